@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Configures (Release) and builds lexdyn into build/. Usage: build.sh [extra cmake args]
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+cd "$ROOT"
+JOBS="${LEXDYN_JOBS:-$(nproc)}"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@" > build.configure.log 2>&1 || { cat build.configure.log; exit 1; }
+cmake --build build -j "$JOBS"

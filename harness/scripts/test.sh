@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Sets up, builds and runs the whole test suite with ctest (what CI runs).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+cd "$ROOT"
+harness/scripts/install-deps.sh
+harness/scripts/build.sh
+cd build
+ctest --output-on-failure -j "${LEXDYN_JOBS:-$(nproc)}" "$@"

@@ -1,0 +1,40 @@
+// Error handling, three levels (docs/architecture.md, "Errors"):
+//  - LEXDYN_DEBUG_ASSERT(cond): internal invariant, checked in debug builds only.
+//  - LEXDYN_ALWAYS_ASSERT(cond, msg): impossible state; always checked, aborts.
+//  - throw InputError(...): anything a user can get wrong (files, fields, sizes). The
+//    message says what was expected, what was found, and where (file, field / line).
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace lexdyn {
+
+/// A user-facing input error (bad file, bad field, bad size). Carries where it happened.
+class InputError : public std::runtime_error {
+ public:
+  /// `where` is e.g. "cases/exp1.yaml: controller.gains.kp" or "problem.json: levels[2].A[3]".
+  InputError(const std::string& where, const std::string& what)
+      : std::runtime_error(where.empty() ? what : where + ": " + what), where_(where), what_(what) {}
+  const std::string& where() const noexcept { return where_; }
+  const std::string& detail() const noexcept { return what_; }
+
+ private:
+  std::string where_;
+  std::string what_;
+};
+
+[[noreturn]] void abortWithMessage(const char* file, int line, const char* cond, const std::string& msg);
+
+}  // namespace lexdyn
+
+#define LEXDYN_ALWAYS_ASSERT(cond, msg)                                   \
+  do {                                                                    \
+    if (!(cond)) ::lexdyn::abortWithMessage(__FILE__, __LINE__, #cond, (msg)); \
+  } while (0)
+
+#ifdef NDEBUG
+#define LEXDYN_DEBUG_ASSERT(cond) ((void)0)
+#else
+#define LEXDYN_DEBUG_ASSERT(cond) LEXDYN_ALWAYS_ASSERT(cond, "debug assertion")
+#endif

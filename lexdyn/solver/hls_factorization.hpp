@@ -1,0 +1,116 @@
+// Hierarchical complete orthogonal decomposition of the active rows of a lexicographic
+// least-squares problem (the equality-only sub-problem of each active-set iteration).
+//
+// Level by level, the active rows of level k, projected into the null space of the active rows
+// of levels < k, are factorised by a Householder QR with column pivoting of their transpose
+// (rank-revealing, relative rank tolerance per row). Its reflectors are applied to the rows of
+// all later levels (blocked, compact-WY). A level whose projected rows are rank deficient gets
+// a second, left orthogonal factorisation so that its least-squares residual is exact.
+//
+// Storage is column-oriented: each active row is a column of `W_` (rows = free variables).
+// Before each level is factorised, the part of the later columns that this and later levels
+// will overwrite is saved, so that after an active-set change at level c the factorisation
+// restarts at level c and reuses the factors of levels < c (paper sec. VIII-B).
+//
+// All storage is allocated in setup(); factorize(), solve() and multipliers() allocate nothing.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace lexdyn::solver {
+
+class HlsFactorization {
+ public:
+  /// n: variables; rowsPerLevel: rows of each general level. Rows are addressed by a global id
+  /// gid = rowOffset(level) + row, and vectors b / res / mu are indexed by gid.
+  void setup(int n, const std::vector<int>& rowsPerLevel);
+
+  /// Sets the original rows of general level k (pointer kept; must outlive the calls).
+  void setLevelMatrix(int k, const Eigen::MatrixXd* A) { A_[static_cast<size_t>(k)] = A; }
+  /// Recomputes the original row norms (call after the row data changed).
+  void computeRowNorms();
+
+  /// Declares the free variables (those not fixed by an active bound); invalidates everything.
+  void setFreeVariables(const std::vector<int>& freeVar, int nFree);
+
+  /// Active-row bookkeeping. Marks the level dirty; factorize() restarts from the lowest dirty level.
+  void activate(int k, int row);
+  void deactivate(int k, int row);
+  void clearActive();
+  bool isActive(int gid) const { return inList_[static_cast<size_t>(gid)] != 0; }
+  /// Forces a full refactorisation (the row data changed).
+  void invalidateAll();
+
+  /// Factorises from the lowest dirty level. rankTol: a row whose norm after projection into the
+  /// null space of the earlier active rows is at most rankTol times its original norm counts as
+  /// linearly dependent.
+  void factorize(double rankTol);
+  /// The level the last factorize() restarted from (levelCount() when nothing was redone).
+  int lastRestartLevel() const { return lastRestart_; }
+
+  /// Solves the equality hierarchy of the active rows with targets b(gid) (fixed-variable
+  /// contributions already removed): writes the free-variable solution xFree.head(nFree) and
+  /// the residual A x - b of every active row into res(gid) (exactly 0 on levels of full rank).
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& xFree, Eigen::VectorXd& res);
+
+  /// Multipliers of the level-k problem (paper eq. 19-21): mu(gid) for the active rows of levels
+  /// j <= k, with mu = res on level k and sum_j A_j^T mu_j = 0 on the free variables (min-norm
+  /// multipliers on rank-deficient levels). Entries of other rows are left untouched.
+  void multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref<Eigen::VectorXd> mu);
+
+  int levelCount() const { return static_cast<int>(m_.size()); }
+  int rowOffset(int k) const { return rowOff_[static_cast<size_t>(k)]; }
+  int levelOf(int gid) const { return levelOf_[static_cast<size_t>(gid)]; }
+  int activeCount(int k) const { return act_[static_cast<size_t>(k)]; }
+  int rank(int k) const { return rank_[static_cast<size_t>(k)]; }
+  int totalRank() const;
+  int freeCount() const { return nf_; }
+  /// Active rows of level k in the solver's order (global ids).
+  const std::vector<int>& activeList(int k) const { return active_[static_cast<size_t>(k)]; }
+
+ private:
+  void applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
+  void relayout(int c);
+  void saveSnapshot(int k);
+  void swapColumns(int a, int b);
+  void factorLevel(int k, double rankTol);
+
+  int n_ = 0;
+  int nf_ = 0;
+  int mTot_ = 0;
+  std::vector<int> m_, rowOff_, levelOf_;
+  std::vector<const Eigen::MatrixXd*> A_;
+  Eigen::VectorXd rowNorm_;
+  std::vector<int> freeVar_;
+
+  // Current active lists (solver order).
+  std::vector<char> inList_;
+  std::vector<std::vector<int>> active_;
+
+  // Layout of the last factorisation: active columns of all levels, contiguous, level by level.
+  Eigen::MatrixXd W_;
+  std::vector<int> start_, act_, col0_, rank_;
+  std::vector<int> colGid_;  // physical column -> gid
+  std::vector<int> pos_;     // gid -> physical column or -1
+  Eigen::VectorXd tau_, colNorm_, colNormRef_, colOrig_;
+
+  // Snapshot k: rows [col0_k, nf) of the columns of levels >= k before stage k.
+  std::vector<Eigen::MatrixXd> snap_;
+  std::vector<std::vector<int>> snapCol_;   // [k][gid] -> snapshot column or -1
+  std::vector<std::vector<int>> snapGids_;  // [k] gids present in snapshot k
+  std::vector<char> snapValid_;
+
+  // Rank-deficient levels: L = R^T (m x r) = V [U; 0], stored Householder-style.
+  std::vector<Eigen::MatrixXd> left_;
+  std::vector<Eigen::VectorXd> leftTau_;
+
+  // Workspaces.
+  Eigen::MatrixXd S_, Vw_, T_, Y_, Y2_;
+  Eigen::VectorXd work_, work2_, g_, t_, u_;
+
+  int dirtyFrom_ = 0;
+  int lastRestart_ = 0;
+};
+
+}  // namespace lexdyn::solver

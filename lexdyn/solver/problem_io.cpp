@@ -1,0 +1,290 @@
+#include "lexdyn/solver/problem_io.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "lexdyn/common/error.hpp"
+
+namespace lexdyn::solver {
+
+using nlohmann::json;
+
+namespace {
+
+std::string typeName(const json& j) { return j.type_name(); }
+
+// Builds the DOM like json::parse, but keeps the path of the value being parsed so that a
+// number overflow (e.g. 1e999) or a syntax error is reported with its location.
+class PathTrackingSax {
+ public:
+  explicit PathTrackingSax(json& root) : dom_(root, true) {}
+
+  bool null() { return value() && dom_.null(); }
+  bool boolean(bool b) { return value() && dom_.boolean(b); }
+  bool number_integer(json::number_integer_t v) { return value() && dom_.number_integer(v); }
+  bool number_unsigned(json::number_unsigned_t v) { return value() && dom_.number_unsigned(v); }
+  bool number_float(json::number_float_t v, const std::string& s) { return value() && dom_.number_float(v, s); }
+  bool string(std::string& v) { return value() && dom_.string(v); }
+  bool binary(json::binary_t& v) { return value() && dom_.binary(v); }
+  bool start_object(std::size_t n) {
+    value();
+    stack_.push_back({false, -1, {}});
+    return dom_.start_object(n);
+  }
+  bool key(std::string& k) {
+    stack_.back().key = k;
+    return dom_.key(k);
+  }
+  bool end_object() {
+    stack_.pop_back();
+    return dom_.end_object();
+  }
+  bool start_array(std::size_t n) {
+    value();
+    stack_.push_back({true, -1, {}});
+    return dom_.start_array(n);
+  }
+  bool end_array() {
+    stack_.pop_back();
+    return dom_.end_array();
+  }
+  bool parse_error(std::size_t position, const std::string& token, const nlohmann::detail::exception& ex) {
+    std::string msg = ex.what();
+    const auto p = msg.find("] ");
+    if (p != std::string::npos) msg = msg.substr(p + 2);
+    // The failing value has not been reported: it is the next element of the innermost array.
+    if (!stack_.empty() && stack_.back().array) ++stack_.back().index;
+    errorPath_ = path();
+    errorMessage_ = msg + " (byte " + std::to_string(position) + ", near '" + token + "')";
+    return false;
+  }
+
+  const std::string& errorPath() const { return errorPath_; }
+  const std::string& errorMessage() const { return errorMessage_; }
+
+ private:
+  struct Frame {
+    bool array;
+    int index;
+    std::string key;
+  };
+  bool value() {
+    if (!stack_.empty() && stack_.back().array) ++stack_.back().index;
+    return true;
+  }
+  std::string path() const {
+    std::string s;
+    for (const Frame& f : stack_) {
+      if (f.array) {
+        s += "[" + std::to_string(std::max(f.index, 0)) + "]";
+      } else if (!f.key.empty()) {
+        s += (s.empty() ? "" : ".") + f.key;
+      }
+    }
+    return s;
+  }
+  nlohmann::detail::json_sax_dom_parser<json> dom_;
+  std::vector<Frame> stack_;
+  std::string errorPath_, errorMessage_;
+};
+
+double readNumber(const json& j, const std::string& where, bool allowNull, double nullValue) {
+  if (j.is_null()) {
+    if (allowNull) return nullValue;
+    throw InputError(where, "expected a number, found null");
+  }
+  if (!j.is_number()) throw InputError(where, std::string("expected a number, found ") + typeName(j));
+  return j.get<double>();
+}
+
+}  // namespace
+
+Problem parseProblemJson(const std::string& text, const std::string& source) {
+  json doc;
+  PathTrackingSax sax(doc);
+  if (!json::sax_parse(text, &sax)) {
+    const std::string where = sax.errorPath().empty() ? source : source + ": " + sax.errorPath();
+    throw InputError(where, "malformed JSON: " + sax.errorMessage());
+  }
+  if (!doc.is_object()) throw InputError(source, "expected a JSON object at the top level, found " + typeName(doc));
+  for (auto it = doc.begin(); it != doc.end(); ++it) {
+    if (it.key() != "variables" && it.key() != "levels") {
+      throw InputError(source + ": " + it.key(), "unknown key (expected \"variables\" and \"levels\")");
+    }
+  }
+  if (!doc.contains("variables")) throw InputError(source, "missing key \"variables\"");
+  if (!doc.contains("levels")) throw InputError(source, "missing key \"levels\"");
+  const json& jn = doc["variables"];
+  if (!jn.is_number_integer() || jn.get<long long>() <= 0) {
+    throw InputError(source + ": variables", "expected a positive integer, found " + jn.dump());
+  }
+  const int n = static_cast<int>(jn.get<long long>());
+  const json& jl = doc["levels"];
+  if (!jl.is_array()) throw InputError(source + ": levels", "expected an array, found " + typeName(jl));
+
+  Problem problem(n);
+  for (size_t l = 0; l < jl.size(); ++l) {
+    const std::string lw = source + ": levels[" + std::to_string(l) + "]";
+    const json& lv = jl[l];
+    if (!lv.is_object()) throw InputError(lw, "expected an object, found " + typeName(lv));
+    for (auto it = lv.begin(); it != lv.end(); ++it) {
+      const std::string& k = it.key();
+      if (k != "name" && k != "A" && k != "lower" && k != "upper") {
+        throw InputError(lw + "." + k, "unknown key (expected name, A, lower, upper)");
+      }
+    }
+    std::string name;
+    if (lv.contains("name")) {
+      if (!lv["name"].is_string()) throw InputError(lw + ".name", "expected a string");
+      name = lv["name"].get<std::string>();
+    }
+    for (const char* key : {"A", "lower", "upper"}) {
+      if (!lv.contains(key)) throw InputError(lw, std::string("missing key \"") + key + "\"");
+      if (!lv[key].is_array()) throw InputError(lw + "." + key, "expected an array, found " + typeName(lv[key]));
+    }
+    const json& jA = lv["A"];
+    const json& jlo = lv["lower"];
+    const json& jup = lv["upper"];
+    const int m = static_cast<int>(jA.size());
+    if (static_cast<int>(jlo.size()) != m) {
+      throw InputError(lw + ".lower", "has " + std::to_string(jlo.size()) + " entries but A has " + std::to_string(m) + " rows");
+    }
+    if (static_cast<int>(jup.size()) != m) {
+      throw InputError(lw + ".upper", "has " + std::to_string(jup.size()) + " entries but A has " + std::to_string(m) + " rows");
+    }
+    Eigen::MatrixXd A(m, n);
+    Eigen::VectorXd lo(m), up(m);
+    for (int r = 0; r < m; ++r) {
+      const std::string rw = lw + ".A[" + std::to_string(r) + "]";
+      const json& row = jA[static_cast<size_t>(r)];
+      if (!row.is_array()) throw InputError(rw, "expected an array of " + std::to_string(n) + " numbers, found " + typeName(row));
+      if (static_cast<int>(row.size()) != n) {
+        throw InputError(rw, "expected " + std::to_string(n) + " numbers (the number of variables), found " + std::to_string(row.size()));
+      }
+      for (int c = 0; c < n; ++c) {
+        const std::string cw = rw + "[" + std::to_string(c) + "]";
+        const double a = readNumber(row[static_cast<size_t>(c)], cw, false, 0.0);
+        if (!std::isfinite(a)) throw InputError(cw, "expected a finite number, found " + std::to_string(a));
+        A(r, c) = a;
+      }
+      lo(r) = readNumber(jlo[static_cast<size_t>(r)], lw + ".lower[" + std::to_string(r) + "]", true, -kInf);
+      up(r) = readNumber(jup[static_cast<size_t>(r)], lw + ".upper[" + std::to_string(r) + "]", true, kInf);
+      if (std::isnan(lo(r)) || std::isnan(up(r))) throw InputError(lw + ".row[" + std::to_string(r) + "]", "bound is NaN");
+      if (lo(r) > up(r)) {
+        std::ostringstream os;
+        os << "lower bound " << lo(r) << " is greater than upper bound " << up(r);
+        throw InputError(lw + ".row[" + std::to_string(r) + "]", os.str());
+      }
+    }
+    problem.addLevel(name, std::move(A), std::move(lo), std::move(up));
+  }
+  problem.validate(source);
+  return problem;
+}
+
+Problem readProblemJson(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return parseProblemJson(ss.str(), path);
+}
+
+namespace {
+
+json boundValue(double v) {
+  if (std::isinf(v)) return nullptr;
+  return v;
+}
+
+}  // namespace
+
+std::string problemToJson(const Problem& problem) {
+  json doc;
+  doc["variables"] = problem.variables();
+  json levels = json::array();
+  const int n = problem.variables();
+  for (int l = 0; l < problem.levelCount(); ++l) {
+    const Level& lv = problem.level(l);
+    json jl;
+    jl["name"] = lv.name;
+    json A = json::array(), lo = json::array(), up = json::array();
+    for (int r = 0; r < lv.rows(); ++r) {
+      json row = json::array();
+      for (int c = 0; c < n; ++c) {
+        double a = 0.0;
+        if (lv.kind == LevelKind::General) {
+          a = lv.A(r, c);
+        } else if (lv.variable[static_cast<size_t>(r)] == c) {
+          a = lv.coefficient(r);
+        }
+        row.push_back(a);
+      }
+      A.push_back(std::move(row));
+      lo.push_back(boundValue(lv.lower(r)));
+      up.push_back(boundValue(lv.upper(r)));
+    }
+    jl["A"] = std::move(A);
+    jl["lower"] = std::move(lo);
+    jl["upper"] = std::move(up);
+    levels.push_back(std::move(jl));
+  }
+  doc["levels"] = std::move(levels);
+  return doc.dump();
+}
+
+void writeFileAtomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream o(tmp, std::ios::binary | std::ios::trunc);
+    if (!o) throw InputError(path, "cannot write file");
+    o << text;
+    o.flush();
+    if (!o) throw InputError(path, "write failed");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw InputError(path, "cannot rename temporary file into place");
+  }
+}
+
+void writeProblemJson(const Problem& problem, const std::string& path) { writeFileAtomic(path, problemToJson(problem)); }
+
+std::string resultToJson(const Problem& problem, const Result& result, bool withDetails) {
+  json doc;
+  doc["status"] = toString(result.status);
+  doc["reason"] = toString(result.reason);
+  json x = json::array();
+  for (int i = 0; i < result.x.size(); ++i) x.push_back(result.x(i));
+  doc["x"] = std::move(x);
+  json lv = json::array();
+  for (int l = 0; l < result.violation_norm.size(); ++l) lv.push_back(result.violation_norm(l));
+  doc["level_violation"] = std::move(lv);
+  doc["iterations"] = result.iterations;
+  if (withDetails) {
+    doc["optimality_iterations"] = result.optimality_iterations;
+    json act = json::array();
+    json rank = json::array();
+    for (int l = 0; l < problem.levelCount(); ++l) {
+      json a = json::array();
+      for (RowState s : result.active.level[static_cast<size_t>(l)]) a.push_back(toString(s));
+      act.push_back(std::move(a));
+      rank.push_back(result.rank[static_cast<size_t>(l)]);
+    }
+    doc["active_set"] = std::move(act);
+    doc["rank"] = std::move(rank);
+    json viol = json::array();
+    for (const auto& v : result.violation) {
+      json a = json::array();
+      for (int r = 0; r < v.size(); ++r) a.push_back(v(r));
+      viol.push_back(std::move(a));
+    }
+    doc["violation"] = std::move(viol);
+  }
+  return doc.dump();
+}
+
+}  // namespace lexdyn::solver

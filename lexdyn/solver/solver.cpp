@@ -1,0 +1,809 @@
+#include "lexdyn/solver/solver.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/solver/hls_factorization.hpp"
+
+namespace lexdyn::solver {
+
+const char* toString(Status s) {
+  switch (s) {
+    case Status::Solved: return "solved";
+    case Status::StoppedEarly: return "stopped_early";
+    case Status::IterationLimit: return "iteration_limit";
+    case Status::NonFiniteInput: return "non_finite_input";
+  }
+  return "unknown";
+}
+
+const char* toString(StopReason r) {
+  switch (r) {
+    case StopReason::Optimal: return "optimal";
+    case StopReason::SlackBelowThreshold: return "slack_below_threshold";
+    case StopReason::OptimalityPhaseLimit: return "optimality_phase_limit";
+    case StopReason::TotalIterationLimit: return "total_iteration_limit";
+    case StopReason::HardIterationCap: return "hard_iteration_cap";
+    case StopReason::NonFiniteInput: return "non_finite_input";
+  }
+  return "unknown";
+}
+
+const char* toString(RowState s) {
+  switch (s) {
+    case RowState::Inactive: return "inactive";
+    case RowState::Lower: return "lower";
+    case RowState::Upper: return "upper";
+    case RowState::Equality: return "equality";
+  }
+  return "unknown";
+}
+
+Options Options::paper(double dt) {
+  Options o;
+  o.stop_slack_norm = 1e-12 * dt * dt;
+  o.stop_optimality_iterations = 10;
+  o.stop_total_iterations = 30;
+  return o;
+}
+
+int ActiveSet::activeCount() const {
+  int c = 0;
+  for (const auto& l : level)
+    for (RowState s : l) c += (s != RowState::Inactive);
+  return c;
+}
+
+struct Solver::Impl {
+  Options opt;
+  bool isSetup = false;
+  int n = 0, p = 0, lg = 0, first = 0;
+  bool hasBounds = false;
+  std::vector<int> rowsOf;      // rows per problem level
+  std::vector<int> stackOff;    // offset of each problem level in the stacked row numbering
+  std::vector<LevelKind> kinds;
+
+  HlsFactorization fact;
+  int M = 0;  // general rows
+  // Per general row (gid).
+  Eigen::VectorXd lo, up, Ax, Adx, v, dv, res, mu, b, rowNorm;
+  std::vector<RowState> state;
+  // Per variable.
+  Eigen::VectorXd xlo, xup, x, dx, xs, xFree;
+  // Multipliers of every level's problem for the current equality solution, computed lazily.
+  Eigen::MatrixXd muAll;     // M x lg
+  Eigen::MatrixXd muVarAll;  // n x lg
+  std::vector<char> multDone, levelNz;
+  Eigen::VectorXd levelS;
+  // Constraints that re-blocked immediately after being released (anti-cycling), cleared on progress.
+  std::vector<char> tabooRow, tabooVar;
+  int lastDropKind = -1, lastDropIdx = -1;
+  RowState lastDropState = RowState::Inactive;
+  std::vector<RowState> vstate;
+  std::vector<int> boundRow;  // var -> row of the bounds level or -1
+  std::vector<int> freeVar;
+  std::vector<int> fixedVar;
+  int nFixed = 0;
+
+  Result out;
+  // Warm-start copies (the caller may pass our own result).
+  std::vector<RowState> warmRow, warmVar;
+  Eigen::VectorXd warmX;
+
+  const Problem* prob = nullptr;
+
+  void setup(const Problem& problem, const Options& o);
+  void checkCompatible(const Problem& problem) const;
+  bool scanNonFinite(const Problem& problem);
+  void loadData(const Problem& problem);
+  void initCold();
+  void initWarm(const ActiveSet& warm, const Eigen::VectorXd& xw);
+  void startFromStates();
+  void updateFreeVariables();
+  void computeAx(const Eigen::VectorXd& xx, Eigen::VectorXd& out) const;
+  double target(int gid) const;
+  void buildTargets();
+  void solveEquality();
+  bool dualCheck(bool bland, int& kind, int& idx);
+  void prepareLevels();
+  void ensureMult(int kf);
+  bool isHeld(int kind, int idx, int levelH, int kf);
+  double correctSign(int kind, int idx, double value) const;
+  void run();
+  void finish();
+  double rowScale(int gid, double xnorm) const { return std::abs(target(gid)) + rowNorm(gid) * xnorm; }
+  const Eigen::MatrixXd& A(int kf) const { return prob->level(kf + first).A; }
+};
+
+void Solver::Impl::setup(const Problem& problem, const Options& o) {
+  problem.validate("problem");
+  opt = o;
+  n = problem.variables();
+  p = problem.levelCount();
+  hasBounds = p > 0 && problem.level(0).kind == LevelKind::Bounds;
+  first = hasBounds ? 1 : 0;
+  lg = p - first;
+  rowsOf.resize(static_cast<size_t>(p));
+  stackOff.resize(static_cast<size_t>(p));
+  kinds.resize(static_cast<size_t>(p));
+  int off = 0;
+  for (int l = 0; l < p; ++l) {
+    rowsOf[static_cast<size_t>(l)] = problem.level(l).rows();
+    kinds[static_cast<size_t>(l)] = problem.level(l).kind;
+    stackOff[static_cast<size_t>(l)] = off;
+    off += rowsOf[static_cast<size_t>(l)];
+  }
+  std::vector<int> gen;
+  for (int l = first; l < p; ++l) gen.push_back(rowsOf[static_cast<size_t>(l)]);
+  fact.setup(n, gen);
+  M = 0;
+  for (int r : gen) M += r;
+  for (Eigen::VectorXd* vec : {&lo, &up, &Ax, &Adx, &v, &dv, &res, &mu, &b, &rowNorm}) vec->setZero(std::max(M, 1));
+  state.assign(static_cast<size_t>(M), RowState::Inactive);
+  for (Eigen::VectorXd* vec : {&xlo, &xup, &x, &dx, &xs, &xFree}) vec->setZero(n);
+  muAll.setZero(std::max(M, 1), std::max(lg, 1));
+  muVarAll.setZero(n, std::max(lg, 1));
+  multDone.assign(static_cast<size_t>(std::max(lg, 1)), 0);
+  levelNz.assign(static_cast<size_t>(std::max(lg, 1)), 0);
+  levelS.setZero(std::max(lg, 1));
+  tabooRow.assign(static_cast<size_t>(std::max(M, 1)), 0);
+  tabooVar.assign(static_cast<size_t>(n), 0);
+  vstate.assign(static_cast<size_t>(n), RowState::Inactive);
+  boundRow.assign(static_cast<size_t>(n), -1);
+  freeVar.assign(static_cast<size_t>(n), 0);
+  fixedVar.assign(static_cast<size_t>(n), 0);
+  warmRow.assign(static_cast<size_t>(M), RowState::Inactive);
+  warmVar.assign(static_cast<size_t>(n), RowState::Inactive);
+  warmX.setZero(n);
+
+  out = Result{};
+  out.x.setZero(n);
+  out.violation.resize(static_cast<size_t>(p));
+  for (int l = 0; l < p; ++l) out.violation[static_cast<size_t>(l)].setZero(rowsOf[static_cast<size_t>(l)]);
+  out.violation_norm.setZero(p);
+  out.lambda.setZero(off, p);
+  out.active.level.resize(static_cast<size_t>(p));
+  for (int l = 0; l < p; ++l)
+    out.active.level[static_cast<size_t>(l)].assign(static_cast<size_t>(rowsOf[static_cast<size_t>(l)]), RowState::Inactive);
+  out.rank.assign(static_cast<size_t>(p), 0);
+  isSetup = true;
+}
+
+void Solver::Impl::checkCompatible(const Problem& problem) const {
+  if (!isSetup) throw InputError("solver", "solve() called before setup()");
+  bool ok = problem.variables() == n && problem.levelCount() == p;
+  for (int l = 0; ok && l < p; ++l) {
+    const Level& lv = problem.level(l);
+    ok = lv.rows() == rowsOf[static_cast<size_t>(l)] && lv.kind == kinds[static_cast<size_t>(l)] &&
+         lv.upper.size() == lv.rows() &&
+         (lv.kind == LevelKind::Bounds
+              ? (static_cast<int>(lv.variable.size()) == lv.rows() && lv.coefficient.size() == lv.rows())
+              : (lv.A.rows() == lv.rows() && lv.A.cols() == n));
+  }
+  if (!ok) throw InputError("solver", "the problem's sizes differ from those given to setup(); call setup() again");
+}
+
+bool Solver::Impl::scanNonFinite(const Problem& problem) {
+  for (int l = 0; l < p; ++l) {
+    const Level& lv = problem.level(l);
+    for (int r = 0; r < lv.rows(); ++r) {
+      bool bad = std::isnan(lv.lower(r)) || std::isnan(lv.upper(r)) || lv.lower(r) > lv.upper(r);
+      if (lv.kind == LevelKind::General) {
+        bad = bad || !lv.A.row(r).allFinite();
+      } else {
+        bad = bad || !std::isfinite(lv.coefficient(r)) || lv.coefficient(r) == 0.0;
+      }
+      if (bad) {
+        out.bad_level = l;
+        out.bad_row = r;
+        return true;
+      }
+    }
+  }
+  out.bad_level = out.bad_row = -1;
+  return false;
+}
+
+void Solver::Impl::loadData(const Problem& problem) {
+  prob = &problem;
+  for (int kf = 0; kf < lg; ++kf) fact.setLevelMatrix(kf, &problem.level(kf + first).A);
+  fact.computeRowNorms();
+  for (int kf = 0; kf < lg; ++kf) {
+    const Level& lv = problem.level(kf + first);
+    const int off = fact.rowOffset(kf);
+    for (int r = 0; r < lv.rows(); ++r) {
+      lo(off + r) = lv.lower(r);
+      up(off + r) = lv.upper(r);
+      rowNorm(off + r) = lv.A.row(r).norm();
+    }
+  }
+  xlo.setConstant(-kInf);
+  xup.setConstant(kInf);
+  std::fill(boundRow.begin(), boundRow.end(), -1);
+  if (hasBounds) {
+    const Level& lv = problem.level(0);
+    for (int r = 0; r < lv.rows(); ++r) {
+      const int i = lv.variable[static_cast<size_t>(r)];
+      const double c = lv.coefficient(r);
+      boundRow[static_cast<size_t>(i)] = r;
+      if (c > 0) {
+        xlo(i) = lv.lower(r) / c;
+        xup(i) = lv.upper(r) / c;
+      } else {
+        xlo(i) = lv.upper(r) / c;
+        xup(i) = lv.lower(r) / c;
+      }
+      if (lv.lower(r) == lv.upper(r)) xup(i) = xlo(i);
+    }
+  }
+}
+
+double Solver::Impl::target(int gid) const {
+  switch (state[static_cast<size_t>(gid)]) {
+    case RowState::Lower: return lo(gid);
+    case RowState::Upper:
+    case RowState::Equality: return up(gid);
+    default: return 0.0;
+  }
+}
+
+void Solver::Impl::initCold() {
+  for (int i = 0; i < n; ++i) {
+    x(i) = std::min(std::max(0.0, xlo(i)), xup(i));
+    vstate[static_cast<size_t>(i)] = (xlo(i) == xup(i)) ? RowState::Equality : RowState::Inactive;
+  }
+  for (int g = 0; g < M; ++g) state[static_cast<size_t>(g)] = (lo(g) == up(g)) ? RowState::Equality : RowState::Inactive;
+}
+
+void Solver::Impl::initWarm(const ActiveSet& warm, const Eigen::VectorXd& xw) {
+  // Copy first: `warm` may alias out.active.
+  for (int i = 0; i < n; ++i) warmVar[static_cast<size_t>(i)] = RowState::Inactive;
+  for (int g = 0; g < M; ++g) warmRow[static_cast<size_t>(g)] = RowState::Inactive;
+  const bool shapeOk = static_cast<int>(warm.level.size()) == p;
+  if (shapeOk) {
+    for (int l = 0; l < p; ++l) {
+      const auto& ws = warm.level[static_cast<size_t>(l)];
+      if (static_cast<int>(ws.size()) != rowsOf[static_cast<size_t>(l)]) continue;
+      if (l == 0 && hasBounds) {
+        const Level& lv = prob->level(0);
+        for (int r = 0; r < lv.rows(); ++r) {
+          RowState s = ws[static_cast<size_t>(r)];
+          if (lv.coefficient(r) < 0 && (s == RowState::Lower || s == RowState::Upper))
+            s = (s == RowState::Lower) ? RowState::Upper : RowState::Lower;
+          warmVar[static_cast<size_t>(lv.variable[static_cast<size_t>(r)])] = s;
+        }
+      } else {
+        const int off = fact.rowOffset(l - first);
+        for (int r = 0; r < static_cast<int>(ws.size()); ++r) warmRow[static_cast<size_t>(off + r)] = ws[static_cast<size_t>(r)];
+      }
+    }
+  }
+  const bool xOk = xw.size() == n && xw.allFinite();
+  if (xOk) warmX = xw;
+  for (int i = 0; i < n; ++i) {
+    x(i) = std::min(std::max(xOk ? warmX(i) : 0.0, xlo(i)), xup(i));
+    RowState s = warmVar[static_cast<size_t>(i)];
+    if (xlo(i) == xup(i)) {
+      s = RowState::Equality;
+    } else if (s == RowState::Lower && std::isfinite(xlo(i))) {
+      x(i) = xlo(i);
+    } else if (s == RowState::Upper && std::isfinite(xup(i))) {
+      x(i) = xup(i);
+    } else {
+      s = RowState::Inactive;
+    }
+    vstate[static_cast<size_t>(i)] = s;
+  }
+  for (int g = 0; g < M; ++g) {
+    RowState s = warmRow[static_cast<size_t>(g)];
+    if (lo(g) == up(g)) {
+      s = RowState::Equality;
+    } else if ((s == RowState::Lower && !std::isfinite(lo(g))) || (s == RowState::Upper && !std::isfinite(up(g))) ||
+               s == RowState::Equality) {
+      s = RowState::Inactive;
+    }
+    state[static_cast<size_t>(g)] = s;
+  }
+}
+
+void Solver::Impl::updateFreeVariables() {
+  int nf = 0;
+  nFixed = 0;
+  for (int i = 0; i < n; ++i) {
+    if (vstate[static_cast<size_t>(i)] == RowState::Inactive) {
+      freeVar[static_cast<size_t>(nf++)] = i;
+    } else {
+      fixedVar[static_cast<size_t>(nFixed++)] = i;
+    }
+  }
+  fact.setFreeVariables(freeVar, nf);
+}
+
+void Solver::Impl::computeAx(const Eigen::VectorXd& xx, Eigen::VectorXd& outv) const {
+  for (int kf = 0; kf < lg; ++kf) {
+    const int off = fact.rowOffset(kf);
+    const int m = rowsOf[static_cast<size_t>(kf + first)];
+    if (m > 0) outv.segment(off, m).noalias() = A(kf) * xx;
+  }
+}
+
+void Solver::Impl::startFromStates() {
+  fact.clearActive();
+  for (int g = 0; g < M; ++g) {
+    if (state[static_cast<size_t>(g)] != RowState::Inactive) {
+      const int kf = fact.levelOf(g);
+      fact.activate(kf, g - fact.rowOffset(kf));
+    }
+  }
+  updateFreeVariables();
+  computeAx(x, Ax);
+  for (int g = 0; g < M; ++g) {
+    if (state[static_cast<size_t>(g)] == RowState::Inactive) {
+      v(g) = Ax(g) - std::min(std::max(Ax(g), lo(g)), up(g));
+    } else {
+      v(g) = Ax(g) - target(g);
+    }
+  }
+}
+
+void Solver::Impl::buildTargets() {
+  for (int kf = 0; kf < lg; ++kf) {
+    const Eigen::MatrixXd& Ak = A(kf);
+    const int off = fact.rowOffset(kf);
+    for (int gid : fact.activeList(kf)) {
+      double t = target(gid);
+      const int row = gid - off;
+      for (int q = 0; q < nFixed; ++q) {
+        const int i = fixedVar[static_cast<size_t>(q)];
+        t -= Ak(row, i) * x(i);
+      }
+      b(gid) = t;
+    }
+  }
+}
+
+void Solver::Impl::solveEquality() {
+  buildTargets();
+  fact.factorize(opt.rank_tolerance);
+  fact.solve(b, xFree, res);
+  xs = x;  // fixed variables keep their (bound) values
+  for (int f = 0; f < fact.freeCount(); ++f) xs(freeVar[static_cast<size_t>(f)]) = xFree(f);
+}
+
+void Solver::Impl::prepareLevels() {
+  const double xnorm = xs.lpNorm<Eigen::Infinity>();
+  for (int kf = 0; kf < lg; ++kf) {
+    double S = 0.0;
+    bool nonzero = false;
+    for (int gid : fact.activeList(kf)) {
+      const double rj = res(gid);
+      S += std::abs(rj) * rowNorm(gid);
+      if (std::abs(rj) > opt.zero_tolerance * rowScale(gid, xnorm)) nonzero = true;
+    }
+    // A level whose only nonzero residuals sit on zero rows exerts no force on earlier levels.
+    levelS(kf) = S > 0.0 ? S : 1.0;
+    levelNz[static_cast<size_t>(kf)] = nonzero ? 1 : 0;
+    multDone[static_cast<size_t>(kf)] = 0;
+  }
+}
+
+void Solver::Impl::ensureMult(int kf) {
+  if (multDone[static_cast<size_t>(kf)]) return;
+  multDone[static_cast<size_t>(kf)] = 1;
+  auto col = muAll.col(kf);
+  col.setZero();
+  fact.multipliers(kf, res, col);
+  // Fixed variables: mu_i = -sum_j A_ji mu_j over the active rows of levels <= kf.
+  auto mv = muVarAll.col(kf);
+  mv.setZero();
+  if (nFixed == 0) return;
+  for (int j = 0; j <= kf; ++j) {
+    const Eigen::MatrixXd& Aj = A(j);
+    const int off = fact.rowOffset(j);
+    for (int gid : fact.activeList(j)) {
+      const double mj = col(gid);
+      if (mj == 0.0) continue;
+      for (int q = 0; q < nFixed; ++q) {
+        const int i = fixedVar[static_cast<size_t>(q)];
+        mv(i) -= Aj(gid - off, i) * mj;
+      }
+    }
+  }
+}
+
+// Value of a multiplier counted positive when its sign is the correct one for the constraint's
+// state (>= 0 at an upper bound, <= 0 at a lower bound).
+double Solver::Impl::correctSign(int kind, int idx, double value) const {
+  const RowState s = (kind == 0) ? vstate[static_cast<size_t>(idx)] : state[static_cast<size_t>(idx)];
+  return (s == RowState::Upper) ? value : -value;
+}
+
+// A constraint whose multiplier for the level-kf problem has the wrong sign is still held if an
+// intermediate level i (between the constraint's level and kf) with a nonzero residual holds it
+// with the correct sign: the level-kf multipliers are only defined up to adding t * mu^(i),
+// t >= 0, and mu^(i) is a sign-valid certificate, so a valid certificate for level kf exists.
+bool Solver::Impl::isHeld(int kind, int idx, int levelH, int kf) {
+  for (int i = kf - 1; i > levelH; --i) {
+    if (!levelNz[static_cast<size_t>(i)]) continue;
+    ensureMult(i);
+    const double v = (kind == 0) ? muVarAll(idx, i) : muAll(idx, i);
+    const double norm = (kind == 0) ? 1.0 : rowNorm(idx);
+    if (correctSign(kind, idx, v) * norm > opt.dual_tolerance * levelS(i)) return true;
+  }
+  return false;
+}
+
+bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx) {
+  // kind: 0 = variable bound, 1 = general row. Returns true when a constraint must leave.
+  const double xnorm = xs.lpNorm<Eigen::Infinity>();
+  prepareLevels();
+  for (int kf = 0; kf < lg; ++kf) {
+    if (!levelNz[static_cast<size_t>(kf)]) continue;  // the level is satisfied: its multipliers vanish
+    ensureMult(kf);
+    const double S = levelS(kf);
+    const auto mu = muAll.col(kf);
+    const auto muVar = muVarAll.col(kf);
+
+    double best = 0.0;
+    int bestKind = -1, bestIdx = std::numeric_limits<int>::max();
+    auto consider = [&](int k, int i, double measure) {
+      if (bland) {
+        // Smallest index, variables first.
+        if (bestKind < 0 || k < bestKind || (k == bestKind && i < bestIdx)) {
+          bestKind = k;
+          bestIdx = i;
+          best = measure;
+        }
+      } else if (measure > best) {
+        best = measure;
+        bestKind = k;
+        bestIdx = i;
+      }
+    };
+    // Rows of this level: the multiplier is the residual.
+    for (int gid : fact.activeList(kf)) {
+      const RowState s = state[static_cast<size_t>(gid)];
+      if (s != RowState::Lower && s != RowState::Upper) continue;
+      if (tabooRow[static_cast<size_t>(gid)]) continue;
+      const double viol = -correctSign(1, gid, res(gid));
+      if (viol > opt.zero_tolerance * rowScale(gid, xnorm)) consider(1, gid, rowNorm(gid) > 0.0 ? viol * rowNorm(gid) / S : 1.0);
+    }
+    // Rows of earlier levels that are satisfied (not frozen at a nonzero violation).
+    for (int j = 0; j < kf; ++j) {
+      for (int gid : fact.activeList(j)) {
+        const RowState s = state[static_cast<size_t>(gid)];
+        if (s != RowState::Lower && s != RowState::Upper) continue;
+        if (tabooRow[static_cast<size_t>(gid)]) continue;
+        if (std::abs(res(gid)) > opt.zero_tolerance * rowScale(gid, xnorm)) continue;  // frozen
+        const double measure = -correctSign(1, gid, mu(gid)) * rowNorm(gid) / S;
+        if (measure > opt.dual_tolerance && !isHeld(1, gid, j, kf)) consider(1, gid, measure);
+      }
+    }
+    // Active variable bounds.
+    for (int q = 0; q < nFixed; ++q) {
+      const int i = fixedVar[static_cast<size_t>(q)];
+      const RowState s = vstate[static_cast<size_t>(i)];
+      if (s != RowState::Lower && s != RowState::Upper) continue;
+      if (tabooVar[static_cast<size_t>(i)]) continue;
+      const double measure = -correctSign(0, i, muVar(i)) / S;
+      if (measure > opt.dual_tolerance && !isHeld(0, i, -1, kf)) consider(0, i, measure);
+    }
+    if (bestKind >= 0) {
+      kind = bestKind;
+      idx = bestIdx;
+      if (opt.trace) {
+        std::fprintf(stderr, "   dual level %d: release %d:%d measure %.3e res %.3e mu %.3e S %.3e\n", kf, kind, idx, best,
+                     kind == 1 ? res(idx) : 0.0, kind == 1 ? mu(idx) : muVar(idx), S);
+      }
+      return true;
+    }
+  }
+  return false;
+}
+
+void Solver::Impl::run() {
+  out.iterations = out.optimality_iterations = out.activations = out.deactivations = 0;
+  out.held_after_reblock = 0;
+  bool optPhase = false;
+  int degenerateRun = 0;
+  bool bland = false;
+  bool pending = false;  // the working set changed after the last equality solve
+  std::fill(tabooRow.begin(), tabooRow.end(), 0);
+  std::fill(tabooVar.begin(), tabooVar.end(), 0);
+  lastDropKind = lastDropIdx = -1;
+  out.status = Status::Solved;
+  out.reason = StopReason::Optimal;
+
+  for (;;) {
+    if (out.iterations >= opt.max_iterations) {
+      out.status = Status::IterationLimit;
+      out.reason = StopReason::HardIterationCap;
+      break;
+    }
+    solveEquality();
+    pending = false;
+    ++out.iterations;
+    if (optPhase) ++out.optimality_iterations;
+
+    dx = xs - x;
+    computeAx(dx, Adx);
+    const double dxNorm = dx.norm();
+    for (int g = 0; g < M; ++g) dv(g) = (state[static_cast<size_t>(g)] == RowState::Inactive) ? -v(g) : res(g) - v(g);
+
+    // Ratio test over inactive bounds and rows.
+    double alpha = 1.0;
+    int blockKind = -1, blockIdx = -1;
+    RowState blockState = RowState::Inactive;
+    const double tiny = 1e-15;
+    auto offer = [&](double a, int k, int i, RowState s) {
+      if (a < 0.0) a = 0.0;
+      const bool better = bland ? (a < alpha - tiny || (a <= alpha + tiny && blockKind >= 0 &&
+                                                        (k < blockKind || (k == blockKind && i < blockIdx))))
+                                : (a < alpha);
+      if (better || (blockKind < 0 && a < alpha)) {
+        alpha = std::min(a, alpha);
+        blockKind = k;
+        blockIdx = i;
+        blockState = s;
+      }
+    };
+    for (int i = 0; i < n; ++i) {
+      if (vstate[static_cast<size_t>(i)] != RowState::Inactive) continue;
+      const double d = dx(i);
+      const double thr = opt.feasibility_tolerance * dxNorm;
+      if (d > thr && std::isfinite(xup(i))) offer((xup(i) - x(i)) / d, 0, i, RowState::Upper);
+      else if (d < -thr && std::isfinite(xlo(i))) offer((xlo(i) - x(i)) / d, 0, i, RowState::Lower);
+    }
+    for (int g = 0; g < M; ++g) {
+      if (state[static_cast<size_t>(g)] != RowState::Inactive) continue;
+      const double den = Adx(g) - dv(g);
+      const double thr = opt.feasibility_tolerance * (rowNorm(g) * dxNorm + std::abs(dv(g)));
+      const double s = Ax(g) - v(g);
+      if (den > thr && std::isfinite(up(g))) offer((up(g) - s) / den, 1, g, RowState::Upper);
+      else if (den < -thr && std::isfinite(lo(g))) offer((lo(g) - s) / den, 1, g, RowState::Lower);
+    }
+
+    // Step.
+    const bool full = blockKind < 0;
+    if (full) alpha = 1.0;
+    if (full) {
+      x = xs;
+      Ax += Adx;
+      for (int g = 0; g < M; ++g) v(g) = (state[static_cast<size_t>(g)] == RowState::Inactive) ? 0.0 : res(g);
+    } else if (alpha > 0.0) {
+      x += alpha * dx;
+      Ax += alpha * Adx;
+      v += alpha * dv;
+    }
+    // Progress in the (x, v) space: a step that only moves slacks (a row switching sides) counts.
+    const double moved = alpha * std::max(dx.lpNorm<Eigen::Infinity>(), dv.head(M).lpNorm<Eigen::Infinity>());
+    const bool stalled = moved <= 1e-15 * (1.0 + x.lpNorm<Eigen::Infinity>() + v.head(M).lpNorm<Eigen::Infinity>());
+    if (stalled) {
+      ++degenerateRun;
+      if (degenerateRun >= opt.bland_after_degenerate_steps) bland = true;
+      // The constraint just released blocks again at once: keep it (it is held).
+      if (!full && blockKind == lastDropKind && blockIdx == lastDropIdx && blockState == lastDropState) {
+        (blockKind == 0 ? tabooVar : tabooRow)[static_cast<size_t>(blockIdx)] = 1;
+        ++out.held_after_reblock;
+      }
+    } else {
+      degenerateRun = 0;
+      bland = false;
+      std::fill(tabooRow.begin(), tabooRow.end(), 0);
+      std::fill(tabooVar.begin(), tabooVar.end(), 0);
+    }
+    lastDropKind = lastDropIdx = -1;
+
+    if (opt.trace) {
+      std::fprintf(stderr, "it %d alpha %.3e |dx| %.3e block %d:%d(%s) bland %d x=", out.iterations, alpha, dxNorm, blockKind,
+                   blockIdx, toString(blockState), bland ? 1 : 0);
+      for (int i = 0; i < std::min(n, 8); ++i) std::fprintf(stderr, " %.6g", x(i));
+      std::fprintf(stderr, "\n");
+    }
+    if (!full) {
+      // Activate the blocking constraint exactly at its bound.
+      if (blockKind == 0) {
+        const int i = blockIdx;
+        x(i) = (blockState == RowState::Upper) ? xup(i) : xlo(i);
+        vstate[static_cast<size_t>(i)] = blockState;
+        updateFreeVariables();
+      } else {
+        const int g = blockIdx;
+        state[static_cast<size_t>(g)] = blockState;
+        v(g) = Ax(g) - target(g);
+        const int kf = fact.levelOf(g);
+        fact.activate(kf, g - fact.rowOffset(kf));
+      }
+      ++out.activations;
+      pending = true;
+    } else {
+      int kind = -1, idx = -1;
+      if (!dualCheck(bland, kind, idx)) {
+        out.status = Status::Solved;
+        out.reason = StopReason::Optimal;
+        break;
+      }
+      if (opt.trace) std::fprintf(stderr, "   deactivate %d:%d\n", kind, idx);
+      lastDropKind = kind;
+      lastDropIdx = idx;
+      lastDropState = (kind == 0) ? vstate[static_cast<size_t>(idx)] : state[static_cast<size_t>(idx)];
+      if (kind == 0) {
+        vstate[static_cast<size_t>(idx)] = RowState::Inactive;
+        updateFreeVariables();
+      } else {
+        state[static_cast<size_t>(idx)] = RowState::Inactive;
+        // v keeps the current residual; as an inactive row its target slack is 0.
+        const int kf = fact.levelOf(idx);
+        fact.deactivate(kf, idx - fact.rowOffset(kf));
+      }
+      ++out.deactivations;
+      optPhase = true;
+      pending = true;
+    }
+
+    // Paper termination rules (sec. VIII-B).
+    if (opt.stop_slack_norm > 0.0 && v.head(M).squaredNorm() <= opt.stop_slack_norm) {
+      out.status = Status::Solved;
+      out.reason = StopReason::SlackBelowThreshold;
+      break;
+    }
+    if (opt.stop_optimality_iterations > 0 && out.optimality_iterations >= opt.stop_optimality_iterations) {
+      out.status = Status::StoppedEarly;
+      out.reason = StopReason::OptimalityPhaseLimit;
+      break;
+    }
+    if (opt.stop_total_iterations > 0 && out.iterations >= opt.stop_total_iterations) {
+      out.status = Status::StoppedEarly;
+      out.reason = StopReason::TotalIterationLimit;
+      break;
+    }
+  }
+
+  if (opt.compute_multipliers && pending) {
+    // Multipliers of the current working set (its equality solution; x itself is not moved).
+    solveEquality();
+  }
+  (void)pending;
+}
+
+void Solver::Impl::finish() {
+  const Problem& problem = *prob;
+  out.x = x;
+  // True violations at the final x.
+  computeAx(x, Ax);
+  if (hasBounds) {
+    const Level& lv = problem.level(0);
+    for (int r = 0; r < lv.rows(); ++r) {
+      const double ax = lv.coefficient(r) * x(lv.variable[static_cast<size_t>(r)]);
+      out.violation[0](r) = ax - std::min(std::max(ax, lv.lower(r)), lv.upper(r));
+    }
+  }
+  for (int kf = 0; kf < lg; ++kf) {
+    const int off = fact.rowOffset(kf);
+    auto& vl = out.violation[static_cast<size_t>(kf + first)];
+    for (int r = 0; r < vl.size(); ++r) {
+      const double ax = Ax(off + r);
+      vl(r) = ax - std::min(std::max(ax, lo(off + r)), up(off + r));
+    }
+  }
+  for (int l = 0; l < p; ++l) out.violation_norm(l) = out.violation[static_cast<size_t>(l)].norm();
+
+  // Active set.
+  if (hasBounds) {
+    const Level& lv = problem.level(0);
+    for (int r = 0; r < lv.rows(); ++r) {
+      RowState s = vstate[static_cast<size_t>(lv.variable[static_cast<size_t>(r)])];
+      if (lv.coefficient(r) < 0 && (s == RowState::Lower || s == RowState::Upper))
+        s = (s == RowState::Lower) ? RowState::Upper : RowState::Lower;
+      out.active.level[0][static_cast<size_t>(r)] = s;
+    }
+    out.rank[0] = nFixed;
+  }
+  for (int kf = 0; kf < lg; ++kf) {
+    const int off = fact.rowOffset(kf);
+    auto& al = out.active.level[static_cast<size_t>(kf + first)];
+    for (int r = 0; r < static_cast<int>(al.size()); ++r) al[static_cast<size_t>(r)] = state[static_cast<size_t>(off + r)];
+    out.rank[static_cast<size_t>(kf + first)] = fact.rank(kf);
+  }
+
+  // Multipliers, one column per level: a valid KKT certificate of each level's problem. The raw
+  // multipliers of level l are corrected by adding t_i >= 0 times the (corrected) certificate of
+  // an earlier level i that holds a row whose raw multiplier has the wrong sign (see isHeld).
+  out.lambda.setZero();
+  if (!opt.compute_multipliers) return;
+  prepareLevels();
+  const Level* bl = hasBounds ? &problem.level(0) : nullptr;
+  auto rowOf = [&](int gid) {
+    const int j = fact.levelOf(gid);
+    return stackOff[static_cast<size_t>(j + first)] + gid - fact.rowOffset(j);
+  };
+  for (int kf = 0; kf < lg; ++kf) {
+    const int l = kf + first;
+    if (!levelNz[static_cast<size_t>(kf)]) continue;
+    ensureMult(kf);
+    auto col = out.lambda.col(l);
+    for (int j = 0; j <= kf; ++j)
+      for (int gid : fact.activeList(j)) col(rowOf(gid)) = muAll(gid, kf);
+    for (int q = 0; q < nFixed; ++q) {
+      const int i = fixedVar[static_cast<size_t>(q)];
+      const int r = boundRow[static_cast<size_t>(i)];
+      if (r >= 0) col(stackOff[0] + r) = muVarAll(i, kf) / bl->coefficient(r);
+    }
+    // Corrections.
+    for (int i = kf - 1; i >= 0; --i) {
+      if (!levelNz[static_cast<size_t>(i)]) continue;
+      const auto ci = out.lambda.col(i + first);
+      double t = 0.0;
+      auto need = [&](int row, RowState st, double a) {
+        // Current value in column l and in column i, oriented so that >= 0 is correct.
+        const double cur = (st == RowState::Upper) ? col(row) : -col(row);
+        const double hold = (st == RowState::Upper) ? ci(row) : -ci(row);
+        if (cur < 0.0 && hold > 0.0 && hold * a > opt.dual_tolerance * levelS(i)) t = std::max(t, -cur / hold);
+      };
+      for (int j = 0; j < i; ++j)
+        for (int gid : fact.activeList(j)) {
+          const RowState st = state[static_cast<size_t>(gid)];
+          if (st == RowState::Lower || st == RowState::Upper) need(rowOf(gid), st, rowNorm(gid));
+        }
+      if (bl) {
+        for (int q = 0; q < nFixed; ++q) {
+          const int v = fixedVar[static_cast<size_t>(q)];
+          RowState st = vstate[static_cast<size_t>(v)];
+          const int r = boundRow[static_cast<size_t>(v)];
+          if (r < 0 || (st != RowState::Lower && st != RowState::Upper)) continue;
+          if (bl->coefficient(r) < 0) st = (st == RowState::Lower) ? RowState::Upper : RowState::Lower;
+          need(stackOff[0] + r, st, std::abs(bl->coefficient(r)));
+        }
+      }
+      if (t > 0.0) col += t * ci;
+    }
+  }
+}
+
+Solver::Solver() : impl_(std::make_unique<Impl>()) {}
+Solver::~Solver() = default;
+Solver::Solver(Solver&&) noexcept = default;
+Solver& Solver::operator=(Solver&&) noexcept = default;
+
+void Solver::setup(const Problem& problem, const Options& options) { impl_->setup(problem, options); }
+const Options& Solver::options() const { return impl_->opt; }
+void Solver::setOptions(const Options& options) { impl_->opt = options; }
+const Result& Solver::result() const { return impl_->out; }
+
+const Result& Solver::solve(const Problem& problem) {
+  Impl& s = *impl_;
+  s.checkCompatible(problem);
+  if (s.scanNonFinite(problem)) {
+    s.out.status = Status::NonFiniteInput;
+    s.out.reason = StopReason::NonFiniteInput;
+    return s.out;
+  }
+  s.loadData(problem);
+  s.initCold();
+  s.startFromStates();
+  s.run();
+  s.finish();
+  return s.out;
+}
+
+const Result& Solver::solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm) {
+  Impl& s = *impl_;
+  s.checkCompatible(problem);
+  if (s.scanNonFinite(problem)) {
+    s.out.status = Status::NonFiniteInput;
+    s.out.reason = StopReason::NonFiniteInput;
+    return s.out;
+  }
+  s.loadData(problem);
+  s.initWarm(warm, xWarm);
+  s.startFromStates();
+  s.run();
+  s.finish();
+  return s.out;
+}
+
+}  // namespace lexdyn::solver

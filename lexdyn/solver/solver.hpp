@@ -1,0 +1,129 @@
+// Lexicographic least-squares solver with equalities and inequalities on every level
+// (docs/solver.md). Primal active-set method on the slack formulation
+//     lexmin ||v_1||^2, ..., ||v_p||^2   s.t.  lower <= A x - v <= upper,
+// whose equality sub-problems are hierarchical least-squares problems factorised by
+// HlsFactorization. Warm start from a previous active set and x; the factorisation restarts
+// from the level whose active set changed; optional termination rules of the paper
+// (sec. VIII-B) and a hard iteration cap.
+//
+// Lifecycle (as OSQP): setup() validates and allocates; solve() allocates nothing for a problem
+// of the sizes given to setup().
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lexdyn/solver/problem.hpp"
+
+namespace lexdyn::solver {
+
+/// State of one row in the active set. Lower / Upper: the row is held at that bound (it is
+/// violated beyond it, or exactly on it). Equality rows (lower == upper) are always active.
+enum class RowState : std::int8_t { Inactive = 0, Lower = 1, Upper = 2, Equality = 3 };
+
+enum class Status {
+  Solved,          ///< lexicographic optimum reached (or all slacks below the stop threshold)
+  StoppedEarly,    ///< a paper termination rule stopped the search: earlier levels optimal, later sub-optimal
+  IterationLimit,  ///< hard cap reached: x is the best feasible iterate (monotone primal iterates)
+  NonFiniteInput,  ///< NaN in A or bounds, or infinite A: nothing solved (see Result::bad_level/bad_row)
+};
+
+enum class StopReason {
+  Optimal,
+  SlackBelowThreshold,
+  OptimalityPhaseLimit,
+  TotalIterationLimit,
+  HardIterationCap,
+  NonFiniteInput,
+};
+
+const char* toString(Status s);
+const char* toString(StopReason r);
+const char* toString(RowState s);
+
+struct Options {
+  /// A row whose norm after projection into the null space of the earlier active rows is at most
+  /// rank_tolerance times its own norm counts as linearly dependent. Rows with singular values
+  /// down to ~1e-9 relative are treated exactly.
+  double rank_tolerance = 1e-10;
+  /// Blocking test: a row blocks the step only if its rate of change exceeds this, relative to
+  /// |a| |dx| + |dv|.
+  double feasibility_tolerance = 1e-12;
+  /// A residual below zero_tolerance * (|b| + |a| |x|) counts as zero (the row is satisfied and
+  /// stays an inequality for later levels); above, the row is frozen at its optimal violation.
+  double zero_tolerance = 1e-10;
+  /// A multiplier counts as having the wrong sign when it exceeds dual_tolerance relative to the
+  /// level's gradient scale sum_j |v_j| |a_j|.
+  double dual_tolerance = 1e-10;
+  /// Hard cap on active-set iterations (equality sub-problems solved).
+  int max_iterations = 1000;
+  /// After this many consecutive zero-length steps, ties are broken by smallest index (Bland).
+  int bland_after_degenerate_steps = 8;
+  /// Paper sec. VIII-B rules; disabled when <= 0.
+  double stop_slack_norm = 0.0;        ///< stop when sum of squared slacks <= this (paper: 1e-12 dt^2)
+  int stop_optimality_iterations = 0;  ///< stop after this many iterations in the optimality phase (paper: 10)
+  int stop_total_iterations = 0;       ///< stop after this many iterations in total (paper: 30)
+  bool compute_multipliers = true;     ///< fill Result::lambda
+  /// Prints one line per active-set iteration to stderr (debugging; allocates).
+  bool trace = false;
+
+  /// The paper's settings for a control period dt: slack 1e-12 dt^2, 10 optimality-phase
+  /// iterations, 30 in total.
+  static Options paper(double dt);
+};
+
+struct ActiveSet {
+  std::vector<std::vector<RowState>> level;  ///< [level][row]
+  int activeCount() const;
+};
+
+struct Result {
+  Status status = Status::Solved;
+  StopReason reason = StopReason::Optimal;
+  Eigen::VectorXd x;
+  std::vector<Eigen::VectorXd> violation;  ///< [level](row): a x - clamp(a x, lower, upper)
+  Eigen::VectorXd violation_norm;          ///< per level, Euclidean norm
+  /// Lagrange multipliers (paper eq. 19-21): rows = all problem rows stacked level by level,
+  /// column l = multipliers of the level-l problem. Column l holds the level's own residual
+  /// (lambda_{l,l} = A_l x - b_l on its active rows) and the multipliers of the earlier levels'
+  /// active rows; sum_i A_i^T lambda_{i,l} = 0. Sign: >= 0 on rows held at their upper bound,
+  /// <= 0 at their lower bound.
+  Eigen::MatrixXd lambda;
+  ActiveSet active;
+  std::vector<int> rank;  ///< rank of each level's active rows after projection (bounds level: fixed vars)
+  int iterations = 0;             ///< active-set iterations (equality sub-problems solved)
+  int optimality_iterations = 0;  ///< iterations since the first deactivation
+  int activations = 0, deactivations = 0;
+  /// Times a released constraint blocked again at once and was kept (anti-cycling safety net).
+  int held_after_reblock = 0;
+  int bad_level = -1, bad_row = -1;  ///< NonFiniteInput location
+};
+
+class Solver {
+ public:
+  Solver();
+  ~Solver();
+  Solver(Solver&&) noexcept;
+  Solver& operator=(Solver&&) noexcept;
+
+  /// Validates the problem's structure (throws lexdyn::InputError) and allocates everything.
+  void setup(const Problem& problem, const Options& options = Options{});
+  const Options& options() const;
+  void setOptions(const Options& options);
+
+  /// Cold solve (x0 = 0 projected on the bounds; only equality rows active).
+  const Result& solve(const Problem& problem);
+  /// Warm solve from an active set and an x (e.g. the previous tick's result; passing this
+  /// solver's own result() is allowed).
+  const Result& solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm);
+  const Result& result() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lexdyn::solver

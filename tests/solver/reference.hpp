@@ -1,0 +1,382 @@
+// Independent references for the hierarchical least-squares solver, written for the tests only:
+//  - nullSpaceReference: equality-only hierarchies by the classical null-space recursion (SVD);
+//  - bruteForce: tiny problems with inequalities by enumerating every active set, level by level;
+//  - checkKkt: a KKT certificate of every level from the result's x and multipliers alone;
+//  - random problem generators (seeded std::mt19937_64).
+#pragma once
+
+#include <Eigen/Dense>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "lexdyn/solver/problem.hpp"
+#include "lexdyn/solver/solver.hpp"
+
+namespace lexdyn::solver::test {
+
+// ---------------------------------------------------------------------------------------------
+// Null-space recursion for equality hierarchies (x of minimum norm among the optima).
+// ---------------------------------------------------------------------------------------------
+struct EqualityReference {
+  Eigen::VectorXd x;
+  std::vector<double> residualNorm;  // per level
+  int nullity = 0;                   // dimension of the final solution set
+};
+
+inline EqualityReference nullSpaceReference(const Problem& p, double relTol = 1e-9) {
+  const int n = p.variables();
+  EqualityReference ref;
+  ref.x = Eigen::VectorXd::Zero(n);
+  Eigen::MatrixXd Z = Eigen::MatrixXd::Identity(n, n);
+  for (int l = 0; l < p.levelCount(); ++l) {
+    const Level& lv = p.level(l);
+    Eigen::MatrixXd A = lv.A;
+    Eigen::VectorXd b = lv.lower;  // equality: lower == upper
+    if (Z.cols() > 0 && A.rows() > 0) {
+      Eigen::MatrixXd AZ = A * Z;
+      Eigen::JacobiSVD<Eigen::MatrixXd> svd(AZ, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      const Eigen::VectorXd& s = svd.singularValues();
+      // Per-row relative threshold is what the solver uses; for generic data a global relative
+      // threshold on the singular values gives the same rank.
+      const double scale = A.rowwise().norm().maxCoeff();
+      int r = 0;
+      while (r < s.size() && s(r) > relTol * scale) ++r;
+      Eigen::VectorXd rhs = b - A * ref.x;
+      Eigen::VectorXd y = Eigen::VectorXd::Zero(Z.cols());
+      if (r > 0) {
+        Eigen::VectorXd c = svd.matrixU().leftCols(r).transpose() * rhs;
+        for (int i = 0; i < r; ++i) c(i) /= s(i);
+        y = svd.matrixV().leftCols(r) * c;
+      }
+      ref.x += Z * y;
+      Z = (Z * svd.matrixV().rightCols(Z.cols() - r)).eval();
+    }
+    ref.residualNorm.push_back((A * ref.x - b).norm());
+  }
+  ref.nullity = static_cast<int>(Z.cols());
+  return ref;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Violation of a row value against its bounds.
+// ---------------------------------------------------------------------------------------------
+inline double violationOf(double ax, double lo, double up) { return ax - std::min(std::max(ax, lo), up); }
+
+// Rows of a problem in a uniform form (bounds level expanded to rows).
+struct RowSet {
+  Eigen::MatrixXd A;
+  Eigen::VectorXd lo, up;
+  std::vector<int> level;
+};
+
+inline RowSet expandRows(const Problem& p) {
+  const int n = p.variables();
+  const int M = p.totalRows();
+  RowSet rs;
+  rs.A = Eigen::MatrixXd::Zero(M, n);
+  rs.lo.resize(M);
+  rs.up.resize(M);
+  int k = 0;
+  for (int l = 0; l < p.levelCount(); ++l) {
+    const Level& lv = p.level(l);
+    for (int r = 0; r < lv.rows(); ++r, ++k) {
+      if (lv.kind == LevelKind::General) {
+        rs.A.row(k) = lv.A.row(r);
+      } else {
+        rs.A(k, lv.variable[static_cast<size_t>(r)]) = lv.coefficient(r);
+      }
+      rs.lo(k) = lv.lower(r);
+      rs.up(k) = lv.upper(r);
+      rs.level.push_back(l);
+    }
+  }
+  return rs;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Brute force for tiny problems: level by level, enumerate for every row of levels <= k a status
+// (inactive / held at lower / held at upper); solve the equality-constrained least squares of the
+// held level-k rows subject to the held earlier rows and the frozen rows; keep feasible
+// candidates; the smallest true objective is the level's optimum. Returns per-level optimal
+// violation norms. Exponential: rows of levels <= k with inequalities must stay small.
+// ---------------------------------------------------------------------------------------------
+inline std::vector<double> bruteForce(const Problem& p, double feasTol = 1e-9) {
+  const RowSet rs = expandRows(p);
+  const int n = p.variables();
+  const int M = static_cast<int>(rs.level.size());
+  std::vector<double> optimum;
+  // frozen[j]: row j must equal rowValue[j] exactly (earlier level, nonzero optimal violation).
+  std::vector<char> frozen(static_cast<size_t>(M), 0);
+  Eigen::VectorXd frozenValue = Eigen::VectorXd::Zero(M);
+
+  for (int k = 0; k < p.levelCount(); ++k) {
+    std::vector<int> rows;  // rows of levels <= k that are not frozen
+    for (int j = 0; j < M; ++j)
+      if (rs.level[static_cast<size_t>(j)] <= k && !frozen[static_cast<size_t>(j)]) rows.push_back(j);
+    const int R = static_cast<int>(rows.size());
+    std::vector<int> st(static_cast<size_t>(R), 0);  // 0 inactive, 1 lower, 2 upper
+    double best = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd bestX;
+    for (;;) {
+      // Build: equality constraints C x = d (frozen + held earlier rows), objective rows F x ~ g.
+      std::vector<int> cons, obj;
+      std::vector<double> cval, oval;
+      bool skip = false;
+      for (int j = 0; j < M; ++j)
+        if (frozen[static_cast<size_t>(j)] && rs.level[static_cast<size_t>(j)] < k) {
+          cons.push_back(j);
+          cval.push_back(frozenValue(j));
+        }
+      for (int q = 0; q < R; ++q) {
+        const int j = rows[static_cast<size_t>(q)];
+        const int s = st[static_cast<size_t>(q)];
+        if (s == 0) continue;
+        const double t = (s == 1) ? rs.lo(j) : rs.up(j);
+        if (!std::isfinite(t)) {
+          skip = true;
+          break;
+        }
+        if (rs.level[static_cast<size_t>(j)] < k) {
+          cons.push_back(j);
+          cval.push_back(t);
+        } else {
+          obj.push_back(j);
+          oval.push_back(t);
+        }
+      }
+      if (!skip) {
+        // Solve min ||F x - g|| s.t. C x = d (C consistent or least-squares), min-norm x.
+        Eigen::MatrixXd C(cons.size(), n);
+        Eigen::VectorXd d(cons.size());
+        for (size_t i = 0; i < cons.size(); ++i) {
+          C.row(static_cast<Eigen::Index>(i)) = rs.A.row(cons[i]);
+          d(static_cast<Eigen::Index>(i)) = cval[i];
+        }
+        Eigen::MatrixXd F(obj.size(), n);
+        Eigen::VectorXd g(obj.size());
+        for (size_t i = 0; i < obj.size(); ++i) {
+          F.row(static_cast<Eigen::Index>(i)) = rs.A.row(obj[i]);
+          g(static_cast<Eigen::Index>(i)) = oval[i];
+        }
+        Problem sub(n);
+        if (C.rows() > 0) sub.addLevel("c", C, d, d);
+        if (F.rows() > 0) sub.addLevel("f", F, g, g);
+        Eigen::VectorXd xc = Eigen::VectorXd::Zero(n);
+        bool consOk = true;
+        if (sub.levelCount() > 0) {
+          const EqualityReference er = nullSpaceReference(sub);
+          xc = er.x;
+          if (C.rows() > 0 && er.residualNorm[0] > feasTol * (1.0 + d.norm())) consOk = false;
+        }
+        if (consOk) {
+          // Feasibility: earlier non-frozen rows within bounds; true objective of level k.
+          bool feasible = true;
+          double objv = 0.0;
+          for (int j = 0; j < M && feasible; ++j) {
+            const int lj = rs.level[static_cast<size_t>(j)];
+            if (lj > k) continue;
+            const double ax = rs.A.row(j).dot(xc);
+            const double scale = 1.0 + std::abs(ax);
+            if (lj < k) {
+              if (frozen[static_cast<size_t>(j)]) {
+                if (std::abs(ax - frozenValue(j)) > feasTol * scale) feasible = false;
+              } else if (std::abs(violationOf(ax, rs.lo(j), rs.up(j))) > feasTol * scale) {
+                feasible = false;
+              }
+            } else {
+              const double vj = violationOf(ax, rs.lo(j), rs.up(j));
+              objv += vj * vj;
+            }
+          }
+          if (feasible && objv < best) {
+            best = objv;
+            bestX = xc;
+          }
+        }
+      }
+      // Next status assignment.
+      int q = 0;
+      while (q < R) {
+        if (++st[static_cast<size_t>(q)] <= 2) break;
+        st[static_cast<size_t>(q)] = 0;
+        ++q;
+      }
+      if (q == R) break;
+    }
+    optimum.push_back(std::sqrt(best));
+    // Freeze the rows of level k that are violated at the optimum (their violation is unique).
+    for (int j = 0; j < M; ++j) {
+      if (rs.level[static_cast<size_t>(j)] != k) continue;
+      const double ax = rs.A.row(j).dot(bestX);
+      const double vj = violationOf(ax, rs.lo(j), rs.up(j));
+      if (std::abs(vj) > 1e-9 * (1.0 + std::abs(ax))) {
+        frozen[static_cast<size_t>(j)] = 1;
+        frozenValue(j) = ax;
+      }
+    }
+  }
+  return optimum;
+}
+
+// ---------------------------------------------------------------------------------------------
+// KKT certificate from x and lambda only. For every level l:
+//   stationarity  sum_{i<=l} A_i^T lambda_{i,l} = 0,
+//   own rows      lambda_{l,l} = violation of level l at x,
+//   earlier rows  lambda = 0 when strictly inside; >= 0 held at upper; <= 0 held at lower;
+//                 any sign when violated (frozen) or an equality.
+// Returns an empty string when the certificate holds, else a description of the first failure.
+// ---------------------------------------------------------------------------------------------
+inline std::string checkKkt(const Problem& p, const Result& r, double tol = 1e-7) {
+  const RowSet rs = expandRows(p);
+  const int M = static_cast<int>(rs.level.size());
+  const Eigen::VectorXd ax = rs.A * r.x;
+  const double xs = 1.0 + r.x.lpNorm<Eigen::Infinity>();
+  for (int l = 0; l < p.levelCount(); ++l) {
+    const Eigen::VectorXd lam = r.lambda.col(l);
+    double scale = 0.0;
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(p.variables());
+    for (int j = 0; j < M; ++j) {
+      if (rs.level[static_cast<size_t>(j)] > l) {
+        if (lam(j) != 0.0) return "level " + std::to_string(l) + ": multiplier on a later row " + std::to_string(j);
+        continue;
+      }
+      g += rs.A.row(j).transpose() * lam(j);
+      scale += std::abs(lam(j)) * rs.A.row(j).norm();
+    }
+    if (g.lpNorm<Eigen::Infinity>() > tol * (scale + 1e-12)) {
+      std::ostringstream os;
+      os << "level " << l << ": stationarity residual " << g.lpNorm<Eigen::Infinity>() << " (scale " << scale << ")";
+      return os.str();
+    }
+    for (int j = 0; j < M; ++j) {
+      const int lj = rs.level[static_cast<size_t>(j)];
+      if (lj > l) continue;
+      const double rowScale = 1.0 + std::abs(ax(j)) + rs.A.row(j).norm() * xs;
+      const double viol = violationOf(ax(j), rs.lo(j), rs.up(j));
+      std::ostringstream os;
+      os << "level " << l << ", row " << j << " (level " << lj << "): ";
+      if (lj == l) {
+        if (std::abs(lam(j) - viol) > tol * rowScale) {
+          os << "own multiplier " << lam(j) << " differs from the violation " << viol;
+          return os.str();
+        }
+        continue;
+      }
+      const double lamScale = tol * (scale + 1e-12) / std::max(rs.A.row(j).norm(), 1e-300);
+      if (std::abs(viol) > tol * rowScale || rs.lo(j) == rs.up(j)) continue;  // frozen or equality
+      const bool atUp = std::isfinite(rs.up(j)) && std::abs(ax(j) - rs.up(j)) <= tol * rowScale;
+      const bool atLo = std::isfinite(rs.lo(j)) && std::abs(ax(j) - rs.lo(j)) <= tol * rowScale;
+      if (!atUp && !atLo) {
+        if (std::abs(lam(j)) > lamScale) {
+          os << "strictly satisfied row has multiplier " << lam(j);
+          return os.str();
+        }
+      } else if (atUp && !atLo && lam(j) < -lamScale) {
+        os << "row at its upper bound has multiplier " << lam(j) << " < 0";
+        return os.str();
+      } else if (atLo && !atUp && lam(j) > lamScale) {
+        os << "row at its lower bound has multiplier " << lam(j) << " > 0";
+        return os.str();
+      }
+    }
+  }
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Random problems.
+// ---------------------------------------------------------------------------------------------
+struct GenOptions {
+  int n = 6;
+  int levels = 4;
+  int maxRows = 5;
+  bool inequalities = true;
+  bool boundsLevel = true;
+  double pRankDeficient = 0.25;
+  double pDuplicate = 0.15;
+  double pZeroRow = 0.05;
+  double pConflict = 0.2;
+  double pEquality = 0.3;
+};
+
+inline Problem randomProblem(std::uint64_t seed, const GenOptions& o) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  auto coin = [&](double pr) { return u01(rng) < pr; };
+  auto rnd = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  Problem p(o.n);
+  std::vector<Eigen::RowVectorXd> pool;  // earlier rows, for duplicates and conflicts
+  if (o.boundsLevel) {
+    std::vector<int> vars;
+    for (int i = 0; i < o.n; ++i)
+      if (coin(0.6)) vars.push_back(i);
+    if (!vars.empty()) {
+      const int m = static_cast<int>(vars.size());
+      Eigen::VectorXd c(m), lo(m), up(m);
+      for (int r = 0; r < m; ++r) {
+        c(r) = coin(0.8) ? 1.0 : (coin(0.5) ? -2.0 : 0.5);
+        const double a = u(rng), w = 0.2 + u01(rng);
+        lo(r) = coin(0.15) ? -kInf : a - w;
+        up(r) = coin(0.15) ? kInf : a + w;
+        if (coin(0.1)) up(r) = lo(r) = a;  // fixed variable
+      }
+      p.addBoundsLevel("bounds", vars, c, lo, up);
+    }
+  }
+  for (int l = 0; l < o.levels; ++l) {
+    const int m = rnd(1, o.maxRows);
+    Eigen::MatrixXd A(m, o.n);
+    for (int r = 0; r < m; ++r)
+      for (int c = 0; c < o.n; ++c) A(r, c) = u(rng);
+    if (m > 1 && coin(o.pRankDeficient)) {
+      const int k = rnd(1, std::max(1, std::min(m, o.n) - 1));
+      Eigen::MatrixXd B(m, k), C(k, o.n);
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < k; ++j) B(i, j) = u(rng);
+      for (int i = 0; i < k; ++i)
+        for (int j = 0; j < o.n; ++j) C(i, j) = u(rng);
+      A = B * C;
+    }
+    Eigen::VectorXd lo(m), up(m);
+    for (int r = 0; r < m; ++r) {
+      const double t = 2.0 * u(rng);
+      if (!pool.empty() && coin(o.pDuplicate)) A.row(r) = pool[static_cast<size_t>(rnd(0, static_cast<int>(pool.size()) - 1))];
+      if (coin(o.pZeroRow)) A.row(r).setZero();
+      if (!o.inequalities || coin(o.pEquality)) {
+        lo(r) = up(r) = t;
+      } else {
+        const int kind = rnd(0, 3);
+        const double w = 0.1 + u01(rng);
+        lo(r) = (kind == 1) ? -kInf : t - w;
+        up(r) = (kind == 2) ? kInf : t + w;
+        if (kind == 3 && coin(0.1)) {
+          lo(r) = -kInf;
+          up(r) = kInf;
+        }
+      }
+      if (!pool.empty() && coin(o.pConflict)) {
+        // Same row as an earlier one, with a different target: an algorithmic conflict.
+        A.row(r) = pool[static_cast<size_t>(rnd(0, static_cast<int>(pool.size()) - 1))];
+        lo(r) = up(r) = 3.0 * u(rng);
+      }
+    }
+    for (int r = 0; r < m; ++r) pool.push_back(A.row(r));
+    p.addLevel("level" + std::to_string(l), A, lo, up);
+  }
+  return p;
+}
+
+/// Appends a full-rank minimum-norm level x = 0 so that x is unique.
+inline void appendMinNorm(Problem& p) {
+  const int n = p.variables();
+  p.addLevel("min-norm", Eigen::MatrixXd::Identity(n, n), Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n));
+}
+
+}  // namespace lexdyn::solver::test

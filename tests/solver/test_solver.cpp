@@ -1,0 +1,343 @@
+// Unit tests of the hierarchical least-squares solver against independent references.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/solver/problem.hpp"
+#include "lexdyn/solver/solver.hpp"
+#include "reference.hpp"
+
+namespace lexdyn::solver {
+namespace {
+
+using test::appendMinNorm;
+using test::bruteForce;
+using test::checkKkt;
+using test::GenOptions;
+using test::nullSpaceReference;
+using test::randomProblem;
+
+Eigen::VectorXd vec(std::initializer_list<double> v) {
+  Eigen::VectorXd r(static_cast<Eigen::Index>(v.size()));
+  int i = 0;
+  for (double d : v) r(i++) = d;
+  return r;
+}
+
+Eigen::MatrixXd mat(int rows, int cols, std::initializer_list<double> v) {
+  Eigen::MatrixXd r(rows, cols);
+  int i = 0;
+  for (double d : v) {
+    r(i / cols, i % cols) = d;
+    ++i;
+  }
+  return r;
+}
+
+const Result& solveOnce(Solver& s, const Problem& p, const Options& o = Options{}) {
+  s.setup(p, o);
+  return s.solve(p);
+}
+
+TEST(Solver, SingleEqualityLevelIsLeastSquares) {
+  Problem p(2);
+  p.addLevel("ls", mat(3, 2, {1, 0, 0, 1, 1, 1}), vec({1, 1, 3}), vec({1, 1, 3}));
+  Solver s;
+  const Result& r = solveOnce(s, p);
+  ASSERT_EQ(r.status, Status::Solved);
+  // Normal equations: [2 1; 1 2] x = [4; 4] -> x = [4/3, 4/3].
+  EXPECT_NEAR(r.x(0), 4.0 / 3.0, 1e-12);
+  EXPECT_NEAR(r.x(1), 4.0 / 3.0, 1e-12);
+  EXPECT_NEAR(r.violation_norm(0), std::sqrt(3.0) / 3.0, 1e-12);
+  EXPECT_EQ(checkKkt(p, r), "");
+}
+
+TEST(Solver, LowerLevelCannotDegradeHigherLevel) {
+  // Level 0: x0 + x1 = 1. Level 1: x0 = 5, x1 = 5 (conflicting with level 0 in sum).
+  Problem p(2);
+  p.addLevel("sum", mat(1, 2, {1, 1}), vec({1}), vec({1}));
+  p.addLevel("targets", mat(2, 2, {1, 0, 0, 1}), vec({5, 5}), vec({5, 5}));
+  Solver s;
+  const Result& r = solveOnce(s, p);
+  EXPECT_NEAR(r.violation_norm(0), 0.0, 1e-12);
+  EXPECT_NEAR(r.x(0), 0.5, 1e-12);
+  EXPECT_NEAR(r.x(1), 0.5, 1e-12);
+  EXPECT_EQ(checkKkt(p, r), "");
+}
+
+TEST(Solver, InfeasibleInequalityLevelIsRelaxedNotAnError) {
+  // x >= 2 and x <= 1 on the same level: the least violation is at x = 1.5.
+  Problem p(1);
+  p.addLevel("conflict", mat(2, 1, {1, 1}), vec({2, -kInf}), vec({kInf, 1}));
+  p.addLevel("x=0", mat(1, 1, {1}), vec({0}), vec({0}));
+  Solver s;
+  const Result& r = solveOnce(s, p);
+  ASSERT_EQ(r.status, Status::Solved);
+  EXPECT_NEAR(r.x(0), 1.5, 1e-12);
+  EXPECT_NEAR(r.violation_norm(0), std::sqrt(0.5), 1e-12);
+  EXPECT_EQ(checkKkt(p, r), "");
+}
+
+TEST(Solver, BoundsLevelIsTrustRegion) {
+  // A near-singular task under a box: x stays inside the box.
+  Problem p(2);
+  p.addBoundsLevel("box", {0, 1}, vec({1, 1}), vec({-1, -1}), vec({1, 1}));
+  p.addLevel("near-singular", mat(2, 2, {1, 1, 1, 1 + 1e-8}), vec({1, 2}), vec({1, 2}));
+  Solver s;
+  const Result& r = solveOnce(s, p);
+  ASSERT_EQ(r.status, Status::Solved);
+  EXPECT_LE(r.x.lpNorm<Eigen::Infinity>(), 1.0 + 1e-12);
+  EXPECT_EQ(checkKkt(p, r), "");
+  EXPECT_NEAR(r.violation_norm(1), bruteForce(p)[1], 1e-7);
+}
+
+TEST(Solver, ZeroAndDuplicatedRows) {
+  Problem p(3);
+  p.addLevel("dups", mat(4, 3, {1, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1, 0}), vec({1, 3, 1, 2}), vec({1, 3, 1, 2}));
+  appendMinNorm(p);
+  Solver s;
+  const Result& r = solveOnce(s, p);
+  ASSERT_EQ(r.status, Status::Solved);
+  EXPECT_NEAR(r.x(0), 2.0, 1e-12);  // average of the duplicated targets
+  EXPECT_NEAR(r.x(1), 2.0, 1e-12);
+  EXPECT_NEAR(r.x(2), 0.0, 1e-12);
+  EXPECT_NEAR(r.violation_norm(0), std::sqrt(1 + 1 + 1), 1e-12);  // dups +-1, zero row 1
+  EXPECT_EQ(r.rank[0], 2);
+  EXPECT_EQ(checkKkt(p, r), "");
+}
+
+TEST(Solver, EqualityHierarchiesMatchNullSpaceRecursion) {
+  GenOptions g;
+  g.inequalities = false;
+  g.boundsLevel = false;
+  for (std::uint64_t seed = 1; seed <= 300; ++seed) {
+    g.n = 3 + static_cast<int>(seed % 8);
+    g.levels = 1 + static_cast<int>(seed % 5);
+    g.maxRows = 1 + static_cast<int>(seed % 6);
+    Problem p = randomProblem(seed, g);
+    const bool unique = (seed % 2 == 0);
+    if (unique) appendMinNorm(p);
+    const auto ref = nullSpaceReference(p);
+    Solver s;
+    const Result& r = solveOnce(s, p);
+    ASSERT_EQ(r.status, Status::Solved) << "seed " << seed;
+    for (int l = 0; l < p.levelCount(); ++l) {
+      EXPECT_NEAR(r.violation_norm(l), ref.residualNorm[static_cast<size_t>(l)], 1e-8 * (1 + ref.residualNorm[static_cast<size_t>(l)]))
+          << "seed " << seed << " level " << l;
+    }
+    // Without a final full-rank level both return the minimum-norm optimum.
+    EXPECT_LE((r.x - ref.x).norm(), 1e-8 * (1 + ref.x.norm())) << "seed " << seed;
+    EXPECT_EQ(checkKkt(p, r), "") << "seed " << seed;
+  }
+}
+
+TEST(Solver, TinyInequalityProblemsMatchBruteForce) {
+  GenOptions g;
+  g.n = 3;
+  g.maxRows = 2;
+  int checked = 0;
+  for (std::uint64_t seed = 1; seed <= 160; ++seed) {
+    g.levels = 2 + static_cast<int>(seed % 2);
+    g.boundsLevel = (seed % 3 != 0);
+    g.n = 2 + static_cast<int>(seed % 2);
+    Problem p = randomProblem(seed, g);
+    if (p.totalRows() > 8) continue;
+    const auto bf = bruteForce(p);
+    Solver s;
+    const Result& r = solveOnce(s, p);
+    ASSERT_EQ(r.status, Status::Solved) << "seed " << seed;
+    for (int l = 0; l < p.levelCount(); ++l) {
+      EXPECT_NEAR(r.violation_norm(l), bf[static_cast<size_t>(l)], 1e-7 * (1 + bf[static_cast<size_t>(l)]))
+          << "seed " << seed << " level " << l;
+    }
+    EXPECT_EQ(checkKkt(p, r), "") << "seed " << seed;
+    ++checked;
+  }
+  EXPECT_GT(checked, 100);
+}
+
+TEST(Solver, KktCertificateOnRandomProblems) {
+  GenOptions g;
+  for (std::uint64_t seed = 1000; seed < 1400; ++seed) {
+    g.n = 4 + static_cast<int>(seed % 10);
+    g.levels = 2 + static_cast<int>(seed % 6);
+    g.maxRows = 2 + static_cast<int>(seed % 7);
+    const Problem p = randomProblem(seed, g);
+    Solver s;
+    const Result& r = solveOnce(s, p);
+    ASSERT_EQ(r.status, Status::Solved) << "seed " << seed;
+    EXPECT_EQ(checkKkt(p, r), "") << "seed " << seed;
+  }
+}
+
+TEST(Solver, WarmStartGivesTheColdAnswer) {
+  GenOptions g;
+  for (std::uint64_t seed = 2000; seed < 2150; ++seed) {
+    g.n = 5 + static_cast<int>(seed % 6);
+    g.levels = 3 + static_cast<int>(seed % 4);
+    Problem p = randomProblem(seed, g);
+    appendMinNorm(p);
+    Solver cold, warm;
+    cold.setup(p);
+    warm.setup(p);
+    const Result& rc = cold.solve(p);
+    // Warm start from the optimum itself, from an unrelated problem's active set, and from its own result.
+    warm.solve(p, rc.active, rc.x);
+    EXPECT_EQ(warm.result().iterations, 1) << "seed " << seed;
+    Problem q = randomProblem(seed + 7777, g);
+    appendMinNorm(q);
+    // Same sizes are needed for an active set of q to apply to p; otherwise it is ignored.
+    warm.solve(p, rc.active, Eigen::VectorXd::Zero(p.variables()));
+    warm.solve(p, warm.result().active, warm.result().x);
+    const Result& rw = warm.result();
+    ASSERT_EQ(rw.status, Status::Solved) << "seed " << seed;
+    for (int l = 0; l < p.levelCount(); ++l)
+      EXPECT_NEAR(rw.violation_norm(l), rc.violation_norm(l), 1e-8 * (1 + rc.violation_norm(l))) << "seed " << seed;
+    EXPECT_LE((rw.x - rc.x).norm(), 1e-7 * (1 + rc.x.norm())) << "seed " << seed;
+  }
+}
+
+TEST(Solver, ScalingPermutingAndAppendingKeepEarlierOptima) {
+  GenOptions g;
+  for (std::uint64_t seed = 3000; seed < 3100; ++seed) {
+    g.n = 4 + static_cast<int>(seed % 6);
+    g.levels = 3;
+    const Problem p = randomProblem(seed, g);
+    Solver s0;
+    const Result r0 = solveOnce(s0, p);
+    ASSERT_EQ(r0.status, Status::Solved);
+    const int L = p.levelCount();
+    const int gl = L - 2;  // a general level in the middle
+    // Scale a level by -3: violations scale by 3, the rest is unchanged.
+    {
+      Problem q = p;
+      Level& lv = q.level(gl);
+      lv.A *= -3.0;
+      Eigen::VectorXd lo = -3.0 * lv.upper, up = -3.0 * lv.lower;
+      lv.lower = lo;
+      lv.upper = up;
+      Solver s;
+      const Result& r = solveOnce(s, q);
+      for (int l = 0; l < L; ++l) {
+        const double f = (l == gl) ? 3.0 : 1.0;
+        EXPECT_NEAR(r.violation_norm(l), f * r0.violation_norm(l), 1e-7 * (1 + r0.violation_norm(l))) << "seed " << seed;
+      }
+    }
+    // Permute the rows of a level.
+    {
+      Problem q = p;
+      Level& lv = q.level(gl);
+      const int m = lv.rows();
+      Eigen::MatrixXd A = lv.A;
+      Eigen::VectorXd lo = lv.lower, up = lv.upper;
+      for (int i = 0; i < m; ++i) {
+        lv.A.row(i) = A.row(m - 1 - i);
+        lv.lower(i) = lo(m - 1 - i);
+        lv.upper(i) = up(m - 1 - i);
+      }
+      Solver s;
+      const Result& r = solveOnce(s, q);
+      for (int l = 0; l < L; ++l)
+        EXPECT_NEAR(r.violation_norm(l), r0.violation_norm(l), 1e-7 * (1 + r0.violation_norm(l))) << "seed " << seed;
+    }
+    // Append a level.
+    {
+      Problem q = p;
+      const Problem extra = randomProblem(seed + 99, g);
+      const Level& e = extra.level(extra.levelCount() - 1);
+      q.addLevel("appended", e.A, e.lower, e.upper);
+      Solver s;
+      const Result& r = solveOnce(s, q);
+      for (int l = 0; l < L; ++l)
+        EXPECT_NEAR(r.violation_norm(l), r0.violation_norm(l), 1e-7 * (1 + r0.violation_norm(l))) << "seed " << seed;
+      EXPECT_EQ(checkKkt(q, r), "") << "seed " << seed;
+    }
+  }
+}
+
+TEST(Solver, MultipliersSatisfyStationarityWithBounds) {
+  // A task pushing against a bound: the bound's multiplier carries the level's gradient.
+  Problem p(2);
+  p.addBoundsLevel("box", {0}, vec({1}), vec({-kInf}), vec({1}));
+  p.addLevel("task", mat(1, 2, {1, 0}), vec({3}), vec({3}));
+  Solver s;
+  const Result& r = solveOnce(s, p);
+  EXPECT_NEAR(r.x(0), 1.0, 1e-12);
+  EXPECT_EQ(r.active.level[0][0], RowState::Upper);
+  // lambda_{1,1} = residual = -2; lambda_{bound,1} = 2 (>= 0 at an upper bound).
+  EXPECT_NEAR(r.lambda(1, 1), -2.0, 1e-12);
+  EXPECT_NEAR(r.lambda(0, 1), 2.0, 1e-12);
+  EXPECT_EQ(checkKkt(p, r), "");
+}
+
+TEST(Solver, PaperTerminationRulesStopEarly) {
+  // Many bound activations are needed cold: a task pulling every variable beyond its bound.
+  const int n = 40;
+  Problem p(n);
+  std::vector<int> vars(n);
+  for (int i = 0; i < n; ++i) vars[static_cast<size_t>(i)] = i;
+  p.addBoundsLevel("box", vars, Eigen::VectorXd::Ones(n), -Eigen::VectorXd::Ones(n), Eigen::VectorXd::Ones(n));
+  Eigen::MatrixXd A = Eigen::MatrixXd::Identity(n, n);
+  for (int i = 0; i + 1 < n; ++i) A(i, i + 1) = 0.5;
+  Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 2.0, 10.0);
+  p.addLevel("far", A, t, t);
+  Options o;
+  o.stop_total_iterations = 5;
+  Solver s;
+  const Result& r = solveOnce(s, p, o);
+  EXPECT_EQ(r.status, Status::StoppedEarly);
+  EXPECT_EQ(r.reason, StopReason::TotalIterationLimit);
+  EXPECT_EQ(r.iterations, 5);
+  EXPECT_LE(r.x.lpNorm<Eigen::Infinity>(), 1.0 + 1e-12);  // the bounds level holds
+  Options cap;
+  cap.max_iterations = 3;
+  const Result& r2 = solveOnce(s, p, cap);
+  EXPECT_EQ(r2.status, Status::IterationLimit);
+  EXPECT_LE(r2.x.lpNorm<Eigen::Infinity>(), 1.0 + 1e-12);
+  const Result& r3 = solveOnce(s, p);
+  EXPECT_EQ(r3.status, Status::Solved);
+  EXPECT_EQ(checkKkt(p, r3), "");
+  EXPECT_GT(r3.iterations, 5);
+}
+
+TEST(Solver, NonFiniteDataIsReportedNotSolved) {
+  Problem p(2);
+  p.addLevel("a", mat(1, 2, {1, 1}), vec({0}), vec({0}));
+  Solver s;
+  s.setup(p);
+  p.level(0).A(0, 1) = std::nan("");
+  const Result& r = s.solve(p);
+  EXPECT_EQ(r.status, Status::NonFiniteInput);
+  EXPECT_EQ(r.bad_level, 0);
+  EXPECT_EQ(r.bad_row, 0);
+}
+
+TEST(Solver, SetupRejectsInvalidProblems) {
+  Problem p(2);
+  p.addLevel("bad", mat(1, 2, {1, 1}), vec({2}), vec({1}));
+  Solver s;
+  try {
+    s.setup(p);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("levels[0]"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("row[0]"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Solver, SameInputsGiveBitIdenticalResults) {
+  GenOptions g;
+  g.n = 12;
+  g.levels = 6;
+  const Problem p = randomProblem(4242, g);
+  Solver a, b;
+  const Result ra = solveOnce(a, p);
+  const Result& rb = solveOnce(b, p);
+  for (int i = 0; i < p.variables(); ++i) EXPECT_EQ(ra.x(i), rb.x(i));
+  EXPECT_EQ(ra.iterations, rb.iterations);
+}
+
+}  // namespace
+}  // namespace lexdyn::solver
