@@ -1,6 +1,7 @@
 #include "lexdyn/solver/hls_factorization.hpp"
 
 #include <Eigen/Householder>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -23,94 +24,122 @@ inline void applyReflector(const Ess& ess, double tau, X&& x) {
   if (len > 1) x.tail(len - 1).noalias() -= w * ess;
 }
 
-}  // namespace
+inline size_t z(int i) { return static_cast<size_t>(i); }
 
-// Global row ids: gid = rowOff[level] + row. The layout keeps the active columns of all levels
-// contiguous, level after level.
+}  // namespace
 
 void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   n_ = n;
   nf_ = n;
+  nr_ = n;
   m_ = rowsPerLevel;
   const int L = static_cast<int>(m_.size());
   mTot_ = 0;
-  rowOff_.assign(static_cast<size_t>(L), 0);
+  rowOff_.assign(z(L), 0);
   for (int k = 0; k < L; ++k) {
-    rowOff_[static_cast<size_t>(k)] = mTot_;
-    mTot_ += m_[static_cast<size_t>(k)];
+    rowOff_[z(k)] = mTot_;
+    mTot_ += m_[z(k)];
   }
-  levelOf_.assign(static_cast<size_t>(mTot_), 0);
+  levelOf_.assign(z(mTot_), 0);
   for (int k = 0; k < L; ++k)
-    for (int r = 0; r < m_[static_cast<size_t>(k)]; ++r) levelOf_[static_cast<size_t>(rowOff_[static_cast<size_t>(k)] + r)] = k;
+    for (int r = 0; r < m_[z(k)]; ++r) levelOf_[z(rowOff_[z(k)] + r)] = k;
 
-  A_.assign(static_cast<size_t>(L), nullptr);
-  rowNorm_ = Eigen::VectorXd::Zero(mTot_);
-  freeVar_.resize(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) freeVar_[static_cast<size_t>(i)] = i;
+  A_.assign(z(L), nullptr);
+  static_.assign(z(L), 0);
+  rowNorm_ = Eigen::VectorXd::Zero(std::max(mTot_, 1));
+  freeVar_.resize(z(n));
+  for (int i = 0; i < n; ++i) freeVar_[z(i)] = i;
 
-  inList_.assign(static_cast<size_t>(mTot_), 0);
-  active_.assign(static_cast<size_t>(L), {});
-  for (int k = 0; k < L; ++k) active_[static_cast<size_t>(k)].reserve(static_cast<size_t>(m_[static_cast<size_t>(k)]));
+  inList_.assign(z(mTot_), 0);
+  active_.assign(z(L), {});
+  for (int k = 0; k < L; ++k) active_[z(k)].reserve(z(m_[z(k)]));
 
+  const int nn = std::max(n, 1);
   const int colsW = std::max(mTot_, 1);
-  W_.setZero(std::max(n, 1), colsW);
-  start_.assign(static_cast<size_t>(L), 0);
-  act_.assign(static_cast<size_t>(L), 0);
-  col0_.assign(static_cast<size_t>(L + 1), 0);
-  rank_.assign(static_cast<size_t>(L), 0);
-  colGid_.assign(static_cast<size_t>(colsW), -1);
-  pos_.assign(static_cast<size_t>(mTot_), -1);
+  const int m0max = L > 0 ? std::max(1, std::min(m_[0], n)) : 1;
+  G_.setZero(nn, m0max);
+  varPerm_.assign(z(nn), 0);
+  isFree_.assign(z(nn), 1);
+  flag_.assign(z(nn), 0);
+  newOrder_.assign(z(nn), 0);
+  DTs_.setZero(nn, m0max);
+  transp_.assign(z(nn), 0);
+  WB_.setZero(m0max, colsW);
+  SB_.setZero(m0max, colsW);
+  d_.setZero(m0max);
+  gB_.setZero(m0max);
+
+  W_.setZero(nn, colsW);
+  start_.assign(z(L), 0);
+  act_.assign(z(L), 0);
+  col0_.assign(z(L + 1), 0);
+  rank_.assign(z(L), 0);
+  colGid_.assign(z(colsW), -1);
+  pos_.assign(z(mTot_), -1);
   tau_.setZero(colsW);
   colNorm_.setZero(colsW);
   colNormRef_.setZero(colsW);
   colOrig_.setZero(colsW);
 
-  snap_.assign(static_cast<size_t>(L), Eigen::MatrixXd());
-  snapCol_.assign(static_cast<size_t>(L), std::vector<int>(static_cast<size_t>(mTot_), -1));
-  snapGids_.assign(static_cast<size_t>(L), {});
-  snapValid_.assign(static_cast<size_t>(L), 0);
+  snap_.assign(z(L), Eigen::MatrixXd());
+  snapCol_.assign(z(L), std::vector<int>(z(mTot_), -1));
+  snapGids_.assign(z(L), {});
+  snapValid_.assign(z(L), 0);
   for (int k = 1; k < L; ++k) {
     int later = 0;
-    for (int j = k; j < L; ++j) later += m_[static_cast<size_t>(j)];
-    snap_[static_cast<size_t>(k)].setZero(std::max(n, 1), std::max(later, 1));
-    snapGids_[static_cast<size_t>(k)].reserve(static_cast<size_t>(later));
+    for (int j = k; j < L; ++j) later += m_[z(j)];
+    snap_[z(k)].setZero(nn, std::max(later, 1));
+    snapGids_[z(k)].reserve(z(later));
   }
 
-  left_.resize(static_cast<size_t>(L));
-  leftTau_.resize(static_cast<size_t>(L));
-  for (int k = 0; k < L; ++k) {
-    const int mk = std::max(m_[static_cast<size_t>(k)], 1);
-    left_[static_cast<size_t>(k)].setZero(mk, std::min(mk, std::max(n, 1)));
-    leftTau_[static_cast<size_t>(k)].setZero(mk);
-  }
-
-  S_.setZero(std::max(n, 1), colsW);
+  left_.resize(z(L));
+  leftTau_.resize(z(L));
   int maxLevelRows = 1;
-  for (int mk : m_) maxLevelRows = std::max(maxLevelRows, mk);
+  for (int k = 0; k < L; ++k) {
+    const int mk = std::max(m_[z(k)], 1);
+    maxLevelRows = std::max(maxLevelRows, mk);
+    left_[z(k)].setZero(mk, std::min(mk, nn));
+    leftTau_[z(k)].setZero(mk);
+  }
+
+  S_.setZero(nn, colsW);
+  sparseB_.assign(z(colsW), -2);
+  tmpGid_.assign(z(colsW), -1);
   const int rcap = std::max(1, std::min(n, maxLevelRows));
-  Vw_.setZero(std::max(n, 1), rcap);
+  Vw_.setZero(nn, rcap);
   T_.setZero(rcap, rcap);
   Y_.setZero(rcap, colsW);
   Y2_.setZero(rcap, colsW);
   work_.setZero(std::max({n, mTot_, 1}));
   work2_.setZero(std::max({n, mTot_, 1}));
-  g_.setZero(std::max(n, 1));
-  t_.setZero(std::max(maxLevelRows, 1));
-  u_.setZero(std::max(maxLevelRows, 1));
+  g_.setZero(nn);
+  t_.setZero(maxLevelRows);
+  u_.setZero(maxLevelRows);
+  elim_ = false;
+  m0_ = 0;
+  firstStage_ = 0;
   dirtyFrom_ = 0;
   lastRestart_ = 0;
 }
 
 void HlsFactorization::computeRowNorms() {
+  elimDataValid_ = false;  // new data: the elimination is recomputed
   for (int k = 0; k < levelCount(); ++k) {
-    const Eigen::MatrixXd& A = *A_[static_cast<size_t>(k)];
-    for (int r = 0; r < m_[static_cast<size_t>(k)]; ++r) rowNorm_(rowOff_[static_cast<size_t>(k)] + r) = A.row(r).norm();
+    const Eigen::MatrixXd& A = *A_[z(k)];
+    if (A.rows() == 0) continue;
+    // Column-wise accumulation: contiguous reads of the column-major matrix.
+    auto rn = rowNorm_.segment(rowOff_[z(k)], A.rows());
+    rn = A.cwiseAbs2().rowwise().sum().cwiseSqrt();
   }
 }
 
 void HlsFactorization::setFreeVariables(const std::vector<int>& freeVar, int nFree) {
   nf_ = nFree;
-  for (int i = 0; i < nFree; ++i) freeVar_[static_cast<size_t>(i)] = freeVar[static_cast<size_t>(i)];
+  std::fill(isFree_.begin(), isFree_.end(), 0);
+  for (int i = 0; i < nFree; ++i) {
+    freeVar_[z(i)] = freeVar[z(i)];
+    isFree_[z(freeVar[z(i)])] = 1;
+  }
   invalidateAll();
 }
 
@@ -120,43 +149,154 @@ void HlsFactorization::invalidateAll() {
 }
 
 void HlsFactorization::activate(int k, int row) {
-  const int gid = rowOff_[static_cast<size_t>(k)] + row;
-  LEXDYN_DEBUG_ASSERT(!inList_[static_cast<size_t>(gid)]);
-  inList_[static_cast<size_t>(gid)] = 1;
-  active_[static_cast<size_t>(k)].push_back(gid);
+  const int gid = rowOff_[z(k)] + row;
+  LEXDYN_DEBUG_ASSERT(!inList_[z(gid)]);
+  inList_[z(gid)] = 1;
+  active_[z(k)].push_back(gid);
   dirtyFrom_ = std::min(dirtyFrom_, k);
 }
 
 void HlsFactorization::deactivate(int k, int row) {
-  const int gid = rowOff_[static_cast<size_t>(k)] + row;
-  LEXDYN_DEBUG_ASSERT(inList_[static_cast<size_t>(gid)]);
-  inList_[static_cast<size_t>(gid)] = 0;
-  auto& lst = active_[static_cast<size_t>(k)];
+  const int gid = rowOff_[z(k)] + row;
+  LEXDYN_DEBUG_ASSERT(inList_[z(gid)]);
+  inList_[z(gid)] = 0;
+  auto& lst = active_[z(k)];
   lst.erase(std::find(lst.begin(), lst.end(), gid));  // keeps the order; no reallocation
   dirtyFrom_ = std::min(dirtyFrom_, k);
 }
 
 void HlsFactorization::clearActive() {
   for (int k = 0; k < levelCount(); ++k) {
-    for (int gid : active_[static_cast<size_t>(k)]) inList_[static_cast<size_t>(gid)] = 0;
-    active_[static_cast<size_t>(k)].clear();
+    for (int gid : active_[z(k)]) inList_[z(gid)] = 0;
+    active_[z(k)].clear();
   }
   invalidateAll();
 }
 
 int HlsFactorization::totalRank() const {
   int r = 0;
-  for (int k = 0; k < levelCount(); ++k) r += rank_[static_cast<size_t>(k)];
+  for (int k = 0; k < levelCount(); ++k) r += rank_[z(k)];
   return r;
 }
 
+// ------------------------------------------------------------------------------------------
+// Elimination stage.
+// ------------------------------------------------------------------------------------------
+
+bool HlsFactorization::tryEliminate() {
+  elim_ = false;
+  m0_ = 0;
+  if (!elimAllowed_ || levelCount() == 0) return false;
+  const auto& lst = active_[0];
+  const int m0 = static_cast<int>(lst.size());
+  if (m0 == 0 || m0 > nf_ || m0 > G_.cols()) return false;
+  const Eigen::MatrixXd& A0 = *A_[0];
+  // G = A_0^T restricted to the free variables (rows = variables); columns of A_0 are contiguous.
+  for (int f = 0; f < nf_; ++f) {
+    const double* col = A0.data() + static_cast<Eigen::Index>(freeVar_[z(f)]) * A0.rows();
+    for (int i = 0; i < m0; ++i) G_(f, i) = col[lst[z(i)] - rowOff_[0]];
+  }
+  // Blocked LU with partial pivoting of the tall G (Eigen's kernel): P G = [L1; L2] U. The pivot
+  // rows are the basic variables.
+  int nbTranspositions = 0;
+  Eigen::internal::partial_lu_impl<double, Eigen::ColMajor, int>::blocked_lu(
+      nf_, m0, G_.data(), G_.outerStride(), transp_.data(), nbTranspositions);
+  for (int f = 0; f < nf_; ++f) varPerm_[z(f)] = freeVar_[z(f)];
+  for (int i = 0; i < m0; ++i) std::swap(varPerm_[z(i)], varPerm_[z(transp_[z(i)])]);
+  // Accept only well-conditioned pivots (full row rank, safe for elimination).
+  for (int i = 0; i < m0; ++i) {
+    const int row = lst[z(i)] - rowOff_[0];
+    const double rowMax = A0.row(row).cwiseAbs().maxCoeff();
+    if (!(std::abs(G_(i, i)) > elimTol_ * rowMax) || rowMax == 0.0) return false;
+  }
+  // D^T = L2 L1^{-1} (in place on the lower block).
+  const int nr = nf_ - m0;
+  if (nr > 0) {
+    auto L1 = G_.topLeftCorner(m0, m0).triangularView<Eigen::UnitLower>();
+    auto L2 = G_.block(m0, 0, nr, m0);
+    L1.solveInPlace<Eigen::OnTheRight>(L2);
+  }
+  elim_ = true;
+  elimDataValid_ = true;
+  m0_ = m0;
+  return true;
+}
+
+// The free set changed but the data did not: if every basic variable is still free, the LU of
+// the basic columns stays valid and only the rows of D^T change (kept, dropped for variables now
+// fixed, or computed for variables now free: l = U^{-T} g, D^T row = L1^{-T} l).
+bool HlsFactorization::updateElimination() {
+  if (!elim_ || !elimDataValid_ || !elimAllowed_) return false;
+  const int m0 = m0_;
+  if (static_cast<int>(active_[0].size()) != m0 || m0 > nf_) return false;
+  for (int i = 0; i < m0; ++i)
+    if (!isFree_[z(varPerm_[z(i)])]) return false;
+  const int nrOld = static_cast<int>(nrElim_);
+  for (int i = 0; i < m0; ++i) flag_[z(varPerm_[z(i)])] = 1;  // basic
+  int q = 0;
+  for (int f = 0; f < nrOld; ++f) {
+    const int v = varPerm_[z(m0 + f)];
+    flag_[z(v)] = 2;  // was non-basic
+    if (!isFree_[z(v)]) continue;
+    DTs_.row(q).head(m0) = G_.row(m0 + f).head(m0);
+    newOrder_[z(q++)] = v;
+  }
+  const Eigen::MatrixXd& A0 = *A_[0];
+  const auto& lst = active_[0];
+  for (int f = 0; f < nf_; ++f) {
+    const int v = freeVar_[z(f)];
+    if (flag_[z(v)] != 0) continue;
+    auto g = d_.head(m0);
+    for (int i = 0; i < m0; ++i) g(i) = A0(lst[z(i)] - rowOff_[0], v);
+    G_.topLeftCorner(m0, m0).triangularView<Eigen::Upper>().transpose().solveInPlace(g);
+    G_.topLeftCorner(m0, m0).triangularView<Eigen::UnitLower>().transpose().solveInPlace(g);
+    DTs_.row(q).head(m0) = g.transpose();
+    newOrder_[z(q++)] = v;
+  }
+  for (int i = 0; i < m0; ++i) flag_[z(varPerm_[z(i)])] = 0;
+  for (int f = 0; f < nrOld; ++f) flag_[z(varPerm_[z(m0 + f)])] = 0;
+  if (q != nf_ - m0) return false;  // cannot happen; be safe
+  if (q > 0) G_.block(m0, 0, q, m0) = DTs_.topRows(q).leftCols(m0);
+  for (int f = 0; f < q; ++f) varPerm_[z(m0 + f)] = newOrder_[z(f)];
+  nrElim_ = q;
+  return true;
+}
+
+// Loads the active rows of level j found at S_ columns [p0, p1) marked as loaded (colNorm_ == 1):
+// reduced coordinates into S_, basic part into SB_. Reads the column-major rows column by column.
+void HlsFactorization::gatherLevel(int j, int p0, int p1) {
+  const Eigen::MatrixXd& A = *A_[z(j)];
+  const int off = rowOff_[z(j)];
+  const Eigen::Index lda = A.rows();
+  auto gatherInto = [&](Eigen::MatrixXd& dst, int count, int permOffset) {
+    for (int f = 0; f < count; ++f) {
+      const int v = elim_ ? varPerm_[z(permOffset + f)] : freeVar_[z(f)];
+      const double* col = A.data() + static_cast<Eigen::Index>(v) * lda;
+      for (int q = p0; q < p1; ++q)
+        if (colNorm_(q) == 1.0) dst(f, q) = col[colGidTmp(q) - off];
+    }
+  };
+  gatherInto(S_, nr_, m0_);
+  if (!elim_) return;
+  gatherInto(SB_, m0_, 0);
+  for (int q = p0; q < p1; ++q) {
+    if (colNorm_(q) != 1.0) continue;
+    int nz = 0, last = -1;
+    for (int i = 0; i < m0_; ++i)
+      if (SB_(i, q) != 0.0) {
+        ++nz;
+        last = i;
+      }
+    sparseB_[z(q)] = (nz == 0) ? -1 : (nz == 1 ? last : -2);
+  }
+}
+
 void HlsFactorization::applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int stages) const {
-  // col holds a gathered row (free-variable coordinates); apply Q_k^T for k < stages.
-  for (int k = 0; k < stages; ++k) {
-    const int c0 = col0_[static_cast<size_t>(k)];
-    const int s = start_[static_cast<size_t>(k)];
-    for (int i = 0; i < rank_[static_cast<size_t>(k)]; ++i) {
-      const int len = nf_ - c0 - i;
+  for (int k = firstStage_; k < stages; ++k) {
+    const int c0 = col0_[z(k)];
+    const int s = start_[z(k)];
+    for (int i = 0; i < rank_[z(k)]; ++i) {
+      const int len = nr_ - c0 - i;
       applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), col.segment(c0 + i, len));
     }
   }
@@ -165,41 +305,72 @@ void HlsFactorization::applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int
 void HlsFactorization::relayout(int c) {
   // Rebuild the columns of levels >= c in the solver's active order, in their pre-stage-c state.
   const int L = levelCount();
-  const int sc = (c == 0) ? 0 : start_[static_cast<size_t>(c - 1)] + act_[static_cast<size_t>(c - 1)];
-  const int c0 = col0_[static_cast<size_t>(c)];
-  const bool useSnap = (c > 0) && snapValid_[static_cast<size_t>(c)];
-  int p = 0;
+  const int sc = (c <= firstStage_) ? 0 : start_[z(c - 1)] + act_[z(c - 1)];
+  const int c0 = col0_[z(c)];
+  const bool useSnap = (c > 0) && !static_[z(c)] && snapValid_[z(c)];
+  int p = 0, fresh = 0;
   for (int j = c; j < L; ++j) {
-    for (int gid : active_[static_cast<size_t>(j)]) {
-      const int old = pos_[static_cast<size_t>(gid)];
-      const int sCol = useSnap ? snapCol_[static_cast<size_t>(c)][static_cast<size_t>(gid)] : -1;
+    const int p0 = p;
+    int freshHere = 0;
+    for (int gid : active_[z(j)]) {
+      const int old = pos_[z(gid)];
+      const int sCol = useSnap ? snapCol_[z(c)][z(gid)] : -1;
+      tmpGid_[z(p)] = gid;
       if (old >= 0 && sCol >= 0) {
         S_.col(p).head(c0) = W_.col(old).head(c0);
-        S_.col(p).segment(c0, nf_ - c0) = snap_[static_cast<size_t>(c)].col(sCol).head(nf_ - c0);
+        S_.col(p).segment(c0, nr_ - c0) = snap_[z(c)].col(sCol).head(nr_ - c0);
+        if (elim_) SB_.col(p).head(m0_) = WB_.col(old).head(m0_);
+        colNorm_(p) = 0.0;  // marks a restored column
       } else {
-        const int k = levelOf_[static_cast<size_t>(gid)];
-        const int row = gid - rowOff_[static_cast<size_t>(k)];
-        const Eigen::MatrixXd& A = *A_[static_cast<size_t>(k)];
-        for (int f = 0; f < nf_; ++f) S_(f, p) = A(row, freeVar_[static_cast<size_t>(f)]);
-        applyEarlierStagesTo(S_.col(p).head(nf_), c);
+        colNorm_(p) = 1.0;  // marks a loaded column
+        ++freshHere;
       }
       ++p;
     }
+    if (freshHere > 0) gatherLevel(j, p0, p);
+    fresh += freshHere;
   }
-  // Forget the old positions of levels >= c (rows that left the active set included).
+  // Loaded rows: elimination transform a_N - D^T a_B. Rows whose basic part has at most one
+  // nonzero (bounds-like rows: trust region, minimum velocity) take one column of D^T; runs of
+  // dense rows are transformed together (matrix product).
+  if (elim_ && fresh > 0) {
+    const auto DT = G_.block(m0_, 0, nr_, m0_);
+    int q = 0;
+    while (q < p) {
+      if (colNorm_(q) != 1.0 || sparseB_[z(q)] != -2) {
+        if (colNorm_(q) == 1.0 && sparseB_[z(q)] >= 0) {
+          const int i = sparseB_[z(q)];
+          S_.col(q).head(nr_).noalias() -= SB_(i, q) * DT.col(i);
+        }
+        ++q;
+        continue;
+      }
+      int e = q + 1;
+      while (e < p && colNorm_(e) == 1.0 && sparseB_[z(e)] == -2) ++e;
+      S_.block(0, q, nr_, e - q).noalias() -= DT * SB_.block(0, q, m0_, e - q);
+      q = e;
+    }
+  }
+  if (c > firstStage_ && fresh > 0) {
+    for (int q = 0; q < p; ++q)
+      if (colNorm_(q) == 1.0) applyEarlierStagesTo(S_.col(q).head(nr_), c);
+  }
   for (int q = sc; q < mTot_; ++q) {
-    const int gid = colGid_[static_cast<size_t>(q)];
-    if (gid >= 0) pos_[static_cast<size_t>(gid)] = -1;
-    colGid_[static_cast<size_t>(q)] = -1;
+    const int gid = colGid_[z(q)];
+    if (gid >= 0) pos_[z(gid)] = -1;
+    colGid_[z(q)] = -1;
   }
-  W_.block(0, sc, nf_, p) = S_.block(0, 0, nf_, p);
+  if (p > 0) {
+    W_.block(0, sc, nr_, p) = S_.block(0, 0, nr_, p);
+    if (elim_) WB_.block(0, sc, m0_, p) = SB_.block(0, 0, m0_, p);
+  }
   int q = sc;
   for (int j = c; j < L; ++j) {
-    start_[static_cast<size_t>(j)] = q;
-    act_[static_cast<size_t>(j)] = static_cast<int>(active_[static_cast<size_t>(j)].size());
-    for (int gid : active_[static_cast<size_t>(j)]) {
-      colGid_[static_cast<size_t>(q)] = gid;
-      pos_[static_cast<size_t>(gid)] = q;
+    start_[z(j)] = q;
+    act_[z(j)] = static_cast<int>(active_[z(j)].size());
+    for (int gid : active_[z(j)]) {
+      colGid_[z(q)] = gid;
+      pos_[z(gid)] = q;
       ++q;
     }
   }
@@ -207,51 +378,51 @@ void HlsFactorization::relayout(int c) {
 
 void HlsFactorization::saveSnapshot(int k) {
   const int L = levelCount();
-  auto& sc = snapCol_[static_cast<size_t>(k)];
-  for (int gid : snapGids_[static_cast<size_t>(k)]) sc[static_cast<size_t>(gid)] = -1;
-  snapGids_[static_cast<size_t>(k)].clear();
-  const int s = start_[static_cast<size_t>(k)];
+  auto& sc = snapCol_[z(k)];
+  for (int gid : snapGids_[z(k)]) sc[z(gid)] = -1;
+  snapGids_[z(k)].clear();
+  const int s = start_[z(k)];
   int cnt = 0;
-  for (int j = k; j < L; ++j) cnt += act_[static_cast<size_t>(j)];
-  const int c0 = col0_[static_cast<size_t>(k)];
-  const int d = nf_ - c0;
-  if (cnt > 0 && d > 0) snap_[static_cast<size_t>(k)].block(0, 0, d, cnt) = W_.block(c0, s, d, cnt);
+  for (int j = k; j < L; ++j) cnt += act_[z(j)];
+  const int c0 = col0_[z(k)];
+  const int d = nr_ - c0;
+  if (cnt > 0 && d > 0) snap_[z(k)].block(0, 0, d, cnt) = W_.block(c0, s, d, cnt);
   for (int p = 0; p < cnt; ++p) {
-    const int gid = colGid_[static_cast<size_t>(s + p)];
-    sc[static_cast<size_t>(gid)] = p;
-    snapGids_[static_cast<size_t>(k)].push_back(gid);
+    const int gid = colGid_[z(s + p)];
+    sc[z(gid)] = p;
+    snapGids_[z(k)].push_back(gid);
   }
-  snapValid_[static_cast<size_t>(k)] = 1;
+  snapValid_[z(k)] = 1;
 }
 
 void HlsFactorization::swapColumns(int a, int b) {
   if (a == b) return;
-  W_.col(a).head(nf_).swap(W_.col(b).head(nf_));
+  W_.col(a).head(nr_).swap(W_.col(b).head(nr_));
+  if (elim_) WB_.col(a).head(m0_).swap(WB_.col(b).head(m0_));
   std::swap(colNorm_(a), colNorm_(b));
   std::swap(colNormRef_(a), colNormRef_(b));
   std::swap(colOrig_(a), colOrig_(b));
-  const int ga = colGid_[static_cast<size_t>(a)];
-  const int gb = colGid_[static_cast<size_t>(b)];
-  colGid_[static_cast<size_t>(a)] = gb;
-  colGid_[static_cast<size_t>(b)] = ga;
-  pos_[static_cast<size_t>(gb)] = a;
-  pos_[static_cast<size_t>(ga)] = b;
+  const int ga = colGid_[z(a)];
+  const int gb = colGid_[z(b)];
+  colGid_[z(a)] = gb;
+  colGid_[z(b)] = ga;
+  pos_[z(gb)] = a;
+  pos_[z(ga)] = b;
 }
 
 void HlsFactorization::factorLevel(int k, double rankTol) {
   const int L = levelCount();
-  const int s = start_[static_cast<size_t>(k)];
-  const int m = act_[static_cast<size_t>(k)];
-  const int c0 = col0_[static_cast<size_t>(k)];
-  const int d = nf_ - c0;
+  const int s = start_[z(k)];
+  const int m = act_[z(k)];
+  const int c0 = col0_[z(k)];
+  const int d = nr_ - c0;
   static const double kSqrtEps = std::sqrt(std::numeric_limits<double>::epsilon());
 
-  // Column norms of the projected rows and their original norms.
   for (int j = 0; j < m; ++j) {
     const double nr = (d > 0) ? W_.col(s + j).segment(c0, d).norm() : 0.0;
     colNorm_(s + j) = nr;
     colNormRef_(s + j) = nr;
-    colOrig_(s + j) = rowNorm_(colGid_[static_cast<size_t>(s + j)]);
+    colOrig_(s + j) = rowNorm_(colGid_[z(s + j)]);
   }
 
   int r = 0;
@@ -270,7 +441,6 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
     }
     if (best < 0 || bestRatio <= rankTol) break;
     swapColumns(s + r, s + best);
-    // Householder reflector annihilating W(c0+r+1 : nf, s+r).
     auto x = W_.col(s + r).segment(c0 + r, d - r);
     double tau = 0.0, beta = 0.0;
     x.makeHouseholderInPlace(tau, beta);
@@ -280,27 +450,27 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
     for (int j = r + 1; j < m; ++j) {
       applyReflector(ess, tau, W_.col(s + j).segment(c0 + r, d - r));
       // Norm downdate with recomputation on cancellation (LAPACK xLAQP2).
-      double& nr = colNorm_(s + j);
-      if (nr != 0.0) {
-        double temp = std::abs(W_(c0 + r, s + j)) / nr;
+      double& nrm = colNorm_(s + j);
+      if (nrm != 0.0) {
+        double temp = std::abs(W_(c0 + r, s + j)) / nrm;
         temp = std::max(0.0, (1.0 + temp) * (1.0 - temp));
-        const double ratio = nr / colNormRef_(s + j);
+        const double ratio = nrm / colNormRef_(s + j);
         if (temp * ratio * ratio <= kSqrtEps) {
-          nr = (d - r - 1 > 0) ? W_.col(s + j).segment(c0 + r + 1, d - r - 1).norm() : 0.0;
-          colNormRef_(s + j) = nr;
+          nrm = (d - r - 1 > 0) ? W_.col(s + j).segment(c0 + r + 1, d - r - 1).norm() : 0.0;
+          colNormRef_(s + j) = nrm;
         } else {
-          nr *= std::sqrt(temp);
+          nrm *= std::sqrt(temp);
         }
       }
     }
     ++r;
   }
-  rank_[static_cast<size_t>(k)] = r;
-  col0_[static_cast<size_t>(k + 1)] = c0 + r;
+  rank_[z(k)] = r;
+  col0_[z(k + 1)] = c0 + r;
 
   // Trailing update of the later levels' columns: C <- Q_k^T C (compact WY, blocked).
   int rest = 0;
-  for (int j = k + 1; j < L; ++j) rest += act_[static_cast<size_t>(j)];
+  for (int j = k + 1; j < L; ++j) rest += act_[z(j)];
   if (rest > 0 && r > 0) {
     auto C = W_.block(c0, s + m, d, rest);
     if (r == 1) {
@@ -335,10 +505,10 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
 
   // Rank-deficient level: left factorisation of L = R^T (m x r) = V [U; 0].
   if (r < m) {
-    auto Lm = left_[static_cast<size_t>(k)].block(0, 0, m, r);
+    auto Lm = left_[z(k)].block(0, 0, m, r);
     for (int j = 0; j < m; ++j)
       for (int i = 0; i < r; ++i) Lm(j, i) = (i <= j) ? W_(c0 + i, s + j) : 0.0;
-    auto& lt = leftTau_[static_cast<size_t>(k)];
+    auto& lt = leftTau_[z(k)];
     for (int i = 0; i < r; ++i) {
       auto x = Lm.col(i).segment(i, m - i);
       double tau = 0.0, beta = 0.0;
@@ -356,98 +526,143 @@ void HlsFactorization::factorize(double rankTol) {
     lastRestart_ = L;
     return;
   }
-  const int c = dirtyFrom_;
-  lastRestart_ = c;
+  int c = dirtyFrom_;
   if (c == 0) {
-    for (int q = 0; q < mTot_; ++q) {
-      const int gid = colGid_[static_cast<size_t>(q)];
-      if (gid >= 0) pos_[static_cast<size_t>(gid)] = -1;
-      colGid_[static_cast<size_t>(q)] = -1;
+    for (int q = 0; q < static_cast<int>(colGid_.size()); ++q) {
+      const int gid = colGid_[z(q)];
+      if (gid >= 0) pos_[z(gid)] = -1;
+      colGid_[z(q)] = -1;
     }
-    col0_[0] = 0;
+    std::fill(snapValid_.begin(), snapValid_.end(), 0);
+    if (updateElimination() || tryEliminate()) {
+      nrElim_ = nf_ - m0_;
+      firstStage_ = 1;
+      nr_ = nf_ - m0_;
+      rank_[0] = m0_;
+      act_[0] = m0_;
+      start_[0] = 0;
+      col0_[0] = 0;
+      col0_[1] = 0;
+      c = 1;
+    } else {
+      firstStage_ = 0;
+      nr_ = nf_;
+      col0_[0] = 0;
+    }
+  } else if (c < firstStage_) {
+    c = firstStage_;
   }
-  relayout(c);
-  for (int k = c; k < L; ++k) {
-    if (k > 0) saveSnapshot(k);
-    factorLevel(k, rankTol);
+  lastRestart_ = dirtyFrom_;
+  if (c < L) {
+    relayout(c);
+    for (int k = c; k < L; ++k) {
+      if (k > 0 && !static_[z(k)]) saveSnapshot(k);
+      factorLevel(k, rankTol);
+    }
   }
   dirtyFrom_ = L;
 }
 
-void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& xFree, Eigen::VectorXd& res) {
+void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen::VectorXd& res) {
   const int L = levelCount();
-  auto y = xFree.head(nf_);
+  auto y = work_.head(nr_);
   y.setZero();
-  for (int k = 0; k < L; ++k) {
-    const int m = act_[static_cast<size_t>(k)];
+  if (elim_) {
+    // d = A_B^{-1} b_0 with A_B = U^T L1^T.
+    auto d = d_.head(m0_);
+    for (int i = 0; i < m0_; ++i) d(i) = b(active_[0][z(i)]);
+    G_.topLeftCorner(m0_, m0_).triangularView<Eigen::Upper>().transpose().solveInPlace(d);
+    G_.topLeftCorner(m0_, m0_).triangularView<Eigen::UnitLower>().transpose().solveInPlace(d);
+    for (int gid : active_[0]) res(gid) = 0.0;
+  }
+  for (int k = firstStage_; k < L; ++k) {
+    const int m = act_[z(k)];
     if (m == 0) continue;
-    const int s = start_[static_cast<size_t>(k)];
-    const int c0 = col0_[static_cast<size_t>(k)];
-    const int r = rank_[static_cast<size_t>(k)];
+    const int s = start_[z(k)];
+    const int c0 = col0_[z(k)];
+    const int r = rank_[z(k)];
     auto t = t_.head(m);
-    for (int j = 0; j < m; ++j) t(j) = b(colGid_[static_cast<size_t>(s + j)]);
+    for (int j = 0; j < m; ++j) t(j) = b(colGid_[z(s + j)]);
+    if (elim_) t.noalias() -= WB_.block(0, s, m0_, m).transpose() * d_.head(m0_);
     if (c0 > 0) t.noalias() -= W_.block(0, s, c0, m).transpose() * y.head(c0);
     if (r == m) {
-      // R^T y_seg = t, R = W(c0:c0+r, s:s+r) upper triangular.
       W_.block(c0, s, r, r).triangularView<Eigen::Upper>().transpose().solveInPlace(t);
       y.segment(c0, r) = t;
-      for (int j = 0; j < m; ++j) res(colGid_[static_cast<size_t>(s + j)]) = 0.0;
+      for (int j = 0; j < m; ++j) res(colGid_[z(s + j)]) = 0.0;
     } else {
-      const auto Lm = left_[static_cast<size_t>(k)].block(0, 0, m, r);
-      const auto& lt = leftTau_[static_cast<size_t>(k)];
+      const auto Lm = left_[z(k)].block(0, 0, m, r);
+      const auto& lt = leftTau_[z(k)];
       for (int i = 0; i < r; ++i) applyReflector(Lm.col(i).segment(i + 1, m - i - 1), lt(i), t.segment(i, m - i));
       if (r > 0) {
         auto seg = t.head(r);
         Lm.topLeftCorner(r, r).triangularView<Eigen::Upper>().solveInPlace(seg);
         y.segment(c0, r) = seg;
       }
-      // Residual A x - b = -V [0; z_bottom].
       auto w = u_.head(m);
       w.head(r).setZero();
       w.tail(m - r) = -t.tail(m - r);
       for (int i = r - 1; i >= 0; --i) applyReflector(Lm.col(i).segment(i + 1, m - i - 1), lt(i), w.segment(i, m - i));
-      for (int j = 0; j < m; ++j) res(colGid_[static_cast<size_t>(s + j)]) = w(j);
+      for (int j = 0; j < m; ++j) res(colGid_[z(s + j)]) = w(j);
     }
   }
-  // x = Q_1 ... Q_L y.
-  for (int k = L - 1; k >= 0; --k) {
-    const int s = start_[static_cast<size_t>(k)];
-    const int c0 = col0_[static_cast<size_t>(k)];
-    for (int i = rank_[static_cast<size_t>(k)] - 1; i >= 0; --i) {
-      const int len = nf_ - c0 - i;
+  // Reduced solution x_N = Q y.
+  for (int k = L - 1; k >= firstStage_; --k) {
+    const int s = start_[z(k)];
+    const int c0 = col0_[z(k)];
+    for (int i = rank_[z(k)] - 1; i >= 0; --i) {
+      const int len = nr_ - c0 - i;
       applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), y.segment(c0 + i, len));
     }
   }
+  if (!elim_) {
+    for (int f = 0; f < nf_; ++f) x(freeVar_[z(f)]) = y(f);
+    return;
+  }
+  // x_B = d - D x_N, with D^T stored below the pivots of G.
+  auto xB = work2_.head(m0_);
+  xB = d_.head(m0_);
+  if (nr_ > 0) xB.noalias() -= G_.block(m0_, 0, nr_, m0_).transpose() * y;
+  for (int i = 0; i < m0_; ++i) x(varPerm_[z(i)]) = xB(i);
+  for (int f = 0; f < nr_; ++f) x(varPerm_[z(m0_ + f)]) = y(f);
 }
 
 void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref<Eigen::VectorXd> mu) {
-  auto G = g_.head(nf_);
+  if (elim_ && k == 0) {
+    for (int gid : active_[0]) mu(gid) = res(gid);
+    return;
+  }
+  auto G = g_.head(nr_);
   G.setZero();
   {
-    const int m = act_[static_cast<size_t>(k)];
-    const int s = start_[static_cast<size_t>(k)];
-    const int c0 = col0_[static_cast<size_t>(k)];
+    const int m = act_[z(k)];
+    const int s = start_[z(k)];
+    const int c0 = col0_[z(k)];
     auto u = u_.head(m);
     for (int j = 0; j < m; ++j) {
-      const int gid = colGid_[static_cast<size_t>(s + j)];
+      const int gid = colGid_[z(s + j)];
       u(j) = res(gid);
       mu(gid) = res(gid);
     }
     if (m > 0 && c0 > 0) G.head(c0).noalias() += W_.block(0, s, c0, m) * u;
+    if (elim_ && m > 0) {
+      gB_.head(m0_).setZero();
+      gB_.head(m0_).noalias() += WB_.block(0, s, m0_, m) * u;
+    }
   }
-  for (int j = k - 1; j >= 0; --j) {
-    const int m = act_[static_cast<size_t>(j)];
+  if (elim_ && act_[z(k)] == 0) gB_.head(m0_).setZero();
+  for (int j = k - 1; j >= firstStage_; --j) {
+    const int m = act_[z(j)];
     if (m == 0) continue;
-    const int s = start_[static_cast<size_t>(j)];
-    const int c0 = col0_[static_cast<size_t>(j)];
-    const int r = rank_[static_cast<size_t>(j)];
+    const int s = start_[z(j)];
+    const int c0 = col0_[z(j)];
+    const int r = rank_[z(j)];
     auto u = u_.head(m);
     if (r == m) {
       u = -G.segment(c0, r);
       W_.block(c0, s, r, r).triangularView<Eigen::Upper>().solveInPlace(u);
     } else {
-      const auto Lm = left_[static_cast<size_t>(j)].block(0, 0, m, r);
-      const auto& lt = leftTau_[static_cast<size_t>(j)];
+      const auto Lm = left_[z(j)].block(0, 0, m, r);
+      const auto& lt = leftTau_[z(j)];
       u.setZero();
       if (r > 0) {
         auto top = u.head(r);
@@ -456,8 +671,17 @@ void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref
       }
       for (int i = r - 1; i >= 0; --i) applyReflector(Lm.col(i).segment(i + 1, m - i - 1), lt(i), u.segment(i, m - i));
     }
-    for (int i = 0; i < m; ++i) mu(colGid_[static_cast<size_t>(s + i)]) = u(i);
+    for (int i = 0; i < m; ++i) mu(colGid_[z(s + i)]) = u(i);
     if (c0 > 0) G.head(c0).noalias() += W_.block(0, s, c0, m) * u;
+    if (elim_) gB_.head(m0_).noalias() += WB_.block(0, s, m0_, m) * u;
+  }
+  if (elim_) {
+    // Eliminated level: A_B^T mu_0 = -g_B with A_B^T = L1 U.
+    auto mu0 = gB_.head(m0_);
+    mu0 = -mu0;
+    G_.topLeftCorner(m0_, m0_).triangularView<Eigen::UnitLower>().solveInPlace(mu0);
+    G_.topLeftCorner(m0_, m0_).triangularView<Eigen::Upper>().solveInPlace(mu0);
+    for (int i = 0; i < m0_; ++i) mu(active_[0][z(i)]) = mu0(i);
   }
 }
 

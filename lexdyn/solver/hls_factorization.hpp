@@ -1,16 +1,24 @@
-// Hierarchical complete orthogonal decomposition of the active rows of a lexicographic
-// least-squares problem (the equality-only sub-problem of each active-set iteration).
+// Hierarchical factorisation of the active rows of a lexicographic least-squares problem (the
+// equality-only sub-problem solved at each active-set iteration; docs/solver.md).
 //
-// Level by level, the active rows of level k, projected into the null space of the active rows
-// of levels < k, are factorised by a Householder QR with column pivoting of their transpose
-// (rank-revealing, relative rank tolerance per row). Its reflectors are applied to the rows of
-// all later levels (blocked, compact-WY). A level whose projected rows are rank deficient gets
-// a second, left orthogonal factorisation so that its least-squares residual is exact.
+// Optional elimination stage. When the first general level is made of equality rows only and
+// they are well conditioned with full row rank, it is eliminated by Gaussian elimination with
+// partial pivoting: choosing m0 basic variables B, x_B = d - D x_N, and every later row a becomes
+// a_N - D^T a_B on the remaining (reduced) variables x_N. This is exact, costs far less than the
+// orthogonal factorisation of that level and of its trailing update, and is declined (the level
+// is factorised like the others) when a pivot is small relative to its row.
 //
-// Storage is column-oriented: each active row is a column of `W_` (rows = free variables).
-// Before each level is factorised, the part of the later columns that this and later levels
-// will overwrite is saved, so that after an active-set change at level c the factorisation
-// restarts at level c and reuses the factors of levels < c (paper sec. VIII-B).
+// Orthogonal stages. Level by level, the active rows of level k, projected into the null space of
+// the active rows of earlier levels, are factorised by a Householder QR with column pivoting of
+// their transpose (rank-revealing: a row counts as dependent when its projected norm is at most
+// rankTol times its own norm). The reflectors are applied to the rows of all later levels
+// (blocked, compact WY). A level whose projected rows are rank deficient gets a second, left
+// orthogonal factorisation so that its least-squares residual is exact.
+//
+// Storage is column-oriented: each active row is a column of `W_` (rows = reduced variables).
+// Before each orthogonal stage k, the part of the later columns that stages >= k overwrite is
+// saved, so that after an active-set change at level c the factorisation restarts at level c and
+// reuses everything computed for levels < c (paper sec. VIII-B).
 //
 // All storage is allocated in setup(); factorize(), solve() and multipliers() allocate nothing.
 #pragma once
@@ -30,6 +38,19 @@ class HlsFactorization {
   void setLevelMatrix(int k, const Eigen::MatrixXd* A) { A_[static_cast<size_t>(k)] = A; }
   /// Recomputes the original row norms (call after the row data changed).
   void computeRowNorms();
+  const Eigen::VectorXd& rowNorms() const { return rowNorm_; }
+
+  /// Allows the elimination stage for general level 0 (all its rows are equalities, always
+  /// active). elimTol: smallest accepted pivot relative to the largest entry of its row.
+  void setElimination(bool allowed, double elimTol) {
+    elimAllowed_ = allowed;
+    elimTol_ = elimTol;
+  }
+  /// Declares level k static (only equality rows: its active set never changes, so it is never
+  /// a restart point and needs no snapshot).
+  void setStaticLevel(int k, bool isStatic) { static_[static_cast<size_t>(k)] = isStatic ? 1 : 0; }
+  /// True when the last full factorisation eliminated level 0.
+  bool eliminated() const { return elim_; }
 
   /// Declares the free variables (those not fixed by an active bound); invalidates everything.
   void setFreeVariables(const std::vector<int>& freeVar, int nFree);
@@ -42,17 +63,16 @@ class HlsFactorization {
   /// Forces a full refactorisation (the row data changed).
   void invalidateAll();
 
-  /// Factorises from the lowest dirty level. rankTol: a row whose norm after projection into the
-  /// null space of the earlier active rows is at most rankTol times its original norm counts as
-  /// linearly dependent.
+  /// Factorises from the lowest dirty level.
   void factorize(double rankTol);
   /// The level the last factorize() restarted from (levelCount() when nothing was redone).
   int lastRestartLevel() const { return lastRestart_; }
 
   /// Solves the equality hierarchy of the active rows with targets b(gid) (fixed-variable
-  /// contributions already removed): writes the free-variable solution xFree.head(nFree) and
-  /// the residual A x - b of every active row into res(gid) (exactly 0 on levels of full rank).
-  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& xFree, Eigen::VectorXd& res);
+  /// contributions already removed): writes the free variables' entries of x (variable space;
+  /// fixed entries untouched) and the residual A x - b of every active row into res(gid)
+  /// (exactly 0 on levels of full rank).
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen::VectorXd& res);
 
   /// Multipliers of the level-k problem (paper eq. 19-21): mu(gid) for the active rows of levels
   /// j <= k, with mu = res on level k and sum_j A_j^T mu_j = 0 on the free variables (min-norm
@@ -62,7 +82,7 @@ class HlsFactorization {
   int levelCount() const { return static_cast<int>(m_.size()); }
   int rowOffset(int k) const { return rowOff_[static_cast<size_t>(k)]; }
   int levelOf(int gid) const { return levelOf_[static_cast<size_t>(gid)]; }
-  int activeCount(int k) const { return act_[static_cast<size_t>(k)]; }
+  int activeCount(int k) const { return static_cast<int>(active_[static_cast<size_t>(k)].size()); }
   int rank(int k) const { return rank_[static_cast<size_t>(k)]; }
   int totalRank() const;
   int freeCount() const { return nf_; }
@@ -70,6 +90,10 @@ class HlsFactorization {
   const std::vector<int>& activeList(int k) const { return active_[static_cast<size_t>(k)]; }
 
  private:
+  bool tryEliminate();
+  bool updateElimination();
+  void gatherLevel(int j, int p0, int p1);
+  int colGidTmp(int q) const { return tmpGid_[static_cast<size_t>(q)]; }
   void applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
   void relayout(int c);
   void saveSnapshot(int k);
@@ -77,10 +101,12 @@ class HlsFactorization {
   void factorLevel(int k, double rankTol);
 
   int n_ = 0;
-  int nf_ = 0;
+  int nf_ = 0;   // free variables
+  int nr_ = 0;   // reduced variables (rows of W_ in use): nf_ - m0 when level 0 is eliminated
   int mTot_ = 0;
   std::vector<int> m_, rowOff_, levelOf_;
   std::vector<const Eigen::MatrixXd*> A_;
+  std::vector<char> static_;
   Eigen::VectorXd rowNorm_;
   std::vector<int> freeVar_;
 
@@ -88,14 +114,32 @@ class HlsFactorization {
   std::vector<char> inList_;
   std::vector<std::vector<int>> active_;
 
-  // Layout of the last factorisation: active columns of all levels, contiguous, level by level.
+  // Elimination of level 0: P G = [L1; L2] U with G = A_0^T (free variables x active rows);
+  // the lower part of G_ holds D^T = L2 L1^{-1} after factorisation.
+  bool elimAllowed_ = false;
+  double elimTol_ = 1e-6;
+  bool elim_ = false;
+  int m0_ = 0;
+  int firstStage_ = 0;
+  Eigen::MatrixXd G_;
+  std::vector<int> varPerm_;  // position -> variable id; first m0_ basic, then reduced coordinates
+  std::vector<char> isFree_, flag_;
+  std::vector<int> newOrder_;
+  Eigen::MatrixXd DTs_;
+  bool elimDataValid_ = false;
+  int nrElim_ = 0;
+  std::vector<int> transp_;   // LU row transpositions
+  Eigen::MatrixXd WB_;        // basic-variable part of each active row (per physical column)
+  Eigen::VectorXd d_, gB_;
+
+  // Layout of the last factorisation: active columns of levels >= firstStage_, contiguous.
   Eigen::MatrixXd W_;
   std::vector<int> start_, act_, col0_, rank_;
   std::vector<int> colGid_;  // physical column -> gid
   std::vector<int> pos_;     // gid -> physical column or -1
   Eigen::VectorXd tau_, colNorm_, colNormRef_, colOrig_;
 
-  // Snapshot k: rows [col0_k, nf) of the columns of levels >= k before stage k.
+  // Snapshot k: rows [col0_k, nr) of the columns of levels >= k before stage k.
   std::vector<Eigen::MatrixXd> snap_;
   std::vector<std::vector<int>> snapCol_;   // [k][gid] -> snapshot column or -1
   std::vector<std::vector<int>> snapGids_;  // [k] gids present in snapshot k
@@ -106,8 +150,10 @@ class HlsFactorization {
   std::vector<Eigen::VectorXd> leftTau_;
 
   // Workspaces.
-  Eigen::MatrixXd S_, Vw_, T_, Y_, Y2_;
+  Eigen::MatrixXd S_, SB_, Vw_, T_, Y_, Y2_;
   Eigen::VectorXd work_, work2_, g_, t_, u_;
+  std::vector<int> tmpGid_;   // relayout: gid of each scratch column
+  std::vector<int> sparseB_;  // per loaded column: -2 dense basic part, -1 zero, else its one index
 
   int dirtyFrom_ = 0;
   int lastRestart_ = 0;

@@ -188,8 +188,19 @@ void Solver::Impl::checkCompatible(const Problem& problem) const {
 }
 
 bool Solver::Impl::scanNonFinite(const Problem& problem) {
+  // Fast path: the row norms (computed by loadData) are finite exactly when the rows are finite,
+  // barring overflow; the row-by-row scan below only runs to locate a problem.
   for (int l = 0; l < p; ++l) {
     const Level& lv = problem.level(l);
+    const bool boundsOk = !lv.lower.hasNaN() && !lv.upper.hasNaN() && (lv.lower.array() <= lv.upper.array()).all();
+    bool dataOk;
+    if (lv.kind == LevelKind::General) {
+      const int off = fact.rowOffset(l - first);
+      dataOk = lv.rows() == 0 || rowNorm.segment(off, lv.rows()).allFinite();
+    } else {
+      dataOk = lv.coefficient.allFinite() && (lv.coefficient.array() != 0.0).all();
+    }
+    if (boundsOk && dataOk) continue;
     for (int r = 0; r < lv.rows(); ++r) {
       bool bad = std::isnan(lv.lower(r)) || std::isnan(lv.upper(r)) || lv.lower(r) > lv.upper(r);
       if (lv.kind == LevelKind::General) {
@@ -212,14 +223,23 @@ void Solver::Impl::loadData(const Problem& problem) {
   prob = &problem;
   for (int kf = 0; kf < lg; ++kf) fact.setLevelMatrix(kf, &problem.level(kf + first).A);
   fact.computeRowNorms();
+  if (M > 0) rowNorm.head(M) = fact.rowNorms().head(M);
   for (int kf = 0; kf < lg; ++kf) {
     const Level& lv = problem.level(kf + first);
     const int off = fact.rowOffset(kf);
-    for (int r = 0; r < lv.rows(); ++r) {
-      lo(off + r) = lv.lower(r);
-      up(off + r) = lv.upper(r);
-      rowNorm(off + r) = lv.A.row(r).norm();
-    }
+    lo.segment(off, lv.rows()) = lv.lower;
+    up.segment(off, lv.rows()) = lv.upper;
+  }
+  // The elimination stage needs a first general level of equality rows only.
+  bool allEq = lg > 0 && rowsOf[static_cast<size_t>(first)] > 0;
+  if (allEq) {
+    const Level& l0 = problem.level(first);
+    allEq = (l0.lower.array() == l0.upper.array()).all();
+  }
+  fact.setElimination(opt.eliminate_first_level && allEq, opt.elimination_tolerance);
+  for (int kf = 0; kf < lg; ++kf) {
+    const Level& lv = problem.level(kf + first);
+    fact.setStaticLevel(kf, (lv.lower.array() == lv.upper.array()).all());
   }
   xlo.setConstant(-kInf);
   xup.setConstant(kInf);
@@ -369,9 +389,8 @@ void Solver::Impl::buildTargets() {
 void Solver::Impl::solveEquality() {
   buildTargets();
   fact.factorize(opt.rank_tolerance);
-  fact.solve(b, xFree, res);
-  xs = x;  // fixed variables keep their (bound) values
-  for (int f = 0; f < fact.freeCount(); ++f) xs(freeVar[static_cast<size_t>(f)]) = xFree(f);
+  xs = x;  // fixed variables keep their (bound) values; the free ones are overwritten
+  fact.solve(b, xs, res);
 }
 
 void Solver::Impl::prepareLevels() {
@@ -777,12 +796,12 @@ const Result& Solver::result() const { return impl_->out; }
 const Result& Solver::solve(const Problem& problem) {
   Impl& s = *impl_;
   s.checkCompatible(problem);
+  s.loadData(problem);
   if (s.scanNonFinite(problem)) {
     s.out.status = Status::NonFiniteInput;
     s.out.reason = StopReason::NonFiniteInput;
     return s.out;
   }
-  s.loadData(problem);
   s.initCold();
   s.startFromStates();
   s.run();
@@ -793,12 +812,12 @@ const Result& Solver::solve(const Problem& problem) {
 const Result& Solver::solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm) {
   Impl& s = *impl_;
   s.checkCompatible(problem);
+  s.loadData(problem);
   if (s.scanNonFinite(problem)) {
     s.out.status = Status::NonFiniteInput;
     s.out.reason = StopReason::NonFiniteInput;
     return s.out;
   }
-  s.loadData(problem);
   s.initWarm(warm, xWarm);
   s.startFromStates();
   s.run();

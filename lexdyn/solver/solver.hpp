@@ -58,6 +58,12 @@ struct Options {
   /// A multiplier counts as having the wrong sign when it exceeds dual_tolerance relative to the
   /// level's gradient scale sum_j |v_j| |a_j|.
   double dual_tolerance = 1e-10;
+  /// Eliminate a first general level made only of equality rows by Gaussian elimination with
+  /// partial pivoting when every pivot exceeds elimination_tolerance times the largest entry of
+  /// its row (well conditioned, full row rank); otherwise it is factorised orthogonally like the
+  /// other levels. Exact either way; much cheaper for an equation-of-motion level.
+  bool eliminate_first_level = true;
+  double elimination_tolerance = 1e-6;
   /// Hard cap on active-set iterations (equality sub-problems solved).
   int max_iterations = 1000;
   /// After this many consecutive zero-length steps, ties are broken by smallest index (Bland).

@@ -112,6 +112,9 @@ TEST(Solver, EqualityHierarchiesMatchNullSpaceRecursion) {
   GenOptions g;
   g.inequalities = false;
   g.boundsLevel = false;
+  Options noElim;
+  noElim.eliminate_first_level = false;
+  int eliminated = 0;
   for (std::uint64_t seed = 1; seed <= 300; ++seed) {
     g.n = 3 + static_cast<int>(seed % 8);
     g.levels = 1 + static_cast<int>(seed % 5);
@@ -120,17 +123,25 @@ TEST(Solver, EqualityHierarchiesMatchNullSpaceRecursion) {
     const bool unique = (seed % 2 == 0);
     if (unique) appendMinNorm(p);
     const auto ref = nullSpaceReference(p);
-    Solver s;
-    const Result& r = solveOnce(s, p);
-    ASSERT_EQ(r.status, Status::Solved) << "seed " << seed;
-    for (int l = 0; l < p.levelCount(); ++l) {
-      EXPECT_NEAR(r.violation_norm(l), ref.residualNorm[static_cast<size_t>(l)], 1e-8 * (1 + ref.residualNorm[static_cast<size_t>(l)]))
-          << "seed " << seed << " level " << l;
+    ASSERT_EQ(ref.nullity == 0, unique || ref.nullity == 0);
+    for (const Options& o : {Options{}, noElim}) {
+      Solver s;
+      const Result& r = solveOnce(s, p, o);
+      ASSERT_EQ(r.status, Status::Solved) << "seed " << seed;
+      for (int l = 0; l < p.levelCount(); ++l) {
+        EXPECT_NEAR(r.violation_norm(l), ref.residualNorm[static_cast<size_t>(l)], 1e-8 * (1 + ref.residualNorm[static_cast<size_t>(l)]))
+            << "seed " << seed << " level " << l;
+      }
+      // The optimum is unique: same x. Without elimination the solver returns the minimum-norm
+      // optimum like the reference; with elimination it returns an optimum (docs/solver.md).
+      if (ref.nullity == 0 || !o.eliminate_first_level) {
+        EXPECT_LE((r.x - ref.x).norm(), 1e-8 * (1 + ref.x.norm())) << "seed " << seed;
+      }
+      EXPECT_EQ(checkKkt(p, r), "") << "seed " << seed;
+      if (o.eliminate_first_level && r.rank[0] == p.level(0).rows() && ref.nullity >= 0) ++eliminated;
     }
-    // Without a final full-rank level both return the minimum-norm optimum.
-    EXPECT_LE((r.x - ref.x).norm(), 1e-8 * (1 + ref.x.norm())) << "seed " << seed;
-    EXPECT_EQ(checkKkt(p, r), "") << "seed " << seed;
   }
+  EXPECT_GT(eliminated, 50);  // the elimination stage was exercised
 }
 
 TEST(Solver, TinyInequalityProblemsMatchBruteForce) {

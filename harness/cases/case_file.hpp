@@ -1,0 +1,86 @@
+// Case files: a scenario as strict data (docs/simulator.md, "Case files"). The same binary runs
+// every case; nothing case-specific is compiled in.
+//
+// Top level: name, description?, robot{urdf, data}, duration_s, control_period_s?,
+// initial_state{posture, base_xy?, base_yaw_rad?}, controller{type, ...}, sim{contact, servo,
+// grasps?, integrator?}, events?[...], trace?{every_n_ticks?, flush_every_rows?, frames?},
+// checks[...]. Unknown keys, wrong types and unknown references (joints, frames, surfaces,
+// grasps, postures) are errors naming the file, line and key path. Paths are relative to the
+// case file's directory. Sections are tagged by `type` / `action` so that later controllers,
+// events and checks are added without changing existing files.
+#pragma once
+
+#include "harness/checks/checks.hpp"
+#include "harness/sim/simulator.hpp"
+
+#include <string>
+#include <vector>
+
+namespace lexdyn::cases {
+
+enum class Waveform { Sine, RaisedCosine };
+
+/// offset(t) = amplitude * w(2 pi (t - start_s) / period_s + phase_rad) for t >= start_s, with
+/// w = sin (sine) or (1 - cos) / 2 (raised_cosine, which starts at rest); 0 before start_s.
+struct MotionSpec {
+  std::vector<int> joints;
+  double amplitude = 0.0;  ///< rad or m
+  double period_s = 1.0;
+  double phase_rad = 0.0;
+  double start_s = 0.0;
+  Waveform waveform = Waveform::Sine;
+};
+
+struct ControllerSpec {
+  std::string type;                 ///< "posture_servo"
+  std::string posture;              ///< data-file posture
+  std::vector<MotionSpec> motions;  ///< added to the posture
+};
+
+struct InitialStateSpec {
+  std::string posture;
+  double base_x = 0.0, base_y = 0.0, base_yaw_rad = 0.0;
+};
+
+struct GainGroup {
+  std::string match;  ///< joint-name pattern, '*' matches any run of characters
+  double kp = 0.0, kd = 0.0;
+};
+
+struct EventSpec {
+  double at_s = 0.0;
+  std::string action;  ///< grasp_on | grasp_off
+  std::string grasp;
+  std::string where;
+};
+
+struct TraceSpec {
+  int every_n_ticks = 1;
+  int flush_every_rows = 200;
+  std::vector<std::string> frames;  ///< recorded as frame.<F>.x/y/z (plus the frames checks need)
+};
+
+struct CaseSpec {
+  std::string path;  ///< the case file
+  std::string name, description;
+  std::string urdf_path, data_path;  ///< resolved
+  double duration_s = 0.0;
+  double control_period_s = 0.005;
+  InitialStateSpec initial_state;
+  ControllerSpec controller;
+  sim::SimulatorSettings sim;        ///< gains resolved per joint
+  std::vector<GainGroup> gain_groups;
+  std::vector<EventSpec> events;     ///< sorted by time
+  TraceSpec trace;
+  std::vector<checks::CheckSpec> checks;
+};
+
+/// Reads and validates a case file (and the robot files it names). Throws lexdyn::InputError.
+CaseSpec loadCase(const std::string& path);
+
+/// Glob match with '*' only.
+bool globMatch(const std::string& pattern, const std::string& text);
+
+const char* toString(sim::SetpointProfile p);
+
+}  // namespace lexdyn::cases

@@ -1,0 +1,326 @@
+#include "harness/cases/runner.hpp"
+
+#include "harness/sim/build_info.hpp"
+#include "lexdyn/common/error.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace lexdyn::cases {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.10g", v);
+  return buf;
+}
+
+// The posture servo: a fixed posture plus optional periodic joint motions.
+class PostureServo {
+ public:
+  PostureServo(const ControllerSpec& spec, const Eigen::VectorXd& posture) : spec_(spec), posture_(posture) {}
+  void command(double t, sim::JointCommand& cmd) const {
+    cmd.q = posture_;
+    cmd.qdot.setZero();
+    cmd.tau_ff.setZero();
+    for (const MotionSpec& m : spec_.motions) {
+      if (t < m.start_s) continue;
+      const double w = 2.0 * M_PI / m.period_s;
+      const double a = w * (t - m.start_s) + m.phase_rad;
+      double x = 0.0, xd = 0.0;
+      if (m.waveform == Waveform::Sine) {
+        x = m.amplitude * std::sin(a);
+        xd = m.amplitude * w * std::cos(a);
+      } else {
+        x = m.amplitude * 0.5 * (1.0 - std::cos(a));
+        xd = m.amplitude * 0.5 * w * std::sin(a);
+      }
+      for (int j : m.joints) {
+        cmd.q[j] += x;
+        cmd.qdot[j] += xd;
+      }
+    }
+  }
+
+ private:
+  ControllerSpec spec_;
+  Eigen::VectorXd posture_;
+};
+
+// Channels recorded every tick and how to fill them.
+class Recorder {
+ public:
+  Recorder(const CaseSpec& spec, const sim::Simulator& simu) : simu_(simu) {
+    const model::RobotModel& m = simu.model();
+    const model::RobotDescription& d = m.description();
+    schema_.add(checks::kTimeChannel);
+    for (const char* n : {"base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "com.x", "com.y", "com.z"}) schema_.add(n);
+    for (const char* prefix : {"q.", "qd.", "q_cmd.", "tau."}) {
+      for (const auto& j : m.jointNames()) schema_.add(prefix + j);
+    }
+    for (const auto& s : d.force_sensors) {
+      for (const char* c : {"fx", "fy", "fz", "tx", "ty", "tz"}) schema_.add("ft." + s.name + "." + c);
+    }
+    for (const auto& s : d.contact_surfaces) {
+      schema_.add(checks::contactForceChannel(s.name));
+      for (size_t i = 0; i < s.points.size(); ++i) {
+        schema_.add(checks::contactPointChannel(s.name, static_cast<int>(i), 'x'));
+        schema_.add(checks::contactPointChannel(s.name, static_cast<int>(i), 'y'));
+      }
+    }
+    for (const auto& g : spec.sim.grasps) {
+      for (const char* c : {"active", "fx", "fy", "fz"}) schema_.add("grasp." + g.name + "." + c);
+    }
+    std::vector<std::string> frames = spec.trace.frames;
+    for (const auto& c : spec.checks) {
+      if (!c.frame.empty()) frames.push_back(c.frame);
+    }
+    for (const auto& f : frames) {
+      if (schema_.find(checks::frameChannel(f, 'x')) >= 0) continue;
+      frame_ids_.push_back(m.frameId(f));
+      for (char a : {'x', 'y', 'z'}) schema_.add(checks::frameChannel(f, a));
+    }
+    for (const char* n : {"sim.steps", "sim.rhs_evals", "sim.jac_evals"}) schema_.add(n);
+    row_.assign(static_cast<size_t>(schema_.size()), 0.0);
+  }
+
+  const checks::TraceSchema& channels() const { return schema_; }
+
+  const std::vector<double>& fill() {
+    const model::RobotModel& m = simu_.model();
+    const model::RobotDescription& d = m.description();
+    const model::Configuration& q = simu_.configuration();
+    const sim::SensorReadings& s = simu_.sensors();
+    size_t i = 0;
+    row_[i++] = simu_.time();
+    const Eigen::Vector3d e = model::eulerXYZFromRotation(q.base_rotation);
+    for (int k = 0; k < 3; ++k) row_[i++] = q.base_position[k];
+    for (int k = 0; k < 3; ++k) row_[i++] = e[k];
+    const Eigen::Vector3d com = m.centerOfMass(simu_.data());
+    for (int k = 0; k < 3; ++k) row_[i++] = com[k];
+    const int nj = m.numJoints();
+    for (int j = 0; j < nj; ++j) row_[i++] = s.q[j];
+    for (int j = 0; j < nj; ++j) row_[i++] = s.qdot[j];
+    for (int j = 0; j < nj; ++j) row_[i++] = simu_.commandedPosition()[j];
+    for (int j = 0; j < nj; ++j) row_[i++] = s.tau[j];
+    for (const auto& w : s.wrenches) {
+      for (int k = 0; k < 3; ++k) row_[i++] = w.force[k];
+      for (int k = 0; k < 3; ++k) row_[i++] = w.torque[k];
+    }
+    const auto& cps = simu_.contactPoints();
+    size_t p = 0;
+    for (const auto& surf : d.contact_surfaces) {
+      double fz = 0.0;
+      for (size_t k = 0; k < surf.points.size(); ++k) fz += cps[p + k].force.z();
+      row_[i++] = fz;
+      for (size_t k = 0; k < surf.points.size(); ++k) {
+        row_[i++] = cps[p + k].position.x();
+        row_[i++] = cps[p + k].position.y();
+      }
+      p += surf.points.size();
+    }
+    for (int g = 0; g < static_cast<int>(simu_.settings().grasps.size()); ++g) {
+      row_[i++] = simu_.graspActive(g) ? 1.0 : 0.0;
+      const sim::Wrench w = simu_.graspWrenchWorld(g);
+      for (int k = 0; k < 3; ++k) row_[i++] = w.force[k];
+    }
+    for (model::FrameId f : frame_ids_) {
+      const Eigen::Vector3d x = m.framePlacement(simu_.data(), f).translation();
+      for (int k = 0; k < 3; ++k) row_[i++] = x[k];
+    }
+    const sim::CvodeStats st = simu_.integratorStats();
+    row_[i++] = static_cast<double>(st.steps);
+    row_[i++] = static_cast<double>(st.rhs_evals);
+    row_[i++] = static_cast<double>(st.jac_evals);
+    LEXDYN_ALWAYS_ASSERT(i == row_.size(), "trace row layout mismatch");
+    return row_;
+  }
+
+ private:
+  const sim::Simulator& simu_;
+  checks::TraceSchema schema_;
+  std::vector<model::FrameId> frame_ids_;
+  std::vector<double> row_;
+};
+
+checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu) {
+  const model::RobotModel& m = simu.model();
+  const sim::SimulatorSettings& s = spec.sim;
+  checks::TraceMetadata md;
+  md.emplace_back("lexdyn_trace", "1");
+  md.emplace_back("case", spec.name);
+  md.emplace_back("case_file", spec.path);
+  md.emplace_back("model", m.name() + " (urdf " + spec.urdf_path + ", data " + spec.data_path + ")");
+  md.emplace_back("robot_mass_kg", num(m.totalMass()));
+  md.emplace_back(checks::kWeightMetadata, num(m.totalMass() * m.gravity().norm()));
+  md.emplace_back("control_period_s", num(spec.control_period_s));
+  md.emplace_back("duration_s", num(spec.duration_s));
+  md.emplace_back("integrator", "SUNDIALS CVODE BDF, Newton, dense difference-quotient Jacobian; rtol " +
+                                    num(s.integrator.rtol) + ", atol_position " + num(s.integrator.atol_position) +
+                                    ", atol_velocity " + num(s.integrator.atol_velocity) + ", max_order " +
+                                    std::to_string(s.integrator.max_order) + ", max_steps_per_tick " +
+                                    std::to_string(s.integrator.max_steps_per_tick) + ", max_step_s " +
+                                    num(s.integrator.max_step_s));
+  md.emplace_back("contact", "Hunt-Crossley k " + num(s.contact.stiffness) + " N/m^" + num(s.contact.exponent) +
+                                 ", c " + num(s.contact.dissipation_s_per_m) + " s/m; regularised Coulomb mu " +
+                                 num(s.contact.friction_coefficient) + ", v_s " + num(s.contact.slip_velocity_m_per_s) +
+                                 " m/s; ground z " + num(s.contact.ground_height_m) + " m");
+  std::string gains;
+  for (const auto& g : spec.gain_groups) gains += (gains.empty() ? "" : "; ") + g.match + " kp " + num(g.kp) + " kd " + num(g.kd);
+  md.emplace_back("servo", std::string("set-point profile ") + toString(s.servo.profile) + "; torque saturated at the URDF effort limit; " + gains);
+  md.emplace_back("controller", spec.controller.type + " (posture " + spec.controller.posture + ", " +
+                                    std::to_string(spec.controller.motions.size()) + " motions)");
+  for (const auto& kv : sim::buildInfo()) md.push_back(kv);
+  md.emplace_back("trace_every_n_ticks", std::to_string(spec.trace.every_n_ticks));
+  return md;
+}
+
+void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummary& r, const checks::TraceMetadata& md) {
+  using nlohmann::json;
+  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  json j;
+  j["case"] = spec.name;
+  j["case_file"] = spec.path;
+  j["status"] = r.status;
+  j["message"] = r.message;
+  j["duration_s"] = r.duration_s;
+  j["simulated_s"] = r.simulated_s;
+  j["wall_s"] = r.wall_s;
+  j["realtime_factor"] = number(r.realtime_factor);
+  j["ticks"] = r.ticks;
+  j["integrator"] = {{"steps", r.integrator.steps},
+                     {"rhs_evals", r.integrator.rhs_evals},
+                     {"jac_evals", r.integrator.jac_evals},
+                     {"jac_rhs_evals", r.integrator.jac_rhs_evals},
+                     {"nonlin_iters", r.integrator.nonlin_iters},
+                     {"nonlin_conv_fails", r.integrator.nonlin_conv_fails},
+                     {"err_test_fails", r.integrator.err_test_fails},
+                     {"restarts", r.integrator_restarts}};
+  json checks = json::array();
+  for (const auto& c : r.checks) {
+    checks.push_back({{"name", c.name}, {"type", c.type}, {"passed", c.passed}, {"value", number(c.value)},
+                      {"limit", c.limit}, {"unit", c.unit}, {"detail", c.detail}});
+  }
+  j["checks"] = checks;
+  j["all_checks_passed"] = r.all_checks_passed;
+  j["trace"] = fs::path(r.trace_path).filename().string();
+  json build = json::object();
+  for (const auto& kv : md) build[kv.first] = kv.second;
+  j["trace_header"] = build;
+  const std::string tmp = path + ".partial";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw InputError(tmp, "cannot open for writing");
+    out << j.dump(2) << "\n";
+    if (!out) throw InputError(tmp, "write error");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw InputError(path, "cannot rename the summary into place");
+}
+
+}  // namespace
+
+RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
+  std::error_code ec;
+  fs::create_directories(options.out_dir, ec);
+  if (ec || !fs::is_directory(options.out_dir)) throw InputError(options.out_dir, "cannot create the output directory");
+
+  sim::Simulator simu(spec.urdf_path, spec.data_path, spec.sim);
+  const model::RobotModel& m = simu.model();
+  const Eigen::VectorXd q_init = m.posture(spec.initial_state.posture);
+  const Eigen::Matrix3d R0 = Eigen::AngleAxisd(spec.initial_state.base_yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const model::Configuration q0 =
+      simu.placeOnGround(q_init, R0, Eigen::Vector2d(spec.initial_state.base_x, spec.initial_state.base_y));
+  simu.reset(q0, Eigen::VectorXd::Zero(m.nv()));
+  const PostureServo controller(spec.controller, m.posture(spec.controller.posture));
+
+  Recorder recorder(spec, simu);
+  const checks::TraceMetadata md = metadata(spec, simu);
+  std::vector<std::unique_ptr<checks::Check>> check_list;
+  for (const auto& cs : spec.checks) {
+    check_list.push_back(checks::makeCheck(cs));
+    check_list.back()->bind(recorder.channels(), md);
+  }
+
+  RunSummary r;
+  r.duration_s = spec.duration_s;
+  r.trace_path = (fs::path(options.out_dir) / "trace.csv").string();
+  r.summary_path = (fs::path(options.out_dir) / "summary.json").string();
+  checks::TraceWriter writer(r.trace_path, recorder.channels(), md, spec.trace.flush_every_rows);
+
+  const double T = spec.control_period_s;
+  const long n_ticks = std::lround(spec.duration_s / T);
+  const int nj = m.numJoints();
+  sim::JointCommand cmd{Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj)};
+  size_t next_event = 0;
+  r.status = "completed";
+
+  double last_recorded_t = -1.0;
+  auto record = [&](long k, bool force_write) {
+    const std::vector<double>& row = recorder.fill();
+    last_recorded_t = row[0];
+    for (auto& c : check_list) c->consume(row.data());
+    if (force_write || k % spec.trace.every_n_ticks == 0) writer.write(row.data());
+  };
+
+  const auto wall0 = std::chrono::steady_clock::now();
+  auto wallNow = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count(); };
+  const bool show_progress = options.progress && spec.duration_s >= 2.0;
+  long k = 0;
+  for (; k < n_ticks; ++k) {
+    record(k, k == 0);
+    const double t = static_cast<double>(k) * T;
+    while (next_event < spec.events.size() && spec.events[next_event].at_s <= t + 1e-9) {
+      const EventSpec& e = spec.events[next_event++];
+      const int g = simu.graspIndex(e.grasp);
+      simu.setGraspActive(g, e.action == "grasp_on");
+    }
+    if (options.interrupt && options.interrupt->load()) {
+      r.status = "interrupted";
+      r.message = "interrupted at t = " + num(t) + " s";
+      break;
+    }
+    controller.command(static_cast<double>(k + 1) * T, cmd);
+    const sim::StepResult sr = simu.step(cmd);
+    if (!sr.ok) {
+      r.status = "integrator_failure";
+      r.message = sr.message;
+      break;
+    }
+    if (show_progress && (k + 1) % std::max(1L, std::lround(1.0 / T)) == 0) {
+      const double w = wallNow();
+      std::fprintf(stderr, "[%s] t = %.1f / %.1f s, wall %.1f s, %.1fx real time\n", spec.name.c_str(),
+                   simu.time(), spec.duration_s, w, w > 0 ? simu.time() / w : 0.0);
+    }
+  }
+  // The last state (end of the run, or where it stopped), unless already recorded.
+  if (simu.time() != last_recorded_t) record(k, true);
+  r.wall_s = wallNow();
+  r.simulated_s = simu.time();
+  r.ticks = simu.tick();
+  r.realtime_factor = r.wall_s > 0.0 ? r.simulated_s / r.wall_s : 0.0;
+  r.integrator = simu.integratorStats();
+  r.integrator_restarts = simu.integratorRestarts();
+  writer.finish();
+
+  r.all_checks_passed = true;
+  for (auto& c : check_list) {
+    r.checks.push_back(c->result());
+    r.all_checks_passed = r.all_checks_passed && r.checks.back().passed;
+  }
+  writeSummary(r.summary_path, spec, r, md);
+  return r;
+}
+
+int exitCode(const RunSummary& s) { return (s.status == "completed" && s.all_checks_passed) ? 0 : 1; }
+
+}  // namespace lexdyn::cases

@@ -1,0 +1,40 @@
+// Runs a case: simulator + controller + events, records the trace, evaluates the checks, and
+// writes DIR/trace.csv and DIR/summary.json (docs/simulator.md, "Running a case").
+#pragma once
+
+#include "harness/cases/case_file.hpp"
+
+#include <atomic>
+#include <string>
+#include <vector>
+
+namespace lexdyn::cases {
+
+struct RunOptions {
+  std::string out_dir;
+  bool progress = true;                          ///< progress lines on stderr
+  const std::atomic<bool>* interrupt = nullptr;  ///< set (e.g. by SIGINT) to stop after a tick
+};
+
+struct RunSummary {
+  std::string status;   ///< completed | integrator_failure | interrupted
+  std::string message;  ///< what stopped the run early
+  double duration_s = 0.0;
+  double simulated_s = 0.0;
+  double wall_s = 0.0;
+  double realtime_factor = 0.0;
+  long ticks = 0;
+  sim::CvodeStats integrator;
+  long integrator_restarts = 0;
+  std::vector<checks::CheckResult> checks;
+  bool all_checks_passed = false;
+  std::string trace_path, summary_path;
+};
+
+/// Throws lexdyn::InputError for bad input (nothing is simulated then).
+RunSummary runCase(const CaseSpec& spec, const RunOptions& options);
+
+/// 0: completed and every check passed; 1: a check failed or the run stopped early.
+int exitCode(const RunSummary& summary);
+
+}  // namespace lexdyn::cases

@@ -1,0 +1,210 @@
+#include "harness/checks/checks.hpp"
+
+#include "lexdyn/common/error.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+namespace lexdyn::checks {
+
+std::string frameChannel(const std::string& frame, char axis) { return "frame." + frame + "." + axis; }
+std::string contactForceChannel(const std::string& surface) { return "contact." + surface + ".fz"; }
+std::string contactPointChannel(const std::string& surface, int point, char axis) {
+  return "contact." + surface + ".p" + std::to_string(point) + "." + axis;
+}
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+int require(const TraceSchema& schema, const std::string& channel, const CheckSpec& spec) {
+  const int c = schema.find(channel);
+  if (c < 0) throw InputError(spec.where, "check '" + spec.name + "' needs trace channel '" + channel + "', which is not recorded");
+  return c;
+}
+
+class CheckBase : public Check {
+ public:
+  explicit CheckBase(CheckSpec spec, std::string unit) : spec_(std::move(spec)), unit_(std::move(unit)) {}
+  CheckResult result() const override {
+    CheckResult r;
+    r.name = spec_.name;
+    r.type = spec_.type;
+    r.limit = spec_.limit;
+    r.unit = unit_;
+    if (!seen_) {
+      r.value = kNaN;
+      r.passed = false;
+      r.detail = "no trace row at t >= " + std::to_string(spec_.from_s) + " s";
+      return r;
+    }
+    r.value = worst_;
+    r.passed = worst_ <= spec_.limit;
+    r.detail = detail_;
+    return r;
+  }
+
+ protected:
+  bool active(const double* row) const { return row[t_] >= spec_.from_s - 1e-9; }
+  CheckSpec spec_;
+  std::string unit_;
+  int t_ = 0;
+  bool seen_ = false;
+  double worst_ = 0.0;
+  std::string detail_;
+};
+
+class FrameDrift final : public CheckBase {
+ public:
+  explicit FrameDrift(const CheckSpec& s) : CheckBase(s, "m") {}
+  void bind(const TraceSchema& schema, const TraceMetadata&) override {
+    t_ = require(schema, kTimeChannel, spec_);
+    for (int k = 0; k < 3; ++k) c_[k] = require(schema, frameChannel(spec_.frame, "xyz"[k]), spec_);
+  }
+  void consume(const double* row) override {
+    if (!active(row)) return;
+    if (!seen_) {
+      for (int k = 0; k < 3; ++k) ref_[k] = row[c_[k]];
+      seen_ = true;
+    }
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) d2 += (row[c_[k]] - ref_[k]) * (row[c_[k]] - ref_[k]);
+    const double d = std::sqrt(d2);
+    if (d > worst_ || std::isnan(d)) {
+      worst_ = d;
+      detail_ = "largest at t = " + std::to_string(row[t_]) + " s";
+    }
+  }
+
+ private:
+  int c_[3] = {0, 0, 0};
+  double ref_[3] = {0, 0, 0};
+};
+
+class ForceBalance final : public CheckBase {
+ public:
+  explicit ForceBalance(const CheckSpec& s) : CheckBase(s, "relative") {}
+  void bind(const TraceSchema& schema, const TraceMetadata& metadata) override {
+    t_ = require(schema, kTimeChannel, spec_);
+    for (const auto& s : spec_.surfaces) cols_.push_back(require(schema, contactForceChannel(s), spec_));
+    const std::string* w = findMetadata(metadata, kWeightMetadata);
+    if (!w) throw InputError(spec_.where, std::string("check '") + spec_.name + "' needs the trace metadata '" + kWeightMetadata + "'");
+    weight_ = std::strtod(w->c_str(), nullptr);
+    if (!(weight_ > 0.0)) throw InputError(spec_.where, "robot weight in the trace metadata must be > 0");
+  }
+  void consume(const double* row) override {
+    if (!active(row)) return;
+    seen_ = true;
+    double sum = 0.0;
+    for (int c : cols_) sum += row[c];
+    const double e = std::abs(sum - weight_) / weight_;
+    if (e > worst_ || std::isnan(e)) {
+      worst_ = e;
+      detail_ = "largest at t = " + std::to_string(row[t_]) + " s: sum " + std::to_string(sum) + " N, weight " +
+                std::to_string(weight_) + " N";
+    }
+  }
+
+ private:
+  std::vector<int> cols_;
+  double weight_ = 0.0;
+};
+
+// Lowest height of a frame's origin; passes when it stays at or above the limit.
+class FrameHeight final : public CheckBase {
+ public:
+  explicit FrameHeight(const CheckSpec& s) : CheckBase(s, "m") { worst_ = std::numeric_limits<double>::infinity(); }
+  void bind(const TraceSchema& schema, const TraceMetadata&) override {
+    t_ = require(schema, kTimeChannel, spec_);
+    z_ = require(schema, frameChannel(spec_.frame, 'z'), spec_);
+  }
+  void consume(const double* row) override {
+    if (!active(row)) return;
+    seen_ = true;
+    const double z = row[z_];
+    if (z < worst_ || std::isnan(z)) {
+      worst_ = z;
+      detail_ = "lowest at t = " + std::to_string(row[t_]) + " s";
+    }
+  }
+  CheckResult result() const override {
+    CheckResult r = CheckBase::result();
+    if (seen_) r.passed = worst_ >= spec_.limit;
+    return r;
+  }
+
+ private:
+  int z_ = 0;
+};
+
+class ContactSlip final : public CheckBase {
+ public:
+  explicit ContactSlip(const CheckSpec& s) : CheckBase(s, "m") {}
+  void bind(const TraceSchema& schema, const TraceMetadata&) override {
+    t_ = require(schema, kTimeChannel, spec_);
+    for (const auto& s : spec_.surfaces) {
+      int found = 0;
+      for (int i = 0;; ++i) {
+        const int cx = schema.find(contactPointChannel(s, i, 'x'));
+        const int cy = schema.find(contactPointChannel(s, i, 'y'));
+        if (cx < 0 || cy < 0) break;
+        cols_.push_back({cx, cy});
+        names_.push_back(s + ".p" + std::to_string(i));
+        ++found;
+      }
+      if (found == 0) require(schema, contactPointChannel(s, 0, 'x'), spec_);
+    }
+    ref_.assign(cols_.size(), {0.0, 0.0});
+  }
+  void consume(const double* row) override {
+    if (!active(row)) return;
+    if (!seen_) {
+      for (size_t i = 0; i < cols_.size(); ++i) ref_[i] = {row[cols_[i].first], row[cols_[i].second]};
+      seen_ = true;
+    }
+    for (size_t i = 0; i < cols_.size(); ++i) {
+      const double dx = row[cols_[i].first] - ref_[i].first, dy = row[cols_[i].second] - ref_[i].second;
+      const double d = std::sqrt(dx * dx + dy * dy);
+      if (d > worst_ || std::isnan(d)) {
+        worst_ = d;
+        detail_ = "largest for " + names_[i] + " at t = " + std::to_string(row[t_]) + " s";
+      }
+    }
+  }
+
+ private:
+  std::vector<std::pair<int, int>> cols_;
+  std::vector<std::string> names_;
+  std::vector<std::pair<double, double>> ref_;
+};
+
+}  // namespace
+
+const std::vector<std::string>& checkTypes() {
+  static const std::vector<std::string> types = {"frame_drift", "force_balance", "contact_slip", "frame_height"};
+  return types;
+}
+
+std::unique_ptr<Check> makeCheck(const CheckSpec& spec) {
+  if (spec.type == "frame_drift") return std::make_unique<FrameDrift>(spec);
+  if (spec.type == "force_balance") return std::make_unique<ForceBalance>(spec);
+  if (spec.type == "contact_slip") return std::make_unique<ContactSlip>(spec);
+  if (spec.type == "frame_height") return std::make_unique<FrameHeight>(spec);
+  throw InputError(spec.where, "unknown check type '" + spec.type + "'");
+}
+
+std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace) {
+  TraceSchema schema;
+  for (const auto& n : trace.names) schema.add(n);
+  std::vector<CheckResult> out;
+  for (const auto& s : specs) {
+    auto c = makeCheck(s);
+    c->bind(schema, trace.metadata);
+    for (const auto& row : trace.rows) c->consume(row.data());
+    out.push_back(c->result());
+  }
+  return out;
+}
+
+}  // namespace lexdyn::checks

@@ -1,0 +1,74 @@
+// Traces: one row of named channels per control tick, written as CSV.
+//
+// File format (docs/simulator.md, "Trace files"): metadata lines "# key: value", then one line
+// of channel names, then one line per row, every value in the shortest form that reads back to
+// the same double (so a trace round-trips bit for bit). The writer writes to "<path>.partial", flushes every
+// `flush_every_rows` rows so that an interrupted run keeps its data, and renames the file to
+// <path> in finish(). Channels are registered before the first row; later components (the
+// controller, tasks) add their own channels the same way.
+#pragma once
+
+#include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace lexdyn::checks {
+
+/// Ordered (key, value) pairs written as "# key: value" header lines.
+using TraceMetadata = std::vector<std::pair<std::string, std::string>>;
+
+/// Looks a key up; returns nullptr when absent.
+const std::string* findMetadata(const TraceMetadata& m, const std::string& key);
+
+class TraceSchema {
+ public:
+  /// Adds a channel and returns its column. Names must be unique, non-empty, without commas,
+  /// quotes or whitespace (checked; a duplicate is a programming error and aborts).
+  int add(const std::string& name);
+  /// Column of a channel, -1 when absent.
+  int find(const std::string& name) const;
+  int size() const { return static_cast<int>(names_.size()); }
+  const std::vector<std::string>& names() const { return names_; }
+
+ private:
+  std::vector<std::string> names_;
+};
+
+class TraceWriter {
+ public:
+  TraceWriter(const std::string& path, TraceSchema schema, const TraceMetadata& metadata, int flush_every_rows = 200);
+  ~TraceWriter();
+  TraceWriter(const TraceWriter&) = delete;
+  TraceWriter& operator=(const TraceWriter&) = delete;
+
+  const TraceSchema& schema() const { return schema_; }
+  /// Writes one row of schema().size() values.
+  void write(const double* row);
+  /// Flushes, closes and renames the file to its final name. Idempotent.
+  void finish();
+  long rows() const { return rows_; }
+  const std::string& path() const { return path_; }
+  const std::string& partialPath() const { return partial_; }
+
+ private:
+  std::string path_, partial_;
+  TraceSchema schema_;
+  std::FILE* file_ = nullptr;
+  int flush_every_;
+  long rows_ = 0;
+  std::vector<char> buffer_;
+};
+
+/// A trace read back into memory.
+struct TraceTable {
+  TraceMetadata metadata;
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> rows;
+  int column(const std::string& name) const;  ///< -1 when absent
+};
+
+/// Reads a trace file; throws lexdyn::InputError naming the file and line on malformed input.
+TraceTable readTrace(const std::string& path);
+
+}  // namespace lexdyn::checks

@@ -1,0 +1,72 @@
+// The one adapter to SUNDIALS CVODE (the only file that includes SUNDIALS headers is
+// cvode_integrator.cpp). Integrates ydot = f(t, y) with BDF, a Newton nonlinear solver and a
+// dense direct linear solver whose Jacobian CVODE approximates by difference quotients.
+// Integration is advanced to a given time with CVodeSetStopTime + CV_NORMAL, so CVODE never
+// steps past a control tick and keeps its history (order, step size, Jacobian) across ticks.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace lexdyn::sim {
+
+/// The system of ordinary differential equations. rhs() may throw: the exception's message is
+/// kept and the integration stops with CvodeStatus::RhsFailure.
+class OdeSystem {
+ public:
+  virtual ~OdeSystem() = default;
+  virtual int size() const = 0;
+  virtual void rhs(double t, const double* y, double* ydot) = 0;
+};
+
+struct CvodeSettings {
+  double rtol = 1e-4;           ///< relative tolerance
+  std::vector<double> atol;     ///< absolute tolerance per component (size of the system)
+  int max_order = 5;            ///< BDF order limit (1..5)
+  long max_steps = 20000;       ///< per advance() call
+  double max_step = 0.0;        ///< 0: no limit
+  double initial_step = 0.0;    ///< 0: CVODE's estimate
+};
+
+struct CvodeStats {
+  long steps = 0;
+  long rhs_evals = 0;           ///< by the integrator (not counting the Jacobian's)
+  long jac_evals = 0;           ///< dense difference-quotient Jacobians
+  long jac_rhs_evals = 0;       ///< rhs evaluations spent on those Jacobians
+  long nonlin_iters = 0;
+  long nonlin_conv_fails = 0;
+  long err_test_fails = 0;
+  double last_step = 0.0;
+  int last_order = 0;
+};
+
+enum class CvodeStatus { Success, TooMuchWork, TooMuchAccuracy, ErrorTestFailures, ConvergenceFailures, RhsFailure, OtherFailure };
+
+const char* toString(CvodeStatus s);
+
+class CvodeIntegrator {
+ public:
+  CvodeIntegrator(OdeSystem& system, const CvodeSettings& settings);
+  ~CvodeIntegrator();
+  CvodeIntegrator(const CvodeIntegrator&) = delete;
+  CvodeIntegrator& operator=(const CvodeIntegrator&) = delete;
+
+  /// Starts (or restarts) at t0 from y0 (size of the system).
+  void initialize(double t0, const double* y0);
+  /// Integrates to exactly t_out (stop time) and writes y(t_out). On failure, y_out holds the
+  /// last successful state, time() its time, and message() says what happened.
+  CvodeStatus advance(double t_out, double* y_out);
+  double time() const;
+  const std::string& message() const;
+  CvodeStats stats() const;
+
+  /// "6.4.1": the SUNDIALS version compiled in.
+  static std::string sundialsVersion();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lexdyn::sim

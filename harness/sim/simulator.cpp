@@ -1,0 +1,512 @@
+// Simulator: the robot's Simbody matter subsystem (shared with lexdyn::model's construction),
+// external forces computed here (gravity, compliant ground contact, grasp bushings, joint
+// servos), Simbody's articulated-body forward dynamics for udot, CVODE for time integration.
+// Conventions and parameters: docs/simulator.md.
+#include "harness/sim/simulator.hpp"
+
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/model/detail/model_impl.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+namespace lexdyn::sim {
+
+namespace {
+
+struct PointInfo {
+  int surface = -1;
+  int body = -1;
+  Eigen::Vector3d r_body = Eigen::Vector3d::Zero();  // point in its body frame
+};
+
+struct GraspState {
+  GraspSettings settings;
+  int body = -1;
+  Eigen::Isometry3d X_body_frame = Eigen::Isometry3d::Identity();
+  bool active = false;
+  Eigen::Matrix3d R_anchor = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p_anchor = Eigen::Vector3d::Zero();
+};
+
+struct SensorInfo {
+  int body = -1;
+  Eigen::Isometry3d X_body_frame = Eigen::Isometry3d::Identity();
+};
+
+std::string fmt(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%g", v);
+  return buf;
+}
+
+// Rotation vector of R (angle * axis), |angle| <= pi.
+Eigen::Vector3d rotationVector(const Eigen::Matrix3d& R) {
+  const Eigen::AngleAxisd aa(R);
+  return aa.angle() * aa.axis();
+}
+
+}  // namespace
+
+struct Simulator::Impl final : public OdeSystem {
+  Impl(model::RobotModel m, SimulatorSettings s)
+      : model(std::move(m)), settings(std::move(s)), data(model.createData()), observed(model.createData()) {}
+
+  model::RobotModel model;
+  SimulatorSettings settings;
+  model::ModelData data;      // used by the right-hand side
+  model::ModelData observed;  // state at the last tick
+  int nj = 0, nv = 0, nqc = 0, ny = 0, off = 0;
+  double mu = 0.0;
+  std::vector<PointInfo> points;
+  std::vector<GraspState> grasps;
+  std::vector<SensorInfo> sensor_info;
+
+  // Servo commands: the profile goes from (q0, qd0, tau0) at t0 to (q1, qd1, tau1) at t0 + T.
+  Eigen::VectorXd q0, qd0, tau0, q1, qd1, tau1;
+  double t0 = 0.0;
+
+  // Simbody workspaces.
+  SimTK::Vector mob_forces, udot;
+  SimTK::Vector_<SimTK::SpatialVec> body_forces, A_GB;
+
+  std::vector<double> y;
+  std::unique_ptr<CvodeIntegrator> cvode;
+  long k = 0;
+  long restarts = 0;
+  bool restart_pending = false;
+  bool failed = false;
+  StepResult failure;
+
+  // Observations at the tick.
+  SensorReadings sensors;
+  model::Configuration config;
+  Eigen::VectorXd u;
+  std::vector<ContactPoint> contact_points;
+  std::vector<Wrench> grasp_world;
+  Eigen::VectorXd tau_work;
+
+  int size() const override { return ny; }
+
+  // Counters of the integrator before its last restart.
+  CvodeStats before_restart;
+  void accumulate(const CvodeStats& c) {
+    before_restart.steps += c.steps;
+    before_restart.rhs_evals += c.rhs_evals;
+    before_restart.jac_evals += c.jac_evals;
+    before_restart.jac_rhs_evals += c.jac_rhs_evals;
+    before_restart.nonlin_iters += c.nonlin_iters;
+    before_restart.nonlin_conv_fails += c.nonlin_conv_fails;
+    before_restart.err_test_fails += c.err_test_fails;
+  }
+
+  double period() const { return settings.control_period_s; }
+
+  // Servo set-point at time t (s in [0, 1] over the current period).
+  void setpoint(double t, int j, double& q_ref, double& qd_ref, double& tau_ff) const {
+    const double T = period();
+    double s = (t - t0) / T;
+    s = s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s);
+    switch (settings.servo.profile) {
+      case SetpointProfile::Step:
+        q_ref = q1[j];
+        qd_ref = qd1[j];
+        tau_ff = tau1[j];
+        return;
+      case SetpointProfile::Linear:
+        q_ref = q0[j] + s * (q1[j] - q0[j]);
+        qd_ref = qd1[j];
+        tau_ff = tau0[j] + s * (tau1[j] - tau0[j]);
+        return;
+      case SetpointProfile::Hermite: {
+        const double s2 = s * s, s3 = s2 * s;
+        const double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
+        const double d00 = 6 * s2 - 6 * s, d10 = 3 * s2 - 4 * s + 1, d01 = -6 * s2 + 6 * s, d11 = 3 * s2 - 2 * s;
+        q_ref = h00 * q0[j] + h10 * T * qd0[j] + h01 * q1[j] + h11 * T * qd1[j];
+        qd_ref = (d00 * q0[j] + d01 * q1[j]) / T + d10 * qd0[j] + d11 * qd1[j];
+        tau_ff = tau0[j] + s * (tau1[j] - tau0[j]);
+        return;
+      }
+    }
+  }
+
+  void addBodyForce(int body, const Eigen::Vector3d& torque_about_origin, const Eigen::Vector3d& force) {
+    SimTK::SpatialVec& F = body_forces[model.impl().mobod[static_cast<size_t>(body)]];
+    F[0] += model::toSimTK(torque_about_origin);
+    F[1] += model::toSimTK(force);
+  }
+
+  // All applied forces at (t, q, u) with `d` updated at that state. With `record`, the contact
+  // point states, grasp wrenches and servo torques are stored as observations.
+  void evaluateForces(const model::ModelData& md, double t, const double* q, const double* uu, bool record) {
+    const model::RobotModel::Impl& m = model.impl();
+    const model::ModelData::Impl& d = md.impl();
+    body_forces.setToZero();
+    // Gravity at each body's CoM.
+    for (int b = 0; b < m.nb; ++b) {
+      const Eigen::Vector3d f = m.tree.bodies[static_cast<size_t>(b)].mass * m.desc.gravity;
+      addBodyForce(b, (d.com.col(b) - d.p.col(b)).cross(f), f);
+    }
+    // Ground contact.
+    const ContactSettings& c = settings.contact;
+    for (size_t i = 0; i < points.size(); ++i) {
+      const PointInfo& P = points[i];
+      const Eigen::Vector3d r = d.R[static_cast<size_t>(P.body)] * P.r_body;
+      const Eigen::Vector3d p = d.p.col(P.body) + r;
+      const Eigen::Vector3d v = d.v.col(P.body) + d.omega.col(P.body).cross(r);
+      Eigen::Vector3d F = Eigen::Vector3d::Zero();
+      const double pen = c.ground_height_m - p.z();
+      if (pen > 0.0) {
+        // Hunt-Crossley: fn = k pen^n (1 + c pen_dot), never pulling.
+        double fn = c.stiffness * std::pow(pen, c.exponent) * (1.0 - c.dissipation_s_per_m * v.z());
+        if (fn < 0.0) fn = 0.0;
+        // Regularised Coulomb friction.
+        const double vx = v.x(), vy = v.y();
+        const double scale = -mu * fn / std::sqrt(vx * vx + vy * vy + c.slip_velocity_m_per_s * c.slip_velocity_m_per_s);
+        F = Eigen::Vector3d(scale * vx, scale * vy, fn);
+        addBodyForce(P.body, r.cross(F), F);
+      }
+      if (record) {
+        ContactPoint& cp = contact_points[i];
+        cp.surface = P.surface;
+        cp.position = p;
+        cp.velocity = v;
+        cp.force = F;
+      }
+    }
+    // Grasp bushings.
+    for (size_t g = 0; g < grasps.size(); ++g) {
+      const GraspState& G = grasps[g];
+      Wrench w;
+      if (G.active) {
+        const Eigen::Matrix3d& Rb = d.R[static_cast<size_t>(G.body)];
+        const Eigen::Vector3d r = Rb * G.X_body_frame.translation();
+        const Eigen::Vector3d pG = d.p.col(G.body) + r;
+        const Eigen::Matrix3d RG = Rb * G.X_body_frame.linear();
+        const Eigen::Vector3d vG = d.v.col(G.body) + d.omega.col(G.body).cross(r);
+        const Eigen::Vector3d w_body = d.omega.col(G.body);
+        const GraspSettings& s = G.settings;
+        const Eigen::Vector3d F = -s.stiffness_N_per_m * (pG - G.p_anchor) - s.damping_Ns_per_m * vG;
+        const Eigen::Vector3d rot_err = G.R_anchor * rotationVector(G.R_anchor.transpose() * RG);
+        const Eigen::Vector3d T = -s.rot_stiffness_Nm_per_rad * rot_err - s.rot_damping_Nms_per_rad * w_body;
+        addBodyForce(G.body, T + r.cross(F), F);
+        w.force = F;
+        w.torque = T;
+      }
+      if (record) grasp_world[g] = w;
+    }
+    // Joint servos.
+    mob_forces.setToZero();
+    const Eigen::VectorXd& tau_max = model.jointTorqueLimits();
+    for (int j = 0; j < nj; ++j) {
+      double q_ref = 0.0, qd_ref = 0.0, tau_ff = 0.0;
+      setpoint(t, j, q_ref, qd_ref, tau_ff);
+      const double qj = q[off + j];
+      const double qdj = uu[off + j];
+      double tau = settings.servo.kp[j] * (q_ref - qj) + settings.servo.kd[j] * (qd_ref - qdj) + tau_ff;
+      tau = std::clamp(tau, -tau_max[j], tau_max[j]);
+      mob_forces[m.dof_u_index[static_cast<size_t>(off + j)]] = tau;
+      if (record) tau_work[j] = tau;
+    }
+  }
+
+  void rhs(double t, const double* yy, double* ydot) override {
+    const double* q = yy;
+    const double* uu = yy + nqc;
+    if (model.hasFreeFlyer() && std::cos(q[1]) < 0.02) {
+      throw std::runtime_error("base orientation at the Euler-angle singularity (pitch " +
+                               fmt(q[1] * 180.0 / M_PI) + " deg): the robot has fallen over");
+    }
+    model::detail::updateEuler(model, data, q, uu);
+    evaluateForces(data, t, q, uu, false);
+    const model::RobotModel::Impl& m = model.impl();
+    SimTK::State& state = data.impl().state;
+    m.system.realize(state, SimTK::Stage::Dynamics);
+    m.matter.calcAccelerationIgnoringConstraints(state, mob_forces, body_forces, udot, A_GB);
+    model::detail::eulerCoordinateRates(model, data, ydot);
+    for (int i = 0; i < nv; ++i) ydot[nqc + i] = udot[m.dof_u_index[static_cast<size_t>(i)]];
+  }
+
+  // Observations at the current y and tick time.
+  void observe(double t) {
+    const double* q = y.data();
+    const double* uu = y.data() + nqc;
+    model::detail::updateEuler(model, observed, q, uu);
+    evaluateForces(observed, t, q, uu, true);
+    if (model.hasFreeFlyer()) {
+      config.base_rotation = model::rotationFromEulerXYZ(Eigen::Vector3d(q[0], q[1], q[2]));
+      config.base_position = Eigen::Vector3d(q[3], q[4], q[5]);
+    }
+    for (int j = 0; j < nj; ++j) config.joints[j] = q[off + j];
+    for (int i = 0; i < nv; ++i) u[i] = uu[i];
+    sensors.time_s = t;
+    sensors.q = config.joints;
+    sensors.qdot = u.tail(nj);
+    sensors.tau = tau_work;
+    // Force/torque sensors: external contact wrenches on the sensor's body.
+    const model::ModelData::Impl& d = observed.impl();
+    for (size_t s = 0; s < sensor_info.size(); ++s) {
+      const SensorInfo& S = sensor_info[s];
+      const Eigen::Matrix3d Rs = d.R[static_cast<size_t>(S.body)] * S.X_body_frame.linear();
+      const Eigen::Vector3d ps = d.p.col(S.body) + d.R[static_cast<size_t>(S.body)] * S.X_body_frame.translation();
+      Eigen::Vector3d F = Eigen::Vector3d::Zero(), T = Eigen::Vector3d::Zero();
+      for (size_t i = 0; i < points.size(); ++i) {
+        if (points[i].body != S.body) continue;
+        F += contact_points[i].force;
+        T += (contact_points[i].position - ps).cross(contact_points[i].force);
+      }
+      for (size_t g = 0; g < grasps.size(); ++g) {
+        if (grasps[g].body != S.body || !grasps[g].active) continue;
+        const Eigen::Vector3d pG = d.p.col(S.body) + d.R[static_cast<size_t>(S.body)] * grasps[g].X_body_frame.translation();
+        F += grasp_world[g].force;
+        T += grasp_world[g].torque + (pG - ps).cross(grasp_world[g].force);
+      }
+      sensors.wrenches[s].force = Rs.transpose() * F;
+      sensors.wrenches[s].torque = Rs.transpose() * T;
+    }
+  }
+};
+
+Simulator::Simulator(const std::string& urdf_path, const std::string& data_path, SimulatorSettings settings) {
+  model::RobotModel m = model::RobotModel::fromFiles(urdf_path, data_path);
+  impl_ = std::make_unique<Impl>(std::move(m), std::move(settings));
+  Impl& s = *impl_;
+  const model::RobotModel& model = s.model;
+  const std::string where = "simulator settings";
+  s.nj = model.numJoints();
+  s.nv = model.nv();
+  s.off = model.jointVelocityOffset();
+  s.nqc = s.off + s.nj;  // Euler angles + position + joints, or joints
+  s.ny = s.nqc + s.nv;
+
+  const SimulatorSettings& st = s.settings;
+  if (!(st.control_period_s > 0.0)) throw InputError(where, "control period must be > 0");
+  if (st.servo.kp.size() != s.nj || st.servo.kd.size() != s.nj) {
+    throw InputError(where, "servo gains must have one entry per joint (" + std::to_string(s.nj) + ")");
+  }
+  if ((st.servo.kp.array() < 0.0).any() || (st.servo.kd.array() < 0.0).any()) {
+    throw InputError(where, "servo gains must be >= 0");
+  }
+  const ContactSettings& c = st.contact;
+  if (!(c.stiffness > 0.0) || !(c.exponent >= 1.0) || !(c.dissipation_s_per_m >= 0.0) || !(c.slip_velocity_m_per_s > 0.0)) {
+    throw InputError(where, "contact: expected stiffness > 0, exponent >= 1, dissipation >= 0, slip velocity > 0");
+  }
+  s.mu = c.friction_coefficient >= 0.0 ? c.friction_coefficient : model.description().friction_coefficient;
+
+  const model::RobotDescription& desc = model.description();
+  for (size_t si = 0; si < desc.contact_surfaces.size(); ++si) {
+    const auto& surf = desc.contact_surfaces[si];
+    const auto& F = desc.frames[static_cast<size_t>(surf.frame)];
+    for (const auto& p : surf.points) {
+      PointInfo P;
+      P.surface = static_cast<int>(si);
+      P.body = F.link;
+      P.r_body = F.placement * p;
+      s.points.push_back(P);
+    }
+  }
+  if (!s.points.empty() && !(s.mu > 0.0)) throw InputError(where, "contact: friction coefficient must be > 0");
+  for (const GraspSettings& g : st.grasps) {
+    GraspState G;
+    G.settings = g;
+    const model::FrameId f = model.frameId(g.frame);
+    G.body = model.frameBody(f);
+    G.X_body_frame = model.frameInBody(f);
+    for (const auto& o : s.grasps) {
+      if (o.settings.name == g.name) throw InputError(where, "duplicate grasp name '" + g.name + "'");
+    }
+    s.grasps.push_back(G);
+  }
+  for (const auto& fs : desc.force_sensors) {
+    SensorInfo S;
+    S.body = desc.frames[static_cast<size_t>(fs.frame)].link;
+    S.X_body_frame = desc.frames[static_cast<size_t>(fs.frame)].placement;
+    s.sensor_info.push_back(S);
+  }
+
+  const model::RobotModel::Impl& mi = model.impl();
+  s.mob_forces.resize(mi.simbody_nu);
+  s.udot.resize(mi.simbody_nu);
+  s.body_forces.resize(mi.matter.getNumBodies());
+  s.A_GB.resize(mi.matter.getNumBodies());
+  s.y.assign(static_cast<size_t>(s.ny), 0.0);
+  s.q0 = s.q1 = Eigen::VectorXd::Zero(s.nj);
+  s.qd0 = s.qd1 = s.tau0 = s.tau1 = Eigen::VectorXd::Zero(s.nj);
+  s.config = model.neutralConfiguration();
+  s.u = Eigen::VectorXd::Zero(s.nv);
+  s.contact_points.assign(s.points.size(), ContactPoint());
+  s.grasp_world.assign(s.grasps.size(), Wrench());
+  s.tau_work = Eigen::VectorXd::Zero(s.nj);
+  s.sensors.wrenches.assign(s.sensor_info.size(), Wrench());
+
+  CvodeSettings cs;
+  const IntegratorSettings& is = st.integrator;
+  if (!(is.rtol > 0.0) || !(is.atol_position > 0.0) || !(is.atol_velocity > 0.0) || is.max_order < 1 ||
+      is.max_order > 5 || is.max_steps_per_tick < 1 || is.max_step_s < 0.0) {
+    throw InputError(where, "integrator: expected rtol, atol > 0, max_order in 1..5, max_steps_per_tick >= 1");
+  }
+  cs.rtol = is.rtol;
+  cs.atol.assign(static_cast<size_t>(s.ny), is.atol_velocity);
+  for (int i = 0; i < s.nqc; ++i) cs.atol[static_cast<size_t>(i)] = is.atol_position;
+  cs.max_order = is.max_order;
+  cs.max_steps = is.max_steps_per_tick;
+  cs.max_step = is.max_step_s;
+  s.cvode = std::make_unique<CvodeIntegrator>(s, cs);
+}
+
+Simulator::~Simulator() = default;
+
+const model::RobotModel& Simulator::model() const { return impl_->model; }
+const SimulatorSettings& Simulator::settings() const { return impl_->settings; }
+
+model::Configuration Simulator::placeOnGround(const Eigen::VectorXd& joints, const Eigen::Matrix3d& base_rotation,
+                                              const Eigen::Vector2d& base_xy) const {
+  const Impl& s = *impl_;
+  model::Configuration q = s.model.neutralConfiguration();
+  q.joints = joints;
+  q.base_rotation = base_rotation;
+  q.base_position = Eigen::Vector3d(base_xy.x(), base_xy.y(), 0.0);
+  if (s.points.empty() || !s.model.hasFreeFlyer()) return q;
+  model::ModelData d = s.model.createData();
+  s.model.update(d, q, Eigen::VectorXd::Zero(s.nv));
+  double zmin = std::numeric_limits<double>::infinity();
+  for (const PointInfo& P : s.points) {
+    zmin = std::min(zmin, (d.impl().p.col(P.body) + d.impl().R[static_cast<size_t>(P.body)] * P.r_body).z());
+  }
+  const ContactSettings& c = s.settings.contact;
+  const double weight = s.model.totalMass() * s.model.gravity().norm();
+  const double share = weight / static_cast<double>(s.points.size());
+  const double penetration = std::pow(share / c.stiffness, 1.0 / c.exponent);
+  q.base_position.z() = c.ground_height_m - zmin - penetration;
+  return q;
+}
+
+void Simulator::reset(const model::Configuration& q, const Eigen::VectorXd& u, const JointCommand* initial_command) {
+  Impl& s = *impl_;
+  if (q.joints.size() != s.nj || u.size() != s.nv) throw InputError("simulator reset", "state has the wrong size");
+  int i = 0;
+  if (s.model.hasFreeFlyer()) {
+    const Eigen::Vector3d e = model::eulerXYZFromRotation(q.base_rotation);
+    for (int k = 0; k < 3; ++k) s.y[static_cast<size_t>(i++)] = e[k];
+    for (int k = 0; k < 3; ++k) s.y[static_cast<size_t>(i++)] = q.base_position[k];
+  }
+  for (int j = 0; j < s.nj; ++j) s.y[static_cast<size_t>(i++)] = q.joints[j];
+  for (int k = 0; k < s.nv; ++k) s.y[static_cast<size_t>(i++)] = u[k];
+  if (initial_command) {
+    if (initial_command->q.size() != s.nj || initial_command->qdot.size() != s.nj || initial_command->tau_ff.size() != s.nj) {
+      throw InputError("simulator reset", "initial command vectors must have one entry per joint");
+    }
+    s.q1 = initial_command->q;
+    s.qd1 = initial_command->qdot;
+    s.tau1 = initial_command->tau_ff;
+  } else {
+    s.q1 = q.joints;
+    s.qd1 = u.tail(s.nj);
+    s.tau1.setZero();
+  }
+  s.q0 = s.q1;
+  s.qd0 = s.qd1;
+  s.tau0 = s.tau1;
+  s.restart_pending = false;
+  s.k = 0;
+  s.restarts = 0;
+  s.before_restart = CvodeStats();
+  s.t0 = 0.0;
+  s.failed = false;
+  s.failure = StepResult();
+  for (auto& g : s.grasps) g.active = false;
+  s.cvode->initialize(0.0, s.y.data());
+  s.observe(0.0);
+  for (size_t g = 0; g < s.grasps.size(); ++g) {
+    if (s.grasps[g].settings.initially_active) setGraspActive(static_cast<int>(g), true);
+  }
+  s.observe(0.0);
+}
+
+StepResult Simulator::step(const JointCommand& cmd) {
+  Impl& s = *impl_;
+  if (s.failed) return s.failure;
+  if (cmd.q.size() != s.nj || cmd.qdot.size() != s.nj || cmd.tau_ff.size() != s.nj) {
+    throw InputError("simulator step", "command vectors must have one entry per joint");
+  }
+  s.q0 = s.q1;
+  s.qd0 = s.qd1;
+  s.tau0 = s.tau1;
+  s.q1 = cmd.q;
+  s.qd1 = cmd.qdot;
+  s.tau1 = cmd.tau_ff;
+  const double T = s.period();
+  s.t0 = static_cast<double>(s.k) * T;
+  const double t1 = static_cast<double>(s.k + 1) * T;
+  // A step set-point or a switched grasp makes the right-hand side jump at this tick: restart
+  // the integrator there instead of letting its history straddle the discontinuity.
+  if (s.restart_pending || (s.settings.servo.profile == SetpointProfile::Step && s.k > 0)) {
+    s.accumulate(s.cvode->stats());  // CVodeReInit resets CVODE's counters
+    s.cvode->initialize(s.t0, s.y.data());
+    ++s.restarts;
+  }
+  s.restart_pending = false;
+  const CvodeStatus st = s.cvode->advance(t1, s.y.data());
+  if (st != CvodeStatus::Success) {
+    s.failed = true;
+    s.failure.ok = false;
+    s.failure.status = st;
+    s.failure.message = s.cvode->message();
+    s.observe(s.cvode->time());
+    return s.failure;
+  }
+  ++s.k;
+  s.observe(t1);
+  return StepResult();
+}
+
+void Simulator::setGraspActive(int grasp, bool active) {
+  Impl& s = *impl_;
+  LEXDYN_ALWAYS_ASSERT(grasp >= 0 && grasp < static_cast<int>(s.grasps.size()), "grasp index out of range");
+  GraspState& G = s.grasps[static_cast<size_t>(grasp)];
+  if (active && !G.active) {
+    const Eigen::Isometry3d X = s.model.bodyPlacement(s.observed, G.body) * G.X_body_frame;
+    G.R_anchor = X.linear();
+    G.p_anchor = X.translation();
+  }
+  if (G.active != active) s.restart_pending = true;
+  G.active = active;
+}
+
+bool Simulator::graspActive(int grasp) const { return impl_->grasps.at(static_cast<size_t>(grasp)).active; }
+
+int Simulator::graspIndex(const std::string& name) const {
+  for (size_t g = 0; g < impl_->grasps.size(); ++g) {
+    if (impl_->grasps[g].settings.name == name) return static_cast<int>(g);
+  }
+  throw InputError("simulator settings", "unknown grasp '" + name + "'");
+}
+
+double Simulator::time() const { return impl_->sensors.time_s; }
+long Simulator::tick() const { return impl_->k; }
+const SensorReadings& Simulator::sensors() const { return impl_->sensors; }
+const model::Configuration& Simulator::configuration() const { return impl_->config; }
+const Eigen::VectorXd& Simulator::velocity() const { return impl_->u; }
+const std::vector<ContactPoint>& Simulator::contactPoints() const { return impl_->contact_points; }
+const model::ModelData& Simulator::data() const { return impl_->observed; }
+const Eigen::VectorXd& Simulator::commandedPosition() const { return impl_->q1; }
+Wrench Simulator::graspWrenchWorld(int grasp) const { return impl_->grasp_world.at(static_cast<size_t>(grasp)); }
+CvodeStats Simulator::integratorStats() const {
+  CvodeStats s = impl_->cvode->stats();
+  const CvodeStats& b = impl_->before_restart;
+  s.steps += b.steps;
+  s.rhs_evals += b.rhs_evals;
+  s.jac_evals += b.jac_evals;
+  s.jac_rhs_evals += b.jac_rhs_evals;
+  s.nonlin_iters += b.nonlin_iters;
+  s.nonlin_conv_fails += b.nonlin_conv_fails;
+  s.err_test_fails += b.err_test_fails;
+  return s;
+}
+int Simulator::stateSize() const { return impl_->ny; }
+long Simulator::integratorRestarts() const { return impl_->restarts; }
+
+}  // namespace lexdyn::sim

@@ -1,0 +1,94 @@
+// Strict reading of YAML data files (robot data files, case files).
+//
+// Every value is read through a `yaml::Node`, which remembers the file and the key path it
+// came from ("cases/stand.yaml:12: sim.contact.stiffness"), so that every error names the file,
+// the line and the field. Mappings are read through `yaml::StrictMap`, which refuses unknown
+// and duplicate keys. Numbers must be plain (unquoted) finite scalars, strings must be scalars,
+// booleans must be `true` or `false`.
+//
+// This header includes yaml-cpp. It is used by the loaders of lexdyn/model and harness/cases;
+// it is not part of the controller's per-tick API.
+#pragma once
+
+#include <Eigen/Core>
+#include <yaml-cpp/yaml.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lexdyn::yaml {
+
+/// A YAML node with its origin (file and key path).
+class Node {
+ public:
+  Node(YAML::Node node, std::string file, std::string path);
+
+  /// "file:line: path" (line is 1-based; omitted when unknown).
+  std::string where() const;
+  const std::string& file() const { return file_; }
+  const std::string& path() const { return path_; }
+  const YAML::Node& raw() const { return node_; }
+
+  bool isMap() const { return node_.IsMap(); }
+  bool isSequence() const { return node_.IsSequence(); }
+  bool isScalar() const { return node_.IsScalar(); }
+  bool isNull() const { return node_.IsNull(); }
+
+  /// Throws lexdyn::InputError(where(), what).
+  [[noreturn]] void fail(const std::string& what) const;
+
+  double asDouble() const;            ///< plain finite number
+  double asPositiveDouble() const;    ///< > 0
+  double asNonNegativeDouble() const; ///< >= 0
+  int asInt() const;                  ///< plain integer
+  bool asBool() const;                ///< true / false
+  std::string asString() const;       ///< any scalar, non-empty
+  /// A sequence of exactly `n` numbers.
+  Eigen::VectorXd asVector(int n) const;
+  /// A sequence of any length >= min_size of numbers.
+  Eigen::VectorXd asVectorAnySize(int min_size = 0) const;
+  Eigen::Vector3d asVector3() const;
+  /// One of `choices` (error lists them).
+  std::string asEnum(const std::vector<std::string>& choices) const;
+
+  /// Sequence access.
+  int size() const;  ///< requires a sequence
+  Node operator[](int i) const;
+  std::vector<Node> elements() const;  ///< requires a sequence (an empty one is fine)
+
+  /// Mapping entries in file order (keys must be unique scalars).
+  std::vector<std::pair<std::string, Node>> entries() const;
+
+ private:
+  YAML::Node node_;
+  std::string file_;
+  std::string path_;
+};
+
+/// Loads a YAML file; throws InputError naming the file (and line) when it cannot be read or
+/// parsed. The top-level node must be a mapping.
+Node loadFile(const std::string& path);
+/// Parses YAML text; `file` is used in messages only.
+Node loadString(const std::string& text, const std::string& file);
+
+/// Reads a mapping strictly: every key must be consumed by required()/optional(), and
+/// finish() throws on any key that was not (listing the keys that are allowed).
+class StrictMap {
+ public:
+  explicit StrictMap(const Node& node);
+  Node required(const std::string& key);
+  std::optional<Node> optional(const std::string& key);
+  bool has(const std::string& key) const;
+  /// Throws on unknown keys. Call after all reads.
+  void finish() const;
+  const Node& node() const { return node_; }
+
+ private:
+  Node node_;
+  std::vector<std::string> keys_;       // file order
+  std::vector<std::string> allowed_;    // every key asked for
+  std::vector<bool> used_;
+};
+
+}  // namespace lexdyn::yaml

@@ -1,0 +1,92 @@
+// Internal: the Simbody side of RobotModel / ModelData. Included only by lexdyn/model and
+// harness/sim source files (which are compiled with -UNDEBUG, see docs/architecture.md). Not a
+// public header: it includes Simbody.
+#pragma once
+
+#include "lexdyn/model/robot_model.hpp"
+
+#include <Simbody.h>
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace lexdyn::model {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+inline Eigen::Vector3d toEigen(const SimTK::Vec3& v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
+inline SimTK::Vec3 toSimTK(const Eigen::Vector3d& v) { return SimTK::Vec3(v[0], v[1], v[2]); }
+inline Eigen::Matrix3d toEigen(const SimTK::Rotation& R) {
+  Eigen::Matrix3d M;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) M(i, j) = R.asMat33()(i, j);
+  return M;
+}
+
+struct RobotModel::Impl {
+  explicit Impl(RobotDescription d);
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
+  RobotDescription desc;
+  bool free_flyer = true;
+  int nb = 0;  // bodies (description links)
+  int nj = 0;  // actuated joints
+  int nv = 0;
+  double total_mass = 0.0;
+
+  SimTK::MultibodySystem system;
+  SimTK::SimbodyMatterSubsystem matter;
+  std::vector<SimTK::MobilizedBodyIndex> mobod;  // per body
+  SimTK::State default_state;                    // Euler angles on, realized to Model
+  int simbody_nq = 0, simbody_nu = 0;
+  int base_q_index = 0;               // first q of the free-flyer (3 angles then 3 positions)
+  std::vector<int> joint_q_index;     // per joint
+  std::vector<int> dof_u_index;       // Simbody u index of each model dof (identity here)
+
+  KinematicTree tree;
+  std::vector<std::string> joint_names;
+  Eigen::VectorXd lower, upper, velocity_limit, torque_limit;
+  std::vector<Eigen::Vector3d> joint_axis_local;  // per joint, in the child body frame
+  std::vector<std::vector<int>> children;         // per body
+};
+
+struct ModelData::Impl {
+  SimTK::State state;
+  bool updated = false;
+  // Per body (world frame).
+  std::vector<Eigen::Matrix3d> R;     // R_world_body
+  Eigen::Matrix3Xd p;                 // body origin
+  Eigen::Matrix3Xd com;               // body CoM
+  Eigen::Matrix3Xd omega;             // angular velocity
+  Eigen::Matrix3Xd v;                 // velocity of the body origin
+  Eigen::Matrix3Xd alpha_bias;        // Jdot*u angular part (Simbody's total Coriolis acceleration)
+  Eigen::Matrix3Xd a_bias;            // Jdot*u linear part at the body origin
+  Eigen::Matrix3Xd subtree_com;       // CoM of the subtree rooted at each body
+  // Per dof: motion subspace at the world origin [angular; linear] and its axis / point.
+  Eigen::Matrix<double, 6, Eigen::Dynamic> S;
+  Eigen::Matrix3Xd axis;
+  Eigen::Matrix3Xd point;
+  // Workspaces.
+  std::vector<Matrix6d> composite;                 // composite spatial inertia (world origin)
+  Eigen::Matrix<double, 6, Eigen::Dynamic> wrench; // subtree wrench (world origin)
+  SimTK::Vector simbody_u;                         // reference operators
+  SimTK::Vector_<SimTK::SpatialVec> simbody_body_forces;
+};
+
+}  // namespace lexdyn::model
+
+namespace lexdyn::model::detail {
+
+/// Simulator access: sets the state from the Simbody integration coordinates
+/// q = [body-fixed XYZ Euler angles (3); base position (3); joints] (free-flyer) or q = joints,
+/// and u in model order; realizes Velocity and computes the same caches as update().
+void updateEuler(const RobotModel& model, ModelData& data, const double* q, const double* u);
+/// Time derivative of those coordinates (Euler-angle rates, base velocity, joint rates) at the
+/// state of the last update (Simbody's qdot = N(q) u).
+void eulerCoordinateRates(const RobotModel& model, const ModelData& data, double* qdot);
+/// Realizes Velocity and fills the kinematic caches of `d`.
+void realizeAndCache(const RobotModel::Impl& m, ModelData::Impl& d);
+
+}  // namespace lexdyn::model::detail

@@ -1,0 +1,150 @@
+#!/usr/bin/env python3
+"""Writes hrp2kai_like.urdf from the joint and link tables below.
+
+The tables are the model's source of truth; models/hrp2kai_like/README.md lists every figure
+with its source code (D derived, J JVRC-1 figure, E estimated). Regenerate with
+    python3 models/hrp2kai_like/generate_urdf.py > models/hrp2kai_like/hrp2kai_like.urdf
+Inertias are diagonal about the CoM, from the primitive shape (box or z-axis cylinder).
+"""
+import sys
+
+# Right side; the left side negates y and maps roll/yaw limits [l, u] -> [-u, -l].
+# name, parent link, child link, axis, origin xyz, lower, upper, velocity, effort
+LEG = [
+    ("LEG_JOINT0", "WAIST", "LEG_LINK0", "z", (0, -0.105, 0), -0.524, 0.785, 5.0, 100.0),
+    ("LEG_JOINT1", "LEG_LINK0", "LEG_LINK1", "x", (0, 0, 0), -0.785, 0.349, 5.0, 250.0),
+    ("LEG_JOINT2", "LEG_LINK1", "LEG_LINK2", "y", (0, 0, 0), -2.094, 0.785, 6.0, 300.0),
+    ("LEG_JOINT3", "LEG_LINK2", "LEG_LINK3", "y", (0, 0, -0.37), 0.0, 2.618, 7.0, 300.0),
+    ("LEG_JOINT4", "LEG_LINK3", "LEG_LINK4", "y", (0, 0, -0.37), -1.484, 0.960, 7.0, 250.0),
+    ("LEG_JOINT5", "LEG_LINK4", "LEG_LINK5", "x", (0, 0, 0), -0.611, 0.785, 5.0, 150.0),
+]
+CHEST_HEAD = [
+    ("CHEST_JOINT0", "WAIST", "CHEST_LINK0", "z", (0, 0, 0.35), -0.785, 0.785, 4.0, 150.0),
+    ("CHEST_JOINT1", "CHEST_LINK0", "CHEST_LINK1", "y", (0, 0, 0), -0.524, 1.047, 4.0, 250.0),
+    ("HEAD_JOINT0", "CHEST_LINK1", "HEAD_LINK0", "z", (0, 0, 0.30), -1.222, 1.222, 5.0, 20.0),
+    ("HEAD_JOINT1", "HEAD_LINK0", "HEAD_LINK1", "y", (0, 0, 0), -0.873, 1.047, 5.0, 20.0),
+]
+ARM = [
+    ("ARM_JOINT0", "CHEST_LINK1", "ARM_LINK0", "y", (0, -0.25, 0.20), -3.142, 1.047, 4.0, 120.0),
+    ("ARM_JOINT1", "ARM_LINK0", "ARM_LINK1", "x", (0, 0, 0), -1.745, 0.175, 4.0, 120.0),
+    ("ARM_JOINT2", "ARM_LINK1", "ARM_LINK2", "z", (0, 0, 0), -1.571, 1.571, 4.0, 60.0),
+    ("ARM_JOINT3", "ARM_LINK2", "ARM_LINK3", "y", (0, 0, -0.30), -2.531, 0.0, 4.5, 80.0),
+    ("ARM_JOINT4", "ARM_LINK3", "ARM_LINK4", "z", (0, 0, 0), -1.920, 1.920, 3.5, 30.0),
+    ("ARM_JOINT5", "ARM_LINK4", "ARM_LINK5", "y", (0, 0, -0.30), -1.571, 1.571, 3.5, 30.0),
+    ("ARM_JOINT6", "ARM_LINK5", "ARM_LINK6", "x", (0, 0, 0), -1.920, 1.920, 3.5, 20.0),
+    ("ARM_JOINT7", "ARM_LINK6", "ARM_LINK7", "y", (0.03, 0, -0.10), -0.35, 1.05, 3.0, 10.0),
+]
+# link: mass (kg), CoM (m), shape ("box", x, y, z) or ("cyl", radius, height along z)
+LINKS = {
+    "WAIST": (11.0, (0, 0, 0.06), ("box", 0.22, 0.30, 0.18)),
+    "LEG_LINK0": (1.0, (0, 0, 0.02), ("cyl", 0.05, 0.10)),
+    "LEG_LINK1": (1.2, (0, 0, 0), ("box", 0.10, 0.08, 0.08)),
+    "LEG_LINK2": (3.8, (0, 0, -0.16), ("box", 0.12, 0.12, 0.37)),
+    "LEG_LINK3": (2.8, (0, 0, -0.17), ("box", 0.11, 0.11, 0.37)),
+    "LEG_LINK4": (0.7, (0, 0, 0), ("box", 0.08, 0.08, 0.06)),
+    "LEG_LINK5": (1.5, (0, 0, -0.08), ("box", 0.216, 0.14, 0.05)),
+    "CHEST_LINK0": (1.5, (0, 0, 0), ("cyl", 0.07, 0.08)),
+    "CHEST_LINK1": (15.0, (-0.02, 0, 0.12), ("box", 0.26, 0.36, 0.40)),
+    "HEAD_LINK0": (0.5, (0, 0, 0), ("cyl", 0.03, 0.06)),
+    "HEAD_LINK1": (2.0, (0.02, 0, 0.10), ("box", 0.18, 0.16, 0.20)),
+    "ARM_LINK0": (1.0, (0, 0, 0), ("cyl", 0.05, 0.10)),
+    "ARM_LINK1": (0.8, (0, 0, 0), ("box", 0.08, 0.08, 0.08)),
+    "ARM_LINK2": (1.6, (0, 0, -0.15), ("cyl", 0.05, 0.30)),
+    "ARM_LINK3": (1.0, (0, 0, -0.05), ("cyl", 0.045, 0.10)),
+    "ARM_LINK4": (0.8, (0, 0, -0.20), ("cyl", 0.04, 0.20)),
+    "ARM_LINK5": (0.4, (0, 0, 0), ("box", 0.06, 0.06, 0.06)),
+    "ARM_LINK6": (0.7, (0, 0, -0.08), ("box", 0.06, 0.08, 0.12)),
+    "ARM_LINK7": (0.2, (0, 0, -0.04), ("box", 0.02, 0.03, 0.08)),
+}
+AXES = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1"}
+
+
+def num(v):
+    s = "%.6f" % v
+    s = s.rstrip("0").rstrip(".")
+    return "0" if s in ("-0", "") else s
+
+
+def inertia(mass, shape):
+    if shape[0] == "box":
+        a, b, c = shape[1:]
+        return (mass / 12 * (b * b + c * c), mass / 12 * (a * a + c * c), mass / 12 * (a * a + b * b))
+    r, h = shape[1:]
+    ixx = mass / 12 * (3 * r * r + h * h)
+    return (ixx, ixx, mass / 2 * r * r)
+
+
+def geometry(shape):
+    if shape[0] == "box":
+        return '<box size="%s %s %s"/>' % tuple(num(v) for v in shape[1:])
+    return '<cylinder radius="%s" length="%s"/>' % (num(shape[1]), num(shape[2]))
+
+
+def link(name, key, mirror):
+    mass, com, shape = LINKS[key]
+    com = (com[0], -com[1] if mirror else com[1], com[2])
+    ixx, iyy, izz = inertia(mass, shape)
+    xyz = " ".join(num(v) for v in com)
+    return (
+        '  <link name="%s">\n'
+        '    <inertial>\n'
+        '      <origin xyz="%s" rpy="0 0 0"/>\n'
+        '      <mass value="%s"/>\n'
+        '      <inertia ixx="%s" ixy="0" ixz="0" iyy="%s" iyz="0" izz="%s"/>\n'
+        '    </inertial>\n'
+        '    <visual>\n'
+        '      <origin xyz="%s" rpy="0 0 0"/>\n'
+        '      <geometry>%s</geometry>\n'
+        '    </visual>\n'
+        '  </link>\n'
+    ) % (name, xyz, num(mass), "%.9g" % ixx, "%.9g" % iyy, "%.9g" % izz, xyz, geometry(shape))
+
+
+def joint(name, parent, child, axis, xyz, lower, upper, vel, effort):
+    return (
+        '  <joint name="%s" type="revolute">\n'
+        '    <parent link="%s"/>\n'
+        '    <child link="%s"/>\n'
+        '    <origin xyz="%s" rpy="0 0 0"/>\n'
+        '    <axis xyz="%s"/>\n'
+        '    <limit lower="%s" upper="%s" velocity="%s" effort="%s"/>\n'
+        '  </joint>\n'
+    ) % (name, parent, child, " ".join(num(v) for v in xyz), AXES[axis], num(lower), num(upper), num(vel), num(effort))
+
+
+def side(table, prefix, mirror):
+    """Joints and child links of one limb; prefix is R or L."""
+    out = []
+    for (jn, parent, child, axis, xyz, lo, up, vel, eff) in table:
+        if mirror:
+            xyz = (xyz[0], -xyz[1], xyz[2])
+            if axis in ("x", "z"):
+                lo, up = -up, -lo
+        p = parent if parent in ("WAIST", "CHEST_LINK1") else prefix + parent
+        out.append(joint(prefix + jn, p, prefix + child, axis, xyz, lo, up, vel, eff))
+        out.append(link(prefix + child, child, mirror))
+    return out
+
+
+def main():
+    parts = [
+        '<?xml version="1.0"?>\n',
+        "<!-- Generated by models/hrp2kai_like/generate_urdf.py; do not edit by hand.\n"
+        "     An HRP-2Kai-like humanoid written from published facts and estimates, see README.md.\n"
+        "     x forward, y left, z up; zero pose: straight legs, arms down, WAIST 0.845 m above the soles. -->\n",
+        '<robot name="hrp2kai_like">\n',
+        link("WAIST", "WAIST", False),
+    ]
+    parts += side(LEG, "R", False)
+    parts += side(LEG, "L", True)
+    for (jn, parent, child, axis, xyz, lo, up, vel, eff) in CHEST_HEAD:
+        parts.append(joint(jn, parent, child, axis, xyz, lo, up, vel, eff))
+        parts.append(link(child, child, False))
+    parts += side(ARM, "R", False)
+    parts += side(ARM, "L", True)
+    parts.append("</robot>\n")
+    sys.stdout.write("".join(parts))
+
+
+if __name__ == "__main__":
+    main()

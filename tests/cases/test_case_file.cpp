@@ -1,0 +1,177 @@
+// Case files are strict data: the repository's cases load; unknown keys, wrong types and
+// unknown references are errors naming the file, the line and the key path.
+#include "harness/cases/case_file.hpp"
+#include "lexdyn/common/error.hpp"
+#include "case_test_utils.hpp"
+
+#include <gtest/gtest.h>
+
+namespace lexdyn::cases {
+namespace {
+
+using testing::minimalCase;
+using testing::outputDir;
+using testing::writeCase;
+
+std::string src(const std::string& rel) { return std::string(LEXDYN_SOURCE_DIR) + "/" + rel; }
+
+std::string errorOf(const std::map<std::string, std::string>& sections) {
+  const std::string path = writeCase(outputDir("case_file_errors"), sections);
+  try {
+    loadCase(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+TEST(CaseFile, RepositoryCasesLoad) {
+  const CaseSpec stand = loadCase(src("cases/stand.yaml"));
+  EXPECT_EQ(stand.name, "stand");
+  EXPECT_DOUBLE_EQ(stand.duration_s, 10.0);
+  EXPECT_DOUBLE_EQ(stand.control_period_s, 0.005);
+  ASSERT_EQ(stand.sim.servo.kp.size(), 32);
+  // Gains: later groups override earlier ones.
+  EXPECT_EQ(stand.sim.servo.kp[3], 20000.0);   // RLEG_JOINT3
+  EXPECT_EQ(stand.sim.servo.kp[14], 500.0);    // HEAD_JOINT0
+  EXPECT_EQ(stand.sim.servo.kp[16], 2000.0);   // RARM_JOINT0
+  EXPECT_EQ(stand.sim.servo.kp[23], 100.0);    // RARM_JOINT7
+  EXPECT_EQ(stand.sim.servo.profile, sim::SetpointProfile::Hermite);
+  EXPECT_DOUBLE_EQ(stand.sim.contact.friction_coefficient, 0.7);  // from the data file
+  ASSERT_EQ(stand.checks.size(), 3u);
+  EXPECT_EQ(stand.checks[0].type, "frame_drift");
+  const CaseSpec squat = loadCase(src("cases/squat_sway.yaml"));
+  EXPECT_EQ(squat.controller.motions.size(), 5u);
+}
+
+TEST(CaseFile, MinimalCaseLoads) {
+  const CaseSpec c = loadCase(writeCase(outputDir("case_file_min"), minimalCase()));
+  EXPECT_EQ(c.name, "minimal");
+  EXPECT_EQ(c.trace.frames.size(), 1u);
+}
+
+TEST(CaseFile, UnknownKeysAreErrorsWithFileLineAndPath) {
+  auto s = minimalCase();
+  s["c_duration"] = "duration_s: 0.5\ncolour: red\n";
+  std::string msg = errorOf(s);
+  EXPECT_NE(msg.find("case.yaml:6: colour"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("unknown key"), std::string::npos) << msg;
+  s = minimalCase();
+  s["f_sim"] += "  extra: 1\n";
+  msg = errorOf(s);
+  EXPECT_NE(msg.find("sim.extra"), std::string::npos) << msg;
+}
+
+TEST(CaseFile, WrongTypesAreErrors) {
+  auto s = minimalCase();
+  s["c_duration"] = "duration_s: ten\n";
+  EXPECT_NE(errorOf(s).find("case.yaml:5: duration_s: expected a finite number, found 'ten'"), std::string::npos)
+      << errorOf(s);
+  s = minimalCase();
+  s["c_duration"] = "duration_s: -1\n";
+  EXPECT_NE(errorOf(s).find("expected a number > 0"), std::string::npos);
+  s = minimalCase();
+  s["f_sim"] += "  integrator: {max_order: 7}\n";
+  EXPECT_NE(errorOf(s).find("sim.integrator.max_order"), std::string::npos) << errorOf(s);
+  s = minimalCase();
+  s["f_sim"] += "  integrator: {rtol: \"1e-4\"}\n";
+  EXPECT_NE(errorOf(s).find("sim.integrator.rtol"), std::string::npos) << errorOf(s);
+}
+
+TEST(CaseFile, MissingKeysAreErrors) {
+  auto s = minimalCase();
+  s.erase("h_checks");
+  EXPECT_NE(errorOf(s).find("missing required key 'checks'"), std::string::npos) << errorOf(s);
+}
+
+TEST(CaseFile, UnknownReferencesAreErrors) {
+  auto s = minimalCase();
+  s["d_initial"] = "initial_state:\n  posture: kneeling\n";
+  std::string msg = errorOf(s);
+  EXPECT_NE(msg.find("initial_state.posture"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("half_sitting"), std::string::npos) << msg;  // lists the known ones
+
+  s = minimalCase();
+  s["h_checks"] = "checks:\n  - {type: frame_drift, frame: NOSE, limit_m: 0.01}\n";
+  msg = errorOf(s);
+  EXPECT_NE(msg.find("checks[0].frame"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("'NOSE'"), std::string::npos) << msg;
+
+  s = minimalCase();
+  s["h_checks"] = "checks:\n  - {type: contact_slip, surfaces: [RIGHT_HAND], limit_m: 0.01}\n";
+  EXPECT_NE(errorOf(s).find("checks[0].surfaces[0]"), std::string::npos) << errorOf(s);
+
+  s = minimalCase();
+  s["h_checks"] = "checks:\n  - {type: zmp_inside, limit_m: 0.01}\n";
+  msg = errorOf(s);
+  EXPECT_NE(msg.find("checks[0].type"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("frame_drift"), std::string::npos) << msg;
+
+  s = minimalCase();
+  s["e_controller"] = "controller:\n  type: posture_servo\n  posture: half_sitting\n  motions:\n"
+                      "    - {joints: [RKNEE], amplitude: 0.1, period_s: 1}\n";
+  EXPECT_NE(errorOf(s).find("controller.motions[0].joints[0]"), std::string::npos) << errorOf(s);
+
+  s = minimalCase();
+  s["e_controller"] = "controller:\n  type: lexdyn_bfgs\n  posture: half_sitting\n";
+  EXPECT_NE(errorOf(s).find("controller.type"), std::string::npos) << errorOf(s);
+
+  s = minimalCase();
+  s["b_robot"] = "robot:\n  urdf: no/such.urdf\n  data: no/such.yaml\n";
+  msg = errorOf(s);
+  EXPECT_NE(msg.find("robot.urdf: file not found"), std::string::npos) << msg;
+}
+
+TEST(CaseFile, GainGroupsMustMatchAndCoverEveryJoint) {
+  auto s = minimalCase();
+  s["f_sim"] += "";
+  s["f_sim"].replace(s["f_sim"].find("\"*\""), 3, "\"*ARM*\"");
+  std::string msg = errorOf(s);
+  EXPECT_NE(msg.find("sim.servo.gains"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("CHEST_JOINT0"), std::string::npos) << msg;  // not covered
+  s = minimalCase();
+  s["f_sim"] += "";
+  s["f_sim"].replace(s["f_sim"].find("\"*LEG_JOINT*\""), 13, "\"*KNEE*\"");
+  msg = errorOf(s);
+  EXPECT_NE(msg.find("matches no joint"), std::string::npos) << msg;
+}
+
+TEST(CaseFile, EventsAndGrasps) {
+  auto s = minimalCase();
+  s["f_sim"] += "  grasps:\n    - {name: left, frame: LGRASP, stiffness_N_per_m: 2e4, damping_Ns_per_m: 400,"
+                " rot_stiffness_Nm_per_rad: 500, rot_damping_Nms_per_rad: 10}\n";
+  s["e_controller"] += "events:\n  - {at_s: 0.3, action: grasp_off, grasp: left}\n  - {at_s: 0.1, action: grasp_on, grasp: left}\n";
+  const CaseSpec c = loadCase(writeCase(outputDir("case_file_events"), s));
+  ASSERT_EQ(c.events.size(), 2u);
+  EXPECT_EQ(c.events[0].action, "grasp_on");  // sorted by time
+  EXPECT_DOUBLE_EQ(c.events[1].at_s, 0.3);
+
+  auto bad = s;
+  bad["e_controller"] = "controller:\n  type: posture_servo\n  posture: half_sitting\n"
+                        "events:\n  - {at_s: 0.1, action: grasp_on, grasp: right}\n";
+  EXPECT_NE(errorOf(bad).find("events[0].grasp"), std::string::npos) << errorOf(bad);
+  bad["e_controller"] = "controller:\n  type: posture_servo\n  posture: half_sitting\n"
+                        "events:\n  - {at_s: 9, action: grasp_on, grasp: left}\n";
+  EXPECT_NE(errorOf(bad).find("after the end of the run"), std::string::npos) << errorOf(bad);
+}
+
+TEST(CaseFile, DuplicateCheckNamesAreErrors) {
+  auto s = minimalCase();
+  s["h_checks"] = "checks:\n  - {type: frame_drift, frame: WAIST, limit_m: 0.01}\n"
+                  "  - {type: frame_drift, frame: WAIST, limit_m: 0.02}\n";
+  EXPECT_NE(errorOf(s).find("duplicate check name 'frame_drift'"), std::string::npos) << errorOf(s);
+}
+
+TEST(CaseFile, GlobMatching) {
+  EXPECT_TRUE(globMatch("*", "RLEG_JOINT0"));
+  EXPECT_TRUE(globMatch("*LEG_JOINT*", "LLEG_JOINT5"));
+  EXPECT_TRUE(globMatch("RARM_JOINT7", "RARM_JOINT7"));
+  EXPECT_TRUE(globMatch("*ARM_JOINT7", "LARM_JOINT7"));
+  EXPECT_FALSE(globMatch("*ARM_JOINT7", "LARM_JOINT6"));
+  EXPECT_FALSE(globMatch("CHEST*", "HEAD_JOINT0"));
+  EXPECT_TRUE(globMatch("*_*_*", "A_B_C"));
+  EXPECT_FALSE(globMatch("", "A"));
+}
+
+}  // namespace
+}  // namespace lexdyn::cases

@@ -1,0 +1,157 @@
+// The case runner: the stand acceptance case, bit-identical reruns, failure and interruption
+// handling (the trace so far is kept), checks on a stored trace, grasp events.
+#include "harness/cases/runner.hpp"
+#include "case_test_utils.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace lexdyn::cases {
+namespace {
+
+using testing::minimalCase;
+using testing::outputDir;
+using testing::writeCase;
+
+std::string src(const std::string& rel) { return std::string(LEXDYN_SOURCE_DIR) + "/" + rel; }
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+RunSummary run(const CaseSpec& spec, const std::string& dir, const std::atomic<bool>* interrupt = nullptr) {
+  RunOptions o;
+  o.out_dir = dir;
+  o.progress = false;
+  o.interrupt = interrupt;
+  return runCase(spec, o);
+}
+
+// A copy of a repository case with a shorter duration, robot paths made absolute.
+std::string shortenedCopy(const std::string& rel, double duration_s, const std::string& dir) {
+  std::string text = slurp(src(rel));
+  const size_t d = text.find("duration_s: 10.0");
+  EXPECT_NE(d, std::string::npos);
+  text.replace(d, 16, "duration_s: " + std::to_string(duration_s));
+  for (size_t p = text.find("../models/"); p != std::string::npos; p = text.find("../models/")) {
+    text.replace(p, 10, src("models/"));
+  }
+  const std::string path = dir + "/case.yaml";
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(Runner, StandCaseHoldsHalfSittingAndPassesItsChecks) {
+  const std::string dir = outputDir("runner_stand");
+  const CaseSpec spec = loadCase(src("cases/stand.yaml"));
+  const RunSummary s = run(spec, dir);
+  EXPECT_EQ(s.status, "completed");
+  EXPECT_DOUBLE_EQ(s.simulated_s, 10.0);
+  EXPECT_EQ(s.ticks, 2000);
+  ASSERT_EQ(s.checks.size(), 3u);
+  for (const auto& c : s.checks) EXPECT_TRUE(c.passed) << c.name << " value " << c.value << " limit " << c.limit;
+  EXPECT_EQ(exitCode(s), 0);
+  // Files: the trace header records the model, integrator, compiler, flags and versions.
+  const checks::TraceTable t = checks::readTrace(dir + "/trace.csv");
+  for (const char* key : {"model", "integrator", "contact", "servo", "compiler", "cxx_flags", "eigen", "simbody",
+                          "sundials", "urdfdom", "yaml_cpp", "robot_weight_N"}) {
+    EXPECT_NE(checks::findMetadata(t.metadata, key), nullptr) << key;
+  }
+  EXPECT_EQ(t.rows.size(), 2001u);
+  EXPECT_EQ(t.rows.back()[0], 10.0);
+  const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/summary.json"));
+  EXPECT_EQ(j["status"], "completed");
+  EXPECT_EQ(j["simulated_s"], 10.0);
+  EXPECT_GT(j["wall_s"].get<double>(), 0.0);
+  EXPECT_GT(j["realtime_factor"].get<double>(), 0.0);
+  ASSERT_EQ(j["checks"].size(), 3u);
+  for (const auto& c : j["checks"]) {
+    for (const char* key : {"name", "passed", "value", "limit"}) EXPECT_TRUE(c.contains(key)) << key;
+  }
+  // The checks give the same answers on the stored trace.
+  const auto stored = checks::runChecks(spec.checks, t);
+  for (size_t i = 0; i < stored.size(); ++i) {
+    EXPECT_EQ(stored[i].value, s.checks[i].value) << stored[i].name;
+    EXPECT_EQ(stored[i].passed, s.checks[i].passed);
+  }
+}
+
+TEST(Runner, RerunsAreBitIdentical) {
+  const std::string base = outputDir("runner_determinism");
+  const CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 1.5, base));
+  const RunSummary a = run(spec, base + "/a");
+  const RunSummary b = run(spec, base + "/b");
+  ASSERT_EQ(a.status, "completed");
+  const std::string ta = slurp(base + "/a/trace.csv"), tb = slurp(base + "/b/trace.csv");
+  EXPECT_GT(ta.size(), 100000u);
+  EXPECT_TRUE(ta == tb) << "traces differ";
+  EXPECT_EQ(a.integrator.steps, b.integrator.steps);
+  EXPECT_EQ(a.integrator.rhs_evals, b.integrator.rhs_evals);
+}
+
+TEST(Runner, IntegratorFailureKeepsTheTraceAndReportsTheStatus) {
+  const std::string dir = outputDir("runner_failure");
+  auto sections = minimalCase();
+  sections["f_sim"] += "  integrator: {max_steps_per_tick: 2}\n";
+  const CaseSpec spec = loadCase(writeCase(dir, sections));
+  const RunSummary s = run(spec, dir + "/out");
+  EXPECT_EQ(s.status, "integrator_failure");
+  EXPECT_NE(s.message.find("too_much_work"), std::string::npos) << s.message;
+  EXPECT_EQ(exitCode(s), 1);
+  EXPECT_LT(s.simulated_s, 0.005);
+  const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
+  EXPECT_GE(t.rows.size(), 1u);
+  const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/out/summary.json"));
+  EXPECT_EQ(j["status"], "integrator_failure");
+}
+
+TEST(Runner, InterruptionStopsAfterATickAndKeepsTheTrace) {
+  const std::string dir = outputDir("runner_interrupt");
+  const CaseSpec spec = loadCase(writeCase(dir, minimalCase()));
+  std::atomic<bool> stop{true};
+  const RunSummary s = run(spec, dir + "/out", &stop);
+  EXPECT_EQ(s.status, "interrupted");
+  EXPECT_EQ(exitCode(s), 1);
+  EXPECT_EQ(checks::readTrace(dir + "/out/trace.csv").rows.size(), 1u);
+}
+
+TEST(Runner, AFailedCheckGivesExitCodeOne) {
+  const std::string dir = outputDir("runner_failed_check");
+  auto sections = minimalCase(0.2);
+  sections["h_checks"] = "checks:\n  - {name: tall, type: frame_height, frame: WAIST, min_m: 2.0}\n";
+  const RunSummary s = run(loadCase(writeCase(dir, sections)), dir + "/out");
+  EXPECT_EQ(s.status, "completed");
+  ASSERT_EQ(s.checks.size(), 1u);
+  EXPECT_FALSE(s.checks[0].passed);
+  EXPECT_NEAR(s.checks[0].value, 0.774, 0.01);
+  EXPECT_EQ(exitCode(s), 1);
+}
+
+TEST(Runner, GraspEventsSwitchTheContactAtTheirTimes) {
+  const std::string dir = outputDir("runner_grasp");
+  auto sections = minimalCase(0.4);
+  sections["f_sim"] += "  grasps:\n    - {name: left, frame: LGRASP, stiffness_N_per_m: 2e4, damping_Ns_per_m: 400,"
+                       " rot_stiffness_Nm_per_rad: 500, rot_damping_Nms_per_rad: 10}\n";
+  sections["e_controller"] += "events:\n  - {at_s: 0.1, action: grasp_on, grasp: left}\n"
+                              "  - {at_s: 0.3, action: grasp_off, grasp: left}\n";
+  const RunSummary s = run(loadCase(writeCase(dir, sections)), dir + "/out");
+  ASSERT_EQ(s.status, "completed");
+  const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
+  const int c = t.column("grasp.left.active");
+  ASSERT_GE(c, 0);
+  for (const auto& row : t.rows) {
+    // A row holds the state at its time; the event at t applies to the step from t on.
+    const double expected = (row[0] > 0.1 + 1e-9 && row[0] <= 0.3 + 1e-9) ? 1.0 : 0.0;
+    EXPECT_EQ(row[static_cast<size_t>(c)], expected) << "t = " << row[0];
+  }
+}
+
+}  // namespace
+}  // namespace lexdyn::cases

@@ -1,0 +1,108 @@
+// The CVODE adapter against closed-form solutions, and its failure reporting.
+#include "harness/sim/cvode_integrator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace lexdyn::sim {
+namespace {
+
+// Damped oscillator x'' + 2 z w x' + w^2 x = 0 and a decoupled stiff decay y' = -lambda y.
+class Oscillator : public OdeSystem {
+ public:
+  double w = 3.0, z = 0.1, lambda = 1e4;
+  int calls = 0;
+  double throw_after_t = 1e300;
+  int size() const override { return 3; }
+  void rhs(double t, const double* y, double* yd) override {
+    ++calls;
+    if (t > throw_after_t) throw std::runtime_error("model blew up on purpose");
+    yd[0] = y[1];
+    yd[1] = -2 * z * w * y[1] - w * w * y[0];
+    yd[2] = -lambda * y[2];
+  }
+  // Closed form for x(0) = 1, x'(0) = 0.
+  double x(double t) const {
+    const double wd = w * std::sqrt(1 - z * z);
+    return std::exp(-z * w * t) * (std::cos(wd * t) + z * w / wd * std::sin(wd * t));
+  }
+};
+
+CvodeSettings tight(int n) {
+  CvodeSettings s;
+  s.rtol = 1e-10;
+  s.atol.assign(static_cast<size_t>(n), 1e-12);
+  return s;
+}
+
+TEST(CvodeIntegrator, MatchesClosedFormAcrossStopTimes) {
+  Oscillator sys;
+  CvodeIntegrator cv(sys, tight(3));
+  const double y0[3] = {1.0, 0.0, 1.0};
+  cv.initialize(0.0, y0);
+  double y[3];
+  for (int k = 1; k <= 400; ++k) {
+    const double t = 0.005 * k;
+    ASSERT_EQ(cv.advance(t, y), CvodeStatus::Success);
+    EXPECT_EQ(cv.time(), t);  // stops exactly at the requested time
+    EXPECT_NEAR(y[0], sys.x(t), 1e-8) << "t = " << t;
+    EXPECT_NEAR(y[2], std::exp(-sys.lambda * t), 1e-10);
+  }
+  const CvodeStats st = cv.stats();
+  EXPECT_GT(st.steps, 0);
+  EXPECT_GT(st.jac_evals, 0);
+}
+
+TEST(CvodeIntegrator, LooseToleranceIsStillClose) {
+  Oscillator sys;
+  CvodeSettings s;
+  s.rtol = 1e-4;
+  s.atol.assign(3, 1e-6);
+  CvodeIntegrator cv(sys, s);
+  const double y0[3] = {1.0, 0.0, 1.0};
+  cv.initialize(0.0, y0);
+  double y[3];
+  ASSERT_EQ(cv.advance(2.0, y), CvodeStatus::Success);
+  EXPECT_NEAR(y[0], sys.x(2.0), 1e-3);
+}
+
+TEST(CvodeIntegrator, RightHandSideExceptionStopsWithItsMessage) {
+  Oscillator sys;
+  sys.throw_after_t = 0.0123;
+  CvodeIntegrator cv(sys, tight(3));
+  const double y0[3] = {1.0, 0.0, 1.0};
+  cv.initialize(0.0, y0);
+  double y[3];
+  CvodeStatus s = CvodeStatus::Success;
+  double t = 0.0;
+  while (s == CvodeStatus::Success && t < 1.0) {
+    t += 0.005;
+    s = cv.advance(t, y);
+  }
+  EXPECT_EQ(s, CvodeStatus::RhsFailure);
+  EXPECT_NE(cv.message().find("model blew up on purpose"), std::string::npos) << cv.message();
+  EXPECT_LE(cv.time(), 0.0123 + 1e-12);
+  EXPECT_NEAR(y[0], sys.x(cv.time()), 1e-6);  // the last good state is returned
+}
+
+TEST(CvodeIntegrator, TooMuchWorkIsReported) {
+  Oscillator sys;
+  CvodeSettings s = tight(3);
+  s.max_steps = 3;
+  CvodeIntegrator cv(sys, s);
+  const double y0[3] = {1.0, 0.0, 1.0};
+  cv.initialize(0.0, y0);
+  double y[3];
+  EXPECT_EQ(cv.advance(10.0, y), CvodeStatus::TooMuchWork);
+  EXPECT_LT(cv.time(), 10.0);
+  EXPECT_NE(cv.message().find("too_much_work"), std::string::npos) << cv.message();
+}
+
+TEST(CvodeIntegrator, ReportsTheSundialsVersion) {
+  EXPECT_EQ(CvodeIntegrator::sundialsVersion().rfind("6.", 0), 0u) << CvodeIntegrator::sundialsVersion();
+}
+
+}  // namespace
+}  // namespace lexdyn::sim

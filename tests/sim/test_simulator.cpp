@@ -1,0 +1,281 @@
+// The simulator against closed-form solutions (free pendulum, servo responses, grasp bushing),
+// its sensors against the forces it applies, torque saturation, and failure handling.
+#include "harness/sim/simulator.hpp"
+#include "lexdyn/common/error.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace lexdyn::sim {
+namespace {
+
+std::string src(const std::string& rel) { return std::string(LEXDYN_SOURCE_DIR) + "/" + rel; }
+
+SimulatorSettings tightSettings(int nj, double period) {
+  SimulatorSettings s;
+  s.control_period_s = period;
+  s.servo.kp = Eigen::VectorXd::Zero(nj);
+  s.servo.kd = Eigen::VectorXd::Zero(nj);
+  s.integrator.rtol = 1e-10;
+  s.integrator.atol_position = 1e-12;
+  s.integrator.atol_velocity = 1e-12;
+  return s;
+}
+
+JointCommand hold(const Eigen::VectorXd& q) {
+  return JointCommand{q, Eigen::VectorXd::Zero(q.size()), Eigen::VectorXd::Zero(q.size())};
+}
+
+double agm(double a, double b) {
+  for (int i = 0; i < 60 && std::abs(a - b) > 1e-16 * a; ++i) {
+    const double an = 0.5 * (a + b);
+    b = std::sqrt(a * b);
+    a = an;
+  }
+  return a;
+}
+
+TEST(Simulator, FreePendulumHalfPeriodMatchesClosedForm) {
+  Simulator sim(src("tests/data/model/pendulum.urdf"), src("tests/data/model/pendulum.yaml"), tightSettings(1, 0.001));
+  const double m = 2.5, d = 0.8, I = 0.03 + m * d * d, g = 9.81, th0 = 2.0;
+  model::Configuration q = sim.model().neutralConfiguration();
+  q.joints[0] = th0;
+  sim.reset(q, Eigen::VectorXd::Zero(1));
+  const double k = std::sin(th0 / 2);
+  const double half_period = 2.0 * M_PI / (2.0 * agm(1.0, std::sqrt(1 - k * k))) * std::sqrt(I / (m * g * d));
+  auto accel = [&](double th) { return -m * g * d * std::sin(th) / I; };
+  double t_turn = -1.0;
+  double th_prev = th0, om_prev = 0.0, t_prev = 0.0;
+  for (int i = 0; i < 5000 && t_turn < 0; ++i) {
+    ASSERT_TRUE(sim.step(hold(Eigen::VectorXd::Zero(1))).ok);
+    const double th = sim.sensors().q[0], om = sim.sensors().qdot[0], t = sim.time();
+    if (i > 10 && om_prev < 0.0 && om >= 0.0) {
+      // Turning point from the cubic Hermite interpolant of omega (slopes = accelerations).
+      const double h = t - t_prev, a0 = accel(th_prev), a1 = accel(th);
+      double s = om_prev / (om_prev - om);
+      for (int it = 0; it < 20; ++it) {
+        const double s2 = s * s, s3 = s2 * s;
+        const double v = (2 * s3 - 3 * s2 + 1) * om_prev + (s3 - 2 * s2 + s) * h * a0 + (-2 * s3 + 3 * s2) * om +
+                         (s3 - s2) * h * a1;
+        const double dv = (6 * s2 - 6 * s) * om_prev + (3 * s2 - 4 * s + 1) * h * a0 + (-6 * s2 + 6 * s) * om +
+                          (3 * s2 - 2 * s) * h * a1;
+        s -= v / dv;
+      }
+      t_turn = t_prev + s * h;
+    }
+    th_prev = th;
+    om_prev = om;
+    t_prev = t;
+  }
+  ASSERT_GT(t_turn, 0.0);
+  EXPECT_NEAR(t_turn, half_period, 1e-6 * half_period);
+}
+
+class PointMass : public ::testing::Test {
+ protected:
+  Simulator make(double kp, double kd, SetpointProfile profile, std::vector<GraspSettings> grasps = {}) {
+    SimulatorSettings s = tightSettings(1, 0.005);
+    s.servo.kp[0] = kp;
+    s.servo.kd[0] = kd;
+    s.servo.profile = profile;
+    s.grasps = std::move(grasps);
+    return Simulator(src("models/point_mass/point_mass.urdf"), src("models/point_mass/point_mass.yaml"), s);
+  }
+};
+
+TEST_F(PointMass, StepResponseOfTheServoIsCriticallyDamped) {
+  // m = 1, kp = 100, kd = 20: x(t) = x_ref (1 - (1 + 10 t) exp(-10 t)).
+  Simulator sim = make(100.0, 20.0, SetpointProfile::Step);
+  sim.reset(sim.model().neutralConfiguration(), Eigen::VectorXd::Zero(1));
+  const JointCommand cmd = hold(Eigen::VectorXd::Constant(1, 0.1));
+  for (int k = 1; k <= 200; ++k) {
+    { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+    const double t = sim.time();
+    EXPECT_NEAR(sim.sensors().q[0], 0.1 * (1.0 - (1.0 + 10.0 * t) * std::exp(-10.0 * t)), 1e-8) << t;
+  }
+}
+
+TEST_F(PointMass, HermiteAndLinearSetPointsFollowARampExactlyAStepDoesNot) {
+  // Command q = v t_{k+1}, qdot = v. With a set-point exact within the tick, the tracking error
+  // e = v t - x obeys e'' = -kp e - kd e' with e(0) = 0, e'(0) = v: e = v t exp(-10 t).
+  const double v = 0.2;
+  for (SetpointProfile p : {SetpointProfile::Hermite, SetpointProfile::Linear, SetpointProfile::Step}) {
+    Simulator sim = make(100.0, 20.0, p);
+    // At rest, with the ramp's command at time 0: (0, v).
+    JointCommand start = hold(Eigen::VectorXd::Zero(1));
+    start.qdot[0] = v;
+    sim.reset(sim.model().neutralConfiguration(), Eigen::VectorXd::Zero(1), &start);
+    double worst = 0.0;
+    for (int k = 1; k <= 200; ++k) {
+      JointCommand cmd = hold(Eigen::VectorXd::Constant(1, v * 0.005 * k));
+      cmd.qdot[0] = v;
+      { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+      const double t = sim.time();
+      worst = std::max(worst, std::abs(sim.sensors().q[0] - (v * t - v * t * std::exp(-10.0 * t))));
+    }
+    if (p == SetpointProfile::Step) {
+      EXPECT_GT(worst, 1e-4);  // the step leads the ramp by up to one tick
+    } else {
+      EXPECT_LT(worst, 1e-8);
+    }
+  }
+}
+
+TEST_F(PointMass, TorqueIsSaturatedAtTheEffortLimitAndRecorded) {
+  // Effort limit 100 N: with kp = 1e4 towards 1 m the force saturates, x = 50 t^2.
+  Simulator sim = make(1e4, 0.0, SetpointProfile::Step);
+  sim.reset(sim.model().neutralConfiguration(), Eigen::VectorXd::Zero(1));
+  const JointCommand cmd = hold(Eigen::VectorXd::Constant(1, 1.0));
+  for (int k = 1; k <= 20; ++k) {
+    { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+    const double t = sim.time();
+    EXPECT_NEAR(sim.sensors().q[0], 50.0 * t * t, 1e-9);
+    EXPECT_EQ(sim.sensors().tau[0], 100.0);
+  }
+}
+
+TEST_F(PointMass, GraspBushingIsADampedSpringThatSwitchesOff) {
+  // m x'' = -K x - D x' with K = 400, D = 4: w0 = 20, zeta = 0.1, released after 0.5 s.
+  GraspSettings g;
+  g.name = "pole";
+  g.frame = "mass";
+  g.stiffness_N_per_m = 400.0;
+  g.damping_Ns_per_m = 4.0;
+  g.initially_active = true;
+  Simulator sim = make(0.0, 0.0, SetpointProfile::Hermite, {g});
+  const double v0 = 0.3;
+  sim.reset(sim.model().neutralConfiguration(), Eigen::VectorXd::Constant(1, v0));
+  ASSERT_TRUE(sim.graspActive(0));
+  const double w0 = 20.0, z = 0.1, wd = w0 * std::sqrt(1 - z * z);
+  auto x = [&](double t) { return v0 / wd * std::exp(-z * w0 * t) * std::sin(wd * t); };
+  auto xd = [&](double t) {
+    return v0 * std::exp(-z * w0 * t) * (std::cos(wd * t) - z * w0 / wd * std::sin(wd * t));
+  };
+  const JointCommand cmd = hold(Eigen::VectorXd::Zero(1));
+  for (int k = 1; k <= 100; ++k) {
+    { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+    EXPECT_NEAR(sim.sensors().q[0], x(sim.time()), 1e-8);
+    EXPECT_NEAR(sim.graspWrenchWorld(0).force.x(), -400.0 * x(sim.time()) - 4.0 * xd(sim.time()), 1e-6);
+  }
+  sim.setGraspActive(0, false);
+  const double x1 = x(0.5), v1 = xd(0.5);
+  for (int k = 1; k <= 20; ++k) {
+    { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+    EXPECT_NEAR(sim.sensors().q[0], x1 + v1 * 0.005 * k, 1e-8);
+    EXPECT_EQ(sim.graspWrenchWorld(0).force.norm(), 0.0);
+  }
+}
+
+class Humanoid : public ::testing::Test {
+ protected:
+  static SimulatorSettings settings() {
+    SimulatorSettings s;
+    s.servo.kp = Eigen::VectorXd::Constant(32, 2000.0);
+    s.servo.kd = Eigen::VectorXd::Constant(32, 40.0);
+    for (int j = 0; j < 14; ++j) {  // legs and chest
+      s.servo.kp[j] = 20000.0;
+      s.servo.kd[j] = 400.0;
+    }
+    GraspSettings g;
+    g.name = "left";
+    g.frame = "LGRASP";
+    s.grasps.push_back(g);
+    return s;
+  }
+  Simulator sim{src("models/hrp2kai_like/hrp2kai_like.urdf"), src("models/hrp2kai_like/hrp2kai_like.yaml"), settings()};
+  Eigen::VectorXd hs = sim.model().posture("half_sitting");
+  void SetUp() override { sim.reset(sim.placeOnGround(hs), Eigen::VectorXd::Zero(38)); }
+};
+
+TEST_F(Humanoid, FootSensorsReportTheContactWrench) {
+  const JointCommand cmd = hold(hs);
+  const auto& model = sim.model();
+  const double weight = model.totalMass() * 9.81;
+  for (int k = 0; k < 300; ++k) { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+  // Sensors 0 and 1 are on the feet. Rotate their forces to world and compare with the
+  // contact points' forces and with the weight (the robot is at rest after 1.5 s).
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  for (int s = 0; s < 2; ++s) {
+    const auto& fs = model.description().force_sensors[static_cast<size_t>(s)];
+    const Eigen::Isometry3d X = model.framePlacement(sim.data(), fs.frame);
+    const Wrench& w = sim.sensors().wrenches[static_cast<size_t>(s)];
+    const Eigen::Vector3d f_world = X.linear() * w.force;
+    const Eigen::Vector3d t_world = X.linear() * w.torque;
+    // The same wrench from the contact points of the foot under this sensor.
+    Eigen::Vector3d f = Eigen::Vector3d::Zero(), t = Eigen::Vector3d::Zero();
+    for (const ContactPoint& cp : sim.contactPoints()) {
+      if (cp.surface != s) continue;
+      f += cp.force;
+      t += (cp.position - X.translation()).cross(cp.force);
+    }
+    EXPECT_LT((f_world - f).norm(), 1e-9);
+    EXPECT_LT((t_world - t).norm(), 1e-9);
+    // The centre of pressure lies inside the sole.
+    const Eigen::Isometry3d sole = model.framePlacement(sim.data(), model.frameId(s == 0 ? "RSOLE" : "LSOLE"));
+    const Eigen::Vector3d cop_arm = t_world.cross(f_world) / f_world.squaredNorm();
+    const Eigen::Vector3d cop = X.translation() + cop_arm;
+    EXPECT_LT(std::abs((cop - sole.translation()).x()), 0.108);
+    EXPECT_LT(std::abs((cop - sole.translation()).y()), 0.070);
+    total += f_world;
+  }
+  EXPECT_NEAR(total.z(), weight, 0.01 * weight);
+  // The hand sensors read zero: no grasp.
+  EXPECT_EQ(sim.sensors().wrenches[2].force.norm(), 0.0);
+  EXPECT_EQ(sim.sensors().wrenches[3].force.norm(), 0.0);
+  // Applied torques never exceed the limits.
+  EXPECT_TRUE((sim.sensors().tau.array().abs() <= model.jointTorqueLimits().array()).all());
+}
+
+TEST_F(Humanoid, HandSensorReportsTheGraspWrench) {
+  const auto& model = sim.model();
+  for (int k = 0; k < 100; ++k) ASSERT_TRUE(sim.step(hold(hs)).ok);
+  sim.setGraspActive(0, true);
+  // Pull the left arm forward against the grasp.
+  Eigen::VectorXd target = hs;
+  target[model.jointIndex("LARM_JOINT0")] -= 0.2;
+  for (int k = 0; k < 100; ++k) ASSERT_TRUE(sim.step(hold(target)).ok);
+  const Wrench gw = sim.graspWrenchWorld(0);
+  EXPECT_GT(gw.force.norm(), 5.0);  // the bushing resists the pull
+  const auto& fs = model.description().force_sensors[3];
+  ASSERT_EQ(fs.name, "LeftHandForceSensor");
+  const Eigen::Isometry3d Xs = model.framePlacement(sim.data(), fs.frame);
+  const Eigen::Isometry3d Xg = model.framePlacement(sim.data(), model.frameId("LGRASP"));
+  const Wrench& w = sim.sensors().wrenches[3];
+  EXPECT_LT((Xs.linear() * w.force - gw.force).norm(), 1e-9);
+  const Eigen::Vector3d t_expected = gw.torque + (Xg.translation() - Xs.translation()).cross(gw.force);
+  EXPECT_LT((Xs.linear() * w.torque - t_expected).norm(), 1e-9);
+  sim.setGraspActive(0, false);
+  ASSERT_TRUE(sim.step(hold(target)).ok);
+  EXPECT_EQ(sim.sensors().wrenches[3].force.norm(), 0.0);
+}
+
+TEST(SimulatorFailure, IntegratorFailureStopsWithAClearStatus) {
+  SimulatorSettings s;
+  s.servo.kp = Eigen::VectorXd::Constant(32, 20000.0);
+  s.servo.kd = Eigen::VectorXd::Constant(32, 400.0);
+  s.integrator.max_steps_per_tick = 2;  // far too few for the first tick
+  Simulator sim(src("models/hrp2kai_like/hrp2kai_like.urdf"), src("models/hrp2kai_like/hrp2kai_like.yaml"), s);
+  const Eigen::VectorXd hs = sim.model().posture("half_sitting");
+  sim.reset(sim.placeOnGround(hs), Eigen::VectorXd::Zero(38));
+  const StepResult r = sim.step(hold(hs));
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.status, CvodeStatus::TooMuchWork);
+  EXPECT_NE(r.message.find("too_much_work"), std::string::npos) << r.message;
+  EXPECT_LT(sim.time(), 0.005);
+  EXPECT_EQ(sim.tick(), 0);
+  const StepResult again = sim.step(hold(hs));
+  EXPECT_FALSE(again.ok);
+  EXPECT_EQ(again.message, r.message);
+}
+
+TEST(SimulatorFailure, BadSettingsAreInputErrors) {
+  SimulatorSettings s;
+  s.servo.kp = Eigen::VectorXd::Constant(3, 1.0);  // wrong size
+  s.servo.kd = Eigen::VectorXd::Constant(3, 1.0);
+  EXPECT_THROW(Simulator(src("models/hrp2kai_like/hrp2kai_like.urdf"), src("models/hrp2kai_like/hrp2kai_like.yaml"), s),
+               InputError);
+}
+
+}  // namespace
+}  // namespace lexdyn::sim
