@@ -286,6 +286,22 @@ CaseSpec loadCase(const std::string& path) {
       c.initial_state.base_y = v[1];
     }
     if (auto yaw = is.optional("base_yaw_rad")) c.initial_state.base_yaw_rad = yaw->asDouble();
+    const bool floating = d.base == model::BaseType::FreeFlyer;
+    if (auto st = is.optional("settle")) {
+      const std::string v = st->asEnum({"static_equilibrium", "base_only", "none"});
+      c.initial_state.settle = v == "static_equilibrium" ? sim::Settle::StaticEquilibrium
+                                                          : (v == "base_only" ? sim::Settle::BaseOnly : sim::Settle::None);
+      c.initial_state.settle_given = true;
+      c.initial_state.settle_where = st->where();
+      if (c.initial_state.settle == sim::Settle::BaseOnly && !floating) st->fail("base_only needs a free-flyer base");
+      if (c.initial_state.settle != sim::Settle::None && floating && d.contact_surfaces.empty()) {
+        st->fail("a floating robot without contact surfaces has no static equilibrium; use none");
+      }
+    } else {
+      c.initial_state.settle =
+          floating && !d.contact_surfaces.empty() ? sim::Settle::StaticEquilibrium : sim::Settle::None;
+      c.initial_state.settle_where = is.node().where() + " (settle: " + sim::toString(c.initial_state.settle) + ", the default)";
+    }
     is.finish();
   }
   readController(c, top.required("controller"), d);

@@ -2,7 +2,7 @@
 // every case; nothing case-specific is compiled in.
 //
 // Top level: name, description?, robot{urdf, data}, duration_s, control_period_s?,
-// initial_state{posture, base_xy?, base_yaw_rad?}, controller{type, ...}, sim{contact, servo,
+// initial_state{posture, base_xy?, base_yaw_rad?, settle?}, controller{type, ...}, sim{contact, servo,
 // grasps?, integrator?}, events?[...], trace?{every_n_ticks?, flush_every_rows?, frames?},
 // checks[...]. Unknown keys, wrong types and unknown references (joints, frames, surfaces,
 // grasps, postures) are errors naming the file, line and key path. Paths are relative to the
@@ -37,9 +37,15 @@ struct ControllerSpec {
   std::vector<MotionSpec> motions;  ///< added to the posture
 };
 
+/// The robot starts at rest in `posture`, its servos holding it; the base keeps (base_x,
+/// base_y, base_yaw_rad) and is put on the ground as `settle` says (sim::Settle; default:
+/// static_equilibrium for a free-flyer with contact surfaces, none otherwise).
 struct InitialStateSpec {
   std::string posture;
   double base_x = 0.0, base_y = 0.0, base_yaw_rad = 0.0;
+  sim::Settle settle = sim::Settle::None;
+  bool settle_given = false;   ///< false: the default was taken
+  std::string settle_where;    ///< "file:line: initial_state.settle" (or initial_state) for errors
 };
 
 struct GainGroup {

@@ -153,7 +153,7 @@ class Recorder {
   std::vector<double> row_;
 };
 
-checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu) {
+checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu, const sim::RestingState& rest) {
   const model::RobotModel& m = simu.model();
   const sim::SimulatorSettings& s = spec.sim;
   checks::TraceMetadata md;
@@ -165,6 +165,13 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu)
   md.emplace_back(checks::kWeightMetadata, num(m.totalMass() * m.gravity().norm()));
   md.emplace_back("control_period_s", num(spec.control_period_s));
   md.emplace_back("duration_s", num(spec.duration_s));
+  const InitialStateSpec& is = spec.initial_state;
+  std::string init = "posture " + is.posture + ", base_xy [" + num(is.base_x) + ", " + num(is.base_y) + "], base_yaw_rad " +
+                     num(is.base_yaw_rad) + "; settle " + sim::toString(rest.settle);
+  if (rest.settle != sim::Settle::None) init += " (" + std::to_string(rest.iterations) + " Newton iterations)";
+  init += "; at rest: net force " + num(rest.net_force_N) + " N, net moment " + num(rest.net_moment_Nm) +
+          " N m, largest joint imbalance " + num(rest.joint_residual_Nm) + " N m";
+  md.emplace_back("initial_state", init);
   md.emplace_back("integrator", "SUNDIALS CVODE BDF, Newton, dense difference-quotient Jacobian; rtol " +
                                     num(s.integrator.rtol) + ", atol_position " + num(s.integrator.atol_position) +
                                     ", atol_velocity " + num(s.integrator.atol_velocity) + ", max_order " +
@@ -236,15 +243,22 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
 
   sim::Simulator simu(spec.urdf_path, spec.data_path, spec.sim);
   const model::RobotModel& m = simu.model();
-  const Eigen::VectorXd q_init = m.posture(spec.initial_state.posture);
-  const Eigen::Matrix3d R0 = Eigen::AngleAxisd(spec.initial_state.base_yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const model::Configuration q0 =
-      simu.placeOnGround(q_init, R0, Eigen::Vector2d(spec.initial_state.base_x, spec.initial_state.base_y));
-  simu.reset(q0, Eigen::VectorXd::Zero(m.nv()));
+  // The initial state: at rest, the servos holding the initial posture (docs/simulator.md,
+  // "Initial state"). No equilibrium is bad input: nothing is simulated.
+  const InitialStateSpec& is = spec.initial_state;
+  const Eigen::VectorXd q_init = m.posture(is.posture);
+  const sim::RestingState rest =
+      simu.restingState(q_init, is.settle, is.base_yaw_rad, Eigen::Vector2d(is.base_x, is.base_y));
+  if (!rest.converged) {
+    throw InputError(is.settle_where, rest.message + " (posture '" + is.posture + "'; settle: none starts without it)");
+  }
+  const int nj = m.numJoints();
+  const sim::JointCommand hold{q_init, Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj)};
+  simu.reset(rest.q, Eigen::VectorXd::Zero(m.nv()), &hold);
   const PostureServo controller(spec.controller, m.posture(spec.controller.posture));
 
   Recorder recorder(spec, simu);
-  const checks::TraceMetadata md = metadata(spec, simu);
+  const checks::TraceMetadata md = metadata(spec, simu, rest);
   std::vector<std::unique_ptr<checks::Check>> check_list;
   for (const auto& cs : spec.checks) {
     check_list.push_back(checks::makeCheck(cs));
@@ -255,11 +269,16 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   r.duration_s = spec.duration_s;
   r.trace_path = (fs::path(options.out_dir) / "trace.csv").string();
   r.summary_path = (fs::path(options.out_dir) / "summary.json").string();
+  // The outputs of an earlier run in the same directory go first, so that a run that is killed
+  // never leaves an old summary or trace beside its own partial trace.
+  for (const std::string& old : {r.trace_path, r.summary_path}) {
+    fs::remove(old, ec);
+    if (ec) throw InputError(old, "cannot remove the output of an earlier run: " + ec.message());
+  }
   checks::TraceWriter writer(r.trace_path, recorder.channels(), md, spec.trace.flush_every_rows);
 
   const double T = spec.control_period_s;
   const long n_ticks = std::lround(spec.duration_s / T);
-  const int nj = m.numJoints();
   sim::JointCommand cmd{Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj)};
   size_t next_event = 0;
   r.status = "completed";
@@ -274,7 +293,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
 
   const auto wall0 = std::chrono::steady_clock::now();
   auto wallNow = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count(); };
-  const bool show_progress = options.progress && spec.duration_s >= 2.0;
+  double last_progress_wall = 0.0;
   long k = 0;
   for (; k < n_ticks; ++k) {
     record(k, k == 0);
@@ -296,10 +315,16 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
       r.message = sr.message;
       break;
     }
-    if (show_progress && (k + 1) % std::max(1L, std::lround(1.0 / T)) == 0) {
+    if (options.progress) {
+      // A line every progress_interval_s of wall time (stderr only; nothing else depends on it).
       const double w = wallNow();
-      std::fprintf(stderr, "[%s] t = %.1f / %.1f s, wall %.1f s, %.1fx real time\n", spec.name.c_str(),
-                   simu.time(), spec.duration_s, w, w > 0 ? simu.time() / w : 0.0);
+      if (w - last_progress_wall >= options.progress_interval_s) {
+        last_progress_wall = w;
+        const double rate = w > 0.0 ? simu.time() / w : 0.0;
+        std::fprintf(stderr, "[%s] t = %.2f / %.2f s, wall %.1f s, %.1fx real time, about %.0f s left\n",
+                     spec.name.c_str(), simu.time(), spec.duration_s, w, rate,
+                     rate > 0.0 ? (spec.duration_s - simu.time()) / rate : 0.0);
+      }
     }
   }
   // The last state (end of the run, or where it stopped), unless already recorded.

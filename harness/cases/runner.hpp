@@ -13,6 +13,9 @@ namespace lexdyn::cases {
 struct RunOptions {
   std::string out_dir;
   bool progress = true;                          ///< progress lines on stderr
+  /// Wall-clock seconds between progress lines. Only stderr depends on it, never the
+  /// simulation, the trace or the summary.
+  double progress_interval_s = 2.0;
   const std::atomic<bool>* interrupt = nullptr;  ///< set (e.g. by SIGINT) to stop after a tick
 };
 

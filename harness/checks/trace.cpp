@@ -101,10 +101,19 @@ TraceTable readTrace(const std::string& path) {
   std::string line;
   int lineno = 0;
   bool have_names = false;
+  const std::string kPartial = ".partial";
+  const bool partial = path.size() >= kPartial.size() && path.compare(path.size() - kPartial.size(), kPartial.size(), kPartial) == 0;
   while (std::getline(in, line)) {
     ++lineno;
     if (line.empty()) continue;
     const std::string where = path + ":" + std::to_string(lineno);
+    // Every line the writer writes ends with a newline. A last line without one was cut by a
+    // killed run: dropped from a .partial trace (the rows before it are complete), an error in
+    // a finished one.
+    if (in.eof() && have_names) {
+      if (partial) break;
+      throw InputError(where, "the last line has no newline: the file was cut short");
+    }
     if (!have_names && line.rfind("# ", 0) == 0) {
       const size_t colon = line.find(": ", 2);
       if (colon == std::string::npos) throw InputError(where, "metadata line without 'key: value'");

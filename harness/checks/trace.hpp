@@ -69,6 +69,8 @@ struct TraceTable {
 };
 
 /// Reads a trace file; throws lexdyn::InputError naming the file and line on malformed input.
+/// For a "<path>.partial" file (a run that was killed) an unterminated last row, cut by the
+/// kill in the middle of a write, is dropped; in any other file it is an error.
 TraceTable readTrace(const std::string& path);
 
 }  // namespace lexdyn::checks

@@ -59,9 +59,24 @@ int main(int argc, char** argv) {
   try {
     const lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
     if (*check) {
-      const auto results = lexdyn::checks::runChecks(spec.checks, lexdyn::checks::readTrace(trace_path));
+      const lexdyn::checks::TraceTable table = lexdyn::checks::readTrace(trace_path);
+      const std::string* traced_case = lexdyn::checks::findMetadata(table.metadata, "case");
+      if (traced_case && *traced_case != spec.name) {
+        std::fprintf(stderr, "lexdyn-harness: warning: %s is a trace of case '%s', not of '%s' (%s)\n", trace_path.c_str(),
+                     traced_case->c_str(), spec.name.c_str(), case_path.c_str());
+      }
+      const auto results = lexdyn::checks::runChecks(spec.checks, table);
       bool all = true;
       for (const auto& r : results) all = all && r.passed;
+      const int tc = table.column(lexdyn::checks::kTimeChannel);
+      if (table.rows.empty() || tc < 0) {
+        std::fprintf(stderr, "[%s] %s: %zu rows\n", spec.name.c_str(), trace_path.c_str(), table.rows.size());
+      } else {
+        const bool partial = trace_path.size() > 8 && trace_path.compare(trace_path.size() - 8, 8, ".partial") == 0;
+        std::fprintf(stderr, "[%s] %s: %zu rows, t = %g .. %g s%s\n", spec.name.c_str(), trace_path.c_str(),
+                     table.rows.size(), table.rows.front()[static_cast<size_t>(tc)], table.rows.back()[static_cast<size_t>(tc)],
+                     partial ? " (partial trace: the run did not finish)" : "");
+      }
       printChecks(results);
       return all ? 0 : 1;
     }

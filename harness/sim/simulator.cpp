@@ -7,6 +7,10 @@
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/model/detail/model_impl.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -230,6 +234,22 @@ struct Simulator::Impl final : public OdeSystem {
     for (int i = 0; i < nv; ++i) ydot[nqc + i] = udot[m.dof_u_index[static_cast<size_t>(i)]];
   }
 
+  // Net generalized force on the robot at rest (u = 0, t = t0) at the integration coordinates
+  // `coords` (Euler angles, base position, joints): gravity, contact and servo forces minus the
+  // (zero) inertial terms, in model u order. Zero exactly at a static equilibrium.
+  void restForce(const Eigen::VectorXd& coords, Eigen::VectorXd& f) {
+    const model::RobotModel::Impl& m = model.impl();
+    const Eigen::VectorXd zero_u = Eigen::VectorXd::Zero(nv);
+    model::detail::updateEuler(model, data, coords.data(), zero_u.data());
+    evaluateForces(data, t0, coords.data(), zero_u.data(), false);
+    SimTK::Vector residual(m.simbody_nu, 0.0);
+    const SimTK::Vector zero_udot(m.simbody_nu, 0.0);
+    // residual = M udot + C(q, u) - applied forces, here = -applied forces.
+    m.matter.calcResidualForceIgnoringConstraints(data.impl().state, mob_forces, body_forces, zero_udot, residual);
+    f.resize(nv);
+    for (int i = 0; i < nv; ++i) f[i] = -residual[m.dof_u_index[static_cast<size_t>(i)]];
+  }
+
   // Observations at the current y and tick time.
   void observe(double t) {
     const double* q = y.data();
@@ -382,6 +402,198 @@ model::Configuration Simulator::placeOnGround(const Eigen::VectorXd& joints, con
   const double penetration = std::pow(share / c.stiffness, 1.0 / c.exponent);
   q.base_position.z() = c.ground_height_m - zmin - penetration;
   return q;
+}
+
+const char* toString(Settle s) {
+  switch (s) {
+    case Settle::StaticEquilibrium: return "static_equilibrium";
+    case Settle::BaseOnly: return "base_only";
+    case Settle::None: return "none";
+  }
+  return "?";
+}
+
+RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settle, double base_yaw_rad,
+                                     const Eigen::Vector2d& base_xy) {
+  Impl& s = *impl_;
+  const std::string where = "initial state";
+  if (joints.size() != s.nj) throw InputError(where, "the posture must have one entry per joint (" + std::to_string(s.nj) + ")");
+  const bool ff = s.model.hasFreeFlyer();
+  if (settle == Settle::BaseOnly && !ff) throw InputError(where, "settle base_only needs a free-flyer base");
+  if (settle != Settle::None && ff && s.points.empty()) {
+    throw InputError(where, "a floating robot without contact points has no static equilibrium (use settle none)");
+  }
+  // The servo holds `joints` at rest; grasps are off (switched on later, they anchor where the
+  // frame is and start without force).
+  const Eigen::VectorXd saved[6] = {s.q0, s.qd0, s.tau0, s.q1, s.qd1, s.tau1};
+  const double saved_t0 = s.t0;
+  std::vector<bool> saved_grasps;
+  for (auto& g : s.grasps) {
+    saved_grasps.push_back(g.active);
+    g.active = false;
+  }
+  s.q0 = s.q1 = joints;
+  s.qd0 = s.qd1 = s.tau0 = s.tau1 = Eigen::VectorXd::Zero(s.nj);
+  s.t0 = 0.0;
+
+  const Eigen::Matrix3d R_yaw = Eigen::AngleAxisd(base_yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  RestingState out;
+  out.settle = settle;
+  out.q = placeOnGround(joints, R_yaw, base_xy);
+
+  // Unknowns x: [roll, pitch, z] of the base (free-flyer; R = Rz(yaw) Ry(pitch) Rx(roll), x and
+  // y kept) then, with StaticEquilibrium, the joints. Equations, each (nearly) conjugate to its
+  // unknown: the net moment about the base origin along the heading's x and y axes, the net
+  // vertical force, the joints' net torques. The other components (horizontal force, yaw
+  // moment) vanish at rest: vertical normal forces and gravity have none, and friction is zero
+  // at zero slip velocity.
+  const bool solve_joints = settle == Settle::StaticEquilibrium;
+  const bool solve_base = ff && settle != Settle::None;
+  const int n = (solve_base ? 3 : 0) + (solve_joints ? s.nj : 0);
+  Eigen::VectorXd x(n);
+  if (solve_base) x.head(3) << 0.0, 0.0, out.q.base_position.z();
+  if (solve_joints) x.tail(s.nj) = joints;
+
+  auto configuration = [&](const Eigen::VectorXd& xx) {
+    model::Configuration q = out.q;
+    if (solve_base) {
+      q.base_rotation = R_yaw * Eigen::AngleAxisd(xx[1], Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                        Eigen::AngleAxisd(xx[0], Eigen::Vector3d::UnitX()).toRotationMatrix();
+      q.base_position.z() = xx[2];
+    }
+    if (solve_joints) q.joints = xx.tail(s.nj);
+    return q;
+  };
+  Eigen::VectorXd coords(s.nqc), f(s.nv);
+  auto force = [&](const model::Configuration& q, Eigen::VectorXd& ff_out) {
+    int i = 0;
+    if (ff) {
+      const Eigen::Vector3d e = model::eulerXYZFromRotation(q.base_rotation);
+      for (int k = 0; k < 3; ++k) coords[i++] = e[k];
+      for (int k = 0; k < 3; ++k) coords[i++] = q.base_position[k];
+    }
+    for (int j = 0; j < s.nj; ++j) coords[i++] = q.joints[j];
+    s.restForce(coords, ff_out);
+  };
+  auto residual = [&](const Eigen::VectorXd& xx, Eigen::VectorXd& r) {
+    force(configuration(xx), f);
+    r.resize(n);
+    int i = 0;
+    if (solve_base) {
+      const Eigen::Vector3d m_heading = R_yaw.transpose() * f.head<3>();
+      r[i++] = m_heading.x();
+      r[i++] = m_heading.y();
+      r[i++] = f[5];
+    }
+    if (solve_joints) r.tail(s.nj) = f.tail(s.nj);
+  };
+  // Tolerance: 1e-9 of the weight, at least 1e-9 (N; N m for moments and joint torques).
+  const double weight = s.model.totalMass() * s.model.gravity().norm();
+  const double tol = 1e-9 * std::max(weight, 1.0);
+  auto summarize = [&](const model::Configuration& q) {
+    force(q, f);
+    out.net_force_N = ff ? f.segment(3, 3).norm() : 0.0;
+    out.net_moment_Nm = ff ? f.head(3).norm() : 0.0;
+    out.joint_residual_Nm = s.nj > 0 ? f.tail(s.nj).cwiseAbs().maxCoeff() : 0.0;
+  };
+  auto converged = [&] {
+    return out.net_force_N <= tol && out.net_moment_Nm <= tol && (!solve_joints || out.joint_residual_Nm <= tol);
+  };
+
+  if (n > 0) {
+    const int max_iterations = 50;
+    const double h = 1e-6;  // finite-difference step (m, rad)
+    const double max_tilt_rad = 0.5;
+    Eigen::VectorXd r(n), rp(n), rm(n), dx(n), x_try(n), r_try(n);
+    Eigen::MatrixXd J(n, n);
+    auto jacobian = [&] {  // central differences
+      for (int c = 0; c < n; ++c) {
+        Eigen::VectorXd xc = x;
+        xc[c] = x[c] + h;
+        residual(xc, rp);
+        xc[c] = x[c] - h;
+        residual(xc, rm);
+        J.col(c) = (rp - rm) / (2.0 * h);
+      }
+    };
+    residual(x, r);
+    std::string failure;
+    for (;;) {
+      summarize(configuration(x));
+      if (converged()) {
+        // Only a stable equilibrium is a start: the stiffness -dr/dx (symmetric for these
+        // conservative forces and conjugate unknowns) must have no negative eigenvalue, e.g. not
+        // balanced on an edge of a sole. Its inertia does not depend on the units of x.
+        jacobian();
+        const Eigen::MatrixXd K = -0.5 * (J + J.transpose());
+        const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(K, Eigen::EigenvaluesOnly);
+        const double lo = es.eigenvalues()[0], hi = es.eigenvalues()[n - 1];
+        if (lo < -1e-6 * std::abs(hi)) {
+          failure = "the equilibrium found is unstable (stiffness eigenvalue " + fmt(lo) + " < 0: the robot would fall)";
+        }
+        break;
+      }
+      if (out.iterations >= max_iterations) {
+        failure = "no convergence in " + std::to_string(max_iterations) + " Newton iterations";
+        break;
+      }
+      ++out.iterations;
+      jacobian();
+      const Eigen::FullPivLU<Eigen::MatrixXd> lu(J);
+      if (lu.rank() < n) {
+        failure = "singular Jacobian (the contact points cannot carry the load in this pose)";
+        break;
+      }
+      dx = lu.solve(-r);
+      // Damped step: at most 5 mm in height, 0.05 rad in any angle, then backtracking on |r|.
+      double scale = 1.0;
+      for (int c = 0; c < n; ++c) {
+        const double cap = (solve_base && c == 2) ? 0.005 : 0.05;
+        if (std::abs(dx[c]) * scale > cap) scale = cap / std::abs(dx[c]);
+      }
+      dx *= scale;
+      bool accepted = false;
+      for (double alpha = 1.0; alpha > 1e-6; alpha *= 0.5) {
+        x_try = x + alpha * dx;
+        residual(x_try, r_try);
+        if (r_try.norm() < (1.0 - 1e-4 * alpha) * r.norm()) {
+          accepted = true;
+          break;
+        }
+      }
+      if (!accepted) {
+        failure = "the Newton step does not reduce the imbalance (no equilibrium near this pose)";
+        break;
+      }
+      x = x_try;
+      r = r_try;
+      if (solve_base && (std::abs(x[0]) > max_tilt_rad || std::abs(x[1]) > max_tilt_rad)) {
+        failure = "the base tilts beyond " + fmt(max_tilt_rad) + " rad (roll " + fmt(x[0]) + ", pitch " + fmt(x[1]) + ")";
+        summarize(configuration(x));
+        break;
+      }
+    }
+    out.q = configuration(x);
+    out.converged = failure.empty();
+    if (!out.converged) {
+      out.message = "no stable static equilibrium found (" + std::string(toString(settle)) + "): " + failure + " after " +
+                    std::to_string(out.iterations) + " iterations; left: net force " + fmt(out.net_force_N) +
+                    " N, net moment " + fmt(out.net_moment_Nm) + " N m" +
+                    (solve_joints ? ", joint torque " + fmt(out.joint_residual_Nm) + " N m" : std::string()) +
+                    " (tolerance " + fmt(tol) + ")" + (ff ? "; is the centre of mass above the support polygon?" : "");
+    }
+  } else {
+    summarize(out.q);
+  }
+  s.q0 = saved[0];
+  s.qd0 = saved[1];
+  s.tau0 = saved[2];
+  s.q1 = saved[3];
+  s.qd1 = saved[4];
+  s.tau1 = saved[5];
+  s.t0 = saved_t0;
+  for (size_t g = 0; g < s.grasps.size(); ++g) s.grasps[g].active = saved_grasps[g];
+  return out;
 }
 
 void Simulator::reset(const model::Configuration& q, const Eigen::VectorXd& u, const JointCommand* initial_command) {

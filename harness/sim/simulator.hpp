@@ -107,6 +107,39 @@ struct ContactPoint {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();  ///< ground on robot
 };
 
+/// How the initial state is put on the ground (docs/simulator.md, "Initial state").
+enum class Settle {
+  /// Static equilibrium of the whole simulated system at rest: base height, roll and pitch and
+  /// the joint positions such that, at zero velocity, the compliant contact forces balance
+  /// gravity and every joint servo (holding the given posture) balances its joint's load. The
+  /// joints sit below the posture by the servo's static deflection (load / kp).
+  StaticEquilibrium,
+  /// Base height, roll and pitch only, joints exactly at the posture: the contact forces balance
+  /// gravity as if the robot were rigid; the servos start unloaded (they take up the load in
+  /// the first few ticks).
+  BaseOnly,
+  /// No solve: placeOnGround (base orientation = the given yaw, the lowest contact point at the
+  /// penetration of an even share of the weight).
+  None,
+};
+
+const char* toString(Settle s);
+
+/// The initial state found by Simulator::restingState, with the force imbalance left at it.
+struct RestingState {
+  model::Configuration q;          ///< base pose and joints (velocity zero)
+  Settle settle = Settle::None;
+  bool converged = true;           ///< false: no equilibrium was found (`message` says why)
+  int iterations = 0;              ///< Newton iterations
+  /// At (q, u = 0), servo holding the posture: net external force on the robot (gravity +
+  /// contact), net external moment about the base origin, and the largest net generalized force
+  /// on a joint (servo torque + load; the unloaded servo's imbalance for BaseOnly / None).
+  double net_force_N = 0.0;
+  double net_moment_Nm = 0.0;
+  double joint_residual_Nm = 0.0;
+  std::string message;
+};
+
 struct StepResult {
   bool ok = true;
   CvodeStatus status = CvodeStatus::Success;
@@ -130,6 +163,20 @@ class Simulator {
   model::Configuration placeOnGround(const Eigen::VectorXd& joints,
                                      const Eigen::Matrix3d& base_rotation = Eigen::Matrix3d::Identity(),
                                      const Eigen::Vector2d& base_xy = Eigen::Vector2d::Zero()) const;
+
+  /// Initial state at rest for a posture held by the servos (`settle`, see Settle): keeps the
+  /// base's horizontal position `base_xy` and heading `base_yaw_rad`, and solves by a damped
+  /// Newton iteration on this simulator's own force model (contact, gravity, servos; finite-
+  /// difference Jacobian) for the base height, roll and pitch (free-flyer) and, with
+  /// StaticEquilibrium, the joint positions. Converged when the net force, the net moment and
+  /// (StaticEquilibrium) every joint's net torque are below 1e-9 max(m|g|, 1 N) (N, N m), and
+  /// only if the equilibrium is stable (no negative eigenvalue of the stiffness -dr/dx). Returns
+  /// converged = false with a message when the iteration fails (e.g. the centre of mass is not
+  /// above the support); throws InputError for impossible requests (a floating robot without
+  /// contact points, BaseOnly on a fixed base, wrong sizes). Start with
+  /// reset(r.q, 0, &command holding `joints`) so that the servo holds the posture, not r.q.
+  RestingState restingState(const Eigen::VectorXd& joints, Settle settle, double base_yaw_rad = 0.0,
+                            const Eigen::Vector2d& base_xy = Eigen::Vector2d::Zero());
 
   /// Starts at time 0 from (q, u). The servo's command at time 0 (the start of the first
   /// set-point profile) is `initial_command` if given, else the state itself: (q.joints, joint

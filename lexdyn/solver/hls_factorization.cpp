@@ -204,10 +204,11 @@ bool HlsFactorization::tryEliminate() {
   for (int f = 0; f < nf_; ++f) varPerm_[z(f)] = freeVar_[z(f)];
   for (int i = 0; i < m0; ++i) std::swap(varPerm_[z(i)], varPerm_[z(transp_[z(i)])]);
   // Accept only well-conditioned pivots (full row rank, safe for elimination).
+  auto rowMax = t_.head(A0.rows());
+  rowMax = A0.cwiseAbs().rowwise().maxCoeff();
   for (int i = 0; i < m0; ++i) {
-    const int row = lst[z(i)] - rowOff_[0];
-    const double rowMax = A0.row(row).cwiseAbs().maxCoeff();
-    if (!(std::abs(G_(i, i)) > elimTol_ * rowMax) || rowMax == 0.0) return false;
+    const double rm = rowMax(lst[z(i)] - rowOff_[0]);
+    if (!(std::abs(G_(i, i)) > elimTol_ * rm) || rm == 0.0) return false;
   }
   // D^T = L2 L1^{-1} (in place on the lower block).
   const int nr = nf_ - m0;
@@ -268,12 +269,20 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1) {
   const Eigen::MatrixXd& A = *A_[z(j)];
   const int off = rowOff_[z(j)];
   const Eigen::Index lda = A.rows();
+  // Fast path: every row of the level, in order, loaded (equality levels): a transposed copy
+  // that reads the column-major data contiguously.
+  bool whole = (p1 - p0) == static_cast<int>(lda);
+  for (int q = p0; whole && q < p1; ++q) whole = colNorm_(q) == 1.0 && tmpGid_[z(q)] - off == q - p0;
   auto gatherInto = [&](Eigen::MatrixXd& dst, int count, int permOffset) {
     for (int f = 0; f < count; ++f) {
       const int v = elim_ ? varPerm_[z(permOffset + f)] : freeVar_[z(f)];
+      if (whole) {
+        dst.row(f).segment(p0, p1 - p0) = A.col(v).transpose();
+        continue;
+      }
       const double* col = A.data() + static_cast<Eigen::Index>(v) * lda;
       for (int q = p0; q < p1; ++q)
-        if (colNorm_(q) == 1.0) dst(f, q) = col[colGidTmp(q) - off];
+        if (colNorm_(q) == 1.0) dst(f, q) = col[tmpGid_[z(q)] - off];
     }
   };
   gatherInto(S_, nr_, m0_);

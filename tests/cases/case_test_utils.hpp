@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <string>
 
@@ -39,6 +40,26 @@ inline std::map<std::string, std::string> minimalCase(double duration_s = 0.5) {
       {"g_trace", "trace:\n  frames: [WAIST]\n"},
       {"h_checks", "checks:\n  - {name: waist_drift, type: frame_drift, frame: WAIST, from_s: 0.2, limit_m: 0.01}\n"},
   };
+}
+
+/// A copy of the humanoid's data file in `dir` with an extra posture `one_leg` (the right foot
+/// lifted: no static equilibrium on the feet). Returns its path.
+inline std::string dataFileWithOneLegPosture(const std::string& dir) {
+  const std::string models = std::string(LEXDYN_SOURCE_DIR) + "/models/hrp2kai_like/";
+  std::ifstream in(models + "hrp2kai_like.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t a = text.find("  half_sitting:\n");
+  const size_t b = text.find("\n\n", a);
+  std::string posture = text.substr(a, b == std::string::npos ? std::string::npos : b - a);
+  posture.replace(0, 15, "  one_leg:");
+  for (const auto& [joint, value] : {std::pair<std::string, std::string>{"RLEG_JOINT2: -0.4538", "RLEG_JOINT2: -1.2"},
+                                     {"RLEG_JOINT3: 0.8727", "RLEG_JOINT3: 1.8"}}) {
+    posture.replace(posture.find(joint), joint.size(), value);
+  }
+  text.insert(b == std::string::npos ? text.size() : b, "\n" + posture);
+  const std::string path = dir + "/one_leg.yaml";
+  std::ofstream(path) << text;
+  return path;
 }
 
 inline std::string writeCase(const std::string& dir, const std::map<std::string, std::string>& sections,

@@ -50,6 +50,28 @@ TEST(CaseFile, MinimalCaseLoads) {
   EXPECT_EQ(c.trace.frames.size(), 1u);
 }
 
+TEST(CaseFile, InitialStateSettleDefaultsToTheStaticEquilibrium) {
+  EXPECT_EQ(loadCase(src("cases/stand.yaml")).initial_state.settle, sim::Settle::StaticEquilibrium);
+  const CaseSpec c = loadCase(writeCase(outputDir("case_file_settle"), minimalCase()));
+  EXPECT_EQ(c.initial_state.settle, sim::Settle::StaticEquilibrium);  // free-flyer with feet
+  EXPECT_FALSE(c.initial_state.settle_given);
+  EXPECT_NE(c.initial_state.settle_where.find("initial_state"), std::string::npos) << c.initial_state.settle_where;
+  for (const char* v : {"static_equilibrium", "base_only", "none"}) {
+    auto s = minimalCase();
+    s["d_initial"] = std::string("initial_state:\n  posture: half_sitting\n  settle: ") + v + "\n";
+    const CaseSpec cv = loadCase(writeCase(outputDir("case_file_settle"), s));
+    EXPECT_STREQ(sim::toString(cv.initial_state.settle), v);
+    EXPECT_TRUE(cv.initial_state.settle_given);
+    EXPECT_NE(cv.initial_state.settle_where.find("case.yaml:8: initial_state.settle"), std::string::npos)
+        << cv.initial_state.settle_where;
+  }
+  auto s = minimalCase();
+  s["d_initial"] = "initial_state:\n  posture: half_sitting\n  settle: yes\n";
+  const std::string msg = errorOf(s);
+  EXPECT_NE(msg.find("initial_state.settle"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("static_equilibrium"), std::string::npos) << msg;  // lists the choices
+}
+
 TEST(CaseFile, UnknownKeysAreErrorsWithFileLineAndPath) {
   auto s = minimalCase();
   s["c_duration"] = "duration_s: 0.5\ncolour: red\n";

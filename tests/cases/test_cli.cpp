@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <sys/wait.h>
 
@@ -71,6 +72,78 @@ TEST(HarnessCli, ExitCodeTwoOnBadInputNamingFileAndKey) {
   EXPECT_NE(r.stderr_text.find("missing.yaml"), std::string::npos) << r.stderr_text;
   r = harness("run", dir);  // missing arguments
   EXPECT_EQ(r.code, 2);
+  // A posture without a static equilibrium on the feet: bad input, nothing simulated.
+  s = minimalCase(0.2);
+  const std::string models = std::string(LEXDYN_SOURCE_DIR) + "/models/hrp2kai_like/";
+  s["b_robot"] = "robot:\n  urdf: " + models + "hrp2kai_like.urdf\n  data: " + testing::dataFileWithOneLegPosture(dir) + "\n";
+  s["d_initial"] = "initial_state:\n  posture: one_leg\n  settle: static_equilibrium\n";
+  const std::string c2 = writeCase(dir, s, "one_leg_case.yaml");
+  r = harness("run " + c2 + " --out " + dir + "/out2 --quiet", dir);
+  EXPECT_EQ(r.code, 2) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find(c2 + ":8: initial_state.settle"), std::string::npos) << r.stderr_text;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out2/trace.csv"));
+}
+
+TEST(HarnessCli, SigintStopsTheRunAndKeepsTraceAndSummary) {
+  // A 100 s run (several seconds of wall time), interrupted as soon as it has started writing.
+  const std::string dir = outputDir("cli_sigint");
+  const std::string c = writeCase(dir, minimalCase(100.0));
+  const std::string out = dir + "/out";
+  const std::string script = "(" + std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-harness run " + c + " --out " + out +
+                             " --quiet 2> " + dir + "/stderr.txt & pid=$!; "
+                             "while [ ! -s " + out + "/trace.csv.partial ] && kill -0 $pid 2>/dev/null; do sleep 0.01; done; sleep 0.05; "
+                             "kill -INT $pid; wait $pid; echo $? > " + dir + "/code)";
+  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+  std::ifstream code_in(dir + "/code");
+  int code = -1;
+  code_in >> code;
+  EXPECT_EQ(code, 1);
+  ASSERT_TRUE(std::filesystem::exists(out + "/summary.json"));
+  ASSERT_TRUE(std::filesystem::exists(out + "/trace.csv"));
+  EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv.partial"));
+  std::ifstream sj(out + "/summary.json");
+  const std::string summary((std::istreambuf_iterator<char>(sj)), std::istreambuf_iterator<char>());
+  EXPECT_NE(summary.find("\"status\": \"interrupted\""), std::string::npos) << summary;
+  // The trace holds every tick up to the interruption and its checks can be run again.
+  const Result r = harness("check " + c + " " + out + "/trace.csv", dir);
+  EXPECT_NE(r.stderr_text.find(" rows, t = 0 .. "), std::string::npos) << r.stderr_text;
+}
+
+TEST(HarnessCli, AKilledRunLeavesItsPartialTraceAndNoOldOutputs) {
+  // Outputs of an earlier run in the same directory, then a run killed with SIGKILL: only the
+  // new run's partial trace is left, readable by `check`.
+  const std::string dir = outputDir("cli_sigkill");
+  const std::string c = writeCase(dir, minimalCase(100.0));
+  const std::string out = dir + "/out";
+  std::filesystem::create_directories(out);
+  std::ofstream(out + "/summary.json") << "{\"status\": \"completed\"}\n";
+  std::ofstream(out + "/trace.csv") << "# case: old\nt\n0\n";
+  const std::string script = "(" + std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-harness run " + c + " --out " + out +
+                             " --quiet 2> " + dir + "/stderr.txt & pid=$!; "
+                             // > 600 kB: at least the first 200 rows (one flush, t >= 1 s).
+                             "while [ $(stat -c %s " + out + "/trace.csv.partial 2>/dev/null || echo 0) -lt 600000 ] && "
+                             "kill -0 $pid 2>/dev/null; do sleep 0.01; done; "
+                             "kill -KILL $pid; { wait $pid; } 2>/dev/null; true)";
+  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+  EXPECT_FALSE(std::filesystem::exists(out + "/summary.json"));
+  EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv"));
+  ASSERT_TRUE(std::filesystem::exists(out + "/trace.csv.partial"));
+  const Result r = harness("check " + c + " " + out + "/trace.csv.partial", dir);
+  EXPECT_EQ(r.code, 0) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("partial trace"), std::string::npos) << r.stderr_text;
+}
+
+TEST(HarnessCli, CheckWarnsWhenTheTraceIsOfAnotherCase) {
+  const std::string dir = outputDir("cli_other_case");
+  auto s = minimalCase(0.25);
+  const std::string a = writeCase(dir, s, "a.yaml");
+  s["a_name"] = "name: other\n";
+  const std::string b = writeCase(dir, s, "b.yaml");
+  ASSERT_EQ(harness("run " + a + " --out " + dir + "/out --quiet", dir).code, 0);
+  const Result r = harness("check " + b + " " + dir + "/out/trace.csv", dir);
+  EXPECT_NE(r.stderr_text.find("warning"), std::string::npos) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("'minimal', not of 'other'"), std::string::npos) << r.stderr_text;
+  EXPECT_EQ(harness("check " + a + " " + dir + "/out/trace.csv", dir).stderr_text.find("warning"), std::string::npos);
 }
 
 TEST(HarnessCli, TwoProcessesWriteIdenticalTraces) {

@@ -1,7 +1,9 @@
-// The case runner: the stand acceptance case, bit-identical reruns, failure and interruption
-// handling (the trace so far is kept), checks on a stored trace, grasp events.
+// The case runner: the stand acceptance case and its static-equilibrium start, bit-identical
+// reruns, failure and interruption handling (the trace so far is kept), checks on a stored
+// trace, grasp events.
 #include "harness/cases/runner.hpp"
 #include "case_test_utils.hpp"
+#include "lexdyn/common/error.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -83,6 +85,46 @@ TEST(Runner, StandCaseHoldsHalfSittingAndPassesItsChecks) {
   }
 }
 
+TEST(Runner, StandStartsInStaticEquilibrium) {
+  // The stand case's initial state: contact forces = m g at t = 0, recorded in the trace header.
+  const std::string dir = outputDir("runner_stand_start");
+  const CaseSpec spec = loadCase(shortenedCopy("cases/stand.yaml", 0.1, dir));
+  ASSERT_EQ(spec.initial_state.settle, sim::Settle::StaticEquilibrium);
+  ASSERT_EQ(run(spec, dir + "/out").status, "completed");
+  const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
+  const std::string* weight = checks::findMetadata(t.metadata, checks::kWeightMetadata);
+  const std::string* init = checks::findMetadata(t.metadata, "initial_state");
+  ASSERT_NE(weight, nullptr);
+  ASSERT_NE(init, nullptr);
+  EXPECT_NE(init->find("settle static_equilibrium"), std::string::npos) << *init;
+  const double W = std::stod(*weight);
+  const size_t r = static_cast<size_t>(t.column("contact.RIGHT_FOOT.fz")), l = static_cast<size_t>(t.column("contact.LEFT_FOOT.fz"));
+  EXPECT_EQ(t.rows[0][0], 0.0);
+  EXPECT_NEAR(t.rows[0][r] + t.rows[0][l], W, 1e-9 * W);
+}
+
+TEST(Runner, NoStaticEquilibriumIsAnInputErrorAndNothingRuns) {
+  const std::string dir = outputDir("runner_no_equilibrium");
+  auto sections = minimalCase(0.2);
+  const std::string models = src("models/hrp2kai_like/");
+  sections["b_robot"] = "robot:\n  urdf: " + models + "hrp2kai_like.urdf\n  data: " + testing::dataFileWithOneLegPosture(dir) + "\n";
+  sections["d_initial"] = "initial_state:\n  posture: one_leg\n";
+  const std::string path = writeCase(dir, sections);
+  const CaseSpec spec = loadCase(path);
+  try {
+    run(spec, dir + "/out");
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(path), std::string::npos) << msg;
+    EXPECT_NE(msg.find("initial_state"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("no stable static equilibrium"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("one_leg"), std::string::npos) << msg;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out/trace.csv"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out/trace.csv.partial"));
+}
+
 TEST(Runner, RerunsAreBitIdentical) {
   const std::string base = outputDir("runner_determinism");
   const CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 1.5, base));
@@ -120,6 +162,28 @@ TEST(Runner, InterruptionStopsAfterATickAndKeepsTheTrace) {
   EXPECT_EQ(s.status, "interrupted");
   EXPECT_EQ(exitCode(s), 1);
   EXPECT_EQ(checks::readTrace(dir + "/out/trace.csv").rows.size(), 1u);
+}
+
+TEST(Runner, ProgressLinesGoToStderrOnly) {
+  const std::string dir = outputDir("runner_progress");
+  const CaseSpec spec = loadCase(writeCase(dir, minimalCase(0.05)));
+  RunOptions o;
+  o.out_dir = dir + "/a";
+  o.progress = true;
+  o.progress_interval_s = 0.0;  // a line after every tick
+  ::testing::internal::CaptureStderr();
+  const RunSummary a = runCase(spec, o);
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  ASSERT_EQ(a.status, "completed");
+  size_t lines = 0;
+  for (size_t p = err.find("real time, about"); p != std::string::npos; p = err.find("real time, about", p + 1)) ++lines;
+  EXPECT_EQ(lines, 10u) << err;
+  EXPECT_NE(err.find("[minimal] t = 0.05 / 0.05 s"), std::string::npos) << err;
+  // The trace does not depend on the progress output.
+  o.out_dir = dir + "/b";
+  o.progress = false;
+  ASSERT_EQ(runCase(spec, o).status, "completed");
+  EXPECT_EQ(slurp(dir + "/a/trace.csv"), slurp(dir + "/b/trace.csv"));
 }
 
 TEST(Runner, AFailedCheckGivesExitCodeOne) {

@@ -64,6 +64,27 @@ TEST(Trace, UnfinishedWriterLeavesThePartialFileWithFlushedRows) {
   EXPECT_EQ(readTrace(path + ".partial").rows.size(), 1u);
 }
 
+TEST(Trace, ACutLastRowIsDroppedFromAPartialTraceOnly) {
+  // A killed run can stop in the middle of a row (the writer's buffer is flushed when full).
+  const std::string dir = tempDir("trace_cut");
+  const std::string text = "# a: b\nt,x\n0,1\n0.005,2\n0.01,3";  // no newline after the last row
+  std::ofstream(dir + "/trace.csv.partial") << text;
+  const TraceTable t = readTrace(dir + "/trace.csv.partial");
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_EQ(t.rows[1][1], 2.0);
+  std::ofstream(dir + "/trace.csv") << text;
+  try {
+    readTrace(dir + "/trace.csv");
+    FAIL() << "a finished trace with a cut last line must be an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("trace.csv:5"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no newline"), std::string::npos) << e.what();
+  }
+  // A complete last line (with its newline) is kept in both.
+  std::ofstream(dir + "/whole.csv.partial") << text << "\n";
+  EXPECT_EQ(readTrace(dir + "/whole.csv.partial").rows.size(), 3u);
+}
+
 TEST(Trace, MalformedFilesAreErrorsWithLineNumbers) {
   const std::string dir = tempDir("trace_bad");
   const std::string path = dir + "/bad.csv";

@@ -5,7 +5,8 @@
 //  - N's velocity part obeys the power identity u^T C = 1/2 u^T Mdot u, its gravity part equals
 //    -J_com^T m g;
 //  - every Jacobian (frame, point, CoM, capsule distance) and every Jdot*u bias against central
-//    finite differences along q(h) = integrate(q, u, h), and the frame Jacobian against Simbody's.
+//    finite differences along q(h) = integrate(q, u, h) (frame, point and CoM Jacobians also
+//    column by column along every unit velocity), and the frame Jacobian against Simbody's.
 // Central differences with h = 1e-5 have an O(h^2) error: tolerances below are 1e-6 relative,
 // much tighter than the h^(1/3) needed for one-sided differences.
 #include "model_test_utils.hpp"
@@ -199,6 +200,54 @@ TEST_P(ModelDynamics, FrameJacobiansAndBiasesMatchFiniteDifferencesAndSimbody) {
         return Jh;
       });
       EXPECT_TRUE(near(model().pointBias(data(), f, pt), Jpdot * u, 1e-6));
+    }
+  }
+}
+
+TEST_P(ModelDynamics, FrameAndPointJacobiansMatchFiniteDifferencesColumnByColumn) {
+  // Every column k of every frame and point Jacobian against the central difference of the
+  // frame's placement (position; rotation vector of R(+h) R(-h)^T) along the unit velocity e_k,
+  // so that no column escapes (the test above checks J u for one random u per state).
+  RandomStates rs(17);
+  const int n = model().nv();
+  const int nf = model().numFrames();
+  const Eigen::Vector3d pt(0.05, -0.02, 0.1);
+  for (int trial = 0; trial < 2; ++trial) {
+    const Configuration q = rs.configuration(model());
+    const Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
+    model().update(data(), q, u);
+    std::vector<Eigen::MatrixXd> J(static_cast<size_t>(nf), Eigen::MatrixXd(6, n));
+    std::vector<Eigen::MatrixXd> Jp(static_cast<size_t>(nf), Eigen::MatrixXd(3, n));
+    for (FrameId f = 0; f < nf; ++f) {
+      model().frameJacobian(data(), f, J[static_cast<size_t>(f)]);
+      model().pointJacobian(data(), f, pt, Jp[static_cast<size_t>(f)]);
+    }
+    for (int k = 0; k < n; ++k) {
+      const Eigen::VectorXd e = Eigen::VectorXd::Unit(n, k);
+      Configuration qp = q, qm = q;
+      model().integrate(q, e, kH, qp);
+      model().integrate(q, e, -kH, qm);
+      std::vector<Eigen::Isometry3d> Xp, Xm;
+      std::vector<Eigen::Vector3d> pp, pm;
+      model().update(data(), qp, u);
+      for (FrameId f = 0; f < nf; ++f) {
+        Xp.push_back(model().framePlacement(data(), f));
+        pp.push_back(model().pointPosition(data(), f, pt));
+      }
+      model().update(data(), qm, u);
+      for (FrameId f = 0; f < nf; ++f) {
+        Xm.push_back(model().framePlacement(data(), f));
+        pm.push_back(model().pointPosition(data(), f, pt));
+      }
+      for (FrameId f = 0; f < nf; ++f) {
+        const size_t i = static_cast<size_t>(f);
+        Eigen::Matrix<double, 6, 1> col;
+        col.head<3>() = (Xp[i].translation() - Xm[i].translation()) / (2.0 * kH);
+        const Eigen::AngleAxisd aa(Xp[i].linear() * Xm[i].linear().transpose());
+        col.tail<3>() = aa.angle() * aa.axis() / (2.0 * kH);
+        EXPECT_TRUE(near(J[i].col(k), col, 1e-6)) << model().frameName(f) << " column " << k;
+        EXPECT_TRUE(near(Jp[i].col(k), (pp[i] - pm[i]) / (2.0 * kH), 1e-6)) << model().frameName(f) << " column " << k;
+      }
     }
   }
 }

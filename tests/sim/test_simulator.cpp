@@ -1,5 +1,6 @@
 // The simulator against closed-form solutions (free pendulum, servo responses, grasp bushing),
-// its sensors against the forces it applies, torque saturation, and failure handling.
+// its sensors against the forces it applies, torque saturation, the static-equilibrium start,
+// and failure handling.
 #include "harness/sim/simulator.hpp"
 #include "lexdyn/common/error.hpp"
 
@@ -70,6 +71,37 @@ TEST(Simulator, FreePendulumHalfPeriodMatchesClosedForm) {
   }
   ASSERT_GT(t_turn, 0.0);
   EXPECT_NEAR(t_turn, half_period, 1e-6 * half_period);
+}
+
+TEST(Simulator, FreeFallOfASpinningBodyMatchesClosedForm) {
+  // The free-flyer path of the simulator (Euler-angle coordinates, qdot = N(q) u, Simbody's
+  // forward dynamics, CVODE) against the exact solution for a body with a spherical inertia:
+  // the CoM follows a parabola and the body turns at a constant angular velocity in the world.
+  Simulator sim(src("tests/data/model/free_body.urdf"), src("tests/data/model/free_body.yaml"), tightSettings(0, 0.005));
+  const auto& model = sim.model();
+  const Eigen::Vector3d c_local = model.tree().bodies[0].com;
+  model::Configuration q = model.neutralConfiguration();
+  const Eigen::Matrix3d R0 = model::rotationFromEulerXYZ(Eigen::Vector3d(0.2, -0.3, 0.5));
+  q.base_rotation = R0;
+  q.base_position = Eigen::Vector3d(0.1, 0.2, 3.0);
+  const Eigen::Vector3d w(0.7, -1.1, 0.4), vc0(0.5, -0.2, 1.0);
+  const Eigen::Vector3d c0 = q.base_position + R0 * c_local;
+  Eigen::VectorXd u(6);
+  u << w, vc0 - w.cross(R0 * c_local);  // velocity of the base origin
+  sim.reset(q, u);
+  const JointCommand none{Eigen::VectorXd(0), Eigen::VectorXd(0), Eigen::VectorXd(0)};
+  const Eigen::Vector3d g = model.gravity();
+  for (int k = 1; k <= 200; ++k) {
+    const StepResult r = sim.step(none);
+    ASSERT_TRUE(r.ok) << r.message;
+    const double t = sim.time();
+    const model::Configuration& x = sim.configuration();
+    const Eigen::Vector3d c = x.base_position + x.base_rotation * c_local;
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(w.norm() * t, w.normalized()).toRotationMatrix() * R0;
+    ASSERT_LT((c - (c0 + vc0 * t + 0.5 * g * t * t)).norm(), 1e-8) << "t = " << t;
+    ASSERT_LT((x.base_rotation - R).norm(), 1e-8) << "t = " << t;
+    ASSERT_LT((sim.velocity().head<3>() - w).norm(), 1e-8) << "t = " << t;
+  }
 }
 
 class PointMass : public ::testing::Test {
@@ -248,6 +280,163 @@ TEST_F(Humanoid, HandSensorReportsTheGraspWrench) {
   sim.setGraspActive(0, false);
   ASSERT_TRUE(sim.step(hold(target)).ok);
   EXPECT_EQ(sim.sensors().wrenches[3].force.norm(), 0.0);
+}
+
+// The first 0.1 s from an initial state: largest WAIST displacement and largest relative error
+// of the summed vertical contact force against m g, over the ticks.
+struct StartTransient {
+  double waist_drift_m = 0.0;
+  double force_error_rel = 0.0;
+};
+
+StartTransient firstTenthOfASecond(Simulator& sim, const Eigen::VectorXd& posture) {
+  const auto& model = sim.model();
+  const double weight = model.totalMass() * model.gravity().norm();
+  const model::FrameId waist = model.frameId("WAIST");
+  const Eigen::Vector3d p0 = model.framePlacement(sim.data(), waist).translation();
+  StartTransient tr;
+  for (int k = 0; k < 20; ++k) {
+    const StepResult r = sim.step(hold(posture));
+    EXPECT_TRUE(r.ok) << r.message;
+    if (!r.ok) break;
+    double fz = 0.0;
+    for (const ContactPoint& cp : sim.contactPoints()) fz += cp.force.z();
+    tr.force_error_rel = std::max(tr.force_error_rel, std::abs(fz - weight) / weight);
+    tr.waist_drift_m = std::max(tr.waist_drift_m, (model.framePlacement(sim.data(), waist).translation() - p0).norm());
+  }
+  return tr;
+}
+
+TEST_F(Humanoid, StaticEquilibriumStartIsAtRestFromTheFirstTick) {
+  const auto& model = sim.model();
+  const double weight = model.totalMass() * model.gravity().norm();
+  const RestingState r = sim.restingState(hs, Settle::StaticEquilibrium);
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_GE(r.iterations, 1);
+  EXPECT_LE(r.net_force_N, 1e-9 * weight);
+  EXPECT_LE(r.joint_residual_Nm, 1e-9 * weight);
+  // The base keeps its horizontal position and heading; the joints sit below the posture by the
+  // servo's static deflection (load / kp: small, but not zero).
+  EXPECT_EQ(r.q.base_position.x(), 0.0);
+  EXPECT_EQ(r.q.base_position.y(), 0.0);
+  EXPECT_NEAR(std::atan2(r.q.base_rotation(1, 0), r.q.base_rotation(0, 0)), 0.0, 1e-15);
+  const double deflection = (r.q.joints - hs).cwiseAbs().maxCoeff();
+  EXPECT_GT(deflection, 1e-4);
+  EXPECT_LT(deflection, 0.02);
+
+  const JointCommand command = hold(hs);
+  sim.reset(r.q, Eigen::VectorXd::Zero(38), &command);
+  // At t = 0, from the contact points themselves (not the solver's residual): the vertical
+  // forces sum to m g, no horizontal force, no tilting moment about the CoM.
+  Eigen::Vector3d F = Eigen::Vector3d::Zero(), M = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d com = model.centerOfMass(sim.data());
+  for (const ContactPoint& cp : sim.contactPoints()) {
+    F += cp.force;
+    M += (cp.position - com).cross(cp.force);
+  }
+  EXPECT_NEAR(F.z(), weight, 1e-9 * weight);
+  EXPECT_LT(F.head<2>().norm(), 1e-9 * weight);
+  EXPECT_LT(M.head<2>().norm(), 1e-9 * weight * 1.0);  // N m
+  // Every servo already carries its joint's load: torque = kp (posture - q) != 0.
+  EXPECT_GT(sim.sensors().tau.cwiseAbs().maxCoeff(), 10.0);
+  // The first 0.1 s: nothing moves beyond integrator noise (the unsettled starts of the next
+  // test sink 0.3 mm and lose 9 % of the contact force in the same time).
+  const StartTransient tr = firstTenthOfASecond(sim, hs);
+  EXPECT_LT(tr.waist_drift_m, 2e-6);     // measured 0.3 um (atol_position 1e-6)
+  EXPECT_LT(tr.force_error_rel, 1e-4);   // measured 1.4e-5
+}
+
+TEST_F(Humanoid, UnsettledStartsSinkWhileTheServosTakeUpTheLoad) {
+  const double weight = sim.model().totalMass() * sim.model().gravity().norm();
+  // BaseOnly balances the robot as a rigid body with its joints exactly at the posture.
+  const RestingState base = sim.restingState(hs, Settle::BaseOnly);
+  ASSERT_TRUE(base.converged) << base.message;
+  EXPECT_EQ(base.q.joints, hs);
+  EXPECT_LE(base.net_force_N, 1e-9 * weight);
+  EXPECT_LE(base.net_moment_Nm, 1e-9 * weight);
+  EXPECT_GT(base.joint_residual_Nm, 10.0);  // the servos start unloaded
+  // None: lowest point at the even-share penetration, level base: the moments do not balance.
+  const RestingState none = sim.restingState(hs, Settle::None);
+  EXPECT_EQ(none.iterations, 0);
+  EXPECT_GT(none.net_moment_Nm, 0.1);
+  for (const RestingState* r : {&base, &none}) {
+    sim.reset(r->q, Eigen::VectorXd::Zero(38));
+    double fz = 0.0;
+    for (const ContactPoint& cp : sim.contactPoints()) fz += cp.force.z();
+    EXPECT_NEAR(fz, weight, 1e-6 * weight) << toString(r->settle);
+    const StartTransient tr = firstTenthOfASecond(sim, hs);
+    EXPECT_GT(tr.waist_drift_m, 1e-4) << toString(r->settle);
+    EXPECT_GT(tr.force_error_rel, 0.05) << toString(r->settle);
+  }
+}
+
+TEST_F(Humanoid, StaticEquilibriumKeepsTheGivenHeadingAndPosition) {
+  const RestingState a = sim.restingState(hs, Settle::StaticEquilibrium);
+  const RestingState b = sim.restingState(hs, Settle::StaticEquilibrium, 0.7, Eigen::Vector2d(0.3, -0.2));
+  ASSERT_TRUE(a.converged && b.converged) << a.message << b.message;
+  EXPECT_EQ(b.q.base_position.x(), 0.3);
+  EXPECT_EQ(b.q.base_position.y(), -0.2);
+  EXPECT_NEAR(std::atan2(b.q.base_rotation(1, 0), b.q.base_rotation(0, 0)), 0.7, 1e-12);
+  // On a flat ground the physics does not depend on the heading: the same joints, height, tilt.
+  EXPECT_LT((a.q.joints - b.q.joints).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_NEAR(a.q.base_position.z(), b.q.base_position.z(), 1e-10);
+  const Eigen::Matrix3d Rz = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  EXPECT_LT((Rz * a.q.base_rotation - b.q.base_rotation).norm(), 1e-9);
+}
+
+TEST_F(Humanoid, NoStaticEquilibriumIsReportedNotReturnedAsAStart) {
+  // Right foot lifted: the robot would stand on its left foot with the CoM beside it.
+  Eigen::VectorXd one_leg = hs;
+  one_leg[sim.model().jointIndex("RLEG_JOINT2")] = -1.2;
+  one_leg[sim.model().jointIndex("RLEG_JOINT3")] = 1.8;
+  const RestingState r = sim.restingState(one_leg, Settle::StaticEquilibrium);
+  EXPECT_FALSE(r.converged);
+  EXPECT_NE(r.message.find("no stable static equilibrium"), std::string::npos) << r.message;
+  EXPECT_TRUE(r.q.joints.allFinite());
+}
+
+TEST(SimulatorEquilibrium, ServoHoldsAPendulumAgainstGravity) {
+  // Fixed base: only the joint is solved. kp (theta_ref - theta) = m g d sin(theta), the
+  // root found here by bisection.
+  SimulatorSettings s = tightSettings(1, 0.005);
+  s.servo.kp[0] = 50.0;
+  s.servo.kd[0] = 5.0;
+  Simulator sim(src("tests/data/model/pendulum.urdf"), src("tests/data/model/pendulum.yaml"), s);
+  const double mgd = 2.5 * 9.81 * 0.8, theta_ref = 0.5;
+  double lo = 0.0, hi = theta_ref;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (50.0 * (theta_ref - mid) - mgd * std::sin(mid) > 0.0 ? lo : hi) = mid;
+  }
+  const RestingState r = sim.restingState(Eigen::VectorXd::Constant(1, theta_ref), Settle::StaticEquilibrium);
+  ASSERT_TRUE(r.converged) << r.message;
+  // Converged means a torque imbalance below 1e-9 m g (N m): the angle is off by at most that
+  // over the stiffness kp + m g d cos(theta).
+  const double theta = 0.5 * (lo + hi);
+  EXPECT_LE(r.joint_residual_Nm, 1e-9 * 2.5 * 9.81);
+  EXPECT_NEAR(r.q.joints[0], theta, 1e-9 * 2.5 * 9.81 / (50.0 + mgd * std::cos(theta)));
+  // And it stays there.
+  const JointCommand command = hold(Eigen::VectorXd::Constant(1, theta_ref));
+  sim.reset(r.q, Eigen::VectorXd::Zero(1), &command);
+  for (int k = 0; k < 100; ++k) ASSERT_TRUE(sim.step(command).ok);
+  EXPECT_NEAR(sim.sensors().q[0], r.q.joints[0], 1e-9);
+  // Upside down (theta_ref = pi) the servo balances nothing and the pendulum is at rest, but
+  // that equilibrium is stable only when kp > m g d (19.6 N m/rad): a start must be stable.
+  for (double kp : {10.0, 50.0}) {
+    SimulatorSettings si = s;
+    si.servo.kp[0] = kp;
+    Simulator inverted(src("tests/data/model/pendulum.urdf"), src("tests/data/model/pendulum.yaml"), si);
+    const RestingState up = inverted.restingState(Eigen::VectorXd::Constant(1, M_PI), Settle::StaticEquilibrium);
+    EXPECT_LE(up.joint_residual_Nm, 1e-9 * 2.5 * 9.81);
+    EXPECT_NEAR(up.q.joints[0], M_PI, 1e-12);
+    EXPECT_EQ(up.converged, kp > mgd) << up.message;
+    if (kp < mgd) {
+      EXPECT_NE(up.message.find("unstable"), std::string::npos) << up.message;
+    }
+  }
+  // Requests that cannot be met are input errors.
+  EXPECT_THROW(sim.restingState(Eigen::VectorXd::Constant(1, theta_ref), Settle::BaseOnly), InputError);
+  EXPECT_THROW(sim.restingState(Eigen::VectorXd::Zero(2), Settle::StaticEquilibrium), InputError);
 }
 
 TEST(SimulatorFailure, IntegratorFailureStopsWithAClearStatus) {

@@ -1,0 +1,76 @@
+// Configuration of a controller (const after construction; docs/controller.md).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lexdyn/solver/solver.hpp"
+#include "lexdyn/tasks/task.hpp"
+
+namespace lexdyn::control {
+
+enum class Method {
+  LexDynBFGS,   ///< velocity domain, Newton augmentation with per-level BFGS (sec. VI-A)
+  LexDynAH,     ///< velocity domain, Newton augmentation with the analytic Hessian (sec. VI-B)
+  GaussNewton,  ///< velocity domain, no augmentation (the paper's pure GN, Fig. 14)
+  WLS,          ///< acceleration domain, two-level weighted QP (the paper's LSSOL baseline)
+};
+const char* toString(Method m);
+/// "bfgs" | "ah" | "gn" | "wls" (throws lexdyn::InputError naming `where`).
+Method parseMethod(const std::string& s, const std::string& where);
+
+/// Target of the Newton rows R u(k+1) = target: eq. 62 (R u(k), the paper's PD emulation) or
+/// eq. 35 / 81 (0: the step itself is penalised).
+enum class NewtonTarget { PreviousVelocity, Zero };
+
+struct ControllerParams {
+  Method method = Method::LexDynBFGS;
+  double dt = 0.005;                 ///< control period, s
+  // Thresholds the paper gives as multiples of dt^2 are stored as those multiples.
+  // Switching (eq. 95): a level is augmented while omega = 1/2 ||w_optim||^2 >= nu_dt2 * dt^2,
+  // with w_optim = dt * w_ctrl (eq. 37).
+  double nu_dt2 = 1e-12;
+  NewtonTarget newton_target = NewtonTarget::PreviousVelocity;
+  // LexDynBFGS (sec. VI-A, VII, VIII-A).
+  double xi_dt2 = 1e-12;                ///< curvature threshold on y^T s (units of dt^2)
+  double zeta_dt2 = 1e-3;               ///< eq. 89 lower bound and sign-change increment (dt^2)
+  double new_dof_diagonal_dt2 = 1e-3;   ///< diagonal put on newly occupied dofs, sec. VII (dt^2)
+  bool sign_change_guard = true;        ///< sec. VIII-A
+  bool sr1 = false;                     ///< SR1 instead of BFGS (beyond the paper; off by default)
+  // LexDynAH (sec. VI-B).
+  double rho_dt2 = 1e-12;               ///< skip Hessian terms with |lambda_optim| <= rho (dt^2)
+  double eps_dt2 = 1e-3;                ///< eps I* added after the Higham regularisation, eq. 91 (dt^2)
+  // Constant Levenberg-Marquardt damping mu on every augmentable level (velocity domain: rows
+  // mu u(k+1) = 0, eq. 81; WLS: mu udot = 0 on the objective level, eq. 50). 0: off. Used by the
+  // point-mass study of sec. V-A.
+  double damping = 0.0;
+  bool use_qmod = false;                    ///< eq. 73-76 instead of eq. 32
+  /// Rank-based switching (the paper's future work): augment when the level's active rows lose
+  /// rank after projection, in addition to eq. 95. Off by default.
+  bool rank_switching = false;
+  /// WLS: level-1 violation above this (relative) is a controller failure (the QP is infeasible).
+  double wls_infeasibility_tolerance = 1e-6;
+  solver::Options solver;                   ///< e.g. solver::Options::paper(dt)
+};
+
+/// One level of the hierarchy: task indices, in order. WLS uses exactly two levels: level 0 the
+/// hard constraints, level 1 the weighted objective (weights per task, same order as tasks).
+struct LevelSpec {
+  std::string name;
+  std::vector<int> tasks;
+  std::vector<double> weights;  ///< WLS objective level only
+};
+
+struct ControllerConfig {
+  ControllerParams params;
+  std::vector<tasks::ContactSpec> contacts;          ///< every contact the controller may use
+  std::vector<std::unique_ptr<tasks::TaskModel>> tasks;
+  /// Levels after the bounds level, highest priority first. Bounds tasks (kind() == Bounds)
+  /// may be listed in any level; they always go to the first (bounds) level of the solver.
+  std::vector<LevelSpec> levels;
+  /// Contacts active at start (names).
+  std::vector<std::string> initial_contacts;
+};
+
+}  // namespace lexdyn::control

@@ -1,0 +1,475 @@
+#include "lexdyn/control/controller.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/control/augmentation.hpp"
+#include "lexdyn/control/detail/levels.hpp"
+#include "lexdyn/hessian/kinematic_hessian.hpp"
+
+namespace lexdyn::control {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+inline double us(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::micro>(b - a).count(); }
+inline size_t z(int i) { return static_cast<size_t>(i); }
+
+}  // namespace
+
+const char* toString(Method m) {
+  switch (m) {
+    case Method::LexDynBFGS: return "bfgs";
+    case Method::LexDynAH: return "ah";
+    case Method::GaussNewton: return "gn";
+    case Method::WLS: return "wls";
+  }
+  return "unknown";
+}
+
+Method parseMethod(const std::string& s, const std::string& where) {
+  if (s == "bfgs") return Method::LexDynBFGS;
+  if (s == "ah") return Method::LexDynAH;
+  if (s == "gn") return Method::GaussNewton;
+  if (s == "wls") return Method::WLS;
+  throw InputError(where, "expected one of bfgs, ah, gn, wls, found \"" + s + "\"");
+}
+
+const char* toString(TickStatus s) {
+  switch (s) {
+    case TickStatus::Ok: return "ok";
+    case TickStatus::SolverStoppedEarly: return "solver_stopped_early";
+    case TickStatus::SolverIterationLimit: return "solver_iteration_limit";
+    case TickStatus::Infeasible: return "infeasible";
+    case TickStatus::NonFinite: return "non_finite";
+  }
+  return "unknown";
+}
+
+struct Controller::Impl {
+  const model::RobotModel* model = nullptr;
+  ControllerConfig cfg;
+  tasks::ContactLayout layout;
+  model::ModelData data;
+  std::vector<std::unique_ptr<tasks::TaskData>> td;
+  tasks::TaskModel* taskPtr(int i) const { return cfg.tasks[z(i)].get(); }
+
+  bool velocity = true;  // domain
+  int nv = 0, nx = 0, nj = 0, ng = 0;
+  std::vector<char> contactActive;
+
+  // Solver problem.
+  solver::Problem problem;
+  solver::Solver solver;
+  std::vector<SolverLevel> levels;          // general solver levels, in order
+  bool hasBounds = false;
+  std::vector<int> boundsTasks;             // tasks in the bounds level, with their first row
+  std::vector<int> boundsFirstRow;
+  bool warm = false;
+  int wlsHardLevel = -1;                    // solver level index of the WLS hard level
+
+  // Per-tick buffers.
+  Eigen::MatrixXd M;
+  Eigen::VectorXd N;
+  tasks::TickContext ctx;
+  Eigen::MatrixXd Jp;                       // 3 x nv point Jacobian
+  Eigen::Matrix<double, 3, 4> D;
+  Eigen::VectorXd genForce;                 // nv
+  Command cmd;
+  TickRecord rec;
+
+  std::unique_ptr<Augmentation> aug;
+  std::unique_ptr<hessian::KinematicHessianWorkspace> hws;  // analytic Hessians (LexDynAH)
+
+  Impl(const model::RobotModel& m, ControllerConfig c);
+  void buildLevels();
+  void fillRows();
+  void finishTick(const RobotState& s);
+};
+
+Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&m), cfg(std::move(c)), data(m.createData()) {
+  const ControllerParams& p = cfg.params;
+  if (!(p.dt > 0.0)) throw InputError("controller.dt", "expected a positive control period");
+  velocity = p.method != Method::WLS;
+  nv = m.nv();
+  nj = m.numJoints();
+  layout = tasks::ContactLayout(nv, cfg.contacts);
+  ng = layout.ng();
+  nx = layout.nx();
+  contactActive.assign(z(layout.count()), 0);
+  for (const std::string& name : cfg.initial_contacts) {
+    const int c = layout.find(name);
+    if (c < 0) throw InputError("controller.initial_contacts", "unknown contact \"" + name + "\"");
+    contactActive[z(c)] = 1;
+  }
+  const tasks::Domain dom = velocity ? tasks::Domain::Velocity : tasks::Domain::Acceleration;
+  for (size_t i = 0; i < cfg.tasks.size(); ++i) {
+    const tasks::TaskModel& t = *cfg.tasks[i];
+    if (!t.supports(dom)) {
+      throw InputError("task \"" + t.name() + "\"", std::string("does not support the ") +
+                                                        (velocity ? "velocity" : "acceleration") + " domain of method " +
+                                                        toString(p.method));
+    }
+    td.push_back(t.createData(layout));
+  }
+  buildLevels();
+  M.setZero(nv, nv);
+  N.setZero(nv);
+  Jp.setZero(3, nv);
+  genForce.setZero(nv);
+  ctx.model = model;
+  ctx.data = &data;
+  ctx.contacts = &layout;
+  ctx.contact_active = &contactActive;
+  ctx.dt = p.dt;
+  ctx.domain = dom;
+  ctx.M = &M;
+  ctx.N = &N;
+  if (p.method == Method::LexDynAH) {
+    hws = std::make_unique<hessian::KinematicHessianWorkspace>(m);
+    ctx.hessian = hws.get();
+  }
+  cmd.q = m.neutralConfiguration();
+  cmd.u.setZero(nv);
+  cmd.udot.setZero(nv);
+  cmd.tau.setZero(nj);
+  cmd.gamma.setZero(ng);
+  const int nt = static_cast<int>(cfg.tasks.size());
+  rec.task_error_norm.setZero(nt);
+  rec.task_active_rows.assign(z(nt), 0);
+  rec.task_engaged_rows.assign(z(nt), 0);
+  rec.level_augmented.assign(cfg.levels.size(), 0);
+  rec.level_hessian_updated.assign(cfg.levels.size(), 0);
+  rec.level_violation.setZero(static_cast<Eigen::Index>(cfg.levels.size()));
+  rec.contact_wrench.setZero(6, layout.count());
+}
+
+void Controller::Impl::buildLevels() {
+  const ControllerParams& p = cfg.params;
+  const int nt = static_cast<int>(cfg.tasks.size());
+  std::vector<int> seen(z(nt), 0);
+  for (size_t l = 0; l < cfg.levels.size(); ++l) {
+    const LevelSpec& ls = cfg.levels[l];
+    for (int t : ls.tasks) {
+      if (t < 0 || t >= nt) throw InputError("level \"" + ls.name + "\"", "task index " + std::to_string(t) + " out of range");
+      if (seen[z(t)]++) throw InputError("level \"" + ls.name + "\"", "task \"" + taskPtr(t)->name() + "\" appears twice in the hierarchy");
+    }
+    if (!ls.weights.empty() && ls.weights.size() != ls.tasks.size())
+      throw InputError("level \"" + ls.name + "\"", "weights must match the tasks one to one");
+  }
+  if (!velocity && cfg.levels.size() != 2) {
+    throw InputError("controller.levels", "the WLS baseline needs exactly two levels (hard constraints, weighted objective)");
+  }
+
+  // Bounds level: every bounds task, each variable at most once.
+  std::vector<int> varOwner(z(nx), -1);
+  std::vector<int> boundVars;
+  std::vector<int> vars;
+  for (const LevelSpec& ls : cfg.levels) {
+    for (int t : ls.tasks) {
+      const tasks::TaskModel& tm = *taskPtr(t);
+      if (tm.kind() != tasks::TaskKind::Bounds) continue;
+      tm.boundVariables(layout, vars);
+      if (static_cast<int>(vars.size()) != tm.rows())
+        throw InputError("task \"" + tm.name() + "\"", "bounds task returned a wrong number of variables");
+      for (int v : vars) {
+        if (v < 0 || v >= nx) throw InputError("task \"" + tm.name() + "\"", "bound variable out of range");
+        if (varOwner[z(v)] >= 0) {
+          throw InputError("task \"" + tm.name() + "\"", "bounds variable " + std::to_string(v) + " already bounded by task \"" +
+                                                             taskPtr(varOwner[z(v)])->name() + "\"");
+        }
+        varOwner[z(v)] = t;
+      }
+      boundsTasks.push_back(t);
+      boundsFirstRow.push_back(static_cast<int>(boundVars.size()));
+      boundVars.insert(boundVars.end(), vars.begin(), vars.end());
+    }
+  }
+  problem = solver::Problem(nx);
+  hasBounds = !boundVars.empty();
+  if (hasBounds) {
+    const int m = static_cast<int>(boundVars.size());
+    problem.addBoundsLevel("bounds", boundVars, Eigen::VectorXd::Ones(m), Eigen::VectorXd::Zero(m), Eigen::VectorXd::Zero(m));
+  }
+
+  auto addLevel = [&](SolverLevel lv, const std::string& name) {
+    int rows = lv.task_rows;
+    if (lv.augmentable) {
+      lv.spare_row = rows;
+      rows += nv;
+    }
+    lv.problem_level = problem.addLevel(name, Eigen::MatrixXd::Zero(rows, nx), Eigen::VectorXd::Constant(rows, -solver::kInf),
+                                        Eigen::VectorXd::Constant(rows, solver::kInf));
+    levels.push_back(std::move(lv));
+  };
+  for (size_t l = 0; l < cfg.levels.size(); ++l) {
+    const LevelSpec& ls = cfg.levels[l];
+    // Tasks that must be alone first (equation of motion), then the others.
+    SolverLevel sep, rest;
+    sep.config_level = rest.config_level = static_cast<int>(l);
+    sep.separate = true;
+    for (size_t k = 0; k < ls.tasks.size(); ++k) {
+      const int t = ls.tasks[k];
+      const tasks::TaskModel& tm = *taskPtr(t);
+      if (tm.kind() == tasks::TaskKind::Bounds || tm.rows() == 0) continue;
+      const bool alone = velocity && tm.separateLevel() && ls.tasks.size() > 1;
+      SolverLevel& target = alone ? sep : rest;
+      TaskSlot slot;
+      slot.task = t;
+      slot.row = target.task_rows;
+      if (!velocity && l == 1) {
+        const double w = ls.weights.empty() ? 1.0 : ls.weights[k];
+        if (!(w > 0.0)) throw InputError("level \"" + ls.name + "\"", "weights must be positive");
+        slot.scale = std::sqrt(w);
+      }
+      target.slots.push_back(slot);
+      target.task_rows += tm.rows();
+      if (tm.geometric()) target.augmentable = true;
+    }
+    if (!sep.slots.empty()) {
+      sep.augmentable = false;
+      addLevel(std::move(sep), ls.name + "/separate");
+    }
+    // Newton rows (velocity, BFGS/AH), or constant damping rows (any method with damping > 0).
+    const bool newton = velocity && (p.method == Method::LexDynBFGS || p.method == Method::LexDynAH);
+    const bool damping = p.damping > 0.0 && (velocity ? rest.augmentable : l == 1);
+    rest.augmentable = (newton && rest.augmentable) || damping;
+    if (!rest.slots.empty() || rest.augmentable) {
+      if (!velocity && l == 0) wlsHardLevel = static_cast<int>(levels.size());
+      addLevel(std::move(rest), ls.name);
+    }
+  }
+  solver.setup(problem, p.solver);
+  aug = std::make_unique<Augmentation>(*model, cfg, layout, problem, levels);
+}
+
+void Controller::Impl::fillRows() {
+  // Bounds level.
+  if (hasBounds) {
+    solver::Level& bl = problem.level(0);
+    for (size_t i = 0; i < boundsTasks.size(); ++i) {
+      const tasks::TaskData& d = *td[z(boundsTasks[i])];
+      const int m = static_cast<int>(d.lower.size());
+      bl.lower.segment(boundsFirstRow[i], m) = d.lower;
+      bl.upper.segment(boundsFirstRow[i], m) = d.upper;
+    }
+  }
+  for (const SolverLevel& lv : levels) {
+    solver::Level& pl = problem.level(lv.problem_level);
+    for (const TaskSlot& s : lv.slots) {
+      const tasks::TaskData& d = *td[z(s.task)];
+      const int m = static_cast<int>(d.lower.size());
+      if (s.scale == 1.0) {
+        pl.A.middleRows(s.row, m) = d.A;
+        pl.lower.segment(s.row, m) = d.lower;
+        pl.upper.segment(s.row, m) = d.upper;
+      } else {
+        pl.A.middleRows(s.row, m) = s.scale * d.A;
+        pl.lower.segment(s.row, m) = s.scale * d.lower;
+        pl.upper.segment(s.row, m) = s.scale * d.upper;
+      }
+    }
+  }
+}
+
+void Controller::Impl::finishTick(const RobotState& s) {
+  const ControllerParams& p = cfg.params;
+  const solver::Result& r = solver.result();
+  const double dt = p.dt;
+  if (velocity) {
+    cmd.u = r.x.head(nv);
+    cmd.udot = (cmd.u - s.u) / dt;
+    cmd.gamma = r.x.tail(ng) / dt;
+    if (p.use_qmod) {
+      // eq. 73-76: q_mod = q + dt (u(k+1) + u) / 2.
+      genForce = 0.5 * (cmd.u + s.u);
+      model->integrate(s.q, genForce, dt, cmd.q);
+    } else {
+      model->integrate(s.q, cmd.u, dt, cmd.q);  // eq. 32
+    }
+  } else {
+    cmd.udot = r.x.head(nv);
+    cmd.gamma = r.x.tail(ng);
+    cmd.u = s.u + dt * cmd.udot;
+    genForce = s.u + 0.5 * dt * cmd.udot;  // eq. 57: q + dt u + dt^2/2 udot
+    model->integrate(s.q, genForce, dt, cmd.q);
+  }
+  // Generalized forces M udot + N - Jc^T gamma: the actuated rows are the joint torques; contact
+  // wrenches from the generators.
+  genForce.noalias() = M * cmd.udot;
+  genForce += N;
+  rec.contact_wrench.setZero();
+  for (int c = 0; c < layout.count(); ++c) {
+    if (!contactActive[z(c)]) continue;
+    const tasks::ContactSpec& cs = layout.contact(c);
+    const Eigen::Isometry3d X = model->framePlacement(data, cs.frame);
+    tasks::ContactLayout::generators(X.linear(), cs.normal_in_frame, cs.friction, D);
+    for (size_t pt = 0; pt < cs.points.size(); ++pt) {
+      const Eigen::Vector3d f = D * cmd.gamma.segment(layout.offset(c) + 4 * static_cast<int>(pt), 4);
+      model->pointJacobian(data, cs.frame, cs.points[pt], Jp);
+      genForce.noalias() -= Jp.transpose() * f;
+      const Eigen::Vector3d pw = X * cs.points[pt];
+      rec.contact_wrench.col(c).head<3>() += f;
+      rec.contact_wrench.col(c).tail<3>() += (pw - X.translation()).cross(f);
+    }
+  }
+  cmd.tau = genForce.tail(nj);
+  rec.com = model->centerOfMass(data);
+}
+
+Controller::Controller(const model::RobotModel& model, ControllerConfig config)
+    : impl_(std::make_unique<Impl>(model, std::move(config))) {}
+Controller::~Controller() = default;
+Controller::Controller(Controller&&) noexcept = default;
+Controller& Controller::operator=(Controller&&) noexcept = default;
+
+void Controller::reset(const RobotState& s) {
+  Impl& I = *impl_;
+  I.warm = false;
+  for (size_t i = 0; i < I.td.size(); ++i) I.cfg.tasks[i]->reset(*I.td[i]);
+  I.aug->reset();
+  I.cmd.q = s.q;
+  I.cmd.u = s.u;
+  I.cmd.udot.setZero();
+}
+
+const Command& Controller::tick(const RobotState& s) {
+  Impl& I = *impl_;
+  const ControllerParams& p = I.cfg.params;
+  const auto t0 = Clock::now();
+  // 1. Model.
+  I.model->update(I.data, s.q, s.u);
+  I.model->massMatrix(I.data, I.M);
+  I.model->nonlinearEffects(I.data, I.N);
+  I.ctx.q = &s.q;
+  I.ctx.u = &s.u;
+  I.ctx.time = s.time;
+  const auto t1 = Clock::now();
+  if (I.hws) I.hws->update(*I.model, I.data);
+  // 2. Tasks.
+  for (size_t i = 0; i < I.td.size(); ++i) I.cfg.tasks[i]->compute(I.ctx, *I.td[i]);
+  I.fillRows();
+  const auto t2 = Clock::now();
+  // 3. Newton / damping rows of the augmentable levels.
+  I.aug->apply(I.ctx, I.td, I.levels, I.problem, I.solver.result(), I.warm, s, I.rec);
+  const auto t3 = Clock::now();
+  // 4. Solve, warm-started from the previous tick.
+  const solver::Result& r = I.warm ? I.solver.solve(I.problem, I.solver.result().active, I.solver.result().x)
+                                   : I.solver.solve(I.problem);
+  I.warm = true;
+  const auto t4 = Clock::now();
+  // 5. Command and record.
+  TickStatus st = TickStatus::Ok;
+  if (r.status == solver::Status::NonFiniteInput || !r.x.allFinite()) {
+    st = TickStatus::NonFinite;
+  } else if (r.status == solver::Status::IterationLimit) {
+    st = TickStatus::SolverIterationLimit;
+  } else if (r.status == solver::Status::StoppedEarly) {
+    st = TickStatus::SolverStoppedEarly;
+  }
+  if (st != TickStatus::NonFinite) {
+    I.finishTick(s);
+    if (!I.velocity && I.wlsHardLevel >= 0) {
+      // The WLS hard level must be feasible (the paper's LSSOL has no relaxation).
+      const SolverLevel& hl = I.levels[z(I.wlsHardLevel)];
+      const double viol = r.violation_norm(hl.problem_level);
+      // Relative to the size of the level's finite bounds.
+      const solver::Level& pl = I.problem.level(hl.problem_level);
+      double scale = 1.0;
+      for (int k = 0; k < pl.rows(); ++k) {
+        if (std::isfinite(pl.lower(k))) scale = std::max(scale, std::abs(pl.lower(k)));
+        if (std::isfinite(pl.upper(k))) scale = std::max(scale, std::abs(pl.upper(k)));
+      }
+      if (viol > p.wls_infeasibility_tolerance * scale) st = TickStatus::Infeasible;
+    }
+    if (!I.cmd.u.allFinite() || !I.cmd.tau.allFinite()) st = TickStatus::NonFinite;
+  }
+  I.cmd.status = st;
+  I.aug->afterSolve(I.td, s);
+
+  TickRecord& rec = I.rec;
+  rec.time = s.time;
+  rec.status = st;
+  rec.solver_status = r.status;
+  rec.iterations = r.iterations;
+  rec.optimality_iterations = r.optimality_iterations;
+  for (size_t i = 0; i < I.td.size(); ++i) {
+    const tasks::TaskData& d = *I.td[i];
+    rec.task_error_norm(static_cast<Eigen::Index>(i)) = d.error.norm();
+    int engaged = 0;
+    for (char e : d.engaged) engaged += e ? 1 : 0;
+    rec.task_engaged_rows[i] = engaged;
+    rec.task_active_rows[i] = 0;
+  }
+  for (size_t b = 0; b < I.boundsTasks.size(); ++b) {
+    const int t = I.boundsTasks[b];
+    int held = 0;
+    for (int k = 0; k < I.cfg.tasks[z(t)]->rows(); ++k)
+      held += r.active.level[0][z(I.boundsFirstRow[b] + k)] != solver::RowState::Inactive ? 1 : 0;
+    rec.task_active_rows[z(t)] = held;
+  }
+  rec.level_violation.setZero();
+  for (const SolverLevel& lv : I.levels) {
+    const auto& act = r.active.level[z(lv.problem_level)];
+    for (const TaskSlot& sl : lv.slots) {
+      int held = 0;
+      const int m = I.cfg.tasks[z(sl.task)]->rows();
+      for (int k = 0; k < m; ++k) held += act[z(sl.row + k)] != solver::RowState::Inactive ? 1 : 0;
+      rec.task_active_rows[z(sl.task)] = held;
+    }
+    const double v = r.violation[z(lv.problem_level)].head(lv.task_rows).norm();
+    double& lvv = rec.level_violation(lv.config_level);
+    lvv = std::sqrt(lvv * lvv + v * v);
+  }
+  const auto t5 = Clock::now();
+  rec.model_us = us(t0, t1);
+  rec.tasks_us = us(t1, t2);
+  rec.hessian_us = us(t2, t3);
+  rec.solver_us = us(t3, t4);
+  rec.tick_us = us(t0, t5);
+  return I.cmd;
+}
+
+const TickRecord& Controller::record() const { return impl_->rec; }
+const Command& Controller::command() const { return impl_->cmd; }
+const solver::Result& Controller::solverResult() const { return impl_->solver.result(); }
+const solver::Problem& Controller::problem() const { return impl_->problem; }
+const ControllerConfig& Controller::config() const { return impl_->cfg; }
+const tasks::ContactLayout& Controller::contacts() const { return impl_->layout; }
+const model::RobotModel& Controller::model() const { return *impl_->model; }
+int Controller::taskCount() const { return static_cast<int>(impl_->cfg.tasks.size()); }
+const tasks::TaskModel& Controller::task(int i) const { return *impl_->cfg.tasks[z(i)]; }
+const tasks::TaskData& Controller::taskData(int i) const { return *impl_->td[z(i)]; }
+int Controller::levelCount() const { return static_cast<int>(impl_->cfg.levels.size()); }
+
+int Controller::taskIndex(const std::string& name) const {
+  const auto& ts = impl_->cfg.tasks;
+  std::string known;
+  for (size_t i = 0; i < ts.size(); ++i) {
+    if (ts[i]->name() == name) return static_cast<int>(i);
+    known += (known.empty() ? "" : ", ") + ts[i]->name();
+  }
+  throw InputError("task \"" + name + "\"", "unknown task (known: " + known + ")");
+}
+
+void Controller::setTaskTarget(int task, const Eigen::Ref<const Eigen::VectorXd>& target) {
+  impl_->cfg.tasks[z(task)]->setTarget(*impl_->td[z(task)], target);
+}
+
+int Controller::contactIndex(const std::string& name) const {
+  const int c = impl_->layout.find(name);
+  if (c < 0) {
+    std::string known;
+    for (int i = 0; i < impl_->layout.count(); ++i) known += (i ? ", " : "") + impl_->layout.contact(i).name;
+    throw InputError("contact \"" + name + "\"", "unknown contact (known: " + known + ")");
+  }
+  return c;
+}
+
+void Controller::setContactActive(int contact, bool active) { impl_->contactActive[z(contact)] = active ? 1 : 0; }
+bool Controller::contactActive(int contact) const { return impl_->contactActive[z(contact)] != 0; }
+
+}  // namespace lexdyn::control

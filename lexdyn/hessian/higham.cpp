@@ -1,0 +1,303 @@
+#include "lexdyn/hessian/higham.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "lexdyn/common/error.hpp"
+
+namespace lexdyn::hessian {
+
+// =============================================================================================
+// Symmetric eigendecomposition
+// =============================================================================================
+
+SymmetricEigenSolver::SymmetricEigenSolver(int capacity) { setup(capacity); }
+
+void SymmetricEigenSolver::setup(int capacity) {
+  n_ = 0;
+  iterations_ = 0;
+  LEXDYN_ALWAYS_ASSERT(capacity >= 0, "SymmetricEigenSolver: negative capacity");
+  work_.setZero(capacity, capacity);
+  z_.setZero(capacity, capacity);
+  d_.setZero(capacity);
+  e_.setZero(capacity);
+  tau_.setZero(capacity);
+  tmp_.setZero(capacity);
+}
+
+bool SymmetricEigenSolver::compute(const Eigen::Ref<const Eigen::MatrixXd>& A) {
+  const int n = static_cast<int>(A.rows());
+  LEXDYN_ALWAYS_ASSERT(A.cols() == n, "SymmetricEigenSolver::compute: A must be square");
+  LEXDYN_ALWAYS_ASSERT(n <= capacity(), "SymmetricEigenSolver::compute: A exceeds the capacity");
+  n_ = n;
+  iterations_ = 0;
+  if (n == 0) return true;
+  auto W = work_.topLeftCorner(n, n);
+  auto Z = z_.topLeftCorner(n, n);
+  // Full symmetric copy from the lower triangle.
+  for (int c = 0; c < n; ++c) {
+    for (int r = c; r < n; ++r) {
+      W(r, c) = A(r, c);
+      W(c, r) = A(r, c);
+    }
+  }
+
+  // 1. Householder tridiagonalisation W = Q T Q^T, Q = P_0 P_1 ... P_{n-3},
+  //    P_k = I - tau_k v_k v_k^T acting on rows/columns k+1 .. n-1.
+  for (int k = 0; k + 2 < n; ++k) {
+    const int L = n - k - 1;
+    auto x = W.col(k).segment(k + 1, L);
+    const double sigma = x.tail(L - 1).squaredNorm();
+    const double x0 = x[0];
+    if (sigma == 0.0) {
+      tau_[k] = 0.0;
+      e_[k] = x0;
+      continue;
+    }
+    const double alpha = -std::copysign(std::sqrt(x0 * x0 + sigma), x0);
+    const double v0 = x0 - alpha;  // no cancellation: alpha has the opposite sign of x0
+    x[0] = v0;                     // x now holds v
+    const double tau = 2.0 / (v0 * v0 + sigma);
+    tau_[k] = tau;
+    e_[k] = alpha;
+    // Two-sided update of the trailing block S <- P S P = S - v q^T - q v^T with
+    // p = tau S v, q = p - (tau/2) (p^T v) v.
+    auto S = W.bottomRightCorner(L, L);
+    auto p = tmp_.head(L);
+    for (int r = 0; r < L; ++r) p[r] = 0.0;
+    for (int c = 0; c < L; ++c) {
+      const double vc = x[c];
+      for (int r = 0; r < L; ++r) p[r] += S(r, c) * vc;
+    }
+    p *= tau;
+    const double K = 0.5 * tau * p.dot(x);
+    for (int r = 0; r < L; ++r) p[r] -= K * x[r];
+    for (int c = 0; c < L; ++c) {
+      const double vc = x[c], qc = p[c];
+      for (int r = 0; r < L; ++r) S(r, c) -= x[r] * qc + p[r] * vc;
+    }
+  }
+  for (int k = 0; k < n; ++k) d_[k] = W(k, k);
+  if (n >= 2) e_[n - 2] = W(n - 1, n - 2);
+  e_[n - 1] = 0.0;
+
+  // 2. Accumulate Q (backwards, so that each reflector touches only its trailing block).
+  Z.setIdentity();
+  for (int k = n - 3; k >= 0; --k) {
+    if (tau_[k] == 0.0) continue;
+    const int L = n - k - 1;
+    auto v = W.col(k).segment(k + 1, L);
+    auto Zb = Z.bottomRightCorner(L, L);
+    auto t = tmp_.head(L);
+    for (int c = 0; c < L; ++c) t[c] = Zb.col(c).dot(v);  // t = Zb^T v
+    for (int c = 0; c < L; ++c) {
+      const double tc = tau_[k] * t[c];
+      for (int r = 0; r < L; ++r) Zb(r, c) -= v[r] * tc;
+    }
+  }
+
+  // 3. Implicit symmetric QR steps with Wilkinson shifts on the tridiagonal (d, e), the
+  //    rotations accumulated into Z (Golub & Van Loan, algorithm 8.3.3).
+  const double eps = std::numeric_limits<double>::epsilon();
+  const double tiny = std::numeric_limits<double>::min();
+  int h = n - 1;
+  const int max_iterations = 30 * n;
+  while (h > 0) {
+    for (int i = 0; i < h; ++i) {
+      const double ae = std::abs(e_[i]);
+      if (ae <= eps * (std::abs(d_[i]) + std::abs(d_[i + 1])) || ae <= tiny) e_[i] = 0.0;
+    }
+    while (h > 0 && e_[h - 1] == 0.0) --h;
+    if (h == 0) break;
+    int l = h - 1;
+    while (l > 0 && e_[l - 1] != 0.0) --l;
+    if (++iterations_ > max_iterations) return false;
+    // Wilkinson shift: the eigenvalue of the trailing 2 x 2 block closer to d[h].
+    const double delta = 0.5 * (d_[h - 1] - d_[h]);
+    const double b = e_[h - 1];
+    const double denom = delta + std::copysign(std::hypot(delta, b), delta);
+    const double mu = d_[h] - b * b / denom;
+    double x = d_[l] - mu;
+    double z = e_[l];
+    for (int k = l; k < h; ++k) {
+      // Rotation G on (k, k+1) with G^T [x; z] = [r; 0], G = [c s; -s c].
+      const double r = std::hypot(x, z);
+      double c = 1.0, s = 0.0;
+      if (r > 0.0) {
+        c = x / r;
+        s = -z / r;
+      }
+      if (k > l) e_[k - 1] = r;
+      const double a = d_[k], bb = d_[k + 1], f = e_[k];
+      const double cc = c * c, ss = s * s, cs = c * s;
+      d_[k] = cc * a - 2.0 * cs * f + ss * bb;
+      d_[k + 1] = ss * a + 2.0 * cs * f + cc * bb;
+      e_[k] = (a - bb) * cs + f * (cc - ss);
+      if (k + 1 < h) {
+        z = -s * e_[k + 1];  // the bulge T(k+2, k)
+        e_[k + 1] = c * e_[k + 1];
+        x = e_[k];
+      }
+      for (int row = 0; row < n; ++row) {
+        const double zk = Z(row, k), zk1 = Z(row, k + 1);
+        Z(row, k) = c * zk - s * zk1;
+        Z(row, k + 1) = s * zk + c * zk1;
+      }
+    }
+  }
+
+  // 4. Ascending order (selection sort, swapping eigenvector columns).
+  for (int i = 0; i + 1 < n; ++i) {
+    int best = i;
+    for (int j = i + 1; j < n; ++j) {
+      if (d_[j] < d_[best]) best = j;
+    }
+    if (best != i) {
+      std::swap(d_[i], d_[best]);
+      Z.col(i).swap(Z.col(best));
+    }
+  }
+  return true;
+}
+
+// =============================================================================================
+// Cholesky
+// =============================================================================================
+
+int choleskyUpperInPlace(Eigen::Ref<Eigen::MatrixXd> A, int m, double pivot_tolerance) {
+  LEXDYN_ALWAYS_ASSERT(m >= 0 && m <= A.rows() && m <= A.cols(), "choleskyUpperInPlace: bad size");
+  int zero_pivots = 0;
+  for (int k = 0; k < m; ++k) {
+    double dkk = A(k, k);
+    for (int i = 0; i < k; ++i) dkk -= A(i, k) * A(i, k);
+    if (!(dkk > pivot_tolerance)) {
+      ++zero_pivots;
+      for (int j = k; j < m; ++j) A(k, j) = 0.0;
+    } else {
+      const double ukk = std::sqrt(dkk);
+      A(k, k) = ukk;
+      for (int j = k + 1; j < m; ++j) {
+        double s = A(k, j);
+        for (int i = 0; i < k; ++i) s -= A(i, k) * A(i, j);
+        A(k, j) = s / ukk;
+      }
+    }
+    for (int i = k + 1; i < m; ++i) A(i, k) = 0.0;
+  }
+  return zero_pivots;
+}
+
+// =============================================================================================
+// Higham
+// =============================================================================================
+
+HighamRegularizer::HighamRegularizer(int n) { setup(n); }
+
+void HighamRegularizer::setup(int n) {
+  LEXDYN_ALWAYS_ASSERT(n >= 0, "HighamRegularizer: negative size");
+  n_ = n;
+  m_ = 0;
+  zero_pivots_ = 0;
+  min_eig_ = 0.0;
+  eig_.setup(n);
+  block_.setZero(n, n);
+  last_.setZero(n, n);
+  index_.assign(static_cast<size_t>(n), 0);
+}
+
+namespace {
+
+// X = V max(Lambda, 0) V^T from a computed decomposition (lower triangle, mirrored: exactly
+// symmetric).
+void clippedReconstruction(const SymmetricEigenSolver& eig, Eigen::Ref<Eigen::MatrixXd> X) {
+  const int k = eig.size();
+  const auto lambda = eig.eigenvalues();
+  const auto V = eig.eigenvectors();
+  int first = 0;
+  while (first < k && !(lambda[first] > 0.0)) ++first;
+  for (int c = 0; c < k; ++c) {
+    for (int r = c; r < k; ++r) {
+      double s = 0.0;
+      for (int l = first; l < k; ++l) s += lambda[l] * V(r, l) * V(c, l);
+      X(r, c) = s;
+      X(c, r) = s;
+    }
+  }
+}
+
+}  // namespace
+
+bool HighamRegularizer::nearestPsd(const Eigen::Ref<const Eigen::MatrixXd>& H, Eigen::Ref<Eigen::MatrixXd> X) {
+  const int k = static_cast<int>(H.rows());
+  LEXDYN_ALWAYS_ASSERT(H.cols() == k && X.rows() == k && X.cols() == k && k <= n_,
+                       "HighamRegularizer::nearestPsd: bad sizes");
+  failed_ = !H.allFinite() || !eig_.compute(H);
+  if (failed_) {
+    X.setConstant(std::numeric_limits<double>::quiet_NaN());
+    min_eig_ = std::numeric_limits<double>::quiet_NaN();
+    return false;
+  }
+  min_eig_ = k > 0 ? eig_.eigenvalues()[0] : 0.0;
+  clippedReconstruction(eig_, X);
+  return true;
+}
+
+int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H,
+                                           const std::vector<char>& occupied, double eps,
+                                           Eigen::Ref<Eigen::MatrixXd> R) {
+  LEXDYN_ALWAYS_ASSERT(H.rows() == n_ && H.cols() == n_, "regularizeAndFactor: H must be n x n");
+  LEXDYN_ALWAYS_ASSERT(static_cast<int>(occupied.size()) == n_, "regularizeAndFactor: mask must have n entries");
+  LEXDYN_ALWAYS_ASSERT(R.cols() == n_, "regularizeAndFactor: R must have n columns");
+  LEXDYN_ALWAYS_ASSERT(eps >= 0.0, "regularizeAndFactor: eps must be >= 0");
+  int m = 0;
+  for (int i = 0; i < n_; ++i) {
+    if (occupied[static_cast<size_t>(i)]) index_[static_cast<size_t>(m++)] = i;
+  }
+  LEXDYN_ALWAYS_ASSERT(R.rows() >= m, "regularizeAndFactor: R has fewer rows than occupied dofs");
+  m_ = m;
+  R.setZero();
+  zero_pivots_ = 0;
+  min_eig_ = 0.0;
+  failed_ = false;
+  if (m == 0) return 0;
+  auto Hb = block_.topLeftCorner(m, m);
+  for (int c = 0; c < m; ++c) {
+    for (int r = 0; r < m; ++r) Hb(r, c) = H(index_[static_cast<size_t>(r)], index_[static_cast<size_t>(c)]);
+  }
+  if (!Hb.allFinite() || !eig_.compute(Hb)) {
+    failed_ = true;
+    m_ = 0;
+    min_eig_ = std::numeric_limits<double>::quiet_NaN();
+    return 0;
+  }
+  min_eig_ = eig_.eigenvalues()[0];
+  auto X = last_.topLeftCorner(m, m);
+  clippedReconstruction(eig_, X);  // eq. 91 without eps
+  double max_diag = 0.0;
+  for (int i = 0; i < m; ++i) {
+    X(i, i) += eps;  // eps I* on the occupied dofs
+    max_diag = std::max(max_diag, X(i, i));
+  }
+  Hb = X;
+  // Pivots below the rounding level of the block are semi-definite directions (eps == 0).
+  const double tol = static_cast<double>(m) * std::numeric_limits<double>::epsilon() * max_diag;
+  zero_pivots_ = choleskyUpperInPlace(Hb, m, tol);
+  for (int r = 0; r < m; ++r) {
+    for (int c = r; c < m; ++c) R(r, index_[static_cast<size_t>(c)]) = Hb(r, c);
+  }
+  return m;
+}
+
+int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H,
+                                           const std::vector<char>& occupied, double eps,
+                                           Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list) {
+  LEXDYN_ALWAYS_ASSERT(occupied_list.capacity() >= static_cast<size_t>(n_),
+                       "regularizeAndFactor: reserve n entries in occupied_list (no allocation per tick)");
+  const int m = regularizeAndFactor(H, occupied, eps, R);
+  occupied_list.clear();  // (empty when the block was not finite)
+  for (int k = 0; k < m; ++k) occupied_list.push_back(index_[static_cast<size_t>(k)]);
+  return m;
+}
+
+}  // namespace lexdyn::hessian

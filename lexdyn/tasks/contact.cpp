@@ -1,0 +1,95 @@
+#include "lexdyn/tasks/contact.hpp"
+
+#include <algorithm>
+
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/hessian/kinematic_hessian.hpp"
+#include "lexdyn/tasks/contact_jacobian.hpp"
+
+namespace lexdyn::tasks {
+
+ContactTask::ContactTask(std::string name, const model::RobotModel& model, const ContactLayout& layout,
+                         const ContactTaskParams& params)
+    : TaskModel(std::move(name)), nv_(model.nv()), ng_(layout.ng()) {
+  if (layout.nv() != nv_) {
+    throwTaskInput(this->name(), "", "the contact layout has nv = " + std::to_string(layout.nv()) +
+                                         ", the model nv = " + std::to_string(nv_));
+  }
+  contact_ = layout.find(params.contact);
+  if (contact_ < 0) {
+    std::string known;
+    for (int c = 0; c < layout.count(); ++c) known += (c ? ", " : "") + layout.contact(c).name;
+    throwTaskInput(this->name(), "contact", "unknown contact '" + params.contact + "' (contacts: " + known + ")");
+  }
+  frame_ = layout.contact(contact_).frame;
+  if (frame_ < 0 || frame_ >= model.numFrames()) {
+    throwTaskInput(this->name(), "contact", "contact '" + params.contact + "' has no valid frame");
+  }
+  body_ = model.frameBody(frame_);
+  pd_ = resolvePd(params.gains, this->name());
+}
+
+std::unique_ptr<TaskData> ContactTask::createData(const ContactLayout& layout) const {
+  if (layout.nv() != nv_ || layout.ng() != ng_) {
+    throwTaskInput(name(), "", "built for a contact layout with nv = " + std::to_string(nv_) + ", ng = " +
+                                   std::to_string(ng_) + ", given nv = " + std::to_string(layout.nv()) +
+                                   ", ng = " + std::to_string(layout.ng()));
+  }
+  auto d = std::make_unique<ContactTaskData>();
+  initData(*d, layout);
+  return d;
+}
+
+void ContactTask::reset(TaskData& d) const { static_cast<ContactTaskData&>(d).holding = false; }
+
+void ContactTask::compute(const TickContext& ctx, TaskData& base) const {
+  auto& d = static_cast<ContactTaskData&>(base);
+  if (!contactActive(ctx, contact_)) {
+    d.holding = false;
+    d.A.setZero();
+    d.J.setZero();
+    d.lower.setZero();
+    d.upper.setZero();
+    d.error.setZero();
+    std::fill(d.engaged.begin(), d.engaged.end(), 0);
+    return;
+  }
+  const model::RobotModel& model = *ctx.model;
+  const model::ModelData& data = *ctx.data;
+  const Eigen::Isometry3d X = model.framePlacement(data, frame_);
+  if (!d.holding) {  // the contact is made: hold this pose
+    d.position = X.translation();
+    d.rotation = X.linear();
+    d.holding = true;
+  }
+  model.frameJacobian(data, frame_, d.J);  // [linear; angular]
+  const model::Vector6d bias = model.frameBias(data, frame_);
+  Eigen::Matrix<double, 6, 1> Ju, e;
+  Ju.noalias() = d.J * (*ctx.u);
+  e.head<3>() = d.position - X.translation();
+  e.tail<3>() = rotationError(d.rotation, X.linear());  // log(R_d R^T)
+  d.A.leftCols(nv_) = d.J;
+  for (int i = 0; i < 6; ++i) {
+    d.error[i] = e[i];
+    const double rhs = pdRowTarget(ctx.domain, ctx.dt, pd_, e[i], Ju[i], bias[i]);  // eq. 61 / 55
+    d.lower[i] = rhs;
+    d.upper[i] = rhs;
+    d.engaged[static_cast<size_t>(i)] = 1;
+  }
+}
+
+void ContactTask::accumulateHessian(const TickContext& ctx, const TaskData& base, const Eigen::Ref<const Eigen::VectorXd>& w,
+                                    Eigen::Ref<Eigen::MatrixXd> H) const {
+  const auto& d = static_cast<const ContactTaskData&>(base);
+  LEXDYN_ALWAYS_ASSERT(ctx.hessian != nullptr && w.size() == 6, "contact: accumulateHessian needs ctx.hessian, w(6)");
+  if (!d.holding) return;
+  hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, Eigen::Vector3d::Zero(),
+                                  Eigen::Vector3d(w.head<3>()), H);
+  hessian::accumulateOrientationHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, Eigen::Vector3d(w.tail<3>()), H);
+}
+
+void ContactTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const {
+  markBodyChain(model, body_, mask);
+}
+
+}  // namespace lexdyn::tasks

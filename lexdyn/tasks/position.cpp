@@ -1,0 +1,75 @@
+#include "lexdyn/tasks/position.hpp"
+
+#include <algorithm>
+
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/hessian/kinematic_hessian.hpp"
+
+namespace lexdyn::tasks {
+
+PositionTask::PositionTask(std::string name, const model::RobotModel& model, const PositionParams& params)
+    : TaskModel(std::move(name)), nv_(model.nv()) {
+  frame_ = resolveFrame(model, params.frame, this->name(), "frame");
+  body_ = model.frameBody(frame_);
+  requireFinite(params.point, this->name(), "point");
+  point_ = params.point;
+  if (params.target) {
+    requireFinite(*params.target, this->name(), "target");
+    initial_target_ = params.target;
+  }
+  pd_ = resolvePd(params.gains, this->name());
+}
+
+void PositionTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) const {
+  requireFinite(target, name(), "target");
+}
+
+std::unique_ptr<TaskData> PositionTask::createData(const ContactLayout& layout) const {
+  if (layout.nv() != nv_) {
+    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
+  }
+  auto d = std::make_unique<TaskData>();
+  initData(*d, layout);
+  std::fill(d->engaged.begin(), d->engaged.end(), 1);
+  reset(*d);
+  return d;
+}
+
+void PositionTask::reset(TaskData& d) const {
+  d.target_set = initial_target_.has_value();
+  if (initial_target_) d.target = *initial_target_;
+}
+
+void PositionTask::compute(const TickContext& ctx, TaskData& d) const {
+  const model::RobotModel& model = *ctx.model;
+  const model::ModelData& data = *ctx.data;
+  model.pointJacobian(data, frame_, point_, d.J);
+  const Eigen::Vector3d p = model.pointPosition(data, frame_, point_);
+  if (!d.target_set) {
+    d.target = p;  // hold
+    d.target_set = true;
+  }
+  const Eigen::Vector3d bias = model.pointBias(data, frame_, point_);  // Jdot u
+  Eigen::Vector3d Ju;
+  Ju.noalias() = d.J * (*ctx.u);
+  d.A.leftCols(nv_) = d.J;
+  for (int i = 0; i < 3; ++i) {
+    const double e = d.target[i] - p[i];
+    d.error[i] = e;
+    const double rhs = pdRowTarget(ctx.domain, ctx.dt, pd_, e, Ju[i], bias[i]);  // eq. 61 / 55
+    d.lower[i] = rhs;
+    d.upper[i] = rhs;
+  }
+}
+
+void PositionTask::accumulateHessian(const TickContext& ctx, const TaskData&, const Eigen::Ref<const Eigen::VectorXd>& w,
+                                     Eigen::Ref<Eigen::MatrixXd> H) const {
+  LEXDYN_ALWAYS_ASSERT(ctx.hessian != nullptr && w.size() == 3, "position: accumulateHessian needs ctx.hessian, w(3)");
+  hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, point_, Eigen::Vector3d(w), H);
+}
+
+void PositionTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const {
+  markBodyChain(model, body_, mask);
+}
+
+}  // namespace lexdyn::tasks

@@ -1,0 +1,115 @@
+#include "lexdyn/tasks/self_collision.hpp"
+
+#include <limits>
+
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/hessian/kinematic_hessian.hpp"
+
+namespace lexdyn::tasks {
+
+SelfCollisionTask::SelfCollisionTask(std::string name, const model::RobotModel& model, const SelfCollisionParams& params)
+    : TaskModel(std::move(name)), nv_(model.nv()) {
+  const model::RobotDescription& desc = model.description();
+  std::vector<int> indices;
+  if (params.pairs.empty()) {
+    for (int p = 0; p < model.numCollisionPairs(); ++p) indices.push_back(p);
+  } else {
+    for (size_t k = 0; k < params.pairs.size(); ++k) {
+      const std::string field = "pairs[" + std::to_string(k) + "]";
+      const int a = desc.findCapsule(params.pairs[k].first);
+      const int b = desc.findCapsule(params.pairs[k].second);
+      if (a < 0) throwTaskInput(this->name(), field, "unknown capsule '" + params.pairs[k].first + "'");
+      if (b < 0) throwTaskInput(this->name(), field, "unknown capsule '" + params.pairs[k].second + "'");
+      int found = -1;
+      for (int p = 0; p < model.numCollisionPairs(); ++p) {
+        const auto& cp = desc.collision_pairs[static_cast<size_t>(p)];
+        if ((cp.capsule_a == a && cp.capsule_b == b) || (cp.capsule_a == b && cp.capsule_b == a)) found = p;
+      }
+      if (found < 0) {
+        throwTaskInput(this->name(), field, "[" + params.pairs[k].first + ", " + params.pairs[k].second +
+                                                "] is not a collision pair of the robot data file");
+      }
+      for (int prev : indices) {
+        if (prev == found) throwTaskInput(this->name(), field, "pair listed twice");
+      }
+      indices.push_back(found);
+    }
+  }
+  for (int p : indices) {
+    const auto& cp = desc.collision_pairs[static_cast<size_t>(p)];
+    Pair pr;
+    pr.pair = p;
+    pr.frame_a = model.frameId(desc.links[static_cast<size_t>(desc.capsules[static_cast<size_t>(cp.capsule_a)].link)].name);
+    pr.frame_b = model.frameId(desc.links[static_cast<size_t>(desc.capsules[static_cast<size_t>(cp.capsule_b)].link)].name);
+    pr.body_a = model.frameBody(pr.frame_a);
+    pr.body_b = model.frameBody(pr.frame_b);
+    pairs_.push_back(pr);
+  }
+  damper_.interaction = params.interaction_distance.value_or(desc.collision_interaction_distance);
+  damper_.safety = params.safety_distance.value_or(desc.collision_safety_distance);
+  damper_.xi = params.xi;
+  validateDamper(damper_, this->name(), "");
+}
+
+std::unique_ptr<TaskData> SelfCollisionTask::createData(const ContactLayout& layout) const {
+  if (layout.nv() != nv_) {
+    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
+  }
+  auto d = std::make_unique<SelfCollisionTaskData>();
+  initData(*d, layout);
+  d->point_a.setZero(3, rows());
+  d->point_b.setZero(3, rows());
+  d->normal.setZero(3, rows());
+  d->upper.setConstant(std::numeric_limits<double>::infinity());
+  return d;
+}
+
+void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
+  auto& d = static_cast<SelfCollisionTaskData&>(base);
+  const model::RobotModel& model = *ctx.model;
+  const model::ModelData& data = *ctx.data;
+  const Eigen::VectorXd& u = *ctx.u;
+  const double d_i = damper_.interaction, d_s = damper_.safety, xi = damper_.xi;
+  for (int r = 0; r < rows(); ++r) {
+    const Pair& pr = pairs_[static_cast<size_t>(r)];
+    const model::CapsuleDistance cd = model.capsuleDistance(data, pr.pair, d.J.row(r));
+    d.A.row(r).head(nv_) = d.J.row(r);
+    d.point_a.col(r) = model.framePlacement(data, pr.frame_a).inverse() * cd.point_a;
+    d.point_b.col(r) = model.framePlacement(data, pr.frame_b).inverse() * cd.point_b;
+    d.normal.col(r) = cd.normal;
+    const double dist = cd.distance;
+    double lower;
+    if (ctx.domain == Domain::Velocity) {
+      lower = damperVelocityBound(dist, d_i, d_s, xi);
+    } else {
+      lower = damperAccelerationBound(dist, d_i, d_s, xi, d.J.row(r).dot(u), 0.0, ctx.dt);  // Jdot_d u neglected
+    }
+    d.lower[r] = lower;
+    d.upper[r] = std::numeric_limits<double>::infinity();
+    d.error[r] = dist;
+    d.engaged[static_cast<size_t>(r)] = damperEngaged(dist, d_i) ? 1 : 0;
+  }
+}
+
+void SelfCollisionTask::accumulateHessian(const TickContext& ctx, const TaskData& base,
+                                          const Eigen::Ref<const Eigen::VectorXd>& w, Eigen::Ref<Eigen::MatrixXd> H) const {
+  const auto& d = static_cast<const SelfCollisionTaskData&>(base);
+  LEXDYN_ALWAYS_ASSERT(ctx.hessian != nullptr && w.size() == rows(), "self_collision: accumulateHessian needs ctx.hessian, w(rows)");
+  for (int r = 0; r < rows(); ++r) {
+    if (w[r] == 0.0) continue;
+    const Pair& pr = pairs_[static_cast<size_t>(r)];
+    const Eigen::Vector3d wn = w[r] * d.normal.col(r);
+    // d ~= n^T (p_a - p_b) with n and the witness points held on their bodies.
+    hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, pr.frame_a, d.point_a.col(r), wn, H);
+    hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, pr.frame_b, d.point_b.col(r), -wn, H);
+  }
+}
+
+void SelfCollisionTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const {
+  for (const Pair& pr : pairs_) {
+    markBodyChain(model, pr.body_a, mask);
+    markBodyChain(model, pr.body_b, mask);
+  }
+}
+
+}  // namespace lexdyn::tasks

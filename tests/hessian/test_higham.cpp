@@ -1,0 +1,284 @@
+// The symmetric eigensolver, the Cholesky factor and Higham's nearest positive semi-definite
+// matrix (lexdyn/hessian/higham.hpp), against Eigen's decompositions and against the defining
+// property (no positive semi-definite matrix is closer in the Frobenius norm).
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "hessian_test_utils.hpp"
+#include "lexdyn/hessian/higham.hpp"
+
+namespace lexdyn::hessian {
+namespace {
+
+using testing::Rng;
+
+/// The eigenvalue-clipping definition with Eigen's own solver: Q max(Lambda, 0) Q^T.
+Eigen::MatrixXd clipReference(const Eigen::MatrixXd& H) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
+}
+
+/// Higham's eq. 91-92 literally: 1/2 (H + P), P = V Sigma V^T from the SVD H = U Sigma V^T.
+Eigen::MatrixXd polarReference(const Eigen::MatrixXd& H) {
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::MatrixXd P = svd.matrixV() * svd.singularValues().asDiagonal() * svd.matrixV().transpose();
+  return 0.5 * (H + P);
+}
+
+double minEigenvalue(const Eigen::MatrixXd& A) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A, Eigen::EigenvaluesOnly).eigenvalues()[0];
+}
+
+/// A random symmetric matrix with prescribed eigenvalues.
+Eigen::MatrixXd withEigenvalues(const Eigen::VectorXd& lambda, Rng& rng) {
+  const Eigen::Index n = lambda.size();
+  Eigen::MatrixXd G(n, n);
+  for (Eigen::Index i = 0; i < n; ++i) G.col(i) = rng.uniformVector(n);
+  const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(G).householderQ();
+  Eigen::MatrixXd A = Q * lambda.asDiagonal() * Q.transpose();
+  return 0.5 * (A + A.transpose());
+}
+
+std::vector<Eigen::MatrixXd> testMatrices(Rng& rng) {
+  std::vector<Eigen::MatrixXd> out;
+  for (int n : {1, 2, 3, 4, 7, 12, 20, 38}) {
+    for (int k = 0; k < 4; ++k) out.push_back(rng.symmetric(n));
+    out.push_back(rng.symmetric(n, 1e-8));  // Hessians scaled by dt^2 are small
+    out.push_back(rng.symmetric(n, 1e3));
+    Eigen::VectorXd lambda = rng.uniformVector(n);
+    for (int i = 0; i < n; i += 3) lambda[i] = 0.0;  // rank deficient
+    out.push_back(withEigenvalues(lambda, rng));
+    Eigen::VectorXd clustered = Eigen::VectorXd::Constant(n, 1.0);
+    for (int i = 0; i < n; i += 2) clustered[i] = -2.0;  // repeated eigenvalues
+    out.push_back(withEigenvalues(clustered, rng));
+  }
+  out.push_back(Eigen::MatrixXd::Zero(6, 6));
+  out.push_back(Eigen::MatrixXd::Identity(9, 9));
+  Eigen::MatrixXd tri = Eigen::MatrixXd::Zero(8, 8);  // already tridiagonal, with a split
+  for (int i = 0; i < 8; ++i) tri(i, i) = i - 3.5;
+  for (int i = 0; i < 7; ++i) tri(i + 1, i) = tri(i, i + 1) = (i == 3 ? 0.0 : 0.7);
+  out.push_back(tri);
+  Eigen::MatrixXd block = Eigen::MatrixXd::Zero(10, 10);  // a zero block in the middle
+  block.topLeftCorner(4, 4) = rng.symmetric(4);
+  block.bottomRightCorner(3, 3) = rng.symmetric(3);
+  out.push_back(block);
+  return out;
+}
+
+TEST(SymmetricEigenSolver, DecomposesAgainstEigen) {
+  Rng rng(101);
+  SymmetricEigenSolver es(38);
+  for (const Eigen::MatrixXd& A : testMatrices(rng)) {
+    const Eigen::Index n = A.rows();
+    ASSERT_TRUE(es.compute(A));
+    ASSERT_EQ(es.size(), n);
+    const double scale = std::max(1e-300, A.norm());
+    const Eigen::MatrixXd V = es.eigenvectors();
+    const Eigen::VectorXd lambda = es.eigenvalues();
+    EXPECT_LE((A * V - V * lambda.asDiagonal()).norm(), 1e-13 * scale * n) << "n = " << n;
+    EXPECT_LE((V.transpose() * V - Eigen::MatrixXd::Identity(n, n)).norm(), 1e-13 * n) << "n = " << n;
+    for (Eigen::Index i = 0; i + 1 < n; ++i) EXPECT_LE(lambda[i], lambda[i + 1]);
+    const Eigen::VectorXd ref = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues();
+    EXPECT_LE((lambda - ref).cwiseAbs().maxCoeff(), 1e-13 * scale * n) << "n = " << n;
+    EXPECT_LE(es.iterations(), 3 * n + 5) << "n = " << n;  // typical: about 2 sweeps per eigenvalue
+  }
+}
+
+TEST(SymmetricEigenSolver, ReadsOnlyTheLowerTriangle) {
+  Rng rng(102);
+  const Eigen::MatrixXd A = rng.symmetric(9);
+  Eigen::MatrixXd B = A;
+  B.triangularView<Eigen::StrictlyUpper>().setConstant(1e6);
+  SymmetricEigenSolver es(9);
+  ASSERT_TRUE(es.compute(B));
+  const Eigen::VectorXd ref = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A).eigenvalues();
+  EXPECT_LE((es.eigenvalues() - ref).cwiseAbs().maxCoeff(), 1e-13 * A.norm() * 9);
+}
+
+TEST(Cholesky, UpperFactorAndSemidefinitePivots) {
+  Rng rng(103);
+  for (int n : {1, 3, 10, 38}) {
+    Eigen::MatrixXd G(n, n);
+    for (int i = 0; i < n; ++i) G.col(i) = rng.uniformVector(n);
+    const Eigen::MatrixXd A = G.transpose() * G + 1e-3 * Eigen::MatrixXd::Identity(n, n);
+    Eigen::MatrixXd U = A;
+    EXPECT_EQ(choleskyUpperInPlace(U, n), 0);
+    EXPECT_TRUE(U.isUpperTriangular(0.0));
+    EXPECT_LE((U.transpose() * U - A).norm(), 1e-13 * A.norm() * n);
+    const Eigen::MatrixXd Ueigen = A.llt().matrixU();
+    EXPECT_LE((U - Ueigen).norm(), 1e-10 * Ueigen.norm());
+  }
+  // Positive semi-definite of rank 2 with exactly zero pivots.
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(4, 4);
+  S.topLeftCorner(2, 2) << 4, 2, 2, 5;
+  Eigen::MatrixXd U = S;
+  EXPECT_EQ(choleskyUpperInPlace(U, 4), 2);
+  EXPECT_LE((U.transpose() * U - S).norm(), 1e-14);
+  // An indefinite matrix is reported.
+  Eigen::MatrixXd N(2, 2);
+  N << 1, 2, 2, 1;
+  EXPECT_EQ(choleskyUpperInPlace(N, 2), 1);
+}
+
+TEST(Higham, NearestPsdMatchesEigenvalueClippingAndPolarForm) {
+  Rng rng(104);
+  HighamRegularizer hr(38);
+  for (const Eigen::MatrixXd& H : testMatrices(rng)) {
+    const Eigen::Index n = H.rows();
+    const double scale = std::max(1e-300, H.norm());
+    Eigen::MatrixXd X(n, n);
+    hr.nearestPsd(H, X);
+    EXPECT_EQ((X - X.transpose()).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_LE((X - clipReference(H)).norm(), 1e-13 * scale * n) << "n = " << n;
+    EXPECT_LE((X - polarReference(H)).norm(), 1e-12 * scale * n) << "n = " << n;
+    EXPECT_GE(minEigenvalue(X), -1e-14 * scale * n) << "n = " << n;
+  }
+}
+
+TEST(Higham, NoPositiveSemidefiniteMatrixIsCloser) {
+  // Higham (1988): ||H - X||_F = sqrt(sum of the squared negative eigenvalues), and every
+  // positive semi-definite Y is at least as far from H.
+  Rng rng(105);
+  HighamRegularizer hr(12);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int n = 2 + trial % 11;
+    const Eigen::MatrixXd H = rng.symmetric(n);
+    Eigen::MatrixXd X(n, n);
+    hr.nearestPsd(H, X);
+    const Eigen::VectorXd lambda = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
+    const double expected = lambda.cwiseMin(0.0).norm();
+    const double d = (H - X).norm();
+    EXPECT_NEAR(d, expected, 1e-12 * H.norm());
+    for (int k = 0; k < 200; ++k) {
+      // Nearby PSD candidates (X plus a PSD perturbation, or X's nearest PSD after a symmetric
+      // perturbation) and random PSD matrices.
+      Eigen::MatrixXd Y;
+      const Eigen::MatrixXd E = rng.symmetric(n, k % 2 ? 1e-3 : 1e-1);
+      if (k % 3 == 0) {
+        Y = X + E * E.transpose();
+      } else if (k % 3 == 1) {
+        Y = clipReference(X + E);
+      } else {
+        Y = E * E.transpose() * 10.0;
+      }
+      EXPECT_GE((H - Y).norm(), d - 1e-12) << "trial " << trial << " candidate " << k;
+    }
+  }
+}
+
+TEST(Higham, IdempotentOnPositiveSemidefiniteInput) {
+  Rng rng(106);
+  HighamRegularizer hr(20);
+  for (int n : {1, 5, 20}) {
+    Eigen::VectorXd lambda = rng.uniformVector(n, 0.0, 2.0);
+    lambda[0] = 0.0;
+    const Eigen::MatrixXd A = withEigenvalues(lambda, rng);
+    Eigen::MatrixXd X(n, n), XX(n, n);
+    hr.nearestPsd(A, X);
+    EXPECT_LE((X - A).norm(), 1e-14 * A.norm() * n);
+    hr.nearestPsd(X, XX);
+    EXPECT_LE((XX - X).norm(), 1e-14 * X.norm() * n);
+    // In place (X aliases H).
+    Eigen::MatrixXd H = rng.symmetric(n);
+    Eigen::MatrixXd ref(n, n);
+    hr.nearestPsd(H, ref);
+    hr.nearestPsd(H, H);
+    EXPECT_EQ((H - ref).cwiseAbs().maxCoeff(), 0.0);
+  }
+}
+
+TEST(Higham, RegularizeAndFactorOnTheOccupiedDofs) {
+  Rng rng(107);
+  const int n = 15;
+  HighamRegularizer hr(n);
+  for (int trial = 0; trial < 30; ++trial) {
+    std::vector<char> mask(n, 0);
+    std::vector<int> idx;
+    for (int i = 0; i < n; ++i) {
+      mask[static_cast<size_t>(i)] = rng.uniform(0, 1) < 0.6 ? 1 : 0;
+      if (mask[static_cast<size_t>(i)]) idx.push_back(i);
+    }
+    const int m = static_cast<int>(idx.size());
+    Eigen::MatrixXd H = rng.symmetric(n);
+    const double eps = trial % 3 == 0 ? 0.0 : 1e-3;
+    Eigen::MatrixXd Ho(m, m);
+    for (int a = 0; a < m; ++a)
+      for (int b = 0; b < m; ++b) Ho(a, b) = H(idx[static_cast<size_t>(a)], idx[static_cast<size_t>(b)]);
+    const Eigen::MatrixXd expected = clipReference(Ho) + eps * Eigen::MatrixXd::Identity(m, m);
+    // Entries outside the occupied block are ignored.
+    for (int i = 0; i < n; ++i) {
+      if (mask[static_cast<size_t>(i)]) continue;
+      H.row(i).setConstant(123.0);
+      H.col(i).setConstant(123.0);
+    }
+    Eigen::MatrixXd R = Eigen::MatrixXd::Constant(n, n, 7.0);
+    std::vector<int> list;
+    list.reserve(n);
+    ASSERT_EQ(hr.regularizeAndFactor(H, mask, eps, R, list), m);
+    EXPECT_EQ(list, idx);
+    EXPECT_LE((hr.lastRegularized() - expected).norm(), 1e-13 * n * (1.0 + Ho.norm()));
+    // R^T R: the regularised block on the occupied dofs, zero elsewhere; rows >= m zero.
+    Eigen::MatrixXd full = Eigen::MatrixXd::Zero(n, n);
+    for (int a = 0; a < m; ++a)
+      for (int b = 0; b < m; ++b) full(idx[static_cast<size_t>(a)], idx[static_cast<size_t>(b)]) = expected(a, b);
+    EXPECT_LE((R.transpose() * R - full).norm(), 1e-12 * n * (1.0 + Ho.norm())) << "trial " << trial;
+    EXPECT_EQ(R.bottomRows(n - m).cwiseAbs().maxCoeff(), 0.0);
+    for (int i = 0; i < n; ++i) {
+      if (!mask[static_cast<size_t>(i)]) {
+        EXPECT_EQ(R.col(i).cwiseAbs().maxCoeff(), 0.0);
+      }
+    }
+    // Upper triangular in the order of the occupied dofs.
+    for (int r = 0; r < m; ++r)
+      for (int c = 0; c < r; ++c) EXPECT_EQ(R(r, idx[static_cast<size_t>(c)]), 0.0);
+    if (eps > 0.0) {
+      EXPECT_EQ(hr.lastZeroPivots(), 0);
+    }
+  }
+}
+
+TEST(Higham, IndefiniteHessianWithEpsIsFactored) {
+  // An indefinite Hessian (a negative curvature direction), the typical input of eq. 91.
+  Rng rng(108);
+  const int n = 6;
+  Eigen::VectorXd lambda(n);
+  lambda << -2.0, -0.5, 0.0, 0.3, 1.0, 4.0;
+  const Eigen::MatrixXd H = withEigenvalues(lambda, rng);
+  HighamRegularizer hr(n);
+  Eigen::MatrixXd R(n, n);
+  const std::vector<char> all(n, 1);
+  const double eps = 1e-6;
+  ASSERT_EQ(hr.regularizeAndFactor(H, all, eps, R), n);
+  EXPECT_NEAR(hr.lastMinEigenvalue(), -2.0, 1e-12);
+  const Eigen::VectorXd got = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(R.transpose() * R).eigenvalues();
+  Eigen::VectorXd want(n);
+  want << eps, eps, eps, 0.3 + eps, 1.0 + eps, 4.0 + eps;
+  EXPECT_LE((got - want).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_TRUE(R.isUpperTriangular(0.0));
+}
+
+TEST(Higham, NonFiniteInputGivesNoRows) {
+  const int n = 5;
+  HighamRegularizer hr(n);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Identity(n, n);
+  H(1, 2) = H(2, 1) = std::numeric_limits<double>::quiet_NaN();
+  Eigen::MatrixXd R = Eigen::MatrixXd::Constant(n, n, 3.0);
+  EXPECT_EQ(hr.regularizeAndFactor(H, std::vector<char>(n, 1), 1e-6, R), 0);
+  EXPECT_TRUE(hr.lastFailed());
+  EXPECT_EQ(R.cwiseAbs().maxCoeff(), 0.0);
+  // A non-finite entry outside the occupied block is ignored.
+  EXPECT_EQ(hr.regularizeAndFactor(H, {1, 0, 0, 1, 1}, 1e-6, R), 3);
+  EXPECT_FALSE(hr.lastFailed());
+  Eigen::MatrixXd X(n, n);
+  EXPECT_FALSE(hr.nearestPsd(H, X));
+  EXPECT_TRUE(hr.lastFailed());
+  EXPECT_TRUE(hr.nearestPsd(Eigen::MatrixXd::Identity(n, n), X));
+}
+
+}  // namespace
+}  // namespace lexdyn::hessian
