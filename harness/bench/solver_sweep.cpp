@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
 
   using namespace lexdyn::solver;
   std::mt19937_64 meta(seed);
-  long fails = 0, held = 0, iters = 0, solved = 0, maxIt = 0;
+  long fails = 0, held = 0, cycles = 0, iters = 0, solved = 0, maxIt = 0;
   for (long c = 0; c < cases; ++c) {
     const std::uint64_t s = seed + static_cast<std::uint64_t>(c);
     test::GenOptions g;
@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
     const Result& r = solver.solve(p);
     ++solved;
     held += r.held_after_reblock;
+    cycles += r.cycles_broken;
     iters += r.iterations;
     maxIt = std::max<long>(maxIt, r.iterations);
     std::string err = (r.status != Status::Solved) ? std::string("status ") + toString(r.status) : test::checkKkt(p, r);
@@ -62,7 +63,7 @@ int main(int argc, char** argv) {
     if (!err.empty() && ++fails <= 10) std::printf("problem seed %llu: %s\n", static_cast<unsigned long long>(s), err.c_str());
     if ((c + 1) % 20000 == 0) std::fprintf(stderr, "lexdyn-solver-sweep: %ld/%ld\n", c + 1, cases);
   }
-  std::printf("{\"solved\": %ld, \"failures\": %ld, \"held_after_reblock\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld}\n",
-              solved, fails, held, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0, maxIt);
+  std::printf("{\"solved\": %ld, \"failures\": %ld, \"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld}\n",
+              solved, fails, held, cycles, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0, maxIt);
   return fails == 0 ? 0 : 1;
 }

@@ -20,9 +20,12 @@ const char* toString(Method m);
 /// "bfgs" | "ah" | "gn" | "wls" (throws lexdyn::InputError naming `where`).
 Method parseMethod(const std::string& s, const std::string& where);
 
-/// Target of the Newton rows R u(k+1) = target: eq. 62 (R u(k), the paper's PD emulation) or
-/// eq. 35 / 81 (0: the step itself is penalised).
-enum class NewtonTarget { PreviousVelocity, Zero };
+/// Target of the Newton rows R u(k+1) = target: 0 (eq. 35 and the Taylor model eq. 26: the step
+/// dq = dt u(k+1) itself is penalised, as in the paper's damping analysis eq. 81), or R u(k) as
+/// eq. 62 is printed (only the change of velocity is penalised). The default is Zero: with
+/// eq. 62's target a velocity already built up along a singular direction is never damped, and
+/// the 3R benchmark keeps oscillating at the singularity (docs/controller.md).
+enum class NewtonTarget { Zero, PreviousVelocity };
 
 struct ControllerParams {
   Method method = Method::LexDynBFGS;
@@ -31,7 +34,7 @@ struct ControllerParams {
   // Switching (eq. 95): a level is augmented while omega = 1/2 ||w_optim||^2 >= nu_dt2 * dt^2,
   // with w_optim = dt * w_ctrl (eq. 37).
   double nu_dt2 = 1e-12;
-  NewtonTarget newton_target = NewtonTarget::PreviousVelocity;
+  NewtonTarget newton_target = NewtonTarget::Zero;
   // LexDynBFGS (sec. VI-A, VII, VIII-A).
   double xi_dt2 = 1e-12;                ///< curvature threshold on y^T s (units of dt^2)
   double zeta_dt2 = 1e-3;               ///< eq. 89 lower bound and sign-change increment (dt^2)

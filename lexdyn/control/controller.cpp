@@ -60,6 +60,7 @@ struct Controller::Impl {
   bool velocity = true;  // domain
   int nv = 0, nx = 0, nj = 0, ng = 0;
   std::vector<char> contactActive;
+  std::vector<char> used;  // per task: referenced by a level
 
   // Solver problem.
   solver::Problem problem;
@@ -106,9 +107,15 @@ Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&
     contactActive[z(c)] = 1;
   }
   const tasks::Domain dom = velocity ? tasks::Domain::Velocity : tasks::Domain::Acceleration;
+  // Tasks not used by any level are allowed (a case may define tasks for some methods only):
+  // they are neither checked nor computed.
+  used.assign(cfg.tasks.size(), 0);
+  for (const LevelSpec& ls : cfg.levels)
+    for (int t : ls.tasks)
+      if (t >= 0 && t < static_cast<int>(cfg.tasks.size())) used[z(t)] = 1;
   for (size_t i = 0; i < cfg.tasks.size(); ++i) {
     const tasks::TaskModel& t = *cfg.tasks[i];
-    if (!t.supports(dom)) {
+    if (used[i] && !t.supports(dom)) {
       throw InputError("task \"" + t.name() + "\"", std::string("does not support the ") +
                                                         (velocity ? "velocity" : "acceleration") + " domain of method " +
                                                         toString(p.method));
@@ -350,7 +357,8 @@ const Command& Controller::tick(const RobotState& s) {
   const auto t1 = Clock::now();
   if (I.hws) I.hws->update(*I.model, I.data);
   // 2. Tasks.
-  for (size_t i = 0; i < I.td.size(); ++i) I.cfg.tasks[i]->compute(I.ctx, *I.td[i]);
+  for (size_t i = 0; i < I.td.size(); ++i)
+    if (I.used[i]) I.cfg.tasks[i]->compute(I.ctx, *I.td[i]);
   I.fillRows();
   const auto t2 = Clock::now();
   // 3. Newton / damping rows of the augmentable levels.

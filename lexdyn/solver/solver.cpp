@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <string>
 
 #include "lexdyn/common/error.hpp"
@@ -83,6 +84,17 @@ struct Solver::Impl {
   std::vector<char> tabooRow, tabooVar;
   int lastDropKind = -1, lastDropIdx = -1;
   RowState lastDropState = RowState::Inactive;
+  // Cycle detection: Zobrist hash of the working set (fixed seed), recent hashes.
+  std::vector<std::uint64_t> zRow, zVar;  // per gid / var: 3 keys (Lower, Upper, Equality)
+  std::uint64_t wsHash = 0;
+  std::vector<std::uint64_t> recent;
+  int recentPos = 0, recentCount = 0;
+  double rankTol = 1e-9, dualTol = 1e-10;
+  void hashFlip(int kind, int idx, RowState st) {
+    if (st == RowState::Inactive) return;
+    const int k = static_cast<int>(st) - 1;
+    wsHash ^= (kind == 0 ? zVar : zRow)[static_cast<size_t>(3 * idx + k)];
+  }
   std::vector<RowState> vstate;
   std::vector<int> boundRow;  // var -> row of the bounds level or -1
   std::vector<int> freeVar;
@@ -157,6 +169,14 @@ void Solver::Impl::setup(const Problem& problem, const Options& o) {
   freeVar.assign(static_cast<size_t>(n), 0);
   fixedVar.assign(static_cast<size_t>(n), 0);
   warmRow.assign(static_cast<size_t>(M), RowState::Inactive);
+  {
+    std::mt19937_64 rng(0x9e3779b97f4a7c15ULL);
+    zRow.resize(static_cast<size_t>(3 * std::max(M, 1)));
+    zVar.resize(static_cast<size_t>(3 * std::max(n, 1)));
+    for (auto& v : zRow) v = rng();
+    for (auto& v : zVar) v = rng();
+    recent.assign(64, 0);
+  }
   warmVar.assign(static_cast<size_t>(n), RowState::Inactive);
   warmX.setZero(n);
 
@@ -388,7 +408,7 @@ void Solver::Impl::buildTargets() {
 
 void Solver::Impl::solveEquality() {
   buildTargets();
-  fact.factorize(opt.rank_tolerance);
+  fact.factorize(rankTol);
   xs = x;  // fixed variables keep their (bound) values; the free ones are overwritten
   fact.solve(b, xs, res);
 }
@@ -451,7 +471,7 @@ bool Solver::Impl::isHeld(int kind, int idx, int levelH, int kf) {
     ensureMult(i);
     const double v = (kind == 0) ? muVarAll(idx, i) : muAll(idx, i);
     const double norm = (kind == 0) ? 1.0 : rowNorm(idx);
-    if (correctSign(kind, idx, v) * norm > opt.dual_tolerance * levelS(i)) return true;
+    if (correctSign(kind, idx, v) * norm > dualTol * levelS(i)) return true;
   }
   return false;
 }
@@ -499,7 +519,7 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx) {
         if (tabooRow[static_cast<size_t>(gid)]) continue;
         if (std::abs(res(gid)) > opt.zero_tolerance * rowScale(gid, xnorm)) continue;  // frozen
         const double measure = -correctSign(1, gid, mu(gid)) * rowNorm(gid) / S;
-        if (measure > opt.dual_tolerance && !isHeld(1, gid, j, kf)) consider(1, gid, measure);
+        if (measure > dualTol && !isHeld(1, gid, j, kf)) consider(1, gid, measure);
       }
     }
     // Active variable bounds.
@@ -509,7 +529,7 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx) {
       if (s != RowState::Lower && s != RowState::Upper) continue;
       if (tabooVar[static_cast<size_t>(i)]) continue;
       const double measure = -correctSign(0, i, muVar(i)) / S;
-      if (measure > opt.dual_tolerance && !isHeld(0, i, -1, kf)) consider(0, i, measure);
+      if (measure > dualTol && !isHeld(0, i, -1, kf)) consider(0, i, measure);
     }
     if (bestKind >= 0) {
       kind = bestKind;
@@ -534,6 +554,14 @@ void Solver::Impl::run() {
   std::fill(tabooRow.begin(), tabooRow.end(), 0);
   std::fill(tabooVar.begin(), tabooVar.end(), 0);
   lastDropKind = lastDropIdx = -1;
+  out.cycles_broken = 0;
+  rankTol = opt.rank_tolerance;
+  dualTol = opt.dual_tolerance;
+  bool forceBland = false;
+  wsHash = 0;
+  for (int i = 0; i < n; ++i) hashFlip(0, i, vstate[static_cast<size_t>(i)]);
+  for (int g = 0; g < M; ++g) hashFlip(1, g, state[static_cast<size_t>(g)]);
+  recentCount = recentPos = 0;
   out.status = Status::Solved;
   out.reason = StopReason::Optimal;
 
@@ -625,6 +653,7 @@ void Solver::Impl::run() {
     }
     if (!full) {
       // Activate the blocking constraint exactly at its bound.
+      hashFlip(blockKind, blockIdx, blockState);
       if (blockKind == 0) {
         const int i = blockIdx;
         x(i) = (blockState == RowState::Upper) ? xup(i) : xlo(i);
@@ -650,6 +679,7 @@ void Solver::Impl::run() {
       lastDropKind = kind;
       lastDropIdx = idx;
       lastDropState = (kind == 0) ? vstate[static_cast<size_t>(idx)] : state[static_cast<size_t>(idx)];
+      hashFlip(kind, idx, lastDropState);
       if (kind == 0) {
         vstate[static_cast<size_t>(idx)] = RowState::Inactive;
         updateFreeVariables();
@@ -663,6 +693,23 @@ void Solver::Impl::run() {
       optPhase = true;
       pending = true;
     }
+
+    // Cycle detection: the new working set was already visited in this solve.
+    bool repeated = false;
+    for (int q = 0; q < recentCount; ++q) repeated = repeated || recent[static_cast<size_t>(q)] == wsHash;
+    recent[static_cast<size_t>(recentPos)] = wsHash;
+    recentPos = (recentPos + 1) % static_cast<int>(recent.size());
+    recentCount = std::min(recentCount + 1, static_cast<int>(recent.size()));
+    if (repeated && (rankTol < 1e-6 || dualTol < 1e-6)) {
+      ++out.cycles_broken;
+      rankTol = std::min(1e-6, std::max(rankTol, rankTol * opt.cycle_tolerance_factor));
+      dualTol = std::min(1e-6, std::max(dualTol, dualTol * opt.cycle_tolerance_factor));
+      fact.invalidateAll();
+      forceBland = true;
+      recentCount = recentPos = 0;
+      if (opt.trace) std::fprintf(stderr, "   cycle detected: tolerances raised to %.1e / %.1e\n", rankTol, dualTol);
+    }
+    if (forceBland) bland = true;
 
     // Paper termination rules (sec. VIII-B).
     if (opt.stop_slack_norm > 0.0 && v.head(M).squaredNorm() <= opt.stop_slack_norm) {

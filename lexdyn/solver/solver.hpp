@@ -47,8 +47,8 @@ const char* toString(RowState s);
 struct Options {
   /// A row whose norm after projection into the null space of the earlier active rows is at most
   /// rank_tolerance times its own norm counts as linearly dependent. Rows with singular values
-  /// down to ~1e-9 relative are treated exactly.
-  double rank_tolerance = 1e-10;
+  /// down to ~1e-8 relative are treated exactly (no damping).
+  double rank_tolerance = 1e-9;
   /// Blocking test: a row blocks the step only if its rate of change exceeds this, relative to
   /// |a| |dx| + |dv|.
   double feasibility_tolerance = 1e-12;
@@ -68,6 +68,10 @@ struct Options {
   int max_iterations = 1000;
   /// After this many consecutive zero-length steps, ties are broken by smallest index (Bland).
   int bland_after_degenerate_steps = 8;
+  /// When a working set repeats within a solve (a cycle: no strict progress, typically numerical
+  /// on ill-conditioned levels), the rank and dual tolerances are multiplied by this factor (up to
+  /// 1e-6) for the rest of the solve, and ties go to the smallest index.
+  double cycle_tolerance_factor = 100.0;
   /// Paper sec. VIII-B rules; disabled when <= 0.
   double stop_slack_norm = 0.0;        ///< stop when sum of squared slacks <= this (paper: 1e-12 dt^2)
   int stop_optimality_iterations = 0;  ///< stop after this many iterations in the optimality phase (paper: 10)
@@ -105,6 +109,8 @@ struct Result {
   int activations = 0, deactivations = 0;
   /// Times a released constraint blocked again at once and was kept (anti-cycling safety net).
   int held_after_reblock = 0;
+  /// Cycles detected (a working set repeated) and broken by raising the tolerances.
+  int cycles_broken = 0;
   int bad_level = -1, bad_row = -1;  ///< NonFiniteInput location
 };
 

@@ -39,8 +39,9 @@ std::unique_ptr<TaskData> ComBoxTask::createData(const ContactLayout& layout) co
   if (layout.nv() != nv_) {
     throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
   }
-  auto d = std::make_unique<TaskData>();
+  auto d = std::make_unique<DamperTaskData>();
   initData(*d, layout);
+  d->dampers.resize(6);  // lower side of x, y, z, then upper side
   reset(*d);
   return d;
 }
@@ -48,9 +49,11 @@ std::unique_ptr<TaskData> ComBoxTask::createData(const ContactLayout& layout) co
 void ComBoxTask::reset(TaskData& d) const {
   d.target = initial_box_;
   d.target_set = true;
+  static_cast<DamperTaskData&>(d).resetDampers();
 }
 
-void ComBoxTask::compute(const TickContext& ctx, TaskData& d) const {
+void ComBoxTask::compute(const TickContext& ctx, TaskData& base) const {
+  auto& d = static_cast<DamperTaskData&>(base);
   const model::RobotModel& model = *ctx.model;
   const model::ModelData& data = *ctx.data;
   model.centerOfMassJacobian(data, d.J);
@@ -59,14 +62,15 @@ void ComBoxTask::compute(const TickContext& ctx, TaskData& d) const {
   Eigen::Vector3d Ju;
   Ju.noalias() = d.J * (*ctx.u);
   d.A.leftCols(nv_) = d.J;
-  const double d_i = damper_.interaction, d_s = damper_.safety, xi = damper_.xi;
+  const double d_i = damper_.interaction;
   for (int i = 0; i < 3; ++i) {
     const double d_lo = c[i] - d.target[i];
     const double d_hi = d.target[3 + i] - c[i];
     // Velocity-domain bounds on J_i u(k+1): the damper of the lower side bounds +J_i, the one
     // of the upper side bounds -J_i.
-    double lower = damperVelocityBound(d_lo, d_i, d_s, xi);
-    double upper = -damperVelocityBound(d_hi, d_i, d_s, xi);
+    // d_lo grows with the CoM velocity, d_hi shrinks with it.
+    double lower = damperVelocityBound(d_lo, Ju[i], damper_, d.dampers[static_cast<size_t>(i)]);
+    double upper = -damperVelocityBound(d_hi, -Ju[i], damper_, d.dampers[static_cast<size_t>(3 + i)]);
     if (ctx.domain == Domain::Acceleration) {
       lower = (lower - Ju[i]) / ctx.dt - bias[i];
       upper = (upper - Ju[i]) / ctx.dt - bias[i];

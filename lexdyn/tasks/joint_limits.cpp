@@ -33,13 +33,17 @@ std::unique_ptr<TaskData> JointLimitsTask::createData(const ContactLayout& layou
   if (layout.nv() != nv_) {
     throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
   }
-  auto d = std::make_unique<TaskData>();
+  auto d = std::make_unique<DamperTaskData>();
   initData(*d, layout);
+  d->dampers.resize(static_cast<size_t>(2 * nj_));  // lower limit of each joint, then upper
   for (int j = 0; j < nj_; ++j) d->A(j, offset_ + j) = 1.0;
   return d;
 }
 
-void JointLimitsTask::compute(const TickContext& ctx, TaskData& d) const {
+void JointLimitsTask::reset(TaskData& d) const { static_cast<DamperTaskData&>(d).resetDampers(); }
+
+void JointLimitsTask::compute(const TickContext& ctx, TaskData& base) const {
+  auto& d = static_cast<DamperTaskData&>(base);
   const Eigen::VectorXd& q = ctx.q->joints;
   const Eigen::VectorXd& u = *ctx.u;
   for (int j = 0; j < nj_; ++j) {
@@ -52,8 +56,10 @@ void JointLimitsTask::compute(const TickContext& ctx, TaskData& d) const {
     if (std::isfinite(range)) {
       const double d_i = params_.interaction_fraction * range;
       const double d_s = params_.safety_fraction * range;
-      lower = std::clamp(damperVelocityBound(d_lower, d_i, d_s, params_.xi), -v_max, v_max);
-      upper = std::clamp(-damperVelocityBound(d_upper, d_i, d_s, params_.xi), -v_max, v_max);
+      const DamperParams dp{d_i, d_s, params_.xi, params_.adaptive};
+      const double qdot = u[offset_ + j];
+      lower = std::clamp(damperVelocityBound(d_lower, qdot, dp, d.dampers[static_cast<size_t>(j)]), -v_max, v_max);
+      upper = std::clamp(-damperVelocityBound(d_upper, -qdot, dp, d.dampers[static_cast<size_t>(nj_ + j)]), -v_max, v_max);
       engaged = damperEngaged(d_lower, d_i) || damperEngaged(d_upper, d_i);
     }
     if (ctx.domain == Domain::Acceleration) {

@@ -25,6 +25,7 @@ struct JointLimitsParams {
   double interaction_fraction = 0.1;
   double safety_fraction = 0.01;
   double xi = 0.5;  ///< rad/s (m/s for prismatic joints)
+  bool adaptive = true;  ///< gain raised to the approach speed at engagement (damper.hpp)
   bool velocity_limits = true;  ///< also bound |qdot_j| by the URDF velocity limit
 };
 
@@ -37,6 +38,7 @@ class JointLimitsTask : public TaskModel {
   bool supports(Domain) const override { return true; }
   /// A holds the unit coefficient of each row's variable (constant).
   std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
+  void reset(TaskData& d) const override;
   void compute(const TickContext& ctx, TaskData& d) const override;
   void boundVariables(const ContactLayout& layout, std::vector<int>& vars) const override;
 

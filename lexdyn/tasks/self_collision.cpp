@@ -48,6 +48,7 @@ SelfCollisionTask::SelfCollisionTask(std::string name, const model::RobotModel& 
   damper_.interaction = params.interaction_distance.value_or(desc.collision_interaction_distance);
   damper_.safety = params.safety_distance.value_or(desc.collision_safety_distance);
   damper_.xi = params.xi;
+  damper_.adaptive = params.adaptive;
   validateDamper(damper_, this->name(), "");
 }
 
@@ -61,15 +62,18 @@ std::unique_ptr<TaskData> SelfCollisionTask::createData(const ContactLayout& lay
   d->point_b.setZero(3, rows());
   d->normal.setZero(3, rows());
   d->upper.setConstant(std::numeric_limits<double>::infinity());
+  d->dampers.resize(static_cast<size_t>(rows()));
   return d;
 }
+
+void SelfCollisionTask::reset(TaskData& d) const { static_cast<SelfCollisionTaskData&>(d).resetDampers(); }
 
 void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
   auto& d = static_cast<SelfCollisionTaskData&>(base);
   const model::RobotModel& model = *ctx.model;
   const model::ModelData& data = *ctx.data;
   const Eigen::VectorXd& u = *ctx.u;
-  const double d_i = damper_.interaction, d_s = damper_.safety, xi = damper_.xi;
+  const double d_i = damper_.interaction;
   for (int r = 0; r < rows(); ++r) {
     const Pair& pr = pairs_[static_cast<size_t>(r)];
     const model::CapsuleDistance cd = model.capsuleDistance(data, pr.pair, d.J.row(r));
@@ -78,11 +82,12 @@ void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
     d.point_b.col(r) = model.framePlacement(data, pr.frame_b).inverse() * cd.point_b;
     d.normal.col(r) = cd.normal;
     const double dist = cd.distance;
+    const double ddot = d.J.row(r).dot(u);
     double lower;
     if (ctx.domain == Domain::Velocity) {
-      lower = damperVelocityBound(dist, d_i, d_s, xi);
+      lower = damperVelocityBound(dist, ddot, damper_, d.dampers[static_cast<size_t>(r)]);
     } else {
-      lower = damperAccelerationBound(dist, d_i, d_s, xi, d.J.row(r).dot(u), 0.0, ctx.dt);  // Jdot_d u neglected
+      lower = damperAccelerationBound(dist, ddot, 0.0, ctx.dt, damper_, d.dampers[static_cast<size_t>(r)]);  // Jdot_d u neglected
     }
     d.lower[r] = lower;
     d.upper[r] = std::numeric_limits<double>::infinity();

@@ -29,9 +29,10 @@ struct SelfCollisionParams {
   /// d_i, d_s in m; absent: the data file's collision_pairs.interaction_distance / safety_distance.
   std::optional<double> interaction_distance, safety_distance;
   double xi = 0.5;  ///< m/s
+  bool adaptive = true;  ///< gain raised to the approach speed at engagement (damper.hpp)
 };
 
-struct SelfCollisionTaskData : TaskData {
+struct SelfCollisionTaskData : DamperTaskData {
   Eigen::Matrix3Xd point_a, point_b;  ///< witness points of each row in the frames of their links
   Eigen::Matrix3Xd normal;            ///< unit normal of each row (world, from b to a)
 };
@@ -47,6 +48,7 @@ class SelfCollisionTask : public TaskModel {
   bool supports(Domain) const override { return true; }
 
   std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
+  void reset(TaskData& d) const override;
   void compute(const TickContext& ctx, TaskData& d) const override;
   void accumulateHessian(const TickContext& ctx, const TaskData& d, const Eigen::Ref<const Eigen::VectorXd>& w,
                          Eigen::Ref<Eigen::MatrixXd> H) const override;

@@ -46,6 +46,7 @@ TEST_P(JointLimits, ConsistentNearAndBeyondTheLimits) {
   TickFixture fx(GetParam());
   RandomStates rs(301);
   JointLimitsParams p;  // 0.1, 0.01, 0.5
+  p.adaptive = false;   // the fixed-gain formula (the adaptive gain: AdaptiveDamper tests)
   JointLimitsTask task("limits", fx.model, p);
   auto d = task.createData(fx.layout);
   const int nj = fx.model.numJoints(), off = fx.model.jointVelocityOffset();
@@ -148,7 +149,9 @@ TEST(JointLimitsParams, Validation) {
 TEST(SelfCollision, DamperOnCapsuleDistances) {
   TickFixture fx("hrp2kai_like");
   RandomStates rs(302);
-  SelfCollisionTask task("collisions", fx.model);
+  SelfCollisionParams scp;
+  scp.adaptive = false;  // the fixed-gain formula (the adaptive gain: AdaptiveDamper tests)
+  SelfCollisionTask task("collisions", fx.model, scp);
   EXPECT_EQ(task.rows(), fx.model.numCollisionPairs());
   EXPECT_DOUBLE_EQ(task.damper().interaction, 0.05);
   EXPECT_DOUBLE_EQ(task.damper().safety, 0.01);
@@ -238,6 +241,7 @@ TEST(ComBox, DamperEngagesTwoCentimetresBeforeEachEdgeOnly) {
   fx.set(rs.configuration(fx.model), rs.velocity(fx.model, 1.0));
   const Eigen::Vector3d c = fx.model.centerOfMassReference(fx.data);
   ComBoxParams p;
+  p.damper.adaptive = false;  // the fixed-gain formula (the adaptive gain: AdaptiveDamper tests)
   const double xi = p.damper.xi;
   EXPECT_DOUBLE_EQ(p.damper.interaction, 0.02);
   EXPECT_DOUBLE_EQ(p.damper.safety, 0.0);
@@ -364,6 +368,57 @@ TEST(ComBox, BoxValidation) {
   box << 0, 0, std::nan(""), 1, 1, 1;
   EXPECT_THROW(task.setTarget(*d, box), InputError);
 }
+
+// The adaptive gain (damper.hpp): continuous at engagement, linear to the safety distance
+// afterwards, released and re-armed outside the interaction distance.
+TEST(AdaptiveDamper, ContinuousAtEngagementThenLinear) {
+  const DamperParams p{0.02, 0.0, 0.1, true};
+  DamperState st;
+  // Outside: free, not engaged.
+  EXPECT_EQ(damperVelocityBound(0.021, -0.3, p, st), -kInf);
+  EXPECT_FALSE(st.engaged);
+  // Engages at d = 0.0199 approaching at 0.3 m/s (> xi): the bound equals the approach speed.
+  const double d0 = 0.0199;
+  EXPECT_NEAR(damperVelocityBound(d0, -0.3, p, st), -0.3, 1e-15);
+  EXPECT_TRUE(st.engaged);
+  EXPECT_NEAR(st.xi, 0.3 * 0.02 / d0, 1e-15);
+  // Then linear in d with the gain kept, whatever the current rate.
+  EXPECT_NEAR(damperVelocityBound(0.01, -0.1, p, st), -st.xi * 0.01 / 0.02, 1e-15);
+  EXPECT_NEAR(damperVelocityBound(0.0, 0.0, p, st), 0.0, 1e-15);
+  // A slow approach keeps the nominal gain.
+  DamperState slow;
+  EXPECT_NEAR(damperVelocityBound(0.015, -0.01, p, slow), -0.1 * 0.015 / 0.02, 1e-15);
+  // Released outside, re-armed with the new speed at the next engagement.
+  EXPECT_EQ(damperVelocityBound(0.03, 0.2, p, st), -kInf);
+  EXPECT_FALSE(st.engaged);
+  EXPECT_NEAR(damperVelocityBound(0.019, -0.05, p, st), -0.1 * 0.019 / 0.02, 1e-15);
+  // The fixed form jumps: at d0 it demands -0.1 m/s while the distance shrinks at 0.3 m/s.
+  const DamperParams fixed{0.02, 0.0, 0.1, false};
+  DamperState fs;
+  EXPECT_NEAR(damperVelocityBound(d0, -0.3, fixed, fs), -0.1 * d0 / 0.02, 1e-15);
+}
+
+TEST(AdaptiveDamper, ComBoxIsContinuousWhenTheCentreOfMassEntersTheBand) {
+  TickFixture fx("hrp2kai_like");
+  RandomStates rs(304);
+  fx.set(rs.configuration(fx.model), rs.velocity(fx.model, 1.0));
+  const Eigen::Vector3d c = fx.model.centerOfMassReference(fx.data);
+  ComBoxParams p;  // adaptive by default
+  // The lower x edge 1.99 cm below the CoM; the task's reset() forgets the engagement.
+  p.lower = Eigen::Vector3d(c.x() - 0.0199, -kInf, -kInf);
+  ComBoxTask task("com_box", fx.model, p);
+  auto d = task.createData(fx.layout);
+  task.compute(fx.ctx, *d);
+  const double vx = d->J.row(0).dot(fx.u);
+  if (vx < -p.damper.xi) {
+    EXPECT_NEAR(d->lower[0], vx, 1e-12);  // the bound starts at the current velocity
+  } else {
+    EXPECT_NEAR(d->lower[0], -p.damper.xi * 0.0199 / 0.02, 1e-12);
+  }
+  task.reset(*d);
+  EXPECT_FALSE(static_cast<DamperTaskData&>(*d).dampers[0].engaged);
+}
+
 
 }  // namespace
 }  // namespace lexdyn::tasks
