@@ -8,6 +8,10 @@
 
 #include "lexdyn/common/error.hpp"
 
+#ifndef LEXDYN_DIRECT_REFLECTORS
+#define LEXDYN_DIRECT_REFLECTORS 8
+#endif
+
 namespace lexdyn::solver {
 
 namespace {
@@ -25,6 +29,9 @@ inline void applyReflector(const Ess& ess, double tau, X&& x) {
 }
 
 inline size_t z(int i) { return static_cast<size_t>(i); }
+
+// Below this many reflectors, trailing updates apply them one by one (see factorLevel).
+constexpr int kDirectReflectors = LEXDYN_DIRECT_REFLECTORS;
 
 }  // namespace
 
@@ -45,6 +52,9 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
     for (int r = 0; r < m_[z(k)]; ++r) levelOf_[z(rowOff_[z(k)] + r)] = k;
 
   A_.assign(z(L), nullptr);
+  Arm_.resize(z(L));
+  for (int k = 0; k < L; ++k) Arm_[z(k)].setZero(m_[z(k)], n);
+  gatherIdx_.assign(z(std::max(n, 1)), 0);
   static_.assign(z(L), 0);
   rowNorm_ = Eigen::VectorXd::Zero(std::max(mTot_, 1));
   freeVar_.resize(z(n));
@@ -130,6 +140,17 @@ void HlsFactorization::computeRowNorms() {
     // Column-wise accumulation: contiguous reads of the column-major matrix.
     auto rn = rowNorm_.segment(rowOff_[z(k)], A.rows());
     rn = A.cwiseAbs2().rowwise().sum().cwiseSqrt();
+    // Row-major copy, column by column: contiguous reads; the writes of one column touch one
+    // cache line per row, all of which stay in L1 for the next columns.
+    auto& R = Arm_[z(k)];
+    const Eigen::Index rows = A.rows(), cols = A.cols();
+    const double* src = A.data();
+    double* dst = R.data();
+    for (Eigen::Index j = 0; j < cols; ++j) {
+      const double* sc = src + j * rows;
+      double* dc = dst + j;
+      for (Eigen::Index i = 0; i < rows; ++i) dc[i * cols] = sc[i];
+    }
   }
 }
 
@@ -191,10 +212,11 @@ bool HlsFactorization::tryEliminate() {
   const int m0 = static_cast<int>(lst.size());
   if (m0 == 0 || m0 > nf_ || m0 > G_.cols()) return false;
   const Eigen::MatrixXd& A0 = *A_[0];
-  // G = A_0^T restricted to the free variables (rows = variables); columns of A_0 are contiguous.
-  for (int f = 0; f < nf_; ++f) {
-    const double* col = A0.data() + static_cast<Eigen::Index>(freeVar_[z(f)]) * A0.rows();
-    for (int i = 0; i < m0; ++i) G_(f, i) = col[lst[z(i)] - rowOff_[0]];
+  // G = A_0^T restricted to the free variables (rows = variables), read row by row.
+  for (int i = 0; i < m0; ++i) {
+    const double* row = Arm_[0].data() + static_cast<Eigen::Index>(lst[z(i)] - rowOff_[0]) * Arm_[0].cols();
+    double* g = G_.col(i).data();
+    for (int f = 0; f < nf_; ++f) g[f] = row[freeVar_[z(f)]];
   }
   // Blocked LU with partial pivoting of the tall G (Eigen's kernel): P G = [L1; L2] U. The pivot
   // rows are the basic variables.
@@ -266,36 +288,28 @@ bool HlsFactorization::updateElimination() {
 // Loads the active rows of level j found at S_ columns [p0, p1) marked as loaded (colNorm_ == 1):
 // reduced coordinates into S_, basic part into SB_. Reads the column-major rows column by column.
 void HlsFactorization::gatherLevel(int j, int p0, int p1) {
-  const Eigen::MatrixXd& A = *A_[z(j)];
+  // Reads each loaded row contiguously from the row-major copy: reduced coordinates into S_,
+  // basic part into SB_.
+  const auto& Arm = Arm_[z(j)];
   const int off = rowOff_[z(j)];
-  const Eigen::Index lda = A.rows();
-  // Fast path: every row of the level, in order, loaded (equality levels): a transposed copy
-  // that reads the column-major data contiguously.
-  bool whole = (p1 - p0) == static_cast<int>(lda);
-  for (int q = p0; whole && q < p1; ++q) whole = colNorm_(q) == 1.0 && tmpGid_[z(q)] - off == q - p0;
-  auto gatherInto = [&](Eigen::MatrixXd& dst, int count, int permOffset) {
-    for (int f = 0; f < count; ++f) {
-      const int v = elim_ ? varPerm_[z(permOffset + f)] : freeVar_[z(f)];
-      if (whole) {
-        dst.row(f).segment(p0, p1 - p0) = A.col(v).transpose();
-        continue;
-      }
-      const double* col = A.data() + static_cast<Eigen::Index>(v) * lda;
-      for (int q = p0; q < p1; ++q)
-        if (colNorm_(q) == 1.0) dst(f, q) = col[tmpGid_[z(q)] - off];
-    }
-  };
-  gatherInto(S_, nr_, m0_);
-  if (!elim_) return;
-  gatherInto(SB_, m0_, 0);
+  int* idx = gatherIdx_.data();
+  for (int f = 0; f < nr_; ++f) idx[f] = elim_ ? varPerm_[z(m0_ + f)] : freeVar_[z(f)];
   for (int q = p0; q < p1; ++q) {
     if (colNorm_(q) != 1.0) continue;
+    const double* row = Arm.data() + static_cast<Eigen::Index>(tmpGid_[z(q)] - off) * Arm.cols();
+    double* dst = S_.col(q).data();
+    for (int f = 0; f < nr_; ++f) dst[f] = row[idx[f]];
+    if (!elim_) continue;
+    double* db = SB_.col(q).data();
     int nz = 0, last = -1;
-    for (int i = 0; i < m0_; ++i)
-      if (SB_(i, q) != 0.0) {
+    for (int i = 0; i < m0_; ++i) {
+      const double a = row[varPerm_[z(i)]];
+      db[i] = a;
+      if (a != 0.0) {
         ++nz;
         last = i;
       }
+    }
     sparseB_[z(q)] = (nz == 0) ? -1 : (nz == 1 ? last : -2);
   }
 }
@@ -482,8 +496,13 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   for (int j = k + 1; j < L; ++j) rest += act_[z(j)];
   if (rest > 0 && r > 0) {
     auto C = W_.block(c0, s + m, d, rest);
-    if (r == 1) {
-      for (int q = 0; q < rest; ++q) applyReflector(W_.col(s).segment(c0 + 1, d - 1), tau_(s), C.col(q));
+    if (r <= kDirectReflectors) {
+      // Few reflectors: apply them one by one (a matrix-vector product and a rank-one update
+      // each); cheaper than forming the compact-WY factor for such small blocks.
+      for (int i = 0; i < r; ++i) {
+        auto Ci = C.bottomRows(d - i);
+        Ci.applyHouseholderOnTheLeft(W_.col(s + i).segment(c0 + i + 1, d - i - 1), tau_(s + i), work_.data());
+      }
     } else {
       auto V = Vw_.block(0, 0, d, r);
       V.setZero();

@@ -36,7 +36,7 @@ class HlsFactorization {
 
   /// Sets the original rows of general level k (pointer kept; must outlive the calls).
   void setLevelMatrix(int k, const Eigen::MatrixXd* A) { A_[static_cast<size_t>(k)] = A; }
-  /// Recomputes the original row norms (call after the row data changed).
+  /// Recomputes the original row norms and row-major copies (call after the row data changed).
   void computeRowNorms();
   const Eigen::VectorXd& rowNorms() const { return rowNorm_; }
 
@@ -106,6 +106,9 @@ class HlsFactorization {
   int mTot_ = 0;
   std::vector<int> m_, rowOff_, levelOf_;
   std::vector<const Eigen::MatrixXd*> A_;
+  /// Row-major copies of the levels' rows (refreshed by computeRowNorms): gathers read rows.
+  std::vector<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Arm_;
+  std::vector<int> gatherIdx_;
   std::vector<char> static_;
   Eigen::VectorXd rowNorm_;
   std::vector<int> freeVar_;

@@ -79,6 +79,7 @@ struct Solver::Impl {
   Eigen::MatrixXd muAll;     // M x lg
   Eigen::MatrixXd muVarAll;  // n x lg
   std::vector<char> multDone, levelNz;
+  bool multValid = false;  // multDone / levelNz describe the current equality solution
   Eigen::VectorXd levelS;
   // Constraints that re-blocked immediately after being released (anti-cycling), cleared on progress.
   std::vector<char> tabooRow, tabooVar;
@@ -407,6 +408,7 @@ void Solver::Impl::buildTargets() {
 }
 
 void Solver::Impl::solveEquality() {
+  multValid = false;
   buildTargets();
   fact.factorize(rankTol);
   xs = x;  // fixed variables keep their (bound) values; the free ones are overwritten
@@ -414,6 +416,7 @@ void Solver::Impl::solveEquality() {
 }
 
 void Solver::Impl::prepareLevels() {
+  multValid = true;
   const double xnorm = xs.lpNorm<Eigen::Infinity>();
   for (int kf = 0; kf < lg; ++kf) {
     double S = 0.0;
@@ -739,8 +742,7 @@ void Solver::Impl::run() {
 void Solver::Impl::finish() {
   const Problem& problem = *prob;
   out.x = x;
-  // True violations at the final x.
-  computeAx(x, Ax);
+  // True violations at the final x (Ax is kept up to date along the steps).
   if (hasBounds) {
     const Level& lv = problem.level(0);
     for (int r = 0; r < lv.rows(); ++r) {
@@ -781,7 +783,7 @@ void Solver::Impl::finish() {
   // an earlier level i that holds a row whose raw multiplier has the wrong sign (see isHeld).
   out.lambda.setZero();
   if (!opt.compute_multipliers) return;
-  prepareLevels();
+  if (!multValid) prepareLevels();
   const Level* bl = hasBounds ? &problem.level(0) : nullptr;
   auto rowOf = [&](int gid) {
     const int j = fact.levelOf(gid);

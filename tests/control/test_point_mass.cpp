@@ -19,12 +19,13 @@ struct Trajectory {
 };
 
 // x0 = 1, v0 = 0, target x_d = 0.
-Trajectory runController(Method method, double kp, double kv, double mu, double dt, int ticks) {
+Trajectory runController(Method method, double kp, double kv, double mu, double dt, int ticks, bool qmod = false) {
   const model::RobotModel m = model::RobotModel::fromFiles(kDir + "point_mass.urdf", kDir + "point_mass.yaml");
   ControllerConfig cfg;
   cfg.params.method = method;
   cfg.params.dt = dt;
   cfg.params.damping = mu;
+  cfg.params.use_qmod = qmod;
   tasks::PositionParams pp;
   pp.frame = "mass";
   pp.target = Eigen::Vector3d::Zero();
@@ -119,6 +120,23 @@ TEST(PointMass, VelocityDomainReproducesEq82And83) {
     const Trajectory r = velocityRecursion(kKp, kKv, mu, kDt, kTicks);
     EXPECT_LE(maxDiff(c, r), 1e-12) << "mu " << mu;
   }
+}
+
+TEST(PointMass, QmodIntegrationFollowsEq73To76) {
+  // q_mod = q + dt (u(k+1) + u) / 2 (eq. 73-76); the velocity update is eq. 79 unchanged.
+  const Trajectory c = runController(Method::GaussNewton, kKp, kKv, 0.0, kDt, kTicks, true);
+  Trajectory r;
+  double x = 1.0, v = 0.0;
+  for (int k = 0; k <= kTicks; ++k) {
+    r.x.push_back(x);
+    r.v.push_back(v);
+    const double vn = v - kDt * (kKp * x + kKv * v);
+    x = x + kDt * 0.5 * (vn + v);
+    v = vn;
+  }
+  EXPECT_LE(maxDiff(c, r), 1e-12);
+  // It matches the acceleration-domain positions (eq. 75 = eq. 58) for the same velocities.
+  EXPECT_GT(maxDiff(c, runController(Method::GaussNewton, kKp, kKv, 0.0, kDt, kTicks)), 1e-4);
 }
 
 TEST(PointMass, VelocityDomainDampingDoesNotSpoilTheCriticallyDampedBehaviour) {
