@@ -2,7 +2,12 @@
 
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
+#include "lexdyn/control/controller.hpp"
 #include "lexdyn/model/robot_description.hpp"
+#include "lexdyn/model/robot_model.hpp"
+#include "lexdyn/tasks/orientation.hpp"
+
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -103,7 +108,12 @@ std::string postureByName(const model::RobotDescription& d, const yaml::Node& n)
 void readController(CaseSpec& c, const yaml::Node& node, const model::RobotDescription& d) {
   yaml::StrictMap m(node);
   const yaml::Node type = m.required("type");
-  c.controller.type = type.asEnum({"posture_servo"});
+  c.controller.type = type.asEnum({"posture_servo", "lexdyn"});
+  if (c.controller.type == "lexdyn") {
+    c.controller.lexdyn = readLexdynSpec(m, d, c.control_period_s);
+    m.finish();
+    return;
+  }
   c.controller.posture = postureByName(d, m.required("posture"));
   if (auto motions = m.optional("motions")) {
     for (const yaml::Node& mn : motions->elements()) {
@@ -229,18 +239,140 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
   m.finish();
 }
 
-checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescription& d) {
+bool isLexdyn(const CaseSpec& c) { return c.controller.type == "lexdyn"; }
+
+const char* const kMethods[] = {"bfgs", "ah", "gn", "wls"};
+
+/// Methods a check or comparison may concern: those the case has a hierarchy for.
+std::vector<std::string> caseMethods(const CaseSpec& c) {
+  std::vector<std::string> out;
+  for (const char* m : kMethods) {
+    if (c.controller.lexdyn.hasHierarchy(control::parseMethod(m, ""))) out.emplace_back(m);
+  }
+  return out;
+}
+
+/// Every task must be in the hierarchy of every method in `methods`.
+void requireTasksInHierarchies(const CaseSpec& c, const yaml::Node& at, const std::vector<std::string>& tasks,
+                               const std::vector<std::string>& methods) {
+  for (const std::string& m : methods) {
+    const std::vector<std::string> used = usedTasks(c.controller.lexdyn, control::parseMethod(m, ""));
+    for (const std::string& t : tasks) {
+      if (std::find(used.begin(), used.end(), t) == used.end()) {
+        at.fail("task '" + t + "' is not in the hierarchy of method " + m +
+                " (its channels are not recorded then); restrict the check with methods: [...]");
+      }
+    }
+  }
+}
+
+std::vector<std::string> readTaskNames(const CaseSpec& c, const yaml::Node& n) {
+  std::vector<std::string> out;
+  if (n.size() < 1) n.fail("expected at least one task");
+  for (const yaml::Node& tn : n.elements()) {
+    const std::string t = tn.asString();
+    if (c.controller.lexdyn.findTask(t) < 0) tn.fail("unknown task '" + t + "'");
+    out.push_back(t);
+  }
+  return out;
+}
+
+std::vector<std::string> readJointPatterns(const yaml::Node& n, const model::RobotDescription& d) {
+  std::vector<std::string> out;
+  if (n.size() < 1) n.fail("expected at least one joint pattern");
+  for (const yaml::Node& pn : n.elements()) {
+    const std::string pattern = pn.asString();
+    int matched = 0;
+    for (const auto& j : d.joints) {
+      if (!globMatch(pattern, j.name)) continue;
+      ++matched;
+      if (std::find(out.begin(), out.end(), j.name) == out.end()) out.push_back(j.name);
+    }
+    if (matched == 0) pn.fail("pattern '" + pattern + "' matches no joint");
+  }
+  return out;
+}
+
+std::vector<std::string> allJoints(const model::RobotDescription& d) {
+  std::vector<std::string> out;
+  for (const auto& j : d.joints) out.push_back(j.name);
+  return out;
+}
+
+/// Convex hull (counter-clockwise, Andrew's monotone chain) of the points' (x, y).
+std::vector<std::pair<double, double>> convexHull(std::vector<std::pair<double, double>> p) {
+  std::sort(p.begin(), p.end());
+  p.erase(std::unique(p.begin(), p.end()), p.end());
+  if (p.size() < 3) return p;
+  auto cross = [](const std::pair<double, double>& o, const std::pair<double, double>& a, const std::pair<double, double>& b) {
+    return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
+  };
+  std::vector<std::pair<double, double>> h(2 * p.size());
+  size_t k = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross(h[k - 2], h[k - 1], p[i - 1]) <= 0) --k;
+    h[k++] = p[i - 1];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescription& d, const CaseSpec& cs) {
   yaml::StrictMap m(node);
   checks::CheckSpec c;
   c.where = node.where();
-  c.type = m.required("type").asEnum(checks::checkTypes());
+  const yaml::Node typeNode = m.required("type");
+  c.type = typeNode.asEnum(checks::checkTypes());
   c.name = c.type;
   if (auto n = m.optional("name")) c.name = n->asString();
   if (auto f = m.optional("from_s")) c.from_s = f->asNonNegativeDouble();
+  const bool legacy = c.type == "frame_drift" || c.type == "force_balance" || c.type == "contact_slip" || c.type == "frame_height";
+  if (auto v = m.optional("methods")) {
+    if (!isLexdyn(cs)) v->fail("methods: applies to the lexdyn controller only");
+    for (const yaml::Node& mn : v->elements()) {
+      const std::string method = mn.asEnum({"bfgs", "ah", "gn", "wls"});
+      if (!cs.controller.lexdyn.hasHierarchy(control::parseMethod(method, ""))) mn.fail("the case has no hierarchy for method " + method);
+      c.methods.push_back(method);
+    }
+  }
+  if (!legacy) {
+    if (!isLexdyn(cs)) typeNode.fail("check type " + c.type + " reads the lexdyn controller's channels; the controller is " + cs.controller.type);
+    if (auto t = m.optional("to_s")) {
+      c.to_s = t->asNonNegativeDouble();
+      if (c.to_s < c.from_s) t->fail("to_s must not be before from_s");
+    }
+  }
+  const std::vector<std::string> methods = c.methods.empty() && isLexdyn(cs) ? caseMethods(cs) : c.methods;
+  const LexdynSpec& lx = cs.controller.lexdyn;
   auto surfaces = [&]() {
     const yaml::Node s = m.required("surfaces");
     if (s.size() < 1) s.fail("expected at least one contact surface");
     for (const yaml::Node& sn : s.elements()) c.surfaces.push_back(surfaceByName(d, sn));
+  };
+  auto contact = [&](bool needs_sensor) -> const ContactEntry& {
+    const yaml::Node cn = m.required("contact");
+    c.contact = cn.asString();
+    const int k = lx.findContact(c.contact);
+    if (k < 0) cn.fail("unknown controller contact '" + c.contact + "'");
+    const ContactEntry& e = lx.contacts[static_cast<size_t>(k)];
+    for (int i = 0; i < 3; ++i) c.normal[i] = e.normal[i];
+    if (c.type != "contact_wrench_match") {
+      c.source = "computed";
+      if (auto src = m.optional("source")) c.source = src->asEnum({"computed", "sensed"});
+      needs_sensor = needs_sensor || c.source == "sensed";
+    }
+    if (needs_sensor && e.sensor.empty()) cn.fail("contact '" + c.contact + "' has no linked sensor (controller.contacts[].sensor)");
+    return e;
+  };
+  auto oscillationSource = [&]() {
+    c.source = "measured";
+    if (auto src = m.optional("source")) c.source = src->asEnum({"measured", "commanded"});
+    c.joints = allJoints(d);
+    if (auto j = m.optional("joints")) c.joints = readJointPatterns(*j, d);
   };
   if (c.type == "frame_drift") {
     c.frame = frameByName(d, m.required("frame"));
@@ -254,12 +386,288 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
   } else if (c.type == "frame_height") {
     c.frame = frameByName(d, m.required("frame"));
     c.limit = m.required("min_m").asDouble();
+  } else if (c.type == "task_error") {
+    const yaml::Node tn = m.required("tasks");
+    c.tasks = readTaskNames(cs, tn);
+    requireTasksInHierarchies(cs, tn, c.tasks, methods);
+    c.statistic = m.required("statistic").asEnum({"final", "mean", "max"});
+    c.limit = m.required("limit").asNonNegativeDouble();
+  } else if (c.type == "torque_limits") {
+    c.source = "both";
+    if (auto src = m.optional("source")) c.source = src->asEnum({"applied", "commanded", "both"});
+    c.joints = allJoints(d);
+    if (auto j = m.optional("joints")) c.joints = readJointPatterns(*j, d);
+    for (const auto& j : c.joints) {
+      const double lim = d.joints[static_cast<size_t>(d.findJoint(j))].effort_limit;
+      if (!(lim > 0.0)) m.node().fail("joint " + j + " has no effort limit in the URDF");
+      c.joint_limits.push_back(lim);
+    }
+    c.limit = m.required("limit_fraction").asPositiveDouble();
+  } else if (c.type == "contact_unilateral") {
+    contact(false);
+    c.limit = m.required("min_N").asDouble();
+  } else if (c.type == "contact_friction") {
+    const ContactEntry& e = contact(false);
+    c.friction = e.friction;
+    if (auto v = m.optional("friction")) c.friction = v->asPositiveDouble();
+    c.min_normal_N = 1.0;
+    if (auto v = m.optional("min_normal_N")) c.min_normal_N = v->asNonNegativeDouble();
+    c.limit = 1.0;
+    if (auto v = m.optional("limit_ratio")) c.limit = v->asPositiveDouble();
+  } else if (c.type == "contact_cop") {
+    const ContactEntry& e = contact(false);
+    if ((e.normal - Eigen::Vector3d::UnitZ()).norm() > 1e-12) {
+      m.required("contact").fail("contact_cop needs a contact whose normal is the frame's z axis");
+    }
+    std::vector<std::pair<double, double>> pts;
+    for (const auto& p : e.points) pts.emplace_back(p.x(), p.y());
+    c.polygon = convexHull(pts);
+    if (c.polygon.size() < 3) m.required("contact").fail("contact_cop needs a contact with a support polygon (3 points or more, not aligned)");
+    c.min_normal_N = 1.0;
+    if (auto v = m.optional("min_normal_N")) c.min_normal_N = v->asNonNegativeDouble();
+    c.limit = 0.0;
+    if (auto v = m.optional("limit_m")) c.limit = v->asDouble();
+  } else if (c.type == "contact_wrench_match") {
+    contact(true);
+    c.component = "force";
+    if (auto v = m.optional("component")) c.component = v->asEnum({"force", "torque"});
+    c.statistic = "rms";
+    if (auto v = m.optional("statistic")) c.statistic = v->asEnum({"rms", "max"});
+    c.limit = m.required(c.component == "force" ? "limit_N" : "limit_Nm").asPositiveDouble();
+  } else if (c.type == "joint_acceleration_sign_changes") {
+    oscillationSource();
+    if (auto v = m.optional("dead_band_rad_per_s2")) c.dead_band = v->asNonNegativeDouble();
+    c.limit = m.required("limit_per_s").asNonNegativeDouble();
+  } else if (c.type == "joint_velocity_hf_energy") {
+    oscillationSource();
+    c.cutoff_hz = m.required("cutoff_hz").asPositiveDouble();
+    if (c.cutoff_hz >= 0.5 / cs.control_period_s) {
+      m.required("cutoff_hz").fail("must be below the Nyquist frequency of the control rate (" + std::to_string(0.5 / cs.control_period_s) + " Hz)");
+    }
+    c.limit = m.required("limit_rad2_per_s2").asNonNegativeDouble();
+  } else if (c.type == "task_error_rate_sign_changes") {
+    const yaml::Node tn = m.required("task");
+    const std::string t = tn.asString();
+    if (lx.findTask(t) < 0) tn.fail("unknown task '" + t + "'");
+    c.tasks = {t};
+    requireTasksInHierarchies(cs, tn, c.tasks, methods);
+    if (auto v = m.optional("dead_band_per_s")) c.dead_band = v->asNonNegativeDouble();
+    c.limit = m.required("limit_per_s").asNonNegativeDouble();
+  } else if (c.type == "controller_status") {
+    c.allowed = {"ok", "solver_stopped_early"};
+    if (auto v = m.optional("allowed")) {
+      c.allowed.clear();
+      for (const yaml::Node& a : v->elements()) c.allowed.push_back(a.asEnum(checks::controllerStatusNames()));
+    }
+    c.limit = 0.0;
+    if (auto v = m.optional("limit_count")) c.limit = v->asNonNegativeDouble();
+  } else if (c.type == "active_set_peak") {
+    c.limit = m.required("limit_iterations").asPositiveDouble();
+  } else if (c.type == "augmented_fraction") {
+    const yaml::Node ln = m.required("level");
+    c.level = ln.asString();
+    for (const std::string& method : methods) {
+      bool found = false;
+      for (const auto& l : lx.hierarchy(control::parseMethod(method, ""))) found = found || l.name == c.level;
+      if (!found) ln.fail("level '" + c.level + "' is not in the hierarchy of method " + method + "; restrict the check with methods: [...]");
+    }
+    c.limit = m.required("max_fraction").asNonNegativeDouble();
+  } else if (c.type == "tick_time") {
+    c.timer = m.required("timer").asEnum({"model", "tasks", "hessian", "solver", "tick"});
+    if (auto v = m.optional("percentile")) {
+      c.percentile = v->asDouble();
+      if (!(c.percentile > 0.0 && c.percentile <= 100.0)) v->fail("expected a percentile in (0, 100]");
+    }
+    c.limit = m.required("limit_us").asPositiveDouble();
   }
   m.finish();
   return c;
 }
 
+checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& cs) {
+  yaml::StrictMap m(node);
+  checks::ComparisonSpec c;
+  c.where = node.where();
+  c.name = m.required("name").asString();
+  c.type = m.required("type").asEnum({"method_comparison"});
+  const yaml::Node tn = m.required("tasks");
+  c.tasks = readTaskNames(cs, tn);
+  c.statistic = m.required("statistic").asEnum({"final", "mean", "max"});
+  for (auto [key, field] : {std::pair<const char*, std::string*>{"better", &c.better}, {"worse", &c.worse}}) {
+    const yaml::Node mn = m.required(key);
+    *field = mn.asEnum({"bfgs", "ah", "gn", "wls"});
+    if (!cs.controller.lexdyn.hasHierarchy(control::parseMethod(*field, ""))) mn.fail("the case has no hierarchy for method " + *field);
+  }
+  requireTasksInHierarchies(cs, tn, c.tasks, {c.better, c.worse});
+  if (auto v = m.optional("margin")) c.margin = v->asDouble();
+  if (auto f = m.optional("from_s")) c.from_s = f->asNonNegativeDouble();
+  if (auto t = m.optional("to_s")) c.to_s = t->asNonNegativeDouble();
+  m.finish();
+  return c;
+}
+
+EventSpec readEvent(const yaml::Node& en, const CaseSpec& c) {
+  yaml::StrictMap em(en);
+  EventSpec e;
+  e.where = en.where();
+  const yaml::Node at = em.required("at_s");
+  e.at_s = at.asNonNegativeDouble();
+  if (e.at_s > c.duration_s) at.fail("event after the end of the run (duration_s " + std::to_string(c.duration_s) + ")");
+  const yaml::Node action = em.required("action");
+  e.action = action.asEnum({"grasp_on", "grasp_off", "set_target", "add_contact", "remove_contact", "target_trajectory", "swing"});
+  const LexdynSpec& lx = c.controller.lexdyn;
+  if (e.action == "grasp_on" || e.action == "grasp_off") {
+    const yaml::Node g = em.required("grasp");
+    e.grasp = g.asString();
+    bool known = false;
+    for (const auto& gs : c.sim.grasps) known = known || gs.name == e.grasp;
+    if (!known) g.fail("unknown grasp '" + e.grasp + "' (define it under sim.grasps)");
+    if (isLexdyn(c)) {
+      for (const auto& ce : lx.contacts) {
+        if (ce.grasp == e.grasp) g.fail("grasp '" + e.grasp + "' is linked to controller contact '" + ce.name + "': use add_contact / remove_contact");
+      }
+    }
+    em.finish();
+    return e;
+  }
+  if (!isLexdyn(c)) action.fail("action " + e.action + " needs controller type lexdyn");
+  auto taskRef = [&]() {
+    const yaml::Node tn = em.required("task");
+    e.task = tn.asString();
+    if (lx.findTask(e.task) < 0) tn.fail("unknown task '" + e.task + "'");
+  };
+  if (e.action == "add_contact" || e.action == "remove_contact") {
+    const yaml::Node cn = em.required("contact");
+    e.contact = cn.asString();
+    if (lx.findContact(e.contact) < 0) cn.fail("unknown controller contact '" + e.contact + "'");
+  } else if (e.action == "set_target") {
+    taskRef();
+    auto value = em.optional("value");
+    auto rpy = em.optional("rpy_rad");
+    auto lower = em.optional("lower");
+    auto upper = em.optional("upper");
+    const int given = (value ? 1 : 0) + (rpy ? 1 : 0) + ((lower || upper) ? 1 : 0);
+    if (given != 1) en.fail("set_target needs exactly one of value, rpy_rad (orientation) or lower + upper (com_box)");
+    if (value) {
+      if (value->isSequence() && value->size() == 3 && (*value)[0].isSequence()) {
+        e.value.resize(9);  // a rotation matrix given as 3 rows
+        for (int r = 0; r < 3; ++r) e.value.segment<3>(3 * r) = (*value)[r].asVector3();
+      } else {
+        e.value = value->asVectorAnySize(1);
+      }
+    } else if (rpy) {
+      const Eigen::Vector3d a = rpy->asVector3();
+      const Eigen::Matrix3d R = (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
+                                    .toRotationMatrix();
+      e.value = tasks::rotationToTarget(R);
+    } else {
+      if (!lower || !upper) en.fail("a box target needs both lower and upper");
+      e.value.resize(6);
+      e.value.head<3>() = asBound3(*lower);
+      e.value.tail<3>() = asBound3(*upper);
+    }
+  } else if (e.action == "target_trajectory") {
+    taskRef();
+    const yaml::Node f = em.required("file");
+    e.file = resolvePath(f, c.path);
+    double window = 0.0;
+    if (auto v = em.optional("moving_average_s")) window = v->asNonNegativeDouble();
+    bool loop = false;
+    if (auto v = em.optional("loop")) loop = v->asBool();
+    try {
+      e.trajectory = TargetTrajectory::fromCsv(e.file, window, loop);
+    } catch (const InputError& err) {
+      f.fail(err.what());
+    }
+  } else if (e.action == "swing") {
+    taskRef();
+    e.swing.from = em.required("from").asVector3();
+    e.swing.to = em.required("to").asVector3();
+    e.swing.period_s = em.required("period_s").asPositiveDouble();
+    if (auto v = em.optional("phase_rad")) e.swing.phase_rad = v->asDouble();
+  }
+  em.finish();
+  return e;
+}
+
+// Builds the controller of every method the case has a hierarchy for (so that --method works),
+// and checks the events' targets against the built tasks and the contacts' grasp links.
+void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
+  LexdynSpec& lx = c.controller.lexdyn;
+  const model::RobotModel model = model::RobotModel::fromFiles(c.urdf_path, c.data_path);
+  for (const ContactEntry& ce : lx.contacts) {
+    if (ce.grasp.empty()) continue;
+    const sim::GraspSettings* g = nullptr;
+    for (const auto& gs : c.sim.grasps) {
+      if (gs.name == ce.grasp) g = &gs;
+    }
+    if (!g) throw InputError(ce.where + ".grasp", "unknown grasp '" + ce.grasp + "' (define it under sim.grasps)");
+    if (g->frame != ce.frame) {
+      throw InputError(ce.where + ".grasp", "grasp '" + ce.grasp + "' is on frame " + g->frame + ", the contact on frame " + ce.frame);
+    }
+    const bool initially = std::find(lx.initial_contacts.begin(), lx.initial_contacts.end(), ce.name) != lx.initial_contacts.end();
+    if (g->initially_active != initially) {
+      throw InputError(ce.where + ".grasp", "grasp '" + ce.grasp + "' is " + (g->initially_active ? "" : "not ") +
+                                                "initially active but contact '" + ce.name + "' is " + (initially ? "" : "not ") +
+                                                "in initial_contacts; they switch together");
+    }
+    for (const auto& o : lx.contacts) {
+      if (&o != &ce && o.grasp == ce.grasp) throw InputError(ce.where + ".grasp", "grasp '" + ce.grasp + "' is linked to two contacts");
+    }
+  }
+  std::unique_ptr<control::Controller> first;
+  const control::Method chosen = lx.method;
+  for (const char* name : kMethods) {
+    const control::Method m = control::parseMethod(name, "");
+    if (!lx.hasHierarchy(m)) continue;
+    lx.method = m;
+    lx.params.method = m;
+    const std::string& where = m == control::Method::WLS ? lx.wls_levels_where : lx.levels_where;
+    try {
+      auto ctl = std::make_unique<control::Controller>(model, buildControllerConfig(lx, model));
+      if (!first) first = std::move(ctl);
+    } catch (const InputError& e) {
+      lx.method = chosen;
+      lx.params.method = chosen;
+      throw InputError(where, std::string("(method ") + name + ") " + e.what());
+    }
+  }
+  lx.method = chosen;
+  lx.params.method = chosen;
+  (void)controller_node;
+  for (const EventSpec& e : c.events) {
+    if (e.task.empty()) continue;
+    const int ti = first->taskIndex(e.task);
+    const tasks::TaskModel& t = first->task(ti);
+    const int n = t.targetSize();
+    if (n == 0) throw InputError(e.where, "task '" + e.task + "' (" + lx.tasks[static_cast<size_t>(lx.findTask(e.task))].type + ") has no target");
+    if (e.action == "set_target") {
+      if (e.value.size() != n) {
+        throw InputError(e.where, "task '" + e.task + "' takes a target of " + std::to_string(n) + " values, found " +
+                                      std::to_string(e.value.size()));
+      }
+      try {
+        t.checkTarget(e.value);
+      } catch (const InputError& err) {
+        throw InputError(e.where, err.what());
+      }
+    } else if (n != 3) {
+      throw InputError(e.where, e.action + " drives 3-D targets (position, com); task '" + e.task + "' takes " + std::to_string(n) + " values");
+    }
+  }
+}
+
 }  // namespace
+
+std::string methodName(const CaseSpec& spec) {
+  return spec.controller.type == "lexdyn" ? control::toString(spec.controller.lexdyn.method) : "";
+}
+
+void overrideMethod(CaseSpec& spec, const std::string& method, const std::string& where) {
+  if (spec.controller.type != "lexdyn") throw InputError(where, "--method needs a case with controller type lexdyn");
+  setMethod(spec.controller.lexdyn, control::parseMethod(method, where), where);
+}
 
 CaseSpec loadCase(const std::string& path) {
   const yaml::Node root = yaml::loadFile(path);
@@ -280,6 +688,13 @@ CaseSpec loadCase(const std::string& path) {
   {
     yaml::StrictMap is(top.required("initial_state"));
     c.initial_state.posture = postureByName(d, is.required("posture"));
+    if (auto jn = is.optional("joints")) {
+      for (const auto& [key, value] : jn->entries()) {
+        const int j = d.findJoint(key);
+        if (j < 0) value.fail("unknown joint '" + key + "'");
+        c.initial_state.joints.emplace_back(j, value.asDouble());
+      }
+    }
     if (auto xy = is.optional("base_xy")) {
       const Eigen::VectorXd v = xy->asVector(2);
       c.initial_state.base_x = v[0];
@@ -304,25 +719,11 @@ CaseSpec loadCase(const std::string& path) {
     }
     is.finish();
   }
-  readController(c, top.required("controller"), d);
+  const yaml::Node controller_node = top.required("controller");
+  readController(c, controller_node, d);
   readSim(c, top.required("sim"), d);
   if (auto events = top.optional("events")) {
-    for (const yaml::Node& en : events->elements()) {
-      yaml::StrictMap em(en);
-      EventSpec e;
-      e.where = en.where();
-      const yaml::Node at = em.required("at_s");
-      e.at_s = at.asNonNegativeDouble();
-      if (e.at_s > c.duration_s) at.fail("event after the end of the run (duration_s " + std::to_string(c.duration_s) + ")");
-      e.action = em.required("action").asEnum({"grasp_on", "grasp_off"});
-      const yaml::Node g = em.required("grasp");
-      e.grasp = g.asString();
-      bool known = false;
-      for (const auto& gs : c.sim.grasps) known = known || gs.name == e.grasp;
-      if (!known) g.fail("unknown grasp '" + e.grasp + "' (define it under sim.grasps)");
-      em.finish();
-      c.events.push_back(e);
-    }
+    for (const yaml::Node& en : events->elements()) c.events.push_back(readEvent(en, c));
     std::stable_sort(c.events.begin(), c.events.end(), [](const EventSpec& a, const EventSpec& b) { return a.at_s < b.at_s; });
   }
   if (auto tr = top.optional("trace")) {
@@ -338,17 +739,29 @@ CaseSpec loadCase(const std::string& path) {
     if (auto v = tm.optional("frames")) {
       for (const yaml::Node& fn : v->elements()) c.trace.frames.push_back(frameByName(d, fn));
     }
+    if (auto v = tm.optional("timings")) c.trace.timings = v->asBool();
     tm.finish();
   }
   const yaml::Node checks = top.required("checks");
   for (const yaml::Node& cn : checks.elements()) {
-    checks::CheckSpec cs = readCheck(cn, d);
+    checks::CheckSpec cs = readCheck(cn, d, c);
     for (const auto& o : c.checks) {
       if (o.name == cs.name) cn.fail("duplicate check name '" + cs.name + "'");
     }
     c.checks.push_back(cs);
   }
+  if (auto comps = top.optional("comparisons")) {
+    if (!isLexdyn(c)) comps->fail("comparisons need controller type lexdyn");
+    for (const yaml::Node& cn : comps->elements()) {
+      checks::ComparisonSpec cs = readComparison(cn, c);
+      for (const auto& o : c.comparisons) {
+        if (o.name == cs.name) cn.fail("duplicate comparison name '" + cs.name + "'");
+      }
+      c.comparisons.push_back(cs);
+    }
+  }
   top.finish();
+  if (isLexdyn(c)) validateLexdyn(c, controller_node);
   return c;
 }
 

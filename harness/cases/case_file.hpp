@@ -2,14 +2,17 @@
 // every case; nothing case-specific is compiled in.
 //
 // Top level: name, description?, robot{urdf, data}, duration_s, control_period_s?,
-// initial_state{posture, base_xy?, base_yaw_rad?, settle?}, controller{type, ...}, sim{contact, servo,
-// grasps?, integrator?}, events?[...], trace?{every_n_ticks?, flush_every_rows?, frames?},
-// checks[...]. Unknown keys, wrong types and unknown references (joints, frames, surfaces,
+// initial_state{posture, joints?, base_xy?, base_yaw_rad?, settle?}, controller{type, ...},
+// sim{contact, servo, grasps?, integrator?}, events?[...], trace?{every_n_ticks?,
+// flush_every_rows?, frames?, timings?}, checks[...], comparisons?[...]. The lexdyn controller's
+// section and events are described in docs/cases.md. Unknown keys, wrong types and unknown references (joints, frames, surfaces,
 // grasps, postures) are errors naming the file, line and key path. Paths are relative to the
 // case file's directory. Sections are tagged by `type` / `action` so that later controllers,
 // events and checks are added without changing existing files.
 #pragma once
 
+#include "harness/cases/lexdyn_spec.hpp"
+#include "harness/cases/target_path.hpp"
 #include "harness/checks/checks.hpp"
 #include "harness/sim/simulator.hpp"
 
@@ -32,9 +35,10 @@ struct MotionSpec {
 };
 
 struct ControllerSpec {
-  std::string type;                 ///< "posture_servo"
-  std::string posture;              ///< data-file posture
-  std::vector<MotionSpec> motions;  ///< added to the posture
+  std::string type;                 ///< "posture_servo" | "lexdyn"
+  std::string posture;              ///< posture_servo: data-file posture
+  std::vector<MotionSpec> motions;  ///< posture_servo: added to the posture
+  LexdynSpec lexdyn;                ///< lexdyn: method, parameters, contacts, tasks, levels
 };
 
 /// The robot starts at rest in `posture`, its servos holding it; the base keeps (base_x,
@@ -42,6 +46,7 @@ struct ControllerSpec {
 /// static_equilibrium for a free-flyer with contact surfaces, none otherwise).
 struct InitialStateSpec {
   std::string posture;
+  std::vector<std::pair<int, double>> joints;  ///< overrides of the posture (joint index, value)
   double base_x = 0.0, base_y = 0.0, base_yaw_rad = 0.0;
   sim::Settle settle = sim::Settle::None;
   bool settle_given = false;   ///< false: the default was taken
@@ -53,17 +58,27 @@ struct GainGroup {
   double kp = 0.0, kd = 0.0;
 };
 
+/// A timeline event, applied at the first tick at or after at_s (docs/cases.md, "Events").
 struct EventSpec {
   double at_s = 0.0;
-  std::string action;  ///< grasp_on | grasp_off
-  std::string grasp;
+  /// grasp_on | grasp_off (simulator), set_target | add_contact | remove_contact |
+  /// target_trajectory | swing (lexdyn controller)
+  std::string action;
+  std::string grasp;          ///< grasp_on, grasp_off
   std::string where;
+  std::string task;           ///< set_target, target_trajectory, swing
+  Eigen::VectorXd value;      ///< set_target: the task's target (TaskModel::targetSize values)
+  std::string contact;        ///< add_contact, remove_contact
+  std::string file;           ///< target_trajectory: the CSV file (resolved)
+  TargetTrajectory trajectory;
+  Swing swing;
 };
 
 struct TraceSpec {
   int every_n_ticks = 1;
   int flush_every_rows = 200;
   std::vector<std::string> frames;  ///< recorded as frame.<F>.x/y/z (plus the frames checks need)
+  bool timings = true;              ///< lexdyn: record the wall-time channels time.*_us
 };
 
 struct CaseSpec {
@@ -79,10 +94,20 @@ struct CaseSpec {
   std::vector<EventSpec> events;     ///< sorted by time
   TraceSpec trace;
   std::vector<checks::CheckSpec> checks;
+  std::vector<checks::ComparisonSpec> comparisons;  ///< evaluated by `lexdyn-harness compare`
 };
 
-/// Reads and validates a case file (and the robot files it names). Throws lexdyn::InputError.
+/// Reads and validates a case file (and the robot files it names). For a lexdyn controller it
+/// builds the controller of every method the case has a hierarchy for, so that a case that
+/// loads runs with each of them. Throws lexdyn::InputError.
 CaseSpec loadCase(const std::string& path);
+
+/// The method of a lexdyn case as a string ("" for other controllers).
+std::string methodName(const CaseSpec& spec);
+
+/// Overrides the method of a lexdyn case (--method); InputError naming `where` when the case has
+/// no hierarchy for it or is not a lexdyn case.
+void overrideMethod(CaseSpec& spec, const std::string& method, const std::string& where);
 
 /// Glob match with '*' only.
 bool globMatch(const std::string& pattern, const std::string& text);

@@ -60,7 +60,7 @@ class PostureServo {
 // Channels recorded every tick and how to fill them.
 class Recorder {
  public:
-  Recorder(const CaseSpec& spec, const sim::Simulator& simu) : simu_(simu) {
+  Recorder(const CaseSpec& spec, const sim::Simulator& simu, const LexdynDriver* driver) : simu_(simu), driver_(driver) {
     const model::RobotModel& m = simu.model();
     const model::RobotDescription& d = m.description();
     schema_.add(checks::kTimeChannel);
@@ -91,12 +91,23 @@ class Recorder {
       for (char a : {'x', 'y', 'z'}) schema_.add(checks::frameChannel(f, a));
     }
     for (const char* n : {"sim.steps", "sim.rhs_evals", "sim.jac_evals"}) schema_.add(n);
+    sim_channels_ = static_cast<size_t>(schema_.size());
+    if (driver_) driver_->addChannels(schema_);
     row_.assign(static_cast<size_t>(schema_.size()), 0.0);
   }
 
   const checks::TraceSchema& channels() const { return schema_; }
+  const std::vector<double>& row() const { return row_; }
 
-  const std::vector<double>& fill() {
+  /// The controller's channels of the tick just computed.
+  void fillController() {
+    if (!driver_) return;
+    const int n = driver_->fill(simu_, row_.data() + sim_channels_);
+    LEXDYN_ALWAYS_ASSERT(sim_channels_ + static_cast<size_t>(n) == row_.size(), "trace row layout mismatch (controller)");
+  }
+
+  /// The simulator's channels at its current time.
+  void fillSim() {
     const model::RobotModel& m = simu_.model();
     const model::RobotDescription& d = m.description();
     const model::Configuration& q = simu_.configuration();
@@ -142,18 +153,20 @@ class Recorder {
     row_[i++] = static_cast<double>(st.steps);
     row_[i++] = static_cast<double>(st.rhs_evals);
     row_[i++] = static_cast<double>(st.jac_evals);
-    LEXDYN_ALWAYS_ASSERT(i == row_.size(), "trace row layout mismatch");
-    return row_;
+    LEXDYN_ALWAYS_ASSERT(i == sim_channels_, "trace row layout mismatch");
   }
 
  private:
   const sim::Simulator& simu_;
+  const LexdynDriver* driver_ = nullptr;
+  size_t sim_channels_ = 0;
   checks::TraceSchema schema_;
   std::vector<model::FrameId> frame_ids_;
   std::vector<double> row_;
 };
 
-checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu, const sim::RestingState& rest) {
+checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu, const sim::RestingState& rest,
+                               const LexdynDriver* driver) {
   const model::RobotModel& m = simu.model();
   const sim::SimulatorSettings& s = spec.sim;
   checks::TraceMetadata md;
@@ -166,7 +179,9 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
   md.emplace_back("control_period_s", num(spec.control_period_s));
   md.emplace_back("duration_s", num(spec.duration_s));
   const InitialStateSpec& is = spec.initial_state;
-  std::string init = "posture " + is.posture + ", base_xy [" + num(is.base_x) + ", " + num(is.base_y) + "], base_yaw_rad " +
+  std::string init = "posture " + is.posture;
+  for (const auto& [j, v] : is.joints) init += (&j == &is.joints.front().first ? " with " : ", ") + m.jointNames()[static_cast<size_t>(j)] + " " + num(v);
+  init += ", base_xy [" + num(is.base_x) + ", " + num(is.base_y) + "], base_yaw_rad " +
                      num(is.base_yaw_rad) + "; settle " + sim::toString(rest.settle);
   if (rest.settle != sim::Settle::None) init += " (" + std::to_string(rest.iterations) + " Newton iterations)";
   init += "; at rest: net force " + num(rest.net_force_N) + " N, net moment " + num(rest.net_moment_Nm) +
@@ -185,8 +200,13 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
   std::string gains;
   for (const auto& g : spec.gain_groups) gains += (gains.empty() ? "" : "; ") + g.match + " kp " + num(g.kp) + " kd " + num(g.kd);
   md.emplace_back("servo", std::string("set-point profile ") + toString(s.servo.profile) + "; torque saturated at the URDF effort limit; " + gains);
-  md.emplace_back("controller", spec.controller.type + " (posture " + spec.controller.posture + ", " +
-                                    std::to_string(spec.controller.motions.size()) + " motions)");
+  if (driver) {
+    md.emplace_back("controller", "lexdyn (docs/controller.md)");
+    driver->addMetadata(md);
+  } else {
+    md.emplace_back("controller", spec.controller.type + " (posture " + spec.controller.posture + ", " +
+                                      std::to_string(spec.controller.motions.size()) + " motions)");
+  }
   for (const auto& kv : sim::buildInfo()) md.push_back(kv);
   md.emplace_back("trace_every_n_ticks", std::to_string(spec.trace.every_n_ticks));
   return md;
@@ -200,6 +220,7 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
   j["case_file"] = spec.path;
   j["status"] = r.status;
   j["message"] = r.message;
+  if (!r.method.empty()) j["method"] = r.method;
   j["duration_s"] = r.duration_s;
   j["simulated_s"] = r.simulated_s;
   j["wall_s"] = r.wall_s;
@@ -219,7 +240,25 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
                       {"limit", c.limit}, {"unit", c.unit}, {"detail", c.detail}});
   }
   j["checks"] = checks;
+  j["skipped_checks"] = r.skipped_checks;
   j["all_checks_passed"] = r.all_checks_passed;
+  if (r.has_controller_stats) {
+    const ControllerStats& cs = r.controller;
+    json tasks = json::object();
+    for (const auto& t : cs.tasks) tasks[t.name] = {{"final_error", number(t.final_error)}, {"mean_error", number(t.mean_error)}};
+    j["tasks"] = tasks;
+    json status = json::object(), solver_status = json::object(), augmented = json::object();
+    for (const auto& [n, c] : cs.status_counts) status[n] = c;
+    for (const auto& [n, c] : cs.solver_status_counts) solver_status[n] = c;
+    for (const auto& [n, c] : cs.augmented_ticks) augmented[n] = c;
+    j["controller"] = {{"ticks", cs.ticks}, {"status_counts", status}, {"augmented_ticks", augmented}};
+    j["solver"] = {{"peak_iterations", cs.peak_iterations},
+                   {"peak_iterations_at_s", cs.peak_iterations_at_s},
+                   {"status_counts", solver_status}};
+    json timing = json::object();
+    for (const auto& t : cs.timing) timing[t.name] = {{"median", t.median_us}, {"p99", t.p99_us}, {"max", t.max_us}};
+    j["timing_us"] = timing;
+  }
   j["trace"] = fs::path(r.trace_path).filename().string();
   json build = json::object();
   for (const auto& kv : md) build[kv.first] = kv.second;
@@ -246,26 +285,49 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   // The initial state: at rest, the servos holding the initial posture (docs/simulator.md,
   // "Initial state"). No equilibrium is bad input: nothing is simulated.
   const InitialStateSpec& is = spec.initial_state;
-  const Eigen::VectorXd q_init = m.posture(is.posture);
+  Eigen::VectorXd q_init = m.posture(is.posture);
+  for (const auto& [j, v] : is.joints) q_init[j] = v;
   const sim::RestingState rest =
       simu.restingState(q_init, is.settle, is.base_yaw_rad, Eigen::Vector2d(is.base_x, is.base_y));
   if (!rest.converged) {
     throw InputError(is.settle_where, rest.message + " (posture '" + is.posture + "'; settle: none starts without it)");
   }
   const int nj = m.numJoints();
-  const sim::JointCommand hold{q_init, Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj)};
+  const bool lexdyn = spec.controller.type == "lexdyn";
+  sim::JointCommand hold{q_init, Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj)};
+  if (lexdyn && spec.controller.lexdyn.feedforward_torque) {
+    // The controller commands the measured (deflected) joints plus feed-forward torques: the
+    // servo's command at t = 0 is the same hand-over, (q at rest, 0, the servo torques at rest),
+    // which applies exactly the torques of the equilibrium. Holding the posture instead would
+    // make the first set-point profile jump by the servo deflection (a velocity set-point of
+    // the deflection / period).
+    hold.q = rest.q.joints;
+    hold.tau_ff = spec.sim.servo.kp.cwiseProduct(q_init - rest.q.joints);
+  }
   simu.reset(rest.q, Eigen::VectorXd::Zero(m.nv()), &hold);
-  const PostureServo controller(spec.controller, m.posture(spec.controller.posture));
+  std::unique_ptr<PostureServo> servo;
+  std::unique_ptr<LexdynDriver> driver;
+  if (lexdyn) {
+    driver = std::make_unique<LexdynDriver>(spec, simu);
+    driver->reset(simu);
+  } else {
+    servo = std::make_unique<PostureServo>(spec.controller, m.posture(spec.controller.posture));
+  }
 
-  Recorder recorder(spec, simu);
-  const checks::TraceMetadata md = metadata(spec, simu, rest);
+  Recorder recorder(spec, simu, driver.get());
+  const checks::TraceMetadata md = metadata(spec, simu, rest, driver.get());
+  RunSummary r;
+  r.method = methodName(spec);
   std::vector<std::unique_ptr<checks::Check>> check_list;
   for (const auto& cs : spec.checks) {
+    if (!checks::appliesTo(cs, r.method)) {
+      r.skipped_checks.push_back(cs.name);
+      continue;
+    }
     check_list.push_back(checks::makeCheck(cs));
     check_list.back()->bind(recorder.channels(), md);
   }
 
-  RunSummary r;
   r.duration_s = spec.duration_s;
   r.trace_path = (fs::path(options.out_dir) / "trace.csv").string();
   r.summary_path = (fs::path(options.out_dir) / "summary.json").string();
@@ -284,8 +346,20 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   r.status = "completed";
 
   double last_recorded_t = -1.0;
-  auto record = [&](long k, bool force_write) {
-    const std::vector<double>& row = recorder.fill();
+  // A row holds the simulator's state at its time (before the events of that time, which act
+  // from that time on) and the controller's tick at that time (after the events).
+  auto applyEvents = [&](double t) {
+    while (next_event < spec.events.size() && spec.events[next_event].at_s <= t + 1e-9) {
+      const EventSpec& e = spec.events[next_event++];
+      if (e.action == "grasp_on" || e.action == "grasp_off") {
+        simu.setGraspActive(simu.graspIndex(e.grasp), e.action == "grasp_on");
+      } else if (driver) {
+        driver->applyEvent(e, t, simu);
+      }
+    }
+  };
+  auto write = [&](long k, bool force_write) {
+    const std::vector<double>& row = recorder.row();
     last_recorded_t = row[0];
     for (auto& c : check_list) c->consume(row.data());
     if (force_write || k % spec.trace.every_n_ticks == 0) writer.write(row.data());
@@ -295,20 +369,29 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   auto wallNow = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count(); };
   double last_progress_wall = 0.0;
   long k = 0;
+  std::string failure;
   for (; k < n_ticks; ++k) {
-    record(k, k == 0);
     const double t = static_cast<double>(k) * T;
-    while (next_event < spec.events.size() && spec.events[next_event].at_s <= t + 1e-9) {
-      const EventSpec& e = spec.events[next_event++];
-      const int g = simu.graspIndex(e.grasp);
-      simu.setGraspActive(g, e.action == "grasp_on");
+    recorder.fillSim();
+    applyEvents(t);
+    bool ok = true;
+    if (driver) {
+      ok = driver->tick(t, simu, cmd, failure);
+      recorder.fillController();
+    } else {
+      servo->command(static_cast<double>(k + 1) * T, cmd);
+    }
+    write(k, k == 0 || !ok);
+    if (!ok) {
+      r.status = "controller_failure";
+      r.message = failure;
+      break;
     }
     if (options.interrupt && options.interrupt->load()) {
       r.status = "interrupted";
       r.message = "interrupted at t = " + num(t) + " s";
       break;
     }
-    controller.command(static_cast<double>(k + 1) * T, cmd);
     const sim::StepResult sr = simu.step(cmd);
     if (!sr.ok) {
       r.status = "integrator_failure";
@@ -321,14 +404,24 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
       if (w - last_progress_wall >= options.progress_interval_s) {
         last_progress_wall = w;
         const double rate = w > 0.0 ? simu.time() / w : 0.0;
-        std::fprintf(stderr, "[%s] t = %.2f / %.2f s, wall %.1f s, %.1fx real time, about %.0f s left\n",
-                     spec.name.c_str(), simu.time(), spec.duration_s, w, rate,
+        std::fprintf(stderr, "[%s%s%s] t = %.2f / %.2f s, wall %.1f s, %.1fx real time, about %.0f s left\n",
+                     spec.name.c_str(), r.method.empty() ? "" : " ", r.method.c_str(), simu.time(), spec.duration_s, w, rate,
                      rate > 0.0 ? (spec.duration_s - simu.time()) / rate : 0.0);
       }
     }
   }
-  // The last state (end of the run, or where it stopped), unless already recorded.
-  if (simu.time() != last_recorded_t) record(k, true);
+  // The last state (end of the run), unless already recorded. The controller ticks there too
+  // (its command is not used) so that every row has the controller's channels.
+  if (simu.time() != last_recorded_t) {
+    recorder.fillSim();
+    applyEvents(simu.time());
+    if (driver) {
+      std::string ignored;
+      driver->tick(simu.time(), simu, cmd, ignored);
+      recorder.fillController();
+    }
+    write(k, true);
+  }
   r.wall_s = wallNow();
   r.simulated_s = simu.time();
   r.ticks = simu.tick();
@@ -336,6 +429,10 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   r.integrator = simu.integratorStats();
   r.integrator_restarts = simu.integratorRestarts();
   writer.finish();
+  if (driver) {
+    r.has_controller_stats = true;
+    r.controller = driver->stats();
+  }
 
   r.all_checks_passed = true;
   for (auto& c : check_list) {

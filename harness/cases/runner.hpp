@@ -3,6 +3,7 @@
 #pragma once
 
 #include "harness/cases/case_file.hpp"
+#include "harness/cases/lexdyn_driver.hpp"
 
 #include <atomic>
 #include <string>
@@ -20,8 +21,9 @@ struct RunOptions {
 };
 
 struct RunSummary {
-  std::string status;   ///< completed | integrator_failure | interrupted
+  std::string status;   ///< completed | integrator_failure | controller_failure | interrupted
   std::string message;  ///< what stopped the run early
+  std::string method;   ///< lexdyn: bfgs | ah | gn | wls ("" for other controllers)
   double duration_s = 0.0;
   double simulated_s = 0.0;
   double wall_s = 0.0;
@@ -30,7 +32,10 @@ struct RunSummary {
   sim::CvodeStats integrator;
   long integrator_restarts = 0;
   std::vector<checks::CheckResult> checks;
+  std::vector<std::string> skipped_checks;  ///< checks restricted to other methods
   bool all_checks_passed = false;
+  bool has_controller_stats = false;
+  ControllerStats controller;               ///< lexdyn: per task errors, iterations, timings
   std::string trace_path, summary_path;
 };
 

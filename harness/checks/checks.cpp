@@ -1,4 +1,5 @@
 #include "harness/checks/checks.hpp"
+#include "harness/checks/check_base.hpp"
 
 #include "lexdyn/common/error.hpp"
 
@@ -16,44 +17,9 @@ std::string contactPointChannel(const std::string& surface, int point, char axis
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-int require(const TraceSchema& schema, const std::string& channel, const CheckSpec& spec) {
-  const int c = schema.find(channel);
-  if (c < 0) throw InputError(spec.where, "check '" + spec.name + "' needs trace channel '" + channel + "', which is not recorded");
-  return c;
-}
-
-class CheckBase : public Check {
- public:
-  explicit CheckBase(CheckSpec spec, std::string unit) : spec_(std::move(spec)), unit_(std::move(unit)) {}
-  CheckResult result() const override {
-    CheckResult r;
-    r.name = spec_.name;
-    r.type = spec_.type;
-    r.limit = spec_.limit;
-    r.unit = unit_;
-    if (!seen_) {
-      r.value = kNaN;
-      r.passed = false;
-      r.detail = "no trace row at t >= " + std::to_string(spec_.from_s) + " s";
-      return r;
-    }
-    r.value = worst_;
-    r.passed = worst_ <= spec_.limit;
-    r.detail = detail_;
-    return r;
-  }
-
- protected:
-  bool active(const double* row) const { return row[t_] >= spec_.from_s - 1e-9; }
-  CheckSpec spec_;
-  std::string unit_;
-  int t_ = 0;
-  bool seen_ = false;
-  double worst_ = 0.0;
-  std::string detail_;
-};
+using detail::CheckBase;
+using detail::kNaN;
+using detail::require;
 
 class FrameDrift final : public CheckBase {
  public:
@@ -182,7 +148,11 @@ class ContactSlip final : public CheckBase {
 }  // namespace
 
 const std::vector<std::string>& checkTypes() {
-  static const std::vector<std::string> types = {"frame_drift", "force_balance", "contact_slip", "frame_height"};
+  static const std::vector<std::string> types = [] {
+    std::vector<std::string> v = {"frame_drift", "force_balance", "contact_slip", "frame_height"};
+    for (const auto& t : detail::controllerCheckTypes()) v.push_back(t);
+    return v;
+  }();
   return types;
 }
 
@@ -191,14 +161,44 @@ std::unique_ptr<Check> makeCheck(const CheckSpec& spec) {
   if (spec.type == "force_balance") return std::make_unique<ForceBalance>(spec);
   if (spec.type == "contact_slip") return std::make_unique<ContactSlip>(spec);
   if (spec.type == "frame_height") return std::make_unique<FrameHeight>(spec);
+  if (auto c = detail::makeControllerCheck(spec)) return c;
   throw InputError(spec.where, "unknown check type '" + spec.type + "'");
+}
+
+bool appliesTo(const CheckSpec& spec, const std::string& method) {
+  if (spec.methods.empty()) return true;
+  for (const auto& m : spec.methods) {
+    if (m == method) return true;
+  }
+  return false;
+}
+
+std::string taskChannel(const std::string& task, const char* what) { return "task." + task + "." + what; }
+std::string levelChannel(const std::string& level, const char* what) { return "level." + level + "." + what; }
+std::string wrenchChannel(const std::string& contact, bool sensed, const char* component) {
+  return std::string(sensed ? "wrench_sensed." : "wrench.") + contact + "." + component;
+}
+std::string contactActiveChannel(const std::string& contact) { return "ctrl_contact." + contact + ".active"; }
+std::string timerChannel(const std::string& timer) { return "time." + timer + "_us"; }
+
+const std::vector<std::string>& controllerStatusNames() {
+  static const std::vector<std::string> names = {"ok", "solver_stopped_early", "solver_iteration_limit", "infeasible",
+                                                 "non_finite"};
+  return names;
+}
+
+const std::vector<std::string>& solverStatusNames() {
+  static const std::vector<std::string> names = {"solved", "stopped_early", "iteration_limit", "non_finite_input"};
+  return names;
 }
 
 std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace) {
   TraceSchema schema;
   for (const auto& n : trace.names) schema.add(n);
+  const std::string* method = findMetadata(trace.metadata, kMethodMetadata);
   std::vector<CheckResult> out;
   for (const auto& s : specs) {
+    if (!appliesTo(s, method ? *method : std::string())) continue;
     auto c = makeCheck(s);
     c->bind(schema, trace.metadata);
     for (const auto& row : trace.rows) c->consume(row.data());

@@ -1,23 +1,35 @@
-// lexdyn-harness: runs a case file and writes DIR/trace.csv and DIR/summary.json.
+// lexdyn-harness: runs case files, checks stored traces, compares methods, golden traces.
 //
-//   lexdyn-harness run cases/stand.yaml --out out/stand [--quiet]
-//   lexdyn-harness check cases/stand.yaml out/stand/trace.csv     (checks of a stored trace)
+//   lexdyn-harness run CASE --out DIR [--method bfgs|ah|gn|wls] [--duration S] [--quiet]
+//   lexdyn-harness check TRACE --case CASE       (the case's checks on a stored trace)
+//   lexdyn-harness check CASE TRACE              (the same, older argument order)
+//   lexdyn-harness compare --case CASE TRACE...  (the case's comparisons between methods)
+//   lexdyn-harness golden update|check [--manifest FILE] [--cases A,B] [--only CASE.METHOD]
+//                                      [--work DIR] [--progress]
 //
-// Exit codes: 0 every check passed; 1 a check failed or the run stopped early (integrator
-// failure, interruption, an internal error); 2 bad input (the message names the file and the
-// key path).
+// Exit codes: 0 every check (comparison, golden) passed; 1 a check failed, a golden differs or
+// the run stopped early (integrator or controller failure, interruption, an internal error);
+// 2 bad input (the message names the file and the key path).
 #include "harness/cases/runner.hpp"
+#include "harness/golden/golden.hpp"
 #include "lexdyn/common/error.hpp"
 
 #include <CLI/CLI.hpp>
+
+#include <unistd.h>
 
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <map>
+#include <sstream>
 #include <string>
 
 namespace {
+
+namespace fs = std::filesystem;
 
 std::atomic<bool> g_interrupt{false};
 
@@ -30,22 +42,185 @@ void printChecks(const std::vector<lexdyn::checks::CheckResult>& checks) {
   }
 }
 
+bool isPartial(const std::string& path) { return path.size() > 8 && path.compare(path.size() - 8, 8, ".partial") == 0; }
+
+void describeTrace(const std::string& label, const std::string& path, const lexdyn::checks::TraceTable& table) {
+  const int tc = table.column(lexdyn::checks::kTimeChannel);
+  if (table.rows.empty() || tc < 0) {
+    std::fprintf(stderr, "[%s] %s: %zu rows\n", label.c_str(), path.c_str(), table.rows.size());
+    return;
+  }
+  const std::string* every = lexdyn::checks::findMetadata(table.metadata, "trace_every_n_ticks");
+  const bool decimated = every && *every != "1";
+  std::fprintf(stderr, "[%s] %s: %zu rows, t = %g .. %g s%s%s\n", label.c_str(), path.c_str(), table.rows.size(),
+               table.rows.front()[static_cast<size_t>(tc)], table.rows.back()[static_cast<size_t>(tc)],
+               isPartial(path) ? " (partial trace: the run did not finish)" : "",
+               decimated ? " (decimated: rate-based checks see fewer rows than the live run did)" : "");
+}
+
+std::vector<std::string> splitList(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+int runCheck(const std::vector<std::string>& positional, const std::string& case_opt) {
+  std::string case_path = case_opt, trace_path;
+  if (positional.size() == 2 && case_opt.empty()) {
+    case_path = positional[0];
+    trace_path = positional[1];
+  } else if (positional.size() == 1) {
+    trace_path = positional[0];
+  } else {
+    throw lexdyn::InputError("check", "expected TRACE --case CASE (or CASE TRACE)");
+  }
+  const lexdyn::checks::TraceTable table = lexdyn::checks::readTrace(trace_path);
+  if (case_path.empty()) {
+    const std::string* cf = lexdyn::checks::findMetadata(table.metadata, "case_file");
+    if (!cf || !fs::is_regular_file(*cf)) throw lexdyn::InputError(trace_path, "the trace does not name a readable case file; give --case CASE");
+    case_path = *cf;
+  }
+  const lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
+  const std::string* traced_case = lexdyn::checks::findMetadata(table.metadata, "case");
+  if (traced_case && *traced_case != spec.name) {
+    std::fprintf(stderr, "lexdyn-harness: warning: %s is a trace of case '%s', not of '%s' (%s)\n", trace_path.c_str(),
+                 traced_case->c_str(), spec.name.c_str(), case_path.c_str());
+  }
+  const auto results = lexdyn::checks::runChecks(spec.checks, table);
+  bool all = true;
+  for (const auto& r : results) all = all && r.passed;
+  const std::string* method = lexdyn::checks::findMetadata(table.metadata, lexdyn::checks::kMethodMetadata);
+  describeTrace(spec.name + (method ? " " + *method : ""), trace_path, table);
+  printChecks(results);
+  return all ? 0 : 1;
+}
+
+int runCompare(const std::string& case_path, const std::vector<std::string>& traces) {
+  if (case_path.empty()) throw lexdyn::InputError("compare", "expected --case CASE");
+  const lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
+  if (spec.comparisons.empty()) throw lexdyn::InputError(case_path, "the case has no comparisons");
+  std::map<std::string, lexdyn::checks::TraceTable> by_method;
+  for (const std::string& p : traces) {
+    lexdyn::checks::TraceTable t = lexdyn::checks::readTrace(p);
+    const std::string* m = lexdyn::checks::findMetadata(t.metadata, lexdyn::checks::kMethodMetadata);
+    if (!m) throw lexdyn::InputError(p, "the trace records no method (not a lexdyn run)");
+    const std::string* c = lexdyn::checks::findMetadata(t.metadata, "case");
+    if (c && *c != spec.name) {
+      std::fprintf(stderr, "lexdyn-harness: warning: %s is a trace of case '%s', not of '%s'\n", p.c_str(), c->c_str(), spec.name.c_str());
+    }
+    describeTrace(spec.name + " " + *m, p, t);
+    if (by_method.count(*m)) throw lexdyn::InputError(p, "a second trace of method " + *m);
+    by_method.emplace(*m, std::move(t));
+  }
+  std::vector<lexdyn::checks::CheckResult> results;
+  for (const auto& cs : spec.comparisons) {
+    if (!by_method.count(cs.better) || !by_method.count(cs.worse)) {
+      lexdyn::checks::CheckResult r;
+      r.name = cs.name;
+      r.type = cs.type;
+      r.passed = false;
+      r.value = std::numeric_limits<double>::quiet_NaN();
+      r.limit = cs.margin;
+      r.detail = "needs traces of methods " + cs.better + " and " + cs.worse;
+      results.push_back(r);
+      continue;
+    }
+    results.push_back(lexdyn::checks::compareMethods(cs, by_method.at(cs.better), by_method.at(cs.worse)));
+  }
+  printChecks(results);
+  bool all = true;
+  for (const auto& r : results) all = all && r.passed;
+  return all ? 0 : 1;
+}
+
+int runGoldenCommand(bool update, const std::string& manifest_path, const std::string& cases_opt, const std::string& only,
+                     std::string work, bool progress) {
+  const lexdyn::golden::Manifest m = lexdyn::golden::loadManifest(manifest_path);
+  const std::vector<std::string> wanted_cases = splitList(cases_opt);
+  const std::vector<std::string> wanted_only = splitList(only);
+  bool temp_work = false;
+  if (work.empty()) {
+    work = (fs::temp_directory_path() / ("lexdyn-golden-" + std::to_string(::getpid()))).string();
+    temp_work = true;
+  }
+  int selected = 0, failed = 0;
+  for (const auto& e : m.entries) {
+    if (!wanted_cases.empty() && std::find(wanted_cases.begin(), wanted_cases.end(), e.case_name) == wanted_cases.end()) continue;
+    for (const auto& method : e.methods) {
+      const std::string id = e.case_name + "." + method;
+      if (!wanted_only.empty() && std::find(wanted_only.begin(), wanted_only.end(), id) == wanted_only.end()) continue;
+      ++selected;
+      const std::string path = lexdyn::golden::goldenPath(m, e.case_name, method);
+      if (!update && !fs::is_regular_file(path)) {
+        std::fprintf(stderr, "  MISSING %s: %s does not exist (lexdyn-harness golden update --only %s)\n", id.c_str(), path.c_str(), id.c_str());
+        ++failed;
+        continue;
+      }
+      std::string status;
+      const lexdyn::checks::TraceTable fresh = lexdyn::golden::runGolden(e, method, m, work, status, progress);
+      if (update) {
+        lexdyn::golden::writeGolden(path, fresh, lexdyn::golden::provenance(e, method, status, m.dir));
+        std::fprintf(stderr, "  wrote %s: %zu rows x %zu channels, %g s, run %s\n", path.c_str(), fresh.rows.size(), fresh.names.size(),
+                     e.duration_s, status.c_str());
+        continue;
+      }
+      const lexdyn::checks::TraceTable golden = lexdyn::checks::readTrace(path);
+      const lexdyn::golden::Comparison c = lexdyn::golden::compare(golden, fresh, m.tolerance, m.channel_tolerances);
+      std::fprintf(stderr, "  %-4s %s: %s\n", c.ok ? "ok" : "FAIL", id.c_str(), c.report().c_str());
+      if (!c.ok) ++failed;
+    }
+  }
+  if (temp_work) {
+    std::error_code ec;
+    fs::remove_all(work, ec);
+  }
+  if (selected == 0) throw lexdyn::InputError(manifest_path, "no golden matches --cases / --only");
+  if (!update) std::fprintf(stderr, "golden check: %d of %d match\n", selected - failed, selected);
+  return failed == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"lexdyn-harness: runs simulation cases and checks their traces"};
+  CLI::App app{"lexdyn-harness: runs simulation cases, checks their traces, compares methods, golden traces"};
   app.require_subcommand(1);
 
-  std::string case_path, out_dir, trace_path;
-  bool quiet = false;
+  std::string case_path, out_dir, case_opt, method, manifest = std::string(LEXDYN_SOURCE_DIR) + "/golden/manifest.yaml";
+  std::string cases_opt, only, work;
+  double duration = 0.0;
+  bool quiet = false, progress = false;
+  std::vector<std::string> positional, traces;
+
   CLI::App* run = app.add_subcommand("run", "run a case file");
   run->add_option("case", case_path, "case file (YAML)")->required();
   run->add_option("--out", out_dir, "output directory (trace.csv, summary.json)")->required();
+  run->add_option("--method", method, "lexdyn method, overrides the case's: bfgs | ah | gn | wls");
+  run->add_option("--duration", duration, "simulate at most this long (s)");
   run->add_flag("--quiet", quiet, "no progress lines");
 
   CLI::App* check = app.add_subcommand("check", "evaluate a case's checks on a stored trace");
-  check->add_option("case", case_path, "case file (YAML)")->required();
-  check->add_option("trace", trace_path, "trace file (CSV)")->required();
+  check->add_option("args", positional, "TRACE (with --case CASE), or CASE TRACE")->required()->expected(1, 2);
+  check->add_option("--case", case_opt, "case file (default: the one the trace names)");
+
+  CLI::App* compare = app.add_subcommand("compare", "evaluate a case's comparisons on traces of several methods");
+  compare->add_option("traces", traces, "trace files (one per method)")->required();
+  compare->add_option("--case", case_opt, "case file")->required();
+
+  CLI::App* golden = app.add_subcommand("golden", "golden traces: update (regenerate) or check (compare)");
+  golden->require_subcommand(1);
+  CLI::App* gupdate = golden->add_subcommand("update", "regenerate golden traces");
+  CLI::App* gcheck = golden->add_subcommand("check", "re-run and compare with the golden traces");
+  for (CLI::App* g : {gupdate, gcheck}) {
+    g->add_option("--manifest", manifest, "golden manifest (default: the source tree's golden/manifest.yaml)");
+    g->add_option("--cases", cases_opt, "comma-separated case names");
+    g->add_option("--only", only, "comma-separated CASE.METHOD ids");
+    g->add_option("--work", work, "directory for the runs (default: a temporary one, removed)");
+    g->add_flag("--progress", progress, "progress lines of the runs");
+  }
 
   try {
     app.parse(argc, argv);
@@ -57,28 +232,14 @@ int main(int argc, char** argv) {
   }
 
   try {
-    const lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
-    if (*check) {
-      const lexdyn::checks::TraceTable table = lexdyn::checks::readTrace(trace_path);
-      const std::string* traced_case = lexdyn::checks::findMetadata(table.metadata, "case");
-      if (traced_case && *traced_case != spec.name) {
-        std::fprintf(stderr, "lexdyn-harness: warning: %s is a trace of case '%s', not of '%s' (%s)\n", trace_path.c_str(),
-                     traced_case->c_str(), spec.name.c_str(), case_path.c_str());
-      }
-      const auto results = lexdyn::checks::runChecks(spec.checks, table);
-      bool all = true;
-      for (const auto& r : results) all = all && r.passed;
-      const int tc = table.column(lexdyn::checks::kTimeChannel);
-      if (table.rows.empty() || tc < 0) {
-        std::fprintf(stderr, "[%s] %s: %zu rows\n", spec.name.c_str(), trace_path.c_str(), table.rows.size());
-      } else {
-        const bool partial = trace_path.size() > 8 && trace_path.compare(trace_path.size() - 8, 8, ".partial") == 0;
-        std::fprintf(stderr, "[%s] %s: %zu rows, t = %g .. %g s%s\n", spec.name.c_str(), trace_path.c_str(),
-                     table.rows.size(), table.rows.front()[static_cast<size_t>(tc)], table.rows.back()[static_cast<size_t>(tc)],
-                     partial ? " (partial trace: the run did not finish)" : "");
-      }
-      printChecks(results);
-      return all ? 0 : 1;
+    if (*check) return runCheck(positional, case_opt);
+    if (*compare) return runCompare(case_opt, traces);
+    if (*golden) return runGoldenCommand(static_cast<bool>(*gupdate), manifest, cases_opt, only, work, progress);
+    lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
+    if (!method.empty()) lexdyn::cases::overrideMethod(spec, method, "--method");
+    if (run->count("--duration")) {
+      if (!(duration > 0.0)) throw lexdyn::InputError("--duration", "expected a positive number of seconds");
+      spec.duration_s = std::min(spec.duration_s, duration);
     }
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
@@ -87,10 +248,26 @@ int main(int argc, char** argv) {
     options.progress = !quiet;
     options.interrupt = &g_interrupt;
     const lexdyn::cases::RunSummary s = lexdyn::cases::runCase(spec, options);
-    std::fprintf(stderr, "[%s] %s: %.3f s simulated in %.3f s wall (%.1fx real time), %ld ticks\n", spec.name.c_str(),
+    const std::string label = spec.name + (s.method.empty() ? "" : " " + s.method);
+    std::fprintf(stderr, "[%s] %s: %.3f s simulated in %.3f s wall (%.1fx real time), %ld ticks\n", label.c_str(),
                  s.status.c_str(), s.simulated_s, s.wall_s, s.realtime_factor, s.ticks);
     if (!s.message.empty()) std::fprintf(stderr, "  %s\n", s.message.c_str());
+    if (s.has_controller_stats) {
+      std::string errs;
+      for (const auto& t : s.controller.tasks) {
+        char buf[128];
+        std::snprintf(buf, sizeof(buf), "%s%s %.4g", errs.empty() ? "" : ", ", t.name.c_str(), t.final_error);
+        errs += buf;
+      }
+      std::fprintf(stderr, "  final task errors: %s\n", errs.c_str());
+      std::fprintf(stderr, "  peak active-set iterations %d at t = %g s\n", s.controller.peak_iterations, s.controller.peak_iterations_at_s);
+    }
     printChecks(s.checks);
+    if (!s.skipped_checks.empty()) {
+      std::string names;
+      for (const auto& n : s.skipped_checks) names += (names.empty() ? "" : ", ") + n;
+      std::fprintf(stderr, "  skipped (other methods): %s\n", names.c_str());
+    }
     std::fprintf(stderr, "  wrote %s and %s\n", s.trace_path.c_str(), s.summary_path.c_str());
     return lexdyn::cases::exitCode(s);
   } catch (const lexdyn::InputError& e) {

@@ -1,0 +1,312 @@
+#include "harness/cases/lexdyn_spec.hpp"
+
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/model/robot_model.hpp"
+
+#include <cmath>
+
+namespace lexdyn::cases {
+
+namespace {
+
+std::string joinNames(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+void readParams(yaml::StrictMap& pm, control::ControllerParams& p) {
+  if (auto v = pm.optional("nu_dt2")) p.nu_dt2 = v->asNonNegativeDouble();
+  if (auto v = pm.optional("xi_dt2")) p.xi_dt2 = v->asNonNegativeDouble();
+  if (auto v = pm.optional("zeta_dt2")) p.zeta_dt2 = v->asNonNegativeDouble();
+  if (auto v = pm.optional("new_dof_diagonal_dt2")) p.new_dof_diagonal_dt2 = v->asNonNegativeDouble();
+  if (auto v = pm.optional("rho_dt2")) p.rho_dt2 = v->asNonNegativeDouble();
+  if (auto v = pm.optional("eps_dt2")) p.eps_dt2 = v->asNonNegativeDouble();
+  if (auto v = pm.optional("newton_target")) {
+    p.newton_target = v->asEnum({"zero", "previous_velocity"}) == "zero" ? control::NewtonTarget::Zero
+                                                                       : control::NewtonTarget::PreviousVelocity;
+  }
+  if (auto v = pm.optional("damping")) p.damping = v->asNonNegativeDouble();
+  if (auto v = pm.optional("use_qmod")) p.use_qmod = v->asBool();
+  if (auto v = pm.optional("sr1")) p.sr1 = v->asBool();
+  if (auto v = pm.optional("rank_switching")) p.rank_switching = v->asBool();
+  if (auto v = pm.optional("sign_change_guard")) p.sign_change_guard = v->asBool();
+  if (auto v = pm.optional("wls_infeasibility_tolerance")) p.wls_infeasibility_tolerance = v->asPositiveDouble();
+}
+
+solver::Options readSolver(yaml::StrictMap& sm, double dt) {
+  solver::Options o;
+  if (auto v = sm.optional("paper_rules")) {
+    if (v->asBool()) o = solver::Options::paper(dt);
+  }
+  auto positiveInt = [](const yaml::Node& n) {
+    const int i = n.asInt();
+    if (i < 1) n.fail("expected an integer >= 1");
+    return i;
+  };
+  auto nonNegativeInt = [](const yaml::Node& n) {
+    const int i = n.asInt();
+    if (i < 0) n.fail("expected an integer >= 0");
+    return i;
+  };
+  if (auto v = sm.optional("max_iterations")) o.max_iterations = positiveInt(*v);
+  if (auto v = sm.optional("rank_tolerance")) o.rank_tolerance = v->asPositiveDouble();
+  if (auto v = sm.optional("feasibility_tolerance")) o.feasibility_tolerance = v->asPositiveDouble();
+  if (auto v = sm.optional("zero_tolerance")) o.zero_tolerance = v->asPositiveDouble();
+  if (auto v = sm.optional("dual_tolerance")) o.dual_tolerance = v->asPositiveDouble();
+  if (auto v = sm.optional("eliminate_first_level")) o.eliminate_first_level = v->asBool();
+  if (auto v = sm.optional("elimination_tolerance")) o.elimination_tolerance = v->asPositiveDouble();
+  if (auto v = sm.optional("bland_after_degenerate_steps")) o.bland_after_degenerate_steps = positiveInt(*v);
+  if (auto v = sm.optional("cycle_tolerance_factor")) o.cycle_tolerance_factor = v->asPositiveDouble();
+  // The paper's termination rules individually (0 disables a rule); override paper_rules.
+  if (auto v = sm.optional("stop_slack_norm")) o.stop_slack_norm = v->asNonNegativeDouble();
+  if (auto v = sm.optional("stop_optimality_iterations")) o.stop_optimality_iterations = nonNegativeInt(*v);
+  if (auto v = sm.optional("stop_total_iterations")) o.stop_total_iterations = nonNegativeInt(*v);
+  return o;
+}
+
+ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& d) {
+  yaml::StrictMap m(node);
+  ContactEntry c;
+  c.where = node.where();
+  const yaml::Node name = m.required("name");
+  c.name = name.asString();
+  requireChannelName(name, c.name);
+  auto surface = m.optional("surface");
+  auto frame = m.optional("frame");
+  if (surface && frame) frame->fail("give either surface or frame (with points), not both");
+  if (!surface && !frame) m.node().fail("a contact needs a surface (of the robot data file) or a frame with points");
+  if (surface) {
+    c.surface = surface->asString();
+    bool found = false;
+    std::vector<std::string> names;
+    for (const auto& s : d.contact_surfaces) {
+      names.push_back(s.name);
+      if (s.name != c.surface) continue;
+      found = true;
+      c.frame = d.frames[static_cast<size_t>(s.frame)].name;
+      c.points = s.points;
+    }
+    if (!found) surface->fail("unknown contact surface '" + c.surface + "' (surfaces: " + joinNames(names) + ")");
+  } else {
+    c.frame = frame->asString();
+    if (d.findFrame(c.frame) < 0) {
+      std::vector<std::string> names;
+      for (const auto& f : d.frames) names.push_back(f.name);
+      frame->fail("unknown frame '" + c.frame + "' (frames: " + joinNames(names) + ")");
+    }
+    const yaml::Node pts = m.required("points");
+    if (pts.size() < 1) pts.fail("expected at least one point");
+    for (const yaml::Node& p : pts.elements()) c.points.push_back(p.asVector3());
+  }
+  if (auto v = m.optional("fixed")) c.fixed = v->asBool();
+  if (auto v = m.optional("normal")) {
+    c.normal = v->asVector3();
+    if (!(c.normal.norm() > 1e-9)) v->fail("expected a nonzero normal");
+    c.normal.normalize();
+  }
+  if (auto v = m.optional("friction")) {
+    c.friction = v->asPositiveDouble();
+  } else if (d.friction_coefficient > 0.0) {
+    c.friction = d.friction_coefficient;
+  } else {
+    m.node().fail("the robot data file has no friction_coefficient; give friction here");
+  }
+  if (auto v = m.optional("grasp")) c.grasp = v->asString();  // checked against sim.grasps by loadCase
+  if (auto v = m.optional("sensor")) {
+    c.sensor = v->asString();
+    bool found = false;
+    std::vector<std::string> names;
+    for (const auto& s : d.force_sensors) {
+      names.push_back(s.name);
+      found = found || s.name == c.sensor;
+    }
+    if (!found) v->fail("unknown force sensor '" + c.sensor + "' (sensors: " + joinNames(names) + ")");
+  }
+  m.finish();
+  return c;
+}
+
+std::vector<LevelEntry> readLevels(const yaml::Node& node, const LexdynSpec& spec, bool wls) {
+  std::vector<LevelEntry> out;
+  const std::vector<yaml::Node> items = node.elements();
+  if (items.empty()) node.fail("expected at least one level");
+  if (wls && items.size() != 2) node.fail("the WLS baseline needs exactly two levels (hard constraints, weighted objective), found " + std::to_string(items.size()));
+  std::vector<std::string> seen;
+  for (size_t l = 0; l < items.size(); ++l) {
+    yaml::StrictMap m(items[l]);
+    LevelEntry e;
+    e.where = items[l].where();
+    const yaml::Node name = m.required("name");
+    e.name = name.asString();
+    requireChannelName(name, e.name);
+    for (const auto& o : out) {
+      if (o.name == e.name) name.fail("duplicate level name '" + e.name + "'");
+    }
+    const yaml::Node tasks = m.required("tasks");
+    for (const yaml::Node& tn : tasks.elements()) {
+      const std::string t = tn.asString();
+      if (spec.findTask(t) < 0) {
+        std::vector<std::string> names;
+        for (const auto& ts : spec.tasks) names.push_back(ts.name);
+        tn.fail("unknown task '" + t + "' (controller.tasks: " + joinNames(names) + ")");
+      }
+      for (const auto& s : seen) {
+        if (s == t) tn.fail("task '" + t + "' appears twice in this hierarchy");
+      }
+      seen.push_back(t);
+      e.tasks.push_back(t);
+    }
+    const bool objective = wls && l == 1;
+    if (auto w = m.optional("weights")) {
+      if (!objective) w->fail("weights are for the WLS objective level (the second of wls_levels) only");
+      e.weights.assign(e.tasks.size(), -1.0);
+      for (const auto& [task, value] : w->entries()) {
+        size_t k = 0;
+        while (k < e.tasks.size() && e.tasks[k] != task) ++k;
+        if (k == e.tasks.size()) value.fail("task '" + task + "' is not on this level (tasks: " + joinNames(e.tasks) + ")");
+        e.weights[k] = value.asPositiveDouble();
+      }
+      std::vector<std::string> missing;
+      for (size_t k = 0; k < e.tasks.size(); ++k) {
+        if (e.weights[k] < 0.0) missing.push_back(e.tasks[k]);
+      }
+      if (!missing.empty()) w->fail("no weight for task(s) " + joinNames(missing));
+    } else if (objective) {
+      m.node().fail("the WLS objective level needs weights: {task: weight, ...}");
+    }
+    m.finish();
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+}  // namespace
+
+int LexdynSpec::findTask(const std::string& name) const {
+  for (size_t i = 0; i < tasks.size(); ++i) {
+    if (tasks[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+int LexdynSpec::findContact(const std::string& name) const {
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    if (contacts[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, double dt) {
+  LexdynSpec s;
+  const yaml::Node method = m.required("method");
+  s.method = control::parseMethod(method.asEnum({"bfgs", "ah", "gn", "wls"}), method.where());
+  s.method_where = method.where();
+  if (auto v = m.optional("feedforward_torque")) s.feedforward_torque = v->asBool();
+  if (auto v = m.optional("state_feedback")) s.state_feedback = v->asEnum({"measured", "integrated", "measured_position"});
+  if (auto pn = m.optional("params")) {
+    yaml::StrictMap pm(*pn);
+    readParams(pm, s.params);
+    pm.finish();
+  }
+  if (auto sn = m.optional("solver")) {
+    yaml::StrictMap sm(*sn);
+    s.params.solver = readSolver(sm, dt);
+    sm.finish();
+  }
+  s.params.dt = dt;
+  s.params.method = s.method;
+  if (auto cn = m.optional("contacts")) {
+    for (const yaml::Node& c : cn->elements()) {
+      ContactEntry e = readContact(c, d);
+      if (s.findContact(e.name) >= 0) c.fail("duplicate contact name '" + e.name + "'");
+      s.contacts.push_back(std::move(e));
+    }
+  }
+  std::vector<std::string> contact_names;
+  for (const auto& c : s.contacts) contact_names.push_back(c.name);
+  if (auto ic = m.optional("initial_contacts")) {
+    for (const yaml::Node& n : ic->elements()) {
+      const std::string name = n.asString();
+      if (s.findContact(name) < 0) n.fail("unknown contact '" + name + "' (controller.contacts: " + joinNames(contact_names) + ")");
+      for (const auto& o : s.initial_contacts) {
+        if (o == name) n.fail("contact '" + name + "' listed twice");
+      }
+      s.initial_contacts.push_back(name);
+    }
+  }
+  const yaml::Node tasks = m.required("tasks");
+  for (const yaml::Node& tn : tasks.elements()) {
+    TaskSpec t = readTaskSpec(tn, d, contact_names);
+    if (s.findTask(t.name) >= 0) tn.fail("duplicate task name '" + t.name + "'");
+    s.tasks.push_back(std::move(t));
+  }
+  auto levels = m.optional("levels");
+  auto wls = m.optional("wls_levels");
+  if (!levels && !wls) m.node().fail("expected a hierarchy: levels (bfgs, ah, gn) and/or wls_levels (wls)");
+  if (levels) {
+    s.levels = readLevels(*levels, s, false);
+    s.levels_where = levels->where();
+  }
+  if (wls) {
+    s.wls_levels = readLevels(*wls, s, true);
+    s.wls_levels_where = wls->where();
+  }
+  if (!s.hasHierarchy(s.method)) {
+    method.fail(std::string("method ") + control::toString(s.method) + " needs " +
+                (s.method == control::Method::WLS ? "wls_levels" : "levels") + ", which the case does not define");
+  }
+  return s;
+}
+
+control::ControllerConfig buildControllerConfig(const LexdynSpec& spec, const model::RobotModel& model) {
+  control::ControllerConfig cfg;
+  cfg.params = spec.params;
+  cfg.params.method = spec.method;
+  for (const ContactEntry& c : spec.contacts) {
+    tasks::ContactSpec cs;
+    cs.name = c.name;
+    cs.frame = model.frameId(c.frame);
+    cs.points = c.points;
+    cs.fixed = c.fixed;
+    cs.friction = c.friction;
+    cs.normal_in_frame = c.normal;
+    cfg.contacts.push_back(cs);
+  }
+  cfg.initial_contacts = spec.initial_contacts;
+  const tasks::ContactLayout layout(model.nv(), cfg.contacts);
+  for (const TaskSpec& t : spec.tasks) cfg.tasks.push_back(makeTask(t, model, layout));
+  for (const LevelEntry& l : spec.hierarchy(spec.method)) {
+    control::LevelSpec ls;
+    ls.name = l.name;
+    for (const std::string& t : l.tasks) ls.tasks.push_back(spec.findTask(t));
+    ls.weights = l.weights;
+    cfg.levels.push_back(ls);
+  }
+  return cfg;
+}
+
+void setMethod(LexdynSpec& spec, control::Method method, const std::string& where) {
+  if (!spec.hasHierarchy(method)) {
+    throw InputError(where, std::string("method ") + control::toString(method) + " needs " +
+                                (method == control::Method::WLS ? "controller.wls_levels" : "controller.levels") +
+                                ", which the case does not define");
+  }
+  spec.method = method;
+  spec.params.method = method;
+  spec.method_where = where;
+}
+
+std::vector<std::string> usedTasks(const LexdynSpec& spec, control::Method m) {
+  std::vector<char> used(spec.tasks.size(), 0);
+  for (const LevelEntry& l : spec.hierarchy(m)) {
+    for (const std::string& t : l.tasks) used[static_cast<size_t>(spec.findTask(t))] = 1;
+  }
+  std::vector<std::string> out;
+  for (size_t i = 0; i < spec.tasks.size(); ++i) {
+    if (used[i]) out.push_back(spec.tasks[i].name);
+  }
+  return out;
+}
+
+}  // namespace lexdyn::cases

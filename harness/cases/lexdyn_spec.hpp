@@ -1,0 +1,80 @@
+// The `controller: {type: lexdyn, ...}` section of a case file (docs/cases.md): method,
+// parameters, solver options, contacts, tasks and the two hierarchies (velocity-domain `levels`
+// and the WLS `wls_levels`), as data; buildControllerConfig() turns it into a
+// control::ControllerConfig for a model.
+#pragma once
+
+#include "harness/cases/task_registry.hpp"
+#include "lexdyn/common/yaml_strict.hpp"
+#include "lexdyn/control/config.hpp"
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+namespace lexdyn::cases {
+
+/// A contact the controller may use: a robot data contact surface, or a frame with points.
+struct ContactEntry {
+  std::string name;
+  std::string where;
+  std::string surface;                 ///< the data-file surface it was taken from (may be empty)
+  std::string frame;
+  std::vector<Eigen::Vector3d> points; ///< in the frame
+  bool fixed = false;
+  double friction = 0.7;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< in the frame
+  std::string grasp;   ///< linked simulator grasp (switched with the contact); empty: none
+  std::string sensor;  ///< linked force/torque sensor (traced for comparison); empty: none
+};
+
+struct LevelEntry {
+  std::string name;
+  std::string where;
+  std::vector<std::string> tasks;
+  std::vector<double> weights;  ///< wls_levels objective only (same order as tasks)
+};
+
+struct LexdynSpec {
+  control::Method method = control::Method::LexDynBFGS;
+  std::string method_where;            ///< where the method comes from (file key or --method)
+  control::ControllerParams params;    ///< method, dt and solver filled in as well
+  bool feedforward_torque = true;      ///< Command::tau sent as the servo's feed-forward torque
+  /// The state the controller reads each tick: the simulator's measured (q, u) (`measured`), or
+  /// its own previous command (`integrated`: q(k+1), u(k+1) of the last tick, the simulator
+  /// only tracking the joint set-points; reset from the measured initial state).
+  std::string state_feedback = "measured";  ///< measured | integrated | measured_position
+  std::vector<ContactEntry> contacts;
+  std::vector<std::string> initial_contacts;
+  std::vector<TaskSpec> tasks;
+  std::vector<LevelEntry> levels;      ///< bfgs, ah, gn
+  std::vector<LevelEntry> wls_levels;  ///< wls: exactly two (hard, objective)
+  std::string levels_where, wls_levels_where;
+
+  bool hasHierarchy(control::Method m) const {
+    return m == control::Method::WLS ? !wls_levels.empty() : !levels.empty();
+  }
+  /// The hierarchy used by method m.
+  const std::vector<LevelEntry>& hierarchy(control::Method m) const {
+    return m == control::Method::WLS ? wls_levels : levels;
+  }
+  int findTask(const std::string& name) const;     ///< -1 when absent
+  int findContact(const std::string& name) const;  ///< -1 when absent
+};
+
+/// Reads the section (everything but `type`, which the caller has read). `dt` is the case's
+/// control period (for solver.paper_rules). Throws lexdyn::InputError naming file, line, key.
+LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& robot, double dt);
+
+/// The controller configuration for `spec.method` (tasks of the other hierarchy are built too
+/// and ignored by the controller).
+control::ControllerConfig buildControllerConfig(const LexdynSpec& spec, const model::RobotModel& model);
+
+/// Sets the method (e.g. from --method), checking that the case has its hierarchy.
+void setMethod(LexdynSpec& spec, control::Method method, const std::string& where);
+
+/// Names of the tasks the hierarchy of method m uses, in task order.
+std::vector<std::string> usedTasks(const LexdynSpec& spec, control::Method m);
+
+}  // namespace lexdyn::cases
