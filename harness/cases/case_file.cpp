@@ -321,6 +321,17 @@ std::vector<std::pair<double, double>> convexHull(std::vector<std::pair<double, 
   return h;
 }
 
+/// The PD gains of a task, nullptr for a type without them.
+const tasks::PdGains* taskGains(const TaskSpec& t) {
+  if (t.type == "position") return &t.position.gains;
+  if (t.type == "orientation") return &t.orientation.gains;
+  if (t.type == "com") return &t.com.gains;
+  if (t.type == "joint_position") return &t.joint_position.gains;
+  if (t.type == "posture") return &t.posture.gains;
+  if (t.type == "contact") return &t.contact.gains;
+  return nullptr;
+}
+
 checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescription& d, const CaseSpec& cs) {
   yaml::StrictMap m(node);
   checks::CheckSpec c;
@@ -453,6 +464,25 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
     requireTasksInHierarchies(cs, tn, c.tasks, methods);
     if (auto v = m.optional("dead_band_per_s")) c.dead_band = v->asNonNegativeDouble();
     c.limit = m.required("limit_per_s").asNonNegativeDouble();
+  } else if (c.type == "task_error_closed_form" || c.type == "task_overshoot") {
+    const yaml::Node tn = m.required("task");
+    const std::string t = tn.asString();
+    const int ti = lx.findTask(t);
+    if (ti < 0) tn.fail("unknown task '" + t + "'");
+    c.tasks = {t};
+    requireTasksInHierarchies(cs, tn, c.tasks, methods);
+    if (c.type == "task_error_closed_form") {
+      // The gains default to the task's own (kv absent: 2 sqrt(kp), critical damping).
+      const tasks::PdGains* g = taskGains(lx.tasks[static_cast<size_t>(ti)]);
+      auto kp = m.optional("kp");
+      auto kv = m.optional("kv");
+      if (!g && !kp) tn.fail("task '" + t + "' (" + lx.tasks[static_cast<size_t>(ti)].type + ") has no PD gains; give kp (and kv)");
+      c.kp = kp ? kp->asNonNegativeDouble() : g->kp;
+      if (kv) c.kv = kv->asNonNegativeDouble();
+      else if (!kp && g->kv) c.kv = *g->kv;
+      else c.kv = 2.0 * std::sqrt(c.kp);
+    }
+    c.limit = m.required("limit_rel").asNonNegativeDouble();
   } else if (c.type == "controller_status") {
     c.allowed = {"ok", "solver_stopped_early"};
     if (auto v = m.optional("allowed")) {
@@ -621,20 +651,19 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
   for (const char* name : kMethods) {
     const control::Method m = control::parseMethod(name, "");
     if (!lx.hasHierarchy(m)) continue;
-    lx.method = m;
-    lx.params.method = m;
     const std::string& where = m == control::Method::WLS ? lx.wls_levels_where : lx.levels_where;
+    const std::string chosen_where = lx.method_where;
     try {
+      setMethod(lx, m, where);
       auto ctl = std::make_unique<control::Controller>(model, buildControllerConfig(lx, model));
       if (!first) first = std::move(ctl);
     } catch (const InputError& e) {
-      lx.method = chosen;
-      lx.params.method = chosen;
+      setMethod(lx, chosen, chosen_where);
       throw InputError(where, std::string("(method ") + name + ") " + e.what());
     }
+    setMethod(lx, chosen, chosen_where);
   }
-  lx.method = chosen;
-  lx.params.method = chosen;
+  setMethod(lx, chosen, lx.method_where);
   (void)controller_node;
   for (const EventSpec& e : c.events) {
     if (e.task.empty()) continue;

@@ -57,11 +57,15 @@ struct LexdynDriver::Impl {
     int index = -1;          // controller contact index
     std::string name;
     model::FrameId frame = -1;   // in the simulator's model
+    model::FrameId ctrl_frame = -1;  // in the controller's model
     int grasp = -1;              // simulator grasp
     int sensor = -1;             // index into the simulator's sensor readings
     model::FrameId sensor_frame = -1;
   };
   std::vector<ContactRec> contacts;
+  // The controller's model at the state it read (planned wrenches are expressed in the contact
+  // frame the controller saw: with `integrated` feedback its own, not the simulator's).
+  mutable std::unique_ptr<model::ModelData> ctrl_data;
 
   struct Generator {
     int task = -1;
@@ -110,6 +114,7 @@ struct LexdynDriver::Impl {
       c.name = ce.name;
       c.index = ctl->contactIndex(ce.name);
       c.frame = sm.frameId(ce.frame);
+      c.ctrl_frame = model.frameId(ce.frame);
       if (!ce.grasp.empty()) c.grasp = simu.graspIndex(ce.grasp);
       if (!ce.sensor.empty()) {
         for (size_t k = 0; k < d.force_sensors.size(); ++k) {
@@ -121,6 +126,7 @@ struct LexdynDriver::Impl {
       }
       contacts.push_back(c);
     }
+    ctrl_data = std::make_unique<model::ModelData>(model.createData());
     error_sum.assign(tasks.size(), 0.0);
     error_last.assign(tasks.size(), 0.0);
     status_counts.assign(checks::controllerStatusNames().size(), 0);
@@ -177,7 +183,7 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
                       ", new_dof_diagonal_dt2 " + num(p.new_dof_diagonal_dt2) + ", rho_dt2 " + num(p.rho_dt2) + ", eps_dt2 " +
                       num(p.eps_dt2) + ", newton_target " +
                       (p.newton_target == control::NewtonTarget::Zero ? "zero" : "previous_velocity") + ", damping " +
-                      num(p.damping) + ", use_qmod " + (p.use_qmod ? "true" : "false") + ", sr1 " + (p.sr1 ? "true" : "false") +
+                      num(p.damping) + ", use_qmod " + (p.use_qmod ? "true" : "false") + ", sr1 " + (p.sr1 ? "true" : "false") + ", newton_identity_weight " + num(p.newton_identity_weight) +
                       ", rank_switching " + (p.rank_switching ? "true" : "false") + ", sign_change_guard " +
                       (p.sign_change_guard ? "true" : "false") + ", wls_infeasibility_tolerance " +
                       num(p.wls_infeasibility_tolerance) + "; feed-forward torque " + (I.lx.feedforward_torque ? "on" : "off") +
@@ -334,12 +340,14 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
   for (int j = 0; j < I.nj; ++j) out[i++] = c.u[c.u.size() - I.nj + j];
   for (int j = 0; j < I.nj; ++j) out[i++] = c.tau[j];
   const model::RobotModel& sm = simu.model();
+  if (!I.contacts.empty()) I.model.update(*I.ctrl_data, I.state.q, I.state.u);
   for (const auto& cr : I.contacts) {
     out[i++] = I.ctl->contactActive(cr.index) ? 1.0 : 0.0;
+    const Eigen::Matrix3d Rc = I.model.framePlacement(*I.ctrl_data, cr.ctrl_frame).linear().transpose();
+    const Eigen::Vector3d f = Rc * r.contact_wrench.col(cr.index).head<3>();
+    const Eigen::Vector3d m = Rc * r.contact_wrench.col(cr.index).tail<3>();
     const Eigen::Isometry3d X = sm.framePlacement(simu.data(), cr.frame);
     const Eigen::Matrix3d Rt = X.linear().transpose();
-    const Eigen::Vector3d f = Rt * r.contact_wrench.col(cr.index).head<3>();
-    const Eigen::Vector3d m = Rt * r.contact_wrench.col(cr.index).tail<3>();
     for (int k = 0; k < 3; ++k) out[i++] = f[k];
     for (int k = 0; k < 3; ++k) out[i++] = m[k];
     if (cr.sensor >= 0) {

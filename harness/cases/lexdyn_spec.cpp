@@ -29,6 +29,7 @@ void readParams(yaml::StrictMap& pm, control::ControllerParams& p) {
   if (auto v = pm.optional("damping")) p.damping = v->asNonNegativeDouble();
   if (auto v = pm.optional("use_qmod")) p.use_qmod = v->asBool();
   if (auto v = pm.optional("sr1")) p.sr1 = v->asBool();
+  if (auto v = pm.optional("newton_identity_weight")) p.newton_identity_weight = v->asNonNegativeDouble();
   if (auto v = pm.optional("rank_switching")) p.rank_switching = v->asBool();
   if (auto v = pm.optional("sign_change_guard")) p.sign_change_guard = v->asBool();
   if (auto v = pm.optional("wls_infeasibility_tolerance")) p.wls_infeasibility_tolerance = v->asPositiveDouble();
@@ -216,6 +217,27 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
   }
   s.params.dt = dt;
   s.params.method = s.method;
+  // Per-method overrides of `params` (e.g. the sec. V-A point mass: the damping each domain is
+  // run with). Keys as in `params`, on top of them.
+  const char* const kMethodNames[] = {"bfgs", "ah", "gn", "wls"};
+  for (const char* name : kMethodNames) {
+    const control::Method mm = control::parseMethod(name, "");
+    const size_t k = static_cast<size_t>(mm);
+    if (s.params_by_method.size() <= k) s.params_by_method.resize(k + 1, s.params);
+    s.params_by_method[k] = s.params;
+    s.params_by_method[k].method = mm;
+  }
+  if (auto mp = m.optional("method_params")) {
+    for (const auto& [name, node] : mp->entries()) {
+      bool known = false;
+      for (const char* n : kMethodNames) known = known || name == n;
+      if (!known) node.fail("unknown method '" + name + "' (bfgs, ah, gn, wls)");
+      yaml::StrictMap pm(node);
+      readParams(pm, s.params_by_method[static_cast<size_t>(control::parseMethod(name, ""))]);
+      pm.finish();
+    }
+  }
+  s.params = s.params_by_method[static_cast<size_t>(s.method)];
   if (auto cn = m.optional("contacts")) {
     for (const yaml::Node& c : cn->elements()) {
       ContactEntry e = readContact(c, d);
@@ -252,6 +274,7 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
     s.wls_levels = readLevels(*wls, s, true);
     s.wls_levels_where = wls->where();
   }
+  m.finish();  // unknown keys first (e.g. a misspelt `levels`)
   if (!s.hasHierarchy(s.method)) {
     method.fail(std::string("method ") + control::toString(s.method) + " needs " +
                 (s.method == control::Method::WLS ? "wls_levels" : "levels") + ", which the case does not define");
@@ -293,6 +316,7 @@ void setMethod(LexdynSpec& spec, control::Method method, const std::string& wher
                                 ", which the case does not define");
   }
   spec.method = method;
+  if (static_cast<size_t>(method) < spec.params_by_method.size()) spec.params = spec.params_by_method[static_cast<size_t>(method)];
   spec.params.method = method;
   spec.method_where = where;
 }

@@ -39,7 +39,10 @@ struct LevelEntry {
 struct LexdynSpec {
   control::Method method = control::Method::LexDynBFGS;
   std::string method_where;            ///< where the method comes from (file key or --method)
-  control::ControllerParams params;    ///< method, dt and solver filled in as well
+  control::ControllerParams params;    ///< of the current method: method, dt and solver filled in as well
+  /// `params` for every method (with its method_params override applied), indexed by
+  /// control::Method; setMethod() copies the method's entry into `params`.
+  std::vector<control::ControllerParams> params_by_method;
   bool feedforward_torque = true;      ///< Command::tau sent as the servo's feed-forward torque
   /// The state the controller reads each tick: the simulator's measured (q, u) (`measured`), or
   /// its own previous command (`integrated`: q(k+1), u(k+1) of the last tick, the simulator
@@ -63,7 +66,7 @@ struct LexdynSpec {
   int findContact(const std::string& name) const;  ///< -1 when absent
 };
 
-/// Reads the section (everything but `type`, which the caller has read). `dt` is the case's
+/// Reads the section (everything but `type`, which the caller has read) and finishes `m`. `dt` is the case's
 /// control period (for solver.paper_rules). Throws lexdyn::InputError naming file, line, key.
 LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& robot, double dt);
 

@@ -212,6 +212,17 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
   return md;
 }
 
+nlohmann::json checksArray(const std::vector<checks::CheckResult>& results) {
+  using nlohmann::json;
+  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  json checks = json::array();
+  for (const auto& c : results) {
+    checks.push_back({{"name", c.name}, {"type", c.type}, {"passed", c.passed}, {"value", number(c.value)},
+                      {"limit", number(c.limit)}, {"unit", c.unit}, {"detail", c.detail}});
+  }
+  return checks;
+}
+
 void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummary& r, const checks::TraceMetadata& md) {
   using nlohmann::json;
   auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
@@ -234,12 +245,7 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
                      {"nonlin_conv_fails", r.integrator.nonlin_conv_fails},
                      {"err_test_fails", r.integrator.err_test_fails},
                      {"restarts", r.integrator_restarts}};
-  json checks = json::array();
-  for (const auto& c : r.checks) {
-    checks.push_back({{"name", c.name}, {"type", c.type}, {"passed", c.passed}, {"value", number(c.value)},
-                      {"limit", c.limit}, {"unit", c.unit}, {"detail", c.detail}});
-  }
-  j["checks"] = checks;
+  j["checks"] = checksArray(r.checks);
   j["skipped_checks"] = r.skipped_checks;
   j["all_checks_passed"] = r.all_checks_passed;
   if (r.has_controller_stats) {
@@ -441,6 +447,13 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   }
   writeSummary(r.summary_path, spec, r, md);
   return r;
+}
+
+std::string checkResultsJson(const std::vector<checks::CheckResult>& results) {
+  bool all = true;
+  for (const auto& c : results) all = all && c.passed;
+  const nlohmann::json j = {{"checks", checksArray(results)}, {"all_checks_passed", all}};
+  return j.dump(2);
 }
 
 int exitCode(const RunSummary& s) { return (s.status == "completed" && s.all_checks_passed) ? 0 : 1; }

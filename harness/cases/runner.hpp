@@ -45,4 +45,8 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options);
 /// 0: completed and every check passed; 1: a check failed or the run stopped early.
 int exitCode(const RunSummary& summary);
 
+/// {"checks": [...], "all_checks_passed": bool} with the checks as summary.json writes them
+/// (`lexdyn-harness check --json`, `compare --json`).
+std::string checkResultsJson(const std::vector<checks::CheckResult>& results);
+
 }  // namespace lexdyn::cases

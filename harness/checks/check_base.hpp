@@ -36,7 +36,7 @@ class CheckBase : public Check {
       return r;
     }
     r.value = worst_;
-    r.passed = worst_ <= spec_.limit;
+    r.passed = worst_ <= spec_.limit + tolerance_;
     r.detail = detail_;
     return r;
   }
@@ -49,7 +49,15 @@ class CheckBase : public Check {
   bool seen_ = false;
   double worst_ = 0.0;
   std::string detail_;
+  /// Boundary tolerance: the value may exceed the limit by this much (in the value's unit) and
+  /// still pass, so that a quantity sitting exactly on a physical bound (a torque at its limit,
+  /// a force on the friction cone) is not failed by round-off. 0 for limits chosen by the user.
+  double tolerance_ = 0.0;
 };
+
+/// Relative round-off allowance of the checks whose limits are physical bounds (torque
+/// limits, friction cone, support polygon, unilateral contact): docs/cases.md, "Checks".
+constexpr double kBoundaryRelTolerance = 1e-9;
 
 /// Builds a controller check (controller_checks.cpp); nullptr for an unknown type.
 std::unique_ptr<Check> makeControllerCheck(const CheckSpec& spec);

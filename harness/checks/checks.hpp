@@ -10,8 +10,8 @@
 // and, on the channels of the lexdyn controller (controller_checks.cpp):
 //   task_error, torque_limits, contact_unilateral, contact_friction, contact_cop,
 //   contact_wrench_match, joint_acceleration_sign_changes, joint_velocity_hf_energy,
-//   task_error_rate_sign_changes, controller_status, active_set_peak, augmented_fraction,
-//   tick_time.
+//   task_error_rate_sign_changes, task_error_closed_form, task_overshoot, controller_status,
+//   active_set_peak, augmented_fraction, tick_time.
 // A check passes when it saw at least one row in its window [from_s, to_s] and its value is on
 // the right side of its limit.
 #pragma once
@@ -56,6 +56,7 @@ struct CheckSpec {
   std::string level;                   ///< augmented_fraction
   std::string timer;                   ///< tick_time: model | tasks | hessian | solver | tick
   std::vector<std::string> allowed;    ///< controller_status: statuses that count as fine
+  double kp = 0.0, kv = 0.0;           ///< task_error_closed_form: the PD gains (1/s^2, 1/s)
 };
 
 /// Comparison of two runs of the same case with different methods (e.g. exp1: the final sum of

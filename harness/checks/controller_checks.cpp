@@ -97,9 +97,12 @@ class TaskError final : public CheckBase {
 // ---------------------------------------------------------------------------------------------
 // Torque limits: max over joints and rows of |tau_j| / tau_max_j (applied and / or commanded).
 
+// A torque exactly at its limit passes (the controller's torque-limit rows are active there, and
+// the simulator saturates at the limit): the value may exceed limit_fraction by 1e-9 (round-off
+// of the solver's torques, relative to the effort limit).
 class TorqueLimits final : public CheckBase {
  public:
-  explicit TorqueLimits(const CheckSpec& s) : CheckBase(s, "fraction of the effort limit") {}
+  explicit TorqueLimits(const CheckSpec& s) : CheckBase(s, "fraction of the effort limit") { tolerance_ = kBoundaryRelTolerance; }
   void bind(const TraceSchema& schema, const TraceMetadata&) override {
     t_ = require(schema, kTimeChannel, spec_);
     if (spec_.joints.size() != spec_.joint_limits.size()) {
@@ -119,10 +122,12 @@ class TorqueLimits final : public CheckBase {
       if (ratio > worst_ || std::isnan(ratio)) {
         worst_ = ratio;
         detail_ = std::string(c.what) + " torque of " + spec_.joints[c.joint] + " " + fmt(tau) + " N m (limit " +
-                  fmt(spec_.joint_limits[c.joint]) + ") at t = " + fmt(row[t_]) + " s; margin " + fmt(1.0 - ratio);
+                  fmt(spec_.joint_limits[c.joint]) + ") at t = " + fmt(row[t_]) + " s; margin " + fmt(spec_.limit - ratio) +
+                  " of the effort limit";
       }
     }
   }
+
 
  private:
   struct Col {
@@ -166,7 +171,8 @@ class ContactCheck : public CheckBase {
   int w_[6] = {0, 0, 0, 0, 0, 0};
 };
 
-// Lowest normal force while the contact is active; passes when >= limit (N).
+// Lowest normal force while the contact is active; passes when every row has
+// f_n >= min_N - 1e-9 |f| (round-off of the wrench's frame change, relative to the row's force).
 class ContactUnilateral final : public ContactCheck {
  public:
   explicit ContactUnilateral(const CheckSpec& s) : ContactCheck(s, "N") { worst_ = kInf; }
@@ -174,6 +180,11 @@ class ContactUnilateral final : public ContactCheck {
     if (!contactActive(row)) return;
     seen_ = true;
     const double fn = normalForce(row);
+    const double fnorm = std::sqrt(row[w_[0]] * row[w_[0]] + row[w_[1]] * row[w_[1]] + row[w_[2]] * row[w_[2]]);
+    if (!(fn >= spec_.limit - kBoundaryRelTolerance * fnorm)) {
+      if (!below_) first_below_ = row[t_];
+      below_ = true;
+    }
     if (fn < worst_ || std::isnan(fn)) {
       worst_ = fn;
       detail_ = std::string("lowest ") + sourceName() + " normal force at t = " + fmt(row[t_]) + " s";
@@ -181,16 +192,26 @@ class ContactUnilateral final : public ContactCheck {
   }
   CheckResult result() const override {
     CheckResult r = CheckBase::result();
-    if (seen_) r.passed = worst_ >= spec_.limit;
-    else r.detail = "no row with contact '" + spec_.contact + "' active in the window";
+    if (seen_) {
+      r.passed = !below_;
+      if (below_) r.detail += "; first below " + fmt(spec_.limit) + " N at t = " + fmt(first_below_) + " s";
+    } else {
+      r.detail = "no row with contact '" + spec_.contact + "' active in the window";
+    }
     return r;
   }
+
+ private:
+  bool below_ = false;
+  double first_below_ = 0.0;
 };
 
-// max |f_t| / (mu f_n) over rows with f_n >= min_normal_N (the circular cone).
+// max |f_t| / (mu f_n) over rows with f_n >= min_normal_N (the circular cone). The computed
+// wrench lies exactly on the cone when a single generator of the friction pyramid carries it,
+// so the ratio may exceed the limit by 1e-9 (round-off).
 class ContactFriction final : public ContactCheck {
  public:
-  explicit ContactFriction(const CheckSpec& s) : ContactCheck(s, "|f_t| / (mu f_n)") {}
+  explicit ContactFriction(const CheckSpec& s) : ContactCheck(s, "|f_t| / (mu f_n)") { tolerance_ = kBoundaryRelTolerance; }
   void consume(const double* row) override {
     if (!contactActive(row)) return;
     const double fn = normalForce(row);
@@ -237,10 +258,17 @@ double signedDistanceToPolygon(const std::vector<std::pair<double, double>>& pol
   return inside ? -dmin : dmin;
 }
 
+// A CoP on the polygon's edge (all the force on one edge or corner) passes a limit of 0: the
+// distance may exceed the limit by 1e-9 of the polygon's diameter (round-off).
 class ContactCop final : public ContactCheck {
  public:
   explicit ContactCop(const CheckSpec& s) : ContactCheck(s, "m (signed distance to the sole's edge, < 0 inside)") {
     worst_ = -kInf;
+    double diameter = 0.0;
+    for (const auto& a : spec_.polygon) {
+      for (const auto& b : spec_.polygon) diameter = std::max(diameter, std::hypot(a.first - b.first, a.second - b.second));
+    }
+    tolerance_ = kBoundaryRelTolerance * diameter;
   }
   void consume(const double* row) override {
     if (!contactActive(row)) return;
@@ -251,7 +279,7 @@ class ContactCop final : public ContactCheck {
     }
     seen_ = true;
     // The contact frame's z is the normal; the CoP on the frame's z = 0 plane.
-    const double x = -row[w_[4]] / fz, y = row[w_[3]] / fz;
+    const double x = 0.0 - row[w_[4]] / fz, y = row[w_[3]] / fz;  // 0.0 - : no "-0" in details
     const double d = signedDistanceToPolygon(spec_.polygon, x, y);
     if (d > worst_ || std::isnan(d)) {
       worst_ = d;
@@ -522,6 +550,125 @@ class TaskErrorRateSignChanges final : public CheckBase {
 };
 
 // ---------------------------------------------------------------------------------------------
+// PD convergence of one task against the closed form (the paper's sec. V-A, eq. 47-52).
+
+/// Solution of x'' + kv x' + kp x = 0 with x(0) = 1, x'(0) = 0 (unit mass; eq. 48-49): critically
+/// damped for kv = 2 sqrt(kp), x = (1 + w t) e^{-w t}, w = sqrt(kp); under- and over-damped
+/// otherwise.
+double pdClosedForm(double kp, double kv, double t) {
+  const double delta = 0.5 * kv;
+  const double disc = kp - delta * delta;
+  if (std::abs(disc) <= 1e-12 * std::max(kp, delta * delta)) return (1.0 + delta * t) * std::exp(-delta * t);
+  if (disc > 0.0) {
+    const double wd = std::sqrt(disc);
+    return std::exp(-delta * t) * (std::cos(wd * t) + delta / wd * std::sin(wd * t));
+  }
+  const double r = std::sqrt(-disc), r1 = -delta + r, r2 = -delta - r;
+  return (r2 * std::exp(r1 * t) - r1 * std::exp(r2 * t)) / (r2 - r1);
+}
+
+// Largest |e(t) - e0 |x(t - t0)|| / e0 over the window, x the closed form above, (t0, e0) the
+// window's first row: the error norm of a task started at rest against the continuous PD
+// response (for a 1-D task; in more dimensions along a straight line).
+class TaskErrorClosedForm final : public CheckBase {
+ public:
+  explicit TaskErrorClosedForm(const CheckSpec& s) : CheckBase(s, "fraction of the initial error") {}
+  void bind(const TraceSchema& schema, const TraceMetadata&) override {
+    t_ = require(schema, kTimeChannel, spec_);
+    if (spec_.tasks.size() != 1) throw InputError(spec_.where, "check '" + spec_.name + "' needs exactly one task");
+    col_ = require(schema, taskChannel(spec_.tasks[0], "error"), spec_);
+  }
+  void consume(const double* row) override {
+    if (!active(row)) return;
+    const double t = row[t_], e = row[col_];
+    if (!seen_) {
+      t0_ = t;
+      e0_ = e;
+      seen_ = true;
+    }
+    if (!(e0_ > 0.0) || !std::isfinite(e0_)) return;
+    const double ref = e0_ * std::abs(pdClosedForm(spec_.kp, spec_.kv, t - t0_));
+    const double d = std::abs(e - ref) / e0_;
+    if (d > worst_ || std::isnan(d)) {
+      worst_ = d;
+      detail_ = "largest at t = " + fmt(t) + " s: |e| " + fmt(e) + ", closed form " + fmt(ref);
+    }
+  }
+  CheckResult result() const override {
+    CheckResult r = CheckBase::result();
+    if (!seen_) return r;
+    if (!(e0_ > 0.0) || !std::isfinite(e0_)) {
+      r.value = kNaN;
+      r.passed = false;
+      r.detail = "the error of " + spec_.tasks[0] + " at the window's start (t = " + fmt(t0_) + " s) is " + fmt(e0_) +
+                 ": no response to compare";
+      return r;
+    }
+    const double zeta = spec_.kp > 0.0 ? spec_.kv / (2.0 * std::sqrt(spec_.kp)) : kInf;
+    r.detail = detail_ + " (e0 " + fmt(e0_) + " at t = " + fmt(t0_) + " s; kp " + fmt(spec_.kp) + ", kv " + fmt(spec_.kv) +
+               ", damping ratio " + fmt(zeta) + ")";
+    return r;
+  }
+
+ private:
+  int col_ = 0;
+  double t0_ = 0.0, e0_ = 0.0;
+};
+
+// Overshoot of a task: the largest rise of its error norm above its running minimum, relative to
+// the error at the window's first row. A task converging monotonically gives 0; a 1-D task that
+// passes through its target (the norm goes to 0 and rises again) gives its largest excursion past
+// the target.
+class TaskOvershoot final : public CheckBase {
+ public:
+  explicit TaskOvershoot(const CheckSpec& s) : CheckBase(s, "fraction of the initial error") {}
+  void bind(const TraceSchema& schema, const TraceMetadata&) override {
+    t_ = require(schema, kTimeChannel, spec_);
+    if (spec_.tasks.size() != 1) throw InputError(spec_.where, "check '" + spec_.name + "' needs exactly one task");
+    col_ = require(schema, taskChannel(spec_.tasks[0], "error"), spec_);
+  }
+  void consume(const double* row) override {
+    if (!active(row)) return;
+    const double t = row[t_], e = row[col_];
+    if (!seen_) {
+      t0_ = t;
+      e0_ = e;
+      min_ = e;
+      t_min_ = t;
+      seen_ = true;
+    }
+    if (e < min_) {
+      min_ = e;
+      t_min_ = t;
+    }
+    const double rise = e - min_;
+    if (rise > rise_ || std::isnan(rise)) {
+      rise_ = rise;
+      detail_ = "largest rise at t = " + fmt(t) + " s: |e| " + fmt(e) + " after a minimum of " + fmt(min_) + " at t = " +
+                fmt(t_min_) + " s";
+    }
+  }
+  CheckResult result() const override {
+    CheckResult r = CheckBase::result();
+    if (!seen_) return r;
+    if (!(e0_ > 0.0) || !std::isfinite(e0_)) {
+      r.value = kNaN;
+      r.passed = false;
+      r.detail = "the error of " + spec_.tasks[0] + " at the window's start (t = " + fmt(t0_) + " s) is " + fmt(e0_);
+      return r;
+    }
+    r.value = rise_ / e0_;
+    r.passed = r.value <= spec_.limit;
+    r.detail = (detail_.empty() ? std::string("the error never rises") : detail_) + " (e0 " + fmt(e0_) + " at t = " + fmt(t0_) + " s)";
+    return r;
+  }
+
+ private:
+  int col_ = 0;
+  double t0_ = 0.0, e0_ = 0.0, min_ = 0.0, t_min_ = 0.0, rise_ = 0.0;
+};
+
+// ---------------------------------------------------------------------------------------------
 // Controller health.
 
 // Number of rows whose controller status is not among the allowed ones.
@@ -656,8 +803,8 @@ const std::vector<std::string>& controllerCheckTypes() {
   static const std::vector<std::string> types = {
       "task_error",        "torque_limits",       "contact_unilateral", "contact_friction",
       "contact_cop",       "contact_wrench_match", "joint_acceleration_sign_changes",
-      "joint_velocity_hf_energy", "task_error_rate_sign_changes", "controller_status", "active_set_peak",
-      "augmented_fraction", "tick_time"};
+      "joint_velocity_hf_energy", "task_error_rate_sign_changes", "task_error_closed_form", "task_overshoot",
+      "controller_status", "active_set_peak", "augmented_fraction", "tick_time"};
   return types;
 }
 
@@ -671,6 +818,8 @@ std::unique_ptr<Check> makeControllerCheck(const CheckSpec& s) {
   if (s.type == "joint_acceleration_sign_changes") return std::make_unique<JointAccelerationSignChanges>(s);
   if (s.type == "joint_velocity_hf_energy") return std::make_unique<JointVelocityHfEnergy>(s);
   if (s.type == "task_error_rate_sign_changes") return std::make_unique<TaskErrorRateSignChanges>(s);
+  if (s.type == "task_error_closed_form") return std::make_unique<TaskErrorClosedForm>(s);
+  if (s.type == "task_overshoot") return std::make_unique<TaskOvershoot>(s);
   if (s.type == "controller_status") return std::make_unique<ControllerStatus>(s);
   if (s.type == "active_set_peak") return std::make_unique<ActiveSetPeak>(s);
   if (s.type == "augmented_fraction") return std::make_unique<AugmentedFraction>(s);

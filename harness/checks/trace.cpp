@@ -129,6 +129,16 @@ TraceTable readTrace(const std::string& path) {
       start = comma + 1;
     }
     if (!have_names) {
+      // Channel names as TraceSchema accepts them (checks rebuild a schema from them).
+      for (size_t i = 0; i < fields.size(); ++i) {
+        const std::string& n = fields[i];
+        if (n.empty() || n.find_first_of(" \t\r\n\"") != std::string::npos) {
+          throw InputError(where, "invalid channel name '" + n + "' in column " + std::to_string(i + 1));
+        }
+        for (size_t k = 0; k < i; ++k) {
+          if (fields[k] == n) throw InputError(where, "duplicate channel name '" + n + "'");
+        }
+      }
       t.names = fields;
       have_names = true;
       continue;

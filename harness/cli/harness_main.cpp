@@ -1,9 +1,10 @@
 // lexdyn-harness: runs case files, checks stored traces, compares methods, golden traces.
 //
 //   lexdyn-harness run CASE --out DIR [--method bfgs|ah|gn|wls] [--duration S] [--quiet]
-//   lexdyn-harness check TRACE --case CASE       (the case's checks on a stored trace)
-//   lexdyn-harness check CASE TRACE              (the same, older argument order)
-//   lexdyn-harness compare --case CASE TRACE...  (the case's comparisons between methods)
+//   lexdyn-harness check TRACE --case CASE [--json]       (the case's checks on a stored trace)
+//   lexdyn-harness check CASE TRACE [--json]              (the same, older argument order)
+//   lexdyn-harness compare --case CASE TRACE... [--json]  (the case's comparisons between methods)
+//   lexdyn-harness golden list [--manifest FILE] [--cases A,B] [--only ID]   (ID CASE_FILE METHOD lines)
 //   lexdyn-harness golden update|check [--manifest FILE] [--cases A,B] [--only CASE.METHOD]
 //                                      [--work DIR] [--progress]
 //
@@ -68,7 +69,7 @@ std::vector<std::string> splitList(const std::string& s) {
   return out;
 }
 
-int runCheck(const std::vector<std::string>& positional, const std::string& case_opt) {
+int runCheck(const std::vector<std::string>& positional, const std::string& case_opt, bool json) {
   std::string case_path = case_opt, trace_path;
   if (positional.size() == 2 && case_opt.empty()) {
     case_path = positional[0];
@@ -96,10 +97,11 @@ int runCheck(const std::vector<std::string>& positional, const std::string& case
   const std::string* method = lexdyn::checks::findMetadata(table.metadata, lexdyn::checks::kMethodMetadata);
   describeTrace(spec.name + (method ? " " + *method : ""), trace_path, table);
   printChecks(results);
+  if (json) std::printf("%s\n", lexdyn::cases::checkResultsJson(results).c_str());
   return all ? 0 : 1;
 }
 
-int runCompare(const std::string& case_path, const std::vector<std::string>& traces) {
+int runCompare(const std::string& case_path, const std::vector<std::string>& traces, bool json) {
   if (case_path.empty()) throw lexdyn::InputError("compare", "expected --case CASE");
   const lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
   if (spec.comparisons.empty()) throw lexdyn::InputError(case_path, "the case has no comparisons");
@@ -132,9 +134,29 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
     results.push_back(lexdyn::checks::compareMethods(cs, by_method.at(cs.better), by_method.at(cs.worse)));
   }
   printChecks(results);
+  if (json) std::printf("%s\n", lexdyn::cases::checkResultsJson(results).c_str());
   bool all = true;
   for (const auto& r : results) all = all && r.passed;
   return all ? 0 : 1;
+}
+
+// One line per selected golden: ID CASE_FILE METHOD ("-" for a case without methods).
+int runGoldenList(const std::string& manifest_path, const std::string& cases_opt, const std::string& only) {
+  const lexdyn::golden::Manifest m = lexdyn::golden::loadManifest(manifest_path);
+  const std::vector<std::string> wanted_cases = splitList(cases_opt);
+  const std::vector<std::string> wanted_only = splitList(only);
+  int selected = 0;
+  for (const auto& e : m.entries) {
+    if (!wanted_cases.empty() && std::find(wanted_cases.begin(), wanted_cases.end(), e.case_name) == wanted_cases.end()) continue;
+    for (const auto& method : e.methods) {
+      const std::string id = lexdyn::golden::goldenId(e.case_name, method);
+      if (!wanted_only.empty() && std::find(wanted_only.begin(), wanted_only.end(), id) == wanted_only.end()) continue;
+      ++selected;
+      std::printf("%s %s %s\n", id.c_str(), e.case_path.c_str(), method.empty() ? "-" : method.c_str());
+    }
+  }
+  if (selected == 0) throw lexdyn::InputError(manifest_path, "no golden matches --cases / --only");
+  return 0;
 }
 
 int runGoldenCommand(bool update, const std::string& manifest_path, const std::string& cases_opt, const std::string& only,
@@ -151,7 +173,7 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
   for (const auto& e : m.entries) {
     if (!wanted_cases.empty() && std::find(wanted_cases.begin(), wanted_cases.end(), e.case_name) == wanted_cases.end()) continue;
     for (const auto& method : e.methods) {
-      const std::string id = e.case_name + "." + method;
+      const std::string id = lexdyn::golden::goldenId(e.case_name, method);
       if (!wanted_only.empty() && std::find(wanted_only.begin(), wanted_only.end(), id) == wanted_only.end()) continue;
       ++selected;
       const std::string path = lexdyn::golden::goldenPath(m, e.case_name, method);
@@ -192,7 +214,7 @@ int main(int argc, char** argv) {
   std::string case_path, out_dir, case_opt, method, manifest = std::string(LEXDYN_SOURCE_DIR) + "/golden/manifest.yaml";
   std::string cases_opt, only, work;
   double duration = 0.0;
-  bool quiet = false, progress = false;
+  bool quiet = false, progress = false, json = false;
   std::vector<std::string> positional, traces;
 
   CLI::App* run = app.add_subcommand("run", "run a case file");
@@ -205,15 +227,21 @@ int main(int argc, char** argv) {
   CLI::App* check = app.add_subcommand("check", "evaluate a case's checks on a stored trace");
   check->add_option("args", positional, "TRACE (with --case CASE), or CASE TRACE")->required()->expected(1, 2);
   check->add_option("--case", case_opt, "case file (default: the one the trace names)");
+  check->add_flag("--json", json, "also print the results as JSON on stdout (summary.json's checks)");
 
   CLI::App* compare = app.add_subcommand("compare", "evaluate a case's comparisons on traces of several methods");
   compare->add_option("traces", traces, "trace files (one per method)")->required();
   compare->add_option("--case", case_opt, "case file")->required();
+  compare->add_flag("--json", json, "also print the results as JSON on stdout");
 
   CLI::App* golden = app.add_subcommand("golden", "golden traces: update (regenerate) or check (compare)");
   golden->require_subcommand(1);
   CLI::App* gupdate = golden->add_subcommand("update", "regenerate golden traces");
   CLI::App* gcheck = golden->add_subcommand("check", "re-run and compare with the golden traces");
+  CLI::App* glist = golden->add_subcommand("list", "print the manifest's goldens: ID CASE_FILE METHOD (- for none)");
+  glist->add_option("--manifest", manifest, "golden manifest (default: the source tree's golden/manifest.yaml)");
+  glist->add_option("--cases", cases_opt, "comma-separated case names");
+  glist->add_option("--only", only, "comma-separated golden ids");
   for (CLI::App* g : {gupdate, gcheck}) {
     g->add_option("--manifest", manifest, "golden manifest (default: the source tree's golden/manifest.yaml)");
     g->add_option("--cases", cases_opt, "comma-separated case names");
@@ -232,8 +260,9 @@ int main(int argc, char** argv) {
   }
 
   try {
-    if (*check) return runCheck(positional, case_opt);
-    if (*compare) return runCompare(case_opt, traces);
+    if (*check) return runCheck(positional, case_opt, json);
+    if (*compare) return runCompare(case_opt, traces, json);
+    if (*golden && *glist) return runGoldenList(manifest, cases_opt, only);
     if (*golden) return runGoldenCommand(static_cast<bool>(*gupdate), manifest, cases_opt, only, work, progress);
     lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
     if (!method.empty()) lexdyn::cases::overrideMethod(spec, method, "--method");

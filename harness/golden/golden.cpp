@@ -90,17 +90,22 @@ Manifest loadManifest(const std::string& path) {
     if (!fs::is_regular_file(e.case_path)) cn.fail("case file not found: " + e.case_path);
     cases::CaseSpec spec = cases::loadCase(e.case_path);
     e.case_name = spec.name;
-    const yaml::Node methods = em.required("methods");
-    for (const yaml::Node& mn : methods.elements()) {
-      const std::string method = mn.asEnum({"bfgs", "ah", "gn", "wls"});
-      try {
-        cases::overrideMethod(spec, method, mn.where());
-      } catch (const InputError& err) {
-        mn.fail(err.detail());
+    if (auto methods = em.optional("methods")) {
+      if (spec.controller.type != "lexdyn") methods->fail("the case's controller (" + spec.controller.type + ") has no methods");
+      for (const yaml::Node& mn : methods->elements()) {
+        const std::string method = mn.asEnum({"bfgs", "ah", "gn", "wls"});
+        try {
+          cases::overrideMethod(spec, method, mn.where());
+        } catch (const InputError& err) {
+          mn.fail(err.detail());
+        }
+        e.methods.push_back(method);
       }
-      e.methods.push_back(method);
+      if (e.methods.empty()) methods->fail("expected at least one method");
+    } else {
+      if (spec.controller.type == "lexdyn") en.fail("missing required key 'methods' (the case has a lexdyn controller)");
+      e.methods.push_back("");
     }
-    if (e.methods.empty()) methods.fail("expected at least one method");
     const yaml::Node d = em.required("duration_s");
     e.duration_s = d.asPositiveDouble();
     if (e.duration_s > spec.duration_s + 1e-12) d.fail("longer than the case (" + num(spec.duration_s) + " s)");
@@ -118,8 +123,12 @@ Manifest loadManifest(const std::string& path) {
   return m;
 }
 
+std::string goldenId(const std::string& case_name, const std::string& method) {
+  return method.empty() ? case_name : case_name + "." + method;
+}
+
 std::string goldenPath(const Manifest& m, const std::string& case_name, const std::string& method) {
-  return (fs::path(m.dir) / (case_name + "." + method + ".csv")).string();
+  return (fs::path(m.dir) / (goldenId(case_name, method) + ".csv")).string();
 }
 
 checks::TraceTable selectChannels(const checks::TraceTable& t, const Manifest& m) {
@@ -146,12 +155,18 @@ checks::TraceTable selectChannels(const checks::TraceTable& t, const Manifest& m
 checks::TraceTable runGolden(const Entry& e, const std::string& method, const Manifest& m, const std::string& work_dir,
                              std::string& status, bool progress) {
   cases::CaseSpec spec = cases::loadCase(e.case_path);
-  cases::overrideMethod(spec, method, e.where);
+  if (!method.empty()) cases::overrideMethod(spec, method, e.where);
   spec.duration_s = std::min(spec.duration_s, e.duration_s);
   spec.trace.every_n_ticks = e.every_n_ticks;
   spec.trace.timings = false;
+  // Without the wall-time channels the tick_time checks have nothing to read; a golden compares
+  // traces, not check results, so they are left out (every other check keeps the channels it
+  // adds, e.g. frames).
+  spec.checks.erase(std::remove_if(spec.checks.begin(), spec.checks.end(),
+                                   [](const checks::CheckSpec& c) { return c.type == "tick_time"; }),
+                    spec.checks.end());
   cases::RunOptions o;
-  o.out_dir = (fs::path(work_dir) / (e.case_name + "." + method)).string();
+  o.out_dir = (fs::path(work_dir) / goldenId(e.case_name, method)).string();
   o.progress = progress;
   const cases::RunSummary s = cases::runCase(spec, o);
   status = s.status;
@@ -165,7 +180,7 @@ checks::TraceMetadata provenance(const Entry& e, const std::string& method, cons
   checks::TraceMetadata md;
   md.emplace_back("golden_format", "lexdyn-golden/1");
   md.emplace_back("golden_case", e.case_name);
-  md.emplace_back("golden_method", method);
+  md.emplace_back("golden_method", method.empty() ? "none" : method);
   md.emplace_back("golden_duration_s", num(e.duration_s));
   md.emplace_back("golden_every_n_ticks", std::to_string(e.every_n_ticks));
   md.emplace_back("golden_run_status", status);
@@ -176,7 +191,7 @@ checks::TraceMetadata provenance(const Entry& e, const std::string& method, cons
     rev += " (with uncommitted changes)";
   }
   md.emplace_back("git_revision", rev);
-  md.emplace_back("regenerate", "lexdyn-harness golden update --only " + e.case_name + "." + method);
+  md.emplace_back("regenerate", "lexdyn-harness golden update --only " + goldenId(e.case_name, method));
   return md;
 }
 
@@ -200,6 +215,7 @@ Comparison compare(const checks::TraceTable& golden, const checks::TraceTable& f
   std::vector<int> col(golden.names.size(), -1);
   std::vector<Tolerance> tol(golden.names.size(), tolerance);
   for (size_t i = 0; i < golden.names.size(); ++i) {
+    if (golden.names[i].rfind("time.", 0) == 0) continue;  // wall-clock times: never compared
     col[i] = fresh.column(golden.names[i]);
     if (col[i] < 0) c.problems.push_back("channel " + golden.names[i] + " is not in the fresh trace");
     for (const auto& ct : channel_tolerances) {
@@ -207,7 +223,7 @@ Comparison compare(const checks::TraceTable& golden, const checks::TraceTable& f
     }
   }
   long extra = 0;
-  for (const auto& n : fresh.names) extra += golden.column(n) < 0 ? 1 : 0;
+  for (const auto& n : fresh.names) extra += (golden.column(n) < 0 && n.rfind("time.", 0) != 0) ? 1 : 0;
   if (extra > 0) c.notes.push_back(std::to_string(extra) + " channels only in the fresh trace (not compared)");
   const int gt = golden.column(checks::kTimeChannel), ft = fresh.column(checks::kTimeChannel);
   if (gt < 0 || ft < 0) c.problems.push_back("no time channel 't'");
@@ -230,7 +246,8 @@ Comparison compare(const checks::TraceTable& golden, const checks::TraceTable& f
     c.problems.push_back("row count: golden " + span(golden, gt) + "; fresh " + span(fresh, ft));
   }
   c.rows = static_cast<long>(n);
-  c.channels = static_cast<long>(golden.names.size());
+  c.channels = 0;
+  for (const auto& name : golden.names) c.channels += name.rfind("time.", 0) == 0 ? 0 : 1;
   bool found = false;
   for (size_t r = 0; r < n && gt >= 0 && ft >= 0; ++r) {
     const std::vector<double>& g = golden.rows[r];

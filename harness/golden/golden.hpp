@@ -29,7 +29,7 @@ struct ChannelTolerance {
 struct Entry {
   std::string case_path;             ///< resolved
   std::string case_name;             ///< the case's `name` (file names, --cases)
-  std::vector<std::string> methods;
+  std::vector<std::string> methods;  ///< {""} for a case without methods (posture servo)
   double duration_s = 0.0;           ///< horizon (at most the case's duration)
   int every_n_ticks = 10;            ///< decimation
   std::string where;
@@ -48,7 +48,9 @@ struct Manifest {
 /// validate them and their methods.
 Manifest loadManifest(const std::string& path);
 
-/// "<dir>/<case>.<method>.csv"
+/// "<case>.<method>", or "<case>" without a method: names goldens in files, messages and --only.
+std::string goldenId(const std::string& case_name, const std::string& method);
+/// "<dir>/<id>.csv"
 std::string goldenPath(const Manifest& m, const std::string& case_name, const std::string& method);
 
 /// The channels kept in a golden: matching `channels`, not matching `exclude`, never time.*
@@ -86,7 +88,8 @@ struct Comparison {
 };
 
 /// Compares a fresh trace with a golden one. Rows are matched in order (their times must agree
-/// to 1e-9 s); every golden channel must be in the fresh trace.
+/// to 1e-9 s); every golden channel must be in the fresh trace. Wall-clock channels (time.*)
+/// are never compared, in whichever trace they are.
 Comparison compare(const checks::TraceTable& golden, const checks::TraceTable& fresh, const Tolerance& tolerance,
                    const std::vector<ChannelTolerance>& channel_tolerances);
 

@@ -91,6 +91,7 @@ Augmentation::Augmentation(const model::RobotModel& model, const ControllerConfi
       qo.update = cfg.params.sr1 ? hessian::QuasiNewtonUpdate::Sr1 : hessian::QuasiNewtonUpdate::Bfgs;
       qo.xi = cfg.params.xi_dt2 * dt2;
       qo.eps = cfg.params.eps_dt2 * dt2;
+      qo.identity_weight = cfg.params.newton_identity_weight;
       a.qn = hessian::makeQuasiNewton(I.nv, qo);
     }
     I.lv.push_back(std::move(a));
@@ -262,7 +263,7 @@ void Augmentation::apply(const tasks::TickContext& ctx, const std::vector<std::u
     if (p.method == Method::LexDynBFGS) {
       rows = a.qn->factor(I.R);
     } else {
-      rows = I.higham.regularizeAndFactor(I.H, a.occupied, p.eps_dt2 * dt2, I.R, I.occList);
+      rows = I.higham.regularizeAndFactor(I.H, a.occupied, p.eps_dt2 * dt2 + p.newton_identity_weight, I.R, I.occList);
     }
     for (int k = 0; k < rows; ++k) {
       spareA.row(k).head(nv) = I.R.row(k);

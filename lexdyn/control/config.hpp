@@ -41,6 +41,12 @@ struct ControllerParams {
   double new_dof_diagonal_dt2 = 1e-3;   ///< diagonal put on newly occupied dofs, sec. VII (dt^2)
   bool sign_change_guard = true;        ///< sec. VIII-A
   bool sr1 = false;                     ///< SR1 instead of BFGS (beyond the paper; off by default)
+  /// alpha of the paper's weighted identity alpha I* on the occupied joints of an augmented
+  /// level (sec. IX-A: "if the movements are too jerky a weighted and dotted identity matrix
+  /// alpha I* could be added to B"), in the units of B (those of J^T J, e.g. m^2/rad^2 for a
+  /// position task). LexDynBFGS: factors B + alpha I*; LexDynAH: eps + alpha after Higham.
+  /// 0 (off) by default, as in the paper's experiments.
+  double newton_identity_weight = 0.0;
   // LexDynAH (sec. VI-B).
   double rho_dt2 = 1e-12;               ///< skip Hessian terms with |lambda_optim| <= rho (dt^2)
   double eps_dt2 = 1e-3;                ///< eps I* added after the Higham regularisation, eq. 91 (dt^2)

@@ -73,9 +73,11 @@ int choleskyOfOccupied(const Eigen::Ref<const Eigen::MatrixXd>& B, const std::ve
 QuasiNewtonMatrix::QuasiNewtonMatrix(int n, const QuasiNewtonOptions& options)
     : n_(n), options_(options), higham_(n) {
   LEXDYN_ALWAYS_ASSERT(n >= 0, "QuasiNewtonMatrix: negative size");
-  LEXDYN_ALWAYS_ASSERT(options.xi >= 0.0 && options.sr1_tolerance >= 0.0 && options.eps >= 0.0,
+  LEXDYN_ALWAYS_ASSERT(options.xi >= 0.0 && options.sr1_tolerance >= 0.0 && options.eps >= 0.0 &&
+                           options.identity_weight >= 0.0,
                        "QuasiNewtonMatrix: thresholds must be >= 0");
   B_.setZero(n, n);
+  if (options.identity_weight > 0.0) W_.setZero(n, n);
   s_.setZero(n);
   y_.setZero(n);
   Bs_.setZero(n);
@@ -200,14 +202,21 @@ int QuasiNewtonMatrix::pack(const Eigen::Ref<const Eigen::VectorXd>& s, const Ei
 int QuasiNewtonMatrix::factor(Eigen::Ref<Eigen::MatrixXd> R) {
   LEXDYN_ALWAYS_ASSERT(R.cols() == n_, "QuasiNewtonMatrix::factor: R must have n columns");
   last_regularized_ = false;
+  const Eigen::MatrixXd* B = &B_;
+  if (options_.identity_weight > 0.0) {
+    W_ = B_;  // same size: no allocation
+    for (int i = 0; i < n_; ++i)
+      if (occupied_[static_cast<size_t>(i)]) W_(i, i) += options_.identity_weight;
+    B = &W_;
+  }
   if (kind() == QuasiNewtonUpdate::Bfgs) {
     int zero_pivots = 0;
-    const int m = choleskyOfOccupied(B_, occupied_, R, list_, &zero_pivots);
+    const int m = choleskyOfOccupied(*B, occupied_, R, list_, &zero_pivots);
     if (zero_pivots == 0) return m;
     // Rounding made B indefinite on the occupied block: Higham + eps instead.
   }
   last_regularized_ = true;
-  return higham_.regularizeAndFactor(B_, occupied_, options_.eps, R);
+  return higham_.regularizeAndFactor(*B, occupied_, options_.eps, R);
 }
 
 bool BfgsMatrix::update(const Eigen::Ref<const Eigen::VectorXd>& s, const Eigen::Ref<const Eigen::VectorXd>& y) {

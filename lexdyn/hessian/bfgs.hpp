@@ -46,6 +46,10 @@ struct QuasiNewtonOptions {
   /// eps added on the occupied diagonal after Higham's regularisation: always for SR1, and for
   /// BFGS only when rounding made B numerically indefinite (not observed).
   double eps = 1e-3 * 0.005 * 0.005;
+  /// alpha of the paper's "weighted identity alpha I*" (sec. IX-A: added to B when the motion is
+  /// too jerky): factor() factors B + alpha I* on the occupied block; B itself is unchanged.
+  /// 0 (the paper's experiments) by default.
+  double identity_weight = 0.0;
 };
 
 /// Eq. 89 value of one active task: max(zeta, 1/2 ||dt edot_PD||^2) (`dt_edot` = dt edot_PD).
@@ -122,6 +126,7 @@ class QuasiNewtonMatrix {
  private:
   bool initialized_ = false;
   bool last_regularized_ = false;
+  Eigen::MatrixXd W_;  // B + alpha I* (identity_weight > 0 only)
   std::vector<char> occupied_;
   std::vector<int> list_;
   HighamRegularizer higham_;

@@ -42,6 +42,60 @@ inline std::map<std::string, std::string> minimalCase(double duration_s = 0.5) {
   };
 }
 
+/// An exp. 1-like lexdyn controller section (both feet, hands to targets; every method).
+inline std::string lexdynController(const std::string& method = "bfgs", const std::string& extra = "") {
+  return "controller:\n"
+         "  type: lexdyn\n"
+         "  method: " + method + "\n"
+         "  state_feedback: integrated\n"
+         "  solver: {paper_rules: true}\n"
+         "  contacts:\n"
+         "    - {name: RIGHT_FOOT, surface: RIGHT_FOOT, sensor: RightFootForceSensor}\n"
+         "    - {name: LEFT_FOOT, surface: LEFT_FOOT, sensor: LeftFootForceSensor}\n"
+         "    - {name: POLE, frame: LGRASP, points: [[0, 0, 0]], fixed: true, grasp: left, sensor: LeftHandForceSensor}\n"
+         "  initial_contacts: [RIGHT_FOOT, LEFT_FOOT]\n"
+         "  tasks:\n"
+         "    - {name: joint_limits, type: joint_limits}\n"
+         "    - {name: force_bounds, type: contact_force_bounds}\n"
+         "    - {name: dynamics, type: equation_of_motion}\n"
+         "    - {name: torque_limits, type: torque_limits}\n"
+         "    - {name: trust, type: trust_region}\n"
+         "    - {name: right_foot, type: contact, contact: RIGHT_FOOT}\n"
+         "    - {name: left_foot, type: contact, contact: LEFT_FOOT}\n"
+         "    - {name: pole, type: contact, contact: POLE}\n"
+         "    - {name: com_box, type: com_box, lower: [-0.03, -0.1, -.inf], upper: [0.03, 0.1, .inf]}\n"
+         "    - {name: right_hand, type: position, frame: RGRASP, target: [0.3, -0.4, 0.9], gains: {kp: 0.3}}\n"
+         "    - {name: left_hand, type: position, frame: LGRASP, gains: {kp: 0.3}}\n"
+         "    - {name: velocity, type: velocity_min}\n"
+         "    - {name: wrench, type: wrench_min}\n"
+         "    - {name: posture, type: posture, posture: half_sitting}\n" +
+         extra +
+         "  levels:\n"
+         "    - {name: bounds, tasks: [joint_limits, force_bounds]}\n"
+         "    - {name: dynamics, tasks: [dynamics, torque_limits]}\n"
+         "    - {name: trust, tasks: [trust]}\n"
+         "    - {name: contacts, tasks: [right_foot, left_foot, pole]}\n"
+         "    - {name: com, tasks: [com_box]}\n"
+         "    - {name: hands, tasks: [right_hand, left_hand]}\n"
+         "    - {name: velocity, tasks: [velocity]}\n"
+         "    - {name: wrench, tasks: [wrench]}\n"
+         "  wls_levels:\n"
+         "    - {name: hard, tasks: [joint_limits, force_bounds, dynamics, torque_limits, right_foot, left_foot, pole, com_box]}\n"
+         "    - {name: objective, tasks: [right_hand, left_hand, posture, wrench],\n"
+         "       weights: {right_hand: 1.0, left_hand: 1.0, posture: 1.0e-3, wrench: 1.0e-5}}\n";
+}
+
+/// minimalCase() with the lexdyn controller above and a simulator grasp `left` on LGRASP.
+inline std::map<std::string, std::string> minimalLexdynCase(double duration_s = 0.3, const std::string& method = "bfgs") {
+  auto s = minimalCase(duration_s);
+  s["e_controller"] = lexdynController(method);
+  s["f_sim"] += "  grasps:\n    - {name: left, frame: LGRASP, stiffness_N_per_m: 2e4, damping_Ns_per_m: 400,"
+                " rot_stiffness_Nm_per_rad: 500, rot_damping_Nms_per_rad: 10}\n";
+  s["g_trace"] = "trace:\n  frames: [WAIST, RGRASP]\n";
+  s["h_checks"] = "checks:\n  - {name: hands, type: task_error, tasks: [right_hand], statistic: final, limit: 10.0}\n";
+  return s;
+}
+
 /// A copy of the humanoid's data file in `dir` with an extra posture `one_leg` (the right foot
 /// lifted: no static equilibrium on the feet). Returns its path.
 inline std::string dataFileWithOneLegPosture(const std::string& dir) {

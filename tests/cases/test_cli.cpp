@@ -1,9 +1,11 @@
 // lexdyn-harness exit codes: 0 all checks passed, 1 a check failed, 2 bad input (with a message
 // naming the file and the key path).
 #include "case_test_utils.hpp"
+#include "harness/checks/trace.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -165,6 +167,106 @@ TEST(HarnessCli, TwoProcessesWriteIdenticalTraces) {
   const std::string a = slurp(dir + "/a/trace.csv"), b = slurp(dir + "/b/trace.csv");
   EXPECT_GT(a.size(), 10000u);
   EXPECT_TRUE(a == b) << "traces of two processes differ";
+}
+
+
+TEST(HarnessCli, ControllerCaseMethodOverrideCheckAndCompare) {
+  const std::string dir = outputDir("cli_controller");
+  auto s = testing::minimalLexdynCase(0.2);
+  s["i_comparisons"] = "comparisons:\n  - {name: bfgs_vs_wls, type: method_comparison, tasks: [right_hand],"
+                       " statistic: final, better: bfgs, worse: wls, margin: 10.0}\n";
+  const std::string c = writeCase(dir, s);
+  Result r = harness("run " + c + " --out " + dir + "/bfgs --quiet", dir);
+  ASSERT_EQ(r.code, 0) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("[minimal bfgs] completed"), std::string::npos) << r.stderr_text;
+  r = harness("run " + c + " --out " + dir + "/wls --method wls --duration 0.1 --quiet", dir);
+  ASSERT_EQ(r.code, 0) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("[minimal wls] completed: 0.100 s simulated"), std::string::npos) << r.stderr_text;
+  EXPECT_EQ(harness("run " + c + " --out " + dir + "/x --method newton --quiet", dir).code, 2);
+  // check: TRACE --case CASE, the case from the trace's header, and the older order.
+  EXPECT_EQ(harness("check " + dir + "/wls/trace.csv --case " + c, dir).code, 0);
+  r = harness("check " + dir + "/wls/trace.csv", dir);
+  EXPECT_EQ(r.code, 0) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("[minimal wls]"), std::string::npos) << r.stderr_text;
+  EXPECT_EQ(harness("check " + c + " " + dir + "/bfgs/trace.csv", dir).code, 0);
+  // compare: one trace per method; a missing method is a failed comparison.
+  r = harness("compare --case " + c + " " + dir + "/bfgs/trace.csv " + dir + "/wls/trace.csv", dir);
+  EXPECT_EQ(r.code, 0) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("ok   bfgs_vs_wls"), std::string::npos) << r.stderr_text;
+  r = harness("compare --case " + c + " " + dir + "/bfgs/trace.csv", dir);
+  EXPECT_EQ(r.code, 1) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("needs traces of methods bfgs and wls"), std::string::npos) << r.stderr_text;
+}
+
+TEST(HarnessCli, TwoProcessesWriteIdenticalControllerTraces) {
+  const std::string dir = outputDir("cli_controller_determinism");
+  auto s = testing::minimalLexdynCase(0.3, "bfgs");
+  s["g_trace"] = "trace:\n  frames: [WAIST]\n  timings: false\n";
+  const std::string c = writeCase(dir, s);
+  ASSERT_EQ(harness("run " + c + " --out " + dir + "/a --quiet", dir).code, 0);
+  ASSERT_EQ(harness("run " + c + " --out " + dir + "/b --quiet", dir).code, 0);
+  auto slurp = [](const std::string& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  const std::string a = slurp(dir + "/a/trace.csv"), b = slurp(dir + "/b/trace.csv");
+  EXPECT_GT(a.size(), 50000u);
+  EXPECT_TRUE(a == b) << "controller traces of two processes differ";
+}
+
+TEST(HarnessCli, GoldenUpdateThenCheckAndAMismatchNamesTimeAndChannel) {
+  const std::string dir = outputDir("cli_golden");
+  const std::string c = writeCase(dir, testing::minimalLexdynCase(0.3));
+  std::filesystem::create_directories(dir + "/golden");
+  const std::string manifest = dir + "/golden/manifest.yaml";
+  std::ofstream(manifest) << "format: lexdyn-golden-manifest/1\n"
+                             "tolerance: {abs: 1.0e-9, rel: 1.0e-9}\n"
+                             "channels: [\"t\", \"q.*\", \"task.*\", \"solver.*\"]\n"
+                             "entries:\n  - {case: ../case.yaml, methods: [bfgs, wls], duration_s: 0.2, every_n_ticks: 4}\n";
+  const std::string g = " --manifest " + manifest + " --work " + dir + "/work";
+  Result r = harness("golden check" + g, dir);
+  EXPECT_EQ(r.code, 1) << r.stderr_text;  // nothing generated yet
+  EXPECT_NE(r.stderr_text.find("MISSING minimal.bfgs"), std::string::npos) << r.stderr_text;
+  r = harness("golden update" + g, dir);
+  ASSERT_EQ(r.code, 0) << r.stderr_text;
+  ASSERT_TRUE(std::filesystem::exists(dir + "/golden/minimal.bfgs.csv"));
+  ASSERT_TRUE(std::filesystem::exists(dir + "/golden/minimal.wls.csv"));
+  r = harness("golden check" + g, dir);
+  EXPECT_EQ(r.code, 0) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("golden check: 2 of 2 match"), std::string::npos) << r.stderr_text;
+  // Tamper with one value of the bfgs golden: q.RARM_JOINT0 at its row t = 0.1 s.
+  const checks::TraceTable t = checks::readTrace(dir + "/golden/minimal.bfgs.csv");
+  std::ifstream in(dir + "/golden/minimal.bfgs.csv");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  const int col = t.column("q.RARM_JOINT0");
+  ASSERT_GE(col, 0);
+  size_t row = 0;
+  while (row < t.rows.size() && std::abs(t.rows[row][0] - 0.1) > 1e-9) ++row;
+  ASSERT_LT(row, t.rows.size());
+  // Find that row's line (rows follow the header and the channel line, in order).
+  size_t pos = text.find("\nt,");
+  pos = text.find('\n', pos + 1);
+  for (size_t k = 0; k < row; ++k) pos = text.find('\n', pos + 1);
+  size_t start = pos + 1;
+  for (int k = 0; k < col; ++k) start = text.find(',', start) + 1;
+  const size_t end = text.find_first_of(",\n", start);
+  text.replace(start, end - start, "0.5");
+  std::ofstream(dir + "/golden/minimal.bfgs.csv") << text;
+  r = harness("golden check" + g, dir);
+  EXPECT_EQ(r.code, 1) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("FAIL minimal.bfgs: MISMATCH: first divergence at t = 0.1 s in channel q.RARM_JOINT0 (golden 0.5"),
+            std::string::npos)
+      << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("ok   minimal.wls"), std::string::npos) << r.stderr_text;
+  EXPECT_EQ(harness("golden check --only minimal.wls" + g, dir).code, 0);
+  EXPECT_EQ(harness("golden check --only minimal.gn" + g, dir).code, 2);  // not in the manifest
+  std::ofstream(dir + "/golden/bad.yaml") << "format: lexdyn-golden-manifest/1\nentries: [{case: ../case.yaml}]\n";
+  r = harness("golden check --manifest " + dir + "/golden/bad.yaml", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.stderr_text.find("bad.yaml:2: entries[0]: missing required key 'methods'"), std::string::npos) << r.stderr_text;
 }
 
 }  // namespace

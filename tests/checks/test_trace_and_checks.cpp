@@ -16,6 +16,19 @@ namespace {
 
 namespace fs = std::filesystem;
 
+CheckSpec legacy(const std::string& name, const std::string& type, const std::string& frame,
+                 const std::vector<std::string>& surfaces, double from_s, double limit, const std::string& where) {
+  CheckSpec s;
+  s.name = name;
+  s.type = type;
+  s.frame = frame;
+  s.surfaces = surfaces;
+  s.from_s = from_s;
+  s.limit = limit;
+  s.where = where;
+  return s;
+}
+
 std::string tempDir(const std::string& name) {
   const fs::path p = fs::path(LEXDYN_BINARY_DIR) / "test_output" / name;
   fs::remove_all(p);
@@ -98,6 +111,21 @@ TEST(Trace, MalformedFilesAreErrorsWithLineNumbers) {
   }
 }
 
+TEST(Trace, DuplicateOrInvalidChannelNamesAreInputErrors) {
+  // Checks rebuild a schema from the names: a malformed header must be an input error, not an abort.
+  const std::string dir = tempDir("trace_bad_names");
+  std::ofstream(dir + "/dup.csv") << "# a: b\nt,x,x\n0,1,2\n";
+  try {
+    readTrace(dir + "/dup.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("dup.csv:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("duplicate channel name 'x'"), std::string::npos) << e.what();
+  }
+  std::ofstream(dir + "/empty.csv") << "t,,y\n0,1,2\n";
+  EXPECT_THROW(readTrace(dir + "/empty.csv"), InputError);
+}
+
 // A synthetic trace: WAIST moves 1 mm in x after 2 s, foot point p1 slides 0.3 mm, the
 // vertical forces sum to the weight except a 1 % dip at t = 3 s, HEAD sinks from 1.5 m to 0.7 m.
 TraceTable synthetic() {
@@ -120,12 +148,12 @@ TraceTable synthetic() {
 TEST(Checks, KnownValuesOnASyntheticTrace) {
   const TraceTable t = synthetic();
   std::vector<CheckSpec> specs(6);
-  specs[0] = {"drift", "frame_drift", "WAIST", {}, 0.5, 0.002, "test"};
-  specs[1] = {"drift_tight", "frame_drift", "WAIST", {}, 0.5, 0.0005, "test"};
-  specs[2] = {"balance", "force_balance", "", {"R", "L"}, 0.0, 0.0101, "test"};
-  specs[3] = {"slip", "contact_slip", "", {"R"}, 0.0, 0.0005, "test"};
-  specs[4] = {"slip_late", "contact_slip", "", {"R"}, 2.5, 0.0001, "test"};
-  specs[5] = {"height", "frame_height", "HEAD", {}, 0.0, 0.75, "test"};
+  specs[0] = legacy("drift", "frame_drift", "WAIST", {}, 0.5, 0.002, "test");
+  specs[1] = legacy("drift_tight", "frame_drift", "WAIST", {}, 0.5, 0.0005, "test");
+  specs[2] = legacy("balance", "force_balance", "", {"R", "L"}, 0.0, 0.0101, "test");
+  specs[3] = legacy("slip", "contact_slip", "", {"R"}, 0.0, 0.0005, "test");
+  specs[4] = legacy("slip_late", "contact_slip", "", {"R"}, 2.5, 0.0001, "test");
+  specs[5] = legacy("height", "frame_height", "HEAD", {}, 0.0, 0.75, "test");
   const std::vector<CheckResult> r = runChecks(specs, t);
   ASSERT_EQ(r.size(), 6u);
   EXPECT_NEAR(r[0].value, 0.001, 1e-15);
@@ -143,16 +171,243 @@ TEST(Checks, KnownValuesOnASyntheticTrace) {
 
 TEST(Checks, NoRowsAfterFromIsAFailureNotAPass) {
   const TraceTable t = synthetic();
-  const std::vector<CheckResult> r = runChecks({{"late", "frame_drift", "WAIST", {}, 100.0, 1.0, "test"}}, t);
+  const std::vector<CheckResult> r = runChecks({legacy("late", "frame_drift", "WAIST", {}, 100.0, 1.0, "test")}, t);
   EXPECT_FALSE(r[0].passed);
   EXPECT_TRUE(std::isnan(r[0].value));
 }
 
 TEST(Checks, MissingChannelsAndMetadataAreInputErrors) {
   TraceTable t = synthetic();
-  EXPECT_THROW(runChecks({{"x", "frame_drift", "FOOT", {}, 0.0, 1.0, "case.yaml:3"}}, t), InputError);
+  EXPECT_THROW(runChecks({legacy("x", "frame_drift", "FOOT", {}, 0.0, 1.0, "case.yaml:3")}, t), InputError);
   t.metadata.clear();
-  EXPECT_THROW(runChecks({{"x", "force_balance", "", {"R"}, 0.0, 1.0, "case.yaml:4"}}, t), InputError);
+  EXPECT_THROW(runChecks({legacy("x", "force_balance", "", {"R"}, 0.0, 1.0, "case.yaml:4")}, t), InputError);
+}
+
+}  // namespace
+}  // namespace lexdyn::checks
+
+// --- Controller checks (harness/checks/controller_checks.cpp) on a synthetic trace ---------
+
+namespace lexdyn::checks {
+namespace {
+
+// 401 rows, t = 0 .. 4 s every 0.01 s, channels with known answers.
+TraceTable controllerTrace() {
+  TraceTable t;
+  t.metadata = {{"method", "bfgs"}};
+  t.names = {"t", "task.a.error", "task.b.error", "task.c.error", "tau.J1", "cmd.tau.J1", "ctrl_contact.C.active"};
+  for (const char* p : {"wrench.C.", "wrench_sensed.C."}) {
+    for (const char* c : {"fx", "fy", "fz", "tx", "ty", "tz"}) t.names.push_back(std::string(p) + c);
+  }
+  for (const char* n : {"qd.J1", "qd.J2", "cmd.qd.J1", "cmd.qd.J2", "ctrl.status", "solver.iterations", "level.L.augmented",
+                        "time.tick_us"}) {
+    t.names.push_back(n);
+  }
+  for (int k = 0; k <= 400; ++k) {
+    const double time = 0.01 * k;
+    const bool active = time >= 1.0 - 1e-9 && time <= 3.0 + 1e-9;
+    std::vector<double> r = {time, 1.0 - 0.1 * time, 0.5, 1.0 + 0.5 * std::sin(M_PI * time), 50.0 * std::sin(time),
+                             k == 200 ? 60.0 : 10.0, active ? 1.0 : 0.0};
+    // Computed: f = (30, 40, 100), torque (5, -2, 0): CoP (0.02, 0.05). Inactive rows: garbage.
+    const double cw[6] = {30, 40, 100, 5, -2, 0};
+    const double sensed_fz = time < 2.0 - 1e-9 ? 90.0 : 110.0;
+    for (int i = 0; i < 6; ++i) r.push_back(active ? cw[i] : -1000.0);
+    for (int i = 0; i < 6; ++i) r.push_back(active ? (i == 2 ? sensed_fz : cw[i]) : -1000.0);
+    r.push_back(std::sin(2.0 * M_PI * 2.1 * time));     // qd.J1: acceleration sign changes
+    r.push_back(0.1 * time);                            // qd.J2: constant acceleration
+    r.push_back(std::sin(2.0 * M_PI * 20.0 * time));    // cmd.qd.J1: 20 Hz
+    r.push_back(std::sin(2.0 * M_PI * 0.5 * time));     // cmd.qd.J2: 0.5 Hz
+    r.push_back(k == 300 ? 3.0 : (k % 50 == 0 ? 1.0 : 0.0));
+    r.push_back(k == 250 ? 17.0 : 1.0);
+    r.push_back(time >= 3.0 - 1e-9 ? 1.0 : 0.0);
+    r.push_back(static_cast<double>(k));
+    t.rows.push_back(r);
+  }
+  return t;
+}
+
+CheckSpec spec(const std::string& type, double limit) {
+  CheckSpec s;
+  s.name = type;
+  s.type = type;
+  s.limit = limit;
+  s.where = "test";
+  return s;
+}
+
+CheckResult one(const CheckSpec& s) {
+  const std::vector<CheckResult> r = runChecks({s}, controllerTrace());
+  EXPECT_EQ(r.size(), 1u);
+  return r.empty() ? CheckResult{} : r[0];
+}
+
+TEST(ControllerChecks, TaskErrorStatistics) {
+  CheckSpec s = spec("task_error", 1.2);
+  s.tasks = {"a", "b"};
+  s.statistic = "final";
+  EXPECT_NEAR(one(s).value, 1.1, 1e-12);
+  EXPECT_TRUE(one(s).passed);
+  s.statistic = "max";
+  EXPECT_NEAR(one(s).value, 1.5, 1e-12);
+  EXPECT_FALSE(one(s).passed);
+  s.statistic = "mean";  // time average of 1.5 - 0.1 t over [0, 4]
+  EXPECT_NEAR(one(s).value, 1.3, 1e-12);
+  s.from_s = 2.0;
+  s.to_s = 3.0;  // 1.5 - 0.25
+  EXPECT_NEAR(one(s).value, 1.25, 1e-12);
+}
+
+TEST(ControllerChecks, TorqueLimits) {
+  CheckSpec s = spec("torque_limits", 0.55);
+  s.joints = {"J1"};
+  s.joint_limits = {100.0};
+  s.source = "applied";
+  EXPECT_NEAR(one(s).value, 0.5, 1e-4);  // 50 sin(t) peaks near t = pi / 2
+  EXPECT_TRUE(one(s).passed);
+  s.source = "both";
+  const CheckResult r = one(s);
+  EXPECT_NEAR(r.value, 0.6, 1e-12);  // commanded 60 N m at t = 2
+  EXPECT_FALSE(r.passed);
+  EXPECT_NE(r.detail.find("commanded torque of J1 60"), std::string::npos) << r.detail;
+  s.limit = 0.6;  // on the limit passes
+  EXPECT_TRUE(one(s).passed);
+}
+
+TEST(ControllerChecks, ContactWrenches) {
+  CheckSpec s = spec("contact_unilateral", 95.0);
+  s.contact = "C";
+  s.source = "computed";
+  EXPECT_EQ(one(s).value, 100.0);  // inactive rows (-1000) are skipped
+  EXPECT_TRUE(one(s).passed);
+  s.source = "sensed";
+  EXPECT_EQ(one(s).value, 90.0);
+  EXPECT_FALSE(one(s).passed);
+  CheckSpec f = spec("contact_friction", 1.0);
+  f.contact = "C";
+  f.source = "computed";
+  f.friction = 0.7;
+  f.min_normal_N = 1.0;
+  EXPECT_NEAR(one(f).value, 50.0 / 70.0, 1e-12);
+  f.friction = 0.4;
+  EXPECT_NEAR(one(f).value, 50.0 / 40.0, 1e-12);
+  EXPECT_FALSE(one(f).passed);
+  CheckSpec c = spec("contact_cop", 0.0);
+  c.contact = "C";
+  c.source = "computed";
+  c.min_normal_N = 1.0;
+  c.polygon = {{-0.1, -0.1}, {0.1, -0.1}, {0.1, 0.1}, {-0.1, 0.1}};
+  EXPECT_NEAR(one(c).value, -0.05, 1e-12);  // CoP (0.02, 0.05): 5 cm inside the y = 0.1 edge
+  EXPECT_TRUE(one(c).passed);
+  c.polygon = {{-0.1, -0.1}, {0.1, -0.1}, {0.1, 0.03}, {-0.1, 0.03}};
+  EXPECT_NEAR(one(c).value, 0.02, 1e-12);  // 2 cm outside
+  EXPECT_FALSE(one(c).passed);
+  CheckSpec m = spec("contact_wrench_match", 9.0);
+  m.contact = "C";
+  m.component = "force";
+  m.statistic = "rms";
+  EXPECT_NEAR(one(m).value, 10.0, 1e-12);
+  EXPECT_FALSE(one(m).passed);
+  m.component = "torque";
+  EXPECT_EQ(one(m).value, 0.0);
+}
+
+TEST(ControllerChecks, Oscillation) {
+  CheckSpec a = spec("joint_acceleration_sign_changes", 4.0);
+  a.joints = {"J1", "J2"};
+  a.source = "measured";
+  a.dead_band = 1e-6;
+  // cos(2 pi 2.1 t) changes sign at (2n + 1) / 8.4 s: 17 times between the first and the last
+  // velocity difference (t = 0.005 .. 3.995 s), over 4 s.
+  const CheckResult r = one(a);
+  EXPECT_NEAR(r.value, 17.0 / 4.0, 1e-12);
+  EXPECT_FALSE(r.passed);
+  EXPECT_NE(r.detail.find("J1: 17"), std::string::npos) << r.detail;
+  a.joints = {"J2"};
+  EXPECT_EQ(one(a).value, 0.0);
+  CheckSpec h = spec("joint_velocity_hf_energy", 0.1);
+  h.joints = {"J1"};
+  h.source = "commanded";
+  h.cutoff_hz = 5.0;
+  // A unit 20 Hz sine passes the 5 Hz high-pass almost unchanged: mean square ~ 1/2.
+  EXPECT_NEAR(one(h).value, 0.5, 0.03);
+  EXPECT_FALSE(one(h).passed);
+  h.joints = {"J2"};  // 0.5 Hz: attenuated by about (0.5 / 5)^4
+  EXPECT_LT(one(h).value, 1e-3);
+  h.cutoff_hz = 60.0;  // above the trace's Nyquist frequency (50 Hz)
+  EXPECT_FALSE(one(h).passed);
+  EXPECT_TRUE(std::isnan(one(h).value));
+  CheckSpec e = spec("task_error_rate_sign_changes", 0.5);
+  e.tasks = {"c"};
+  e.dead_band = 1e-6;
+  EXPECT_NEAR(one(e).value, 1.0, 1e-12);  // 1 + sin(pi t)/2 turns at t = 0.5, 1.5, 2.5, 3.5
+  EXPECT_FALSE(one(e).passed);
+  e.tasks = {"a"};
+  EXPECT_EQ(one(e).value, 0.0);
+}
+
+TEST(ControllerChecks, Health) {
+  CheckSpec s = spec("controller_status", 0.0);
+  s.allowed = {"ok", "solver_stopped_early"};
+  CheckResult r = one(s);
+  EXPECT_EQ(r.value, 1.0);
+  EXPECT_FALSE(r.passed);
+  EXPECT_NE(r.detail.find("first at t = 3 s (infeasible)"), std::string::npos) << r.detail;
+  s.allowed = {"ok"};
+  EXPECT_EQ(one(s).value, 9.0);  // 8 rows stopped early besides
+  CheckSpec p = spec("active_set_peak", 17.0);
+  EXPECT_EQ(one(p).value, 17.0);
+  EXPECT_TRUE(one(p).passed);
+  CheckSpec a = spec("augmented_fraction", 0.2);
+  a.level = "L";
+  EXPECT_NEAR(one(a).value, 101.0 / 401.0, 1e-15);
+  EXPECT_FALSE(one(a).passed);
+  CheckSpec t = spec("tick_time", 300.0);
+  t.timer = "tick";
+  t.percentile = 50.0;
+  EXPECT_EQ(one(t).value, 200.0);
+  t.percentile = 100.0;
+  EXPECT_EQ(one(t).value, 400.0);
+  EXPECT_FALSE(one(t).passed);
+}
+
+TEST(ControllerChecks, MethodFilterAndComparisons) {
+  CheckSpec s = spec("active_set_peak", 100.0);
+  s.methods = {"wls"};
+  EXPECT_TRUE(runChecks({s}, controllerTrace()).empty());  // a bfgs trace
+  s.methods = {"wls", "bfgs"};
+  EXPECT_EQ(runChecks({s}, controllerTrace()).size(), 1u);
+  TraceTable bfgs = controllerTrace(), wls = controllerTrace();
+  wls.metadata = {{"method", "wls"}};
+  for (auto& row : wls.rows) row[1] += 0.2;  // task a worse by 0.2
+  ComparisonSpec c;
+  c.name = "cmp";
+  c.tasks = {"a"};
+  c.statistic = "final";
+  c.better = "bfgs";
+  c.worse = "wls";
+  CheckResult r = compareMethods(c, bfgs, wls);
+  EXPECT_NEAR(r.value, -0.2, 1e-12);
+  EXPECT_TRUE(r.passed);
+  c.better = "wls";
+  c.worse = "bfgs";
+  r = compareMethods(c, wls, bfgs);
+  EXPECT_NEAR(r.value, 0.2, 1e-12);
+  EXPECT_FALSE(r.passed);
+  EXPECT_THROW(compareMethods(c, bfgs, wls), InputError);  // the traces' methods do not match
+}
+
+TEST(ControllerChecks, MissingChannelsAreInputErrors) {
+  CheckSpec s = spec("task_error", 1.0);
+  s.tasks = {"nope"};
+  s.statistic = "final";
+  s.where = "case.yaml:9";
+  try {
+    one(s);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("case.yaml:9: check 'task_error' needs trace channel 'task.nope.error'"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -223,6 +223,35 @@ TEST(Bfgs, FactorIsTheCholeskyFactorOfTheOccupiedBlock) {
   EXPECT_EQ(R2, R.topRows(n));
 }
 
+// The paper's weighted identity alpha I* (sec. IX-A): factor() factors B + alpha I* on the
+// occupied block only, and B itself (the quasi-Newton state) is left unchanged.
+TEST(Bfgs, IdentityWeightIsAddedToTheFactoredMatrixOnly) {
+  Rng rng(205);
+  const int n = 7;
+  const std::vector<char> mask = {1, 0, 1, 1, 0, 1, 1};
+  QuasiNewtonOptions with;
+  with.identity_weight = 0.25;
+  BfgsMatrix A(n), B(n, with);
+  const Eigen::VectorXd d0 = rng.uniformVector(n, 0.5, 1.0);
+  A.initialize(d0, mask);
+  B.initialize(d0, mask);
+  for (int k = 0; k < 20; ++k) {
+    const Eigen::VectorXd s = masked(rng.uniformVector(n), mask);
+    const Eigen::VectorXd y = 1.2 * s + 0.1 * rng.uniformVector(n);
+    EXPECT_EQ(A.update(s, y), B.update(s, y));
+  }
+  EXPECT_EQ(A.matrix(), B.matrix());  // same updates: the weight never enters B
+  Eigen::MatrixXd RA = Eigen::MatrixXd::Zero(n, n), RB = Eigen::MatrixXd::Zero(n, n);
+  ASSERT_EQ(A.factor(RA), 5);
+  ASSERT_EQ(B.factor(RB), 5);
+  Eigen::MatrixXd expected = A.matrix();
+  for (int i = 0; i < n; ++i)
+    if (mask[static_cast<size_t>(i)]) expected(i, i) += 0.25;
+  EXPECT_LE((RB.transpose() * RB - expected).norm(), 1e-13 * expected.norm());
+  EXPECT_GT((RB.transpose() * RB - A.matrix()).norm(), 0.4);  // 0.25 on 5 diagonal entries
+  EXPECT_EQ(B.matrix(), A.matrix());                          // factor() left B alone
+}
+
 TEST(Sr1, SecantEquationSkipRuleAndIndefiniteFactor) {
   Rng rng(205);
   const int n = 8;

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Regenerates golden traces (golden/*.csv) explicitly: the only way they change. ctest never runs
+# this; it runs `lexdyn-harness golden check` (label regression). docs/cases.md, "Golden traces".
+#
+# Usage: harness/scripts/golden-update.sh [-b BUILD_DIR] [-j JOBS] [-m MANIFEST] [ID ...]
+#   ID: CASE.METHOD or CASE (see `lexdyn-harness golden list`); none: every golden of the manifest.
+#   defaults: build/, 2 jobs, golden/manifest.yaml.
+# Afterwards re-run cmake in BUILD_DIR (done here) so that ctest registers new golden files, then
+# review `git diff --stat golden/` and run `ctest -L regression`.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+BUILD="$ROOT/build"
+JOBS=2
+MANIFEST="$ROOT/golden/manifest.yaml"
+while getopts "b:j:m:" opt; do
+  case "$opt" in
+    b) BUILD="$OPTARG" ;;
+    j) JOBS="$OPTARG" ;;
+    m) MANIFEST="$OPTARG" ;;
+    *) echo "usage: $0 [-b BUILD_DIR] [-j JOBS] [-m MANIFEST] [ID ...]" >&2; exit 2 ;;
+  esac
+done
+shift $((OPTIND - 1))
+HARNESS="$BUILD/bin/lexdyn-harness"
+[ -x "$HARNESS" ] || { echo "golden-update: $HARNESS not built (cmake --build $BUILD)" >&2; exit 2; }
+
+ONLY=()
+if [ $# -gt 0 ]; then ONLY=(--only "$(IFS=,; echo "$*")"); fi
+IDS="$("$HARNESS" golden list --manifest "$MANIFEST" "${ONLY[@]}" | cut -d' ' -f1)"
+echo "golden-update: $(echo "$IDS" | wc -l) golden(s), $JOBS at a time" >&2
+export HARNESS MANIFEST
+# One process per golden (each writes its own file atomically); a failing run stops nothing else.
+status=0
+echo "$IDS" | xargs -P "$JOBS" -I{} bash -c '"$HARNESS" golden update --manifest "$MANIFEST" --only "$0"' {} || status=$?
+if [ -f "$BUILD/CMakeCache.txt" ]; then cmake "$BUILD" > /dev/null; fi
+exit $status

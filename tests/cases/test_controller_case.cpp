@@ -1,0 +1,341 @@
+// The lexdyn controller's case-file section (docs/cases.md): the repository's controller cases
+// load for every method they define; every task type is built from YAML with every params
+// field; errors name the file, the line and the key path; target trajectories and swings.
+#include "harness/cases/case_file.hpp"
+#include "harness/cases/target_path.hpp"
+#include "case_test_utils.hpp"
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/control/controller.hpp"
+#include "lexdyn/model/robot_model.hpp"
+#include "lexdyn/tasks/self_collision.hpp"
+#include "lexdyn/tasks/torque_limits.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+namespace lexdyn::cases {
+namespace {
+
+using testing::lexdynController;
+using testing::minimalLexdynCase;
+using testing::outputDir;
+using testing::writeCase;
+
+std::string src(const std::string& rel) { return std::string(LEXDYN_SOURCE_DIR) + "/" + rel; }
+
+std::string errorOf(const std::map<std::string, std::string>& sections, const std::string& dir = "controller_case_errors") {
+  const std::string path = writeCase(outputDir(dir), sections);
+  try {
+    loadCase(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+// Expects an error whose message holds every fragment.
+void expectError(const std::map<std::string, std::string>& sections, const std::vector<std::string>& fragments) {
+  const std::string msg = errorOf(sections);
+  for (const auto& f : fragments) EXPECT_NE(msg.find(f), std::string::npos) << "missing '" << f << "' in: " << msg;
+}
+
+TEST(ControllerCase, RepositoryCasesLoadWithEveryMethod) {
+  struct Expect {
+    const char* file;
+    const char* method;
+    std::vector<std::string> methods;
+  };
+  for (const Expect& e : {Expect{"cases/exp1.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
+                          Expect{"cases/exp1-gn.yaml", "gn", {"bfgs", "ah", "gn", "wls"}},
+                          Expect{"cases/exp1-wls-weak.yaml", "wls", {"bfgs", "ah", "gn", "wls"}},
+                          Expect{"cases/exp2.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
+                          Expect{"cases/exp3.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
+                          Expect{"cases/pointmass-damping.yaml", "gn", {"bfgs", "ah", "gn", "wls"}}}) {
+    CaseSpec c = loadCase(src(e.file));
+    EXPECT_EQ(c.controller.type, "lexdyn") << e.file;
+    EXPECT_EQ(methodName(c), e.method) << e.file;
+    for (const auto& m : e.methods) {
+      overrideMethod(c, m, "--method");
+      EXPECT_EQ(methodName(c), m);
+    }
+  }
+  const CaseSpec exp2 = loadCase(src("cases/exp2.yaml"));
+  const LexdynSpec& lx = exp2.controller.lexdyn;
+  ASSERT_EQ(lx.contacts.size(), 3u);
+  EXPECT_EQ(lx.contacts[2].name, "POLE");
+  EXPECT_TRUE(lx.contacts[2].fixed);
+  EXPECT_EQ(lx.contacts[2].grasp, "left_pole");
+  EXPECT_EQ(lx.contacts[0].points.size(), 4u);  // the sole corners of the data file
+  EXPECT_EQ(lx.levels.size(), 11u);              // the paper's sec. IX hierarchy
+  ASSERT_EQ(lx.wls_levels.size(), 2u);
+  EXPECT_EQ(lx.wls_levels[1].weights, (std::vector<double>{1.0, 1.0, 5e-2, 1e-4}));
+  // The posture task's head yaw override became its target.
+  const TaskSpec& posture = lx.tasks[static_cast<size_t>(lx.findTask("posture"))];
+  ASSERT_EQ(posture.posture.target.size(), 32);
+  EXPECT_EQ(posture.posture.target[14], 0.45);
+  EXPECT_TRUE(posture.posture.posture.empty());
+  const CaseSpec exp3 = loadCase(src("cases/exp3.yaml"));
+  bool trajectory = false;
+  for (const auto& e : exp3.events) {
+    if (e.action != "target_trajectory") continue;
+    trajectory = true;
+    EXPECT_EQ(e.trajectory.movingAverage(), 3.0);
+    EXPECT_GT(e.trajectory.samples(), 100);
+  }
+  EXPECT_TRUE(trajectory);
+}
+
+TEST(ControllerCase, EveryTaskTypeIsBuiltWithEveryParamsField) {
+  auto s = minimalLexdynCase();
+  const std::string extra =
+      "    - {name: jl, type: joint_limits, interaction_fraction: 0.2, safety_fraction: 0.05, xi: 0.7, adaptive: false,"
+      " velocity_limits: false}\n"
+      "    - {name: tl, type: torque_limits, scale: 0.5}\n"
+      "    - {name: tr, type: trust_region, delta: 0.02}\n"
+      "    - {name: sc, type: self_collision, pairs: [[WAIST_C, RARM_LINK3_C]], interaction_distance: 0.06,"
+      " safety_distance: 0.02, xi: 0.3, adaptive: false}\n"
+      "    - {name: ct, type: contact, contact: RIGHT_FOOT, gains: {kp: 50, kv: 7}}\n"
+      "    - {name: po, type: position, frame: RGRASP, point: [0.01, 0.02, 0.03], target: [0.3, -0.3, 1.0],"
+      " gains: {kp: 2.0, kv: 3.0}}\n"
+      "    - {name: orr, type: orientation, frame: CHEST_LINK1, target_rpy_rad: [0.1, 0.0, 0.0], gains: {kp: 4.0}}\n"
+      "    - {name: orm, type: orientation, frame: CHEST_LINK1, target: [[1, 0, 0], [0, 1, 0], [0, 0, 1]]}\n"
+      "    - {name: cm, type: com, target: [0.0, 0.0, 0.7], gains: {kp: 5.0, kv: 1.0}}\n"
+      "    - {name: cb, type: com_box, lower: [-0.1, -.inf, -.inf], upper: [0.1, .inf, .inf],"
+      " damper: {interaction: 0.03, safety: 0.005, xi: 0.2, adaptive: false}}\n"
+      "    - {name: jp, type: joint_position, joints: [HEAD_JOINT0, HEAD_JOINT1], target: [0.1, -0.1], gains: {kp: 6.0}}\n"
+      "    - {name: pt, type: posture, target: [" + std::string("0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, "
+                                                             "0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0") + "], gains: {kp: 0.5}}\n"
+      "    - {name: vm, type: velocity_min}\n"
+      "    - {name: wm, type: wrench_min}\n"
+      "    - {name: eom, type: equation_of_motion}\n"
+      "    - {name: fb, type: contact_force_bounds}\n";
+  s["e_controller"] = lexdynController("bfgs", extra);
+  const CaseSpec c = loadCase(writeCase(outputDir("controller_case_registry"), s));
+  const LexdynSpec& lx = c.controller.lexdyn;
+  auto task = [&](const std::string& n) -> const TaskSpec& { return lx.tasks[static_cast<size_t>(lx.findTask(n))]; };
+  EXPECT_EQ(task("jl").joint_limits.interaction_fraction, 0.2);
+  EXPECT_EQ(task("jl").joint_limits.safety_fraction, 0.05);
+  EXPECT_EQ(task("jl").joint_limits.xi, 0.7);
+  EXPECT_FALSE(task("jl").joint_limits.adaptive);
+  EXPECT_FALSE(task("jl").joint_limits.velocity_limits);
+  EXPECT_EQ(task("tl").torque_limits.scale, 0.5);
+  EXPECT_EQ(task("tr").trust_region.delta, 0.02);
+  ASSERT_EQ(task("sc").self_collision.pairs.size(), 1u);
+  EXPECT_EQ(task("sc").self_collision.pairs[0].second, "RARM_LINK3_C");
+  EXPECT_EQ(*task("sc").self_collision.interaction_distance, 0.06);
+  EXPECT_EQ(*task("sc").self_collision.safety_distance, 0.02);
+  EXPECT_EQ(task("sc").self_collision.xi, 0.3);
+  EXPECT_FALSE(task("sc").self_collision.adaptive);
+  EXPECT_EQ(task("ct").contact.gains.kp, 50.0);
+  EXPECT_EQ(*task("ct").contact.gains.kv, 7.0);
+  EXPECT_EQ(task("po").position.point, Eigen::Vector3d(0.01, 0.02, 0.03));
+  EXPECT_EQ(*task("po").position.target, Eigen::Vector3d(0.3, -0.3, 1.0));
+  EXPECT_EQ(*task("po").position.gains.kv, 3.0);
+  EXPECT_NEAR((*task("orr").orientation.target)(2, 1), std::sin(0.1), 1e-15);
+  EXPECT_EQ(task("orr").orientation.gains.kp, 4.0);
+  EXPECT_TRUE(task("orm").orientation.target->isIdentity());
+  EXPECT_EQ(*task("cm").com.target, Eigen::Vector3d(0.0, 0.0, 0.7));
+  EXPECT_EQ(task("cb").com_box.lower.x(), -0.1);
+  EXPECT_TRUE(std::isinf(task("cb").com_box.upper.y()));
+  EXPECT_EQ(task("cb").com_box.damper.interaction, 0.03);
+  EXPECT_EQ(task("cb").com_box.damper.safety, 0.005);
+  EXPECT_EQ(task("cb").com_box.damper.xi, 0.2);
+  EXPECT_FALSE(task("cb").com_box.damper.adaptive);
+  EXPECT_EQ(task("jp").joint_position.joints.size(), 2u);
+  EXPECT_EQ(task("jp").joint_position.target[1], -0.1);
+  EXPECT_EQ(task("pt").posture.target.size(), 32);
+  EXPECT_EQ(task("pt").posture.gains.kp, 0.5);
+  // The tasks are built by the controller (the loader did, for every method); spot-check
+  // through the controller's own view.
+  const model::RobotModel m = model::RobotModel::fromFiles(c.urdf_path, c.data_path);
+  control::Controller ctl(m, buildControllerConfig(lx, m));
+  const auto& tl = dynamic_cast<const tasks::TorqueLimitsTask&>(ctl.task(ctl.taskIndex("tl")));
+  EXPECT_DOUBLE_EQ(tl.torqueLimits()[3], 0.5 * 300.0);  // RLEG_JOINT3, effort 300 N m
+  const auto& sc = dynamic_cast<const tasks::SelfCollisionTask&>(ctl.task(ctl.taskIndex("sc")));
+  EXPECT_EQ(sc.rows(), 1);
+  EXPECT_EQ(sc.damper().interaction, 0.06);
+  for (const std::string& t : taskTypes()) {
+    bool used = false;
+    for (const auto& ts : lx.tasks) used = used || ts.type == t;
+    EXPECT_TRUE(used) << "task type " << t << " not exercised";
+  }
+  EXPECT_EQ(taskTypes().size(), 15u);
+}
+
+TEST(ControllerCase, ErrorsNameFileLineAndKeyPath) {
+  auto base = minimalLexdynCase();
+  auto with = [&](const std::string& from, const std::string& to) {
+    auto s = base;
+    const size_t p = s["e_controller"].find(from);
+    EXPECT_NE(p, std::string::npos) << from;
+    s["e_controller"].replace(p, from.size(), to);
+    return s;
+  };
+  expectError(with("  method: bfgs\n", "  method: newton\n"), {"case.yaml:10: controller.method", "bfgs, ah, gn, wls"});
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  colour: red\n"),
+              {"controller.colour", "unknown key"});
+  expectError(with("  solver: {paper_rules: true}\n", "  solver: {paper_rules: true, max_iterations: many}\n"),
+              {"controller.solver.max_iterations", "expected an integer"});
+  expectError(with("{name: trust, type: trust_region}", "{name: trust, type: trust_region, delta: -1}"),
+              {"controller.tasks[4].delta", "> 0"});
+  expectError(with("{name: trust, type: trust_region}", "{name: trust, type: trust_region, radius: 1}"),
+              {"controller.tasks[4].radius", "unknown key", "delta"});
+  expectError(with("{name: trust, type: trust_region}", "{name: trust, type: trust_zone}"),
+              {"controller.tasks[4].type", "trust_region"});
+  expectError(with("frame: RGRASP, target", "frame: RHAND, target"), {"controller.tasks[9].frame", "unknown frame 'RHAND'"});
+  expectError(with("gains: {kp: 0.3}}\n    - {name: left_hand", "gains: {kp: fast}}\n    - {name: left_hand"),
+              {"controller.tasks[9].gains.kp", "expected a finite number"});
+  expectError(with("contact: RIGHT_FOOT}", "contact: RIGHT_HAND}"), {"controller.tasks[5].contact", "unknown contact 'RIGHT_HAND'"});
+  expectError(with("tasks: [trust]}", "tasks: [trusty]}"), {"controller.levels[2].tasks[0]", "unknown task 'trusty'"});
+  expectError(with("tasks: [trust]}", "tasks: [joint_limits]}"), {"controller.levels[2].tasks[0]", "appears twice"});
+  expectError(with("weights: {right_hand: 1.0, left_hand: 1.0, posture: 1.0e-3, wrench: 1.0e-5}",
+                   "weights: {right_hand: 1.0, left_hand: 1.0, posture: 1.0e-3}"),
+              {"controller.wls_levels[1].weights", "no weight for task(s) wrench"});
+  expectError(with("surface: RIGHT_FOOT, sensor", "surface: RIGHT_SOLE, sensor"),
+              {"controller.contacts[0].surface", "unknown contact surface 'RIGHT_SOLE'"});
+  expectError(with("sensor: LeftHandForceSensor", "sensor: LeftWristSensor"), {"controller.contacts[2].sensor", "unknown force sensor"});
+  expectError(with("grasp: left,", "grasp: right,"), {"controller.contacts[2].grasp", "unknown grasp 'right'"});
+  expectError(with("initial_contacts: [RIGHT_FOOT, LEFT_FOOT]", "initial_contacts: [RIGHT_FOOT, LEFT_FOOT, POLE]"),
+              {"controller.contacts[2].grasp", "switch together"});
+  expectError(with("  levels:\n", "  levels_unused:\n"), {"controller.levels_unused", "unknown key"});
+  // A task the controller cannot run in a domain: trust_region has no acceleration form.
+  expectError(with("{name: hard, tasks: [joint_limits,", "{name: hard, tasks: [trust, joint_limits,"),
+              {"controller.wls_levels", "(method wls)", "task \"trust\"", "acceleration"});
+  // --method for a hierarchy the case lacks.
+  auto s = base;
+  const size_t w = s["e_controller"].find("  wls_levels:");
+  s["e_controller"] = s["e_controller"].substr(0, w);
+  CaseSpec c = loadCase(writeCase(outputDir("controller_case_nowls"), s));
+  try {
+    overrideMethod(c, "wls", "--method");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--method: method wls needs controller.wls_levels"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ControllerCase, EventAndCheckErrors) {
+  auto s = minimalLexdynCase();
+  s["g_events"] = "events:\n  - {at_s: 0.1, action: set_target, task: right_hand, value: [1, 2]}\n";
+  expectError(s, {"case.yaml", "events[0]", "task 'right_hand' takes a target of 3 values, found 2"});
+  s["g_events"] = "events:\n  - {at_s: 0.1, action: set_target, task: com_box, lower: [0.1, 0, 0], upper: [-0.1, 1, 1]}\n";
+  expectError(s, {"events[0]", "task \"com_box\""});
+  s["g_events"] = "events:\n  - {at_s: 0.1, action: set_target, task: velocity, value: [1]}\n";
+  expectError(s, {"events[0]", "has no target"});
+  s["g_events"] = "events:\n  - {at_s: 0.1, action: add_contact, contact: HAND}\n";
+  expectError(s, {"case.yaml:", "events[0].contact", "unknown controller contact 'HAND'"});
+  s["g_events"] = "events:\n  - {at_s: 0.1, action: grasp_on, grasp: left}\n";
+  expectError(s, {"events[0].grasp", "linked to controller contact 'POLE'"});
+  s["g_events"] = "events:\n  - {at_s: 0.1, action: swing, task: posture, from: [0, 0, 0], to: [1, 1, 1], period_s: 2}\n";
+  expectError(s, {"events[0]", "drives 3-D targets"});
+  s["g_events"] = "events:\n  - {at_s: 0.1, action: target_trajectory, task: right_hand, file: nowhere.csv}\n";
+  expectError(s, {"events[0].file", "file not found"});
+  const std::string dir = outputDir("controller_case_traj");
+  std::ofstream(dir + "/bad.csv") << "t,x,y,z\n0,0,0,0\n1,0,0\n";
+  s["g_events"] = "events:\n  - {at_s: 0.1, action: target_trajectory, task: right_hand, file: bad.csv}\n";
+  {
+    const std::string path = writeCase(dir, s);
+    try {
+      loadCase(path);
+      FAIL() << "no error";
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("events[0].file"), std::string::npos) << msg;
+      EXPECT_NE(msg.find("bad.csv:3: expected 4 values"), std::string::npos) << msg;
+    }
+  }
+  s.erase("g_events");
+  s["h_checks"] = "checks:\n  - {name: p, type: task_error, tasks: [posture], statistic: final, limit: 1}\n";
+  expectError(s, {"checks[0].tasks", "not in the hierarchy of method bfgs", "methods:"});
+  s["h_checks"] = "checks:\n  - {name: p, type: task_error, tasks: [posture], statistic: final, limit: 1, methods: [wls]}\n";
+  EXPECT_EQ(errorOf(s), "<no error>");
+  s["h_checks"] = "checks:\n  - {name: c, type: contact_wrench_match, contact: RIGHT_FOOT, limit_Nm: 3}\n";
+  expectError(s, {"checks[0]", "missing required key 'limit_N'"});
+  s["h_checks"] = "checks:\n  - {name: c, type: contact_cop, contact: POLE}\n";
+  expectError(s, {"checks[0].contact", "support polygon"});
+  s["h_checks"] = "checks:\n  - {name: a, type: augmented_fraction, level: hands, max_fraction: 1}\n";
+  expectError(s, {"checks[0].level", "not in the hierarchy of method wls"});
+  s["h_checks"] = "checks:\n  - {name: j, type: joint_velocity_hf_energy, cutoff_hz: 150, limit_rad2_per_s2: 1}\n";
+  expectError(s, {"checks[0].cutoff_hz", "Nyquist"});
+  s["h_checks"] = "checks:\n  - {name: j, type: joint_acceleration_sign_changes, joints: [\"*FINGER*\"], limit_per_s: 1}\n";
+  expectError(s, {"checks[0].joints[0]", "matches no joint"});
+  // Controller checks need the lexdyn controller.
+  auto p = testing::minimalCase();
+  p["h_checks"] = "checks:\n  - {name: s, type: active_set_peak, limit_iterations: 3}\n";
+  expectError(p, {"checks[0].type", "lexdyn"});
+}
+
+// --- Target paths ---------------------------------------------------------------------------
+
+TEST(TargetPath, PiecewiseLinearWithHoldAndLoop) {
+  const std::vector<double> t = {1.0, 2.0, 4.0};
+  const std::vector<Eigen::Vector3d> x = {{0, 0, 0}, {1, 2, 3}, {3, 2, 1}};
+  const TargetTrajectory hold(t, x, 0.0, false, "test");
+  EXPECT_EQ(hold.raw(0.0), x[0]);
+  EXPECT_EQ(hold.raw(1.5), Eigen::Vector3d(0.5, 1.0, 1.5));
+  EXPECT_EQ(hold.raw(3.0), Eigen::Vector3d(2.0, 2.0, 2.0));
+  EXPECT_EQ(hold.raw(10.0), x[2]);
+  EXPECT_EQ(hold.at(1.5), hold.raw(1.5));  // no moving average
+  const TargetTrajectory loop(t, x, 0.0, true, "test");
+  EXPECT_TRUE(loop.raw(4.5).isApprox(loop.raw(1.5), 1e-15));  // period 3 s
+  EXPECT_TRUE(loop.raw(7.0 + 1.0).isApprox(loop.raw(2.0), 1e-12));
+}
+
+TEST(TargetPath, MovingAverageIsTheExactWindowMean) {
+  const std::vector<double> t = {0.0, 1.0, 2.5, 3.0, 6.0};
+  // Continuous when looped (last sample = first), so that the reference quadrature is accurate.
+  const std::vector<Eigen::Vector3d> x = {{0, 0, 0}, {1, -1, 2}, {-2, 0.5, 1}, {4, 1, -1}, {0, 0, 0}};
+  for (bool looped : {false, true}) {
+    const TargetTrajectory tr(t, x, 3.0, looped, "test");
+    for (double tau : {-1.0, 0.0, 0.7, 2.0, 3.3, 5.9, 8.0, 14.2}) {
+      // Independent reference: midpoint rule on the raw path over [tau - 3, tau].
+      const int n = 30000;
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int i = 0; i < n; ++i) sum += tr.raw(tau - 3.0 + (i + 0.5) * 3.0 / n);
+      const Eigen::Vector3d ref = sum / n;
+      EXPECT_LT((tr.at(tau) - ref).norm(), 2e-6) << "tau " << tau << " loop " << looped;
+    }
+  }
+  // Before the start the window holds the first sample: the filtered target starts there.
+  const TargetTrajectory tr(t, x, 3.0, false, "test");
+  EXPECT_TRUE(tr.at(0.0).isApprox(x[0]));
+  EXPECT_NEAR(tr.at(100.0).norm(), 0.0, 1e-12);
+}
+
+TEST(TargetPath, CsvFilesAndTheirErrors) {
+  const std::string dir = outputDir("target_path_csv");
+  std::ofstream(dir + "/ok.csv") << "# comment\nt,x,y,z\n0, 1, 2, 3\n0.5,2,3,4\n\n1,3,4,5\n";
+  const TargetTrajectory t = TargetTrajectory::fromCsv(dir + "/ok.csv", 0.0, false);
+  EXPECT_EQ(t.samples(), 3);
+  EXPECT_EQ(t.raw(0.25), Eigen::Vector3d(1.5, 2.5, 3.5));
+  auto err = [&](const std::string& text) {
+    std::ofstream(dir + "/bad.csv") << text;
+    try {
+      TargetTrajectory::fromCsv(dir + "/bad.csv", 0.0, false);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("<no error>");
+  };
+  EXPECT_NE(err("0,0,0,0\n0,1,1,1\n").find("bad.csv:2: times must increase strictly"), std::string::npos);
+  EXPECT_NE(err("0,0,0,0\n1,1,x,1\n").find("bad.csv:2: column y: expected a finite number"), std::string::npos);
+  EXPECT_NE(err("-1,0,0,0\n1,1,1,1\n").find("bad.csv:1: times must be >= 0"), std::string::npos);
+  EXPECT_NE(err("0,0,0,0\n").find("at least 2 samples"), std::string::npos);
+  EXPECT_NE(err("t,x,y,z\n0,0,0,0\nt,x,y,z\n").find("bad.csv:3"), std::string::npos);
+}
+
+TEST(TargetPath, SwingStartsAtTheMidpointTowardsTo) {
+  Swing s;
+  s.from = Eigen::Vector3d(-3, -1.5, 0);
+  s.to = Eigen::Vector3d(3, -1.5, 2);
+  s.period_s = 60.0;
+  EXPECT_TRUE(s.at(0.0).isApprox(Eigen::Vector3d(0, -1.5, 1)));
+  EXPECT_TRUE(s.at(15.0).isApprox(s.to));
+  EXPECT_TRUE(s.at(45.0).isApprox(s.from));
+  EXPECT_GT(s.at(1.0).x(), 0.0);
+}
+
+}  // namespace
+}  // namespace lexdyn::cases

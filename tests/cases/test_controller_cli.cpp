@@ -1,0 +1,309 @@
+// lexdyn-harness with a lexdyn controller case (the small point-mass model): --method overrides
+// the case's method; `check TRACE --case CASE --json` on the stored trace gives exactly the
+// checks of the run's summary.json; `compare` evaluates the case's method comparisons on stored
+// traces; SIGINT stops a controller run keeping its trace and writing a summary with the
+// controller's statistics; method_params errors name the file and key.
+#include "harness/cases/case_file.hpp"
+#include "case_test_utils.hpp"
+#include "lexdyn/common/error.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace lexdyn::cases {
+namespace {
+
+using testing::outputDir;
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+Result harness(const std::string& args, const std::string& dir) {
+  const std::string cmd = std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-harness " + args + " > " + dir + "/stdout.txt 2> " + dir +
+                          "/stderr.txt";
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(dir + "/stdout.txt");
+  r.err = slurp(dir + "/stderr.txt");
+  return r;
+}
+
+/// A point-mass case with every kind of check that applies to a 1-dof robot without contacts,
+/// and a comparison between the velocity and the acceleration domain.
+std::string pointMassCase(const std::string& dir, double duration_s, const std::string& extra_controller = "") {
+  const std::string models = std::string(LEXDYN_SOURCE_DIR) + "/models/point_mass/";
+  const std::string path = dir + "/pm.yaml";
+  std::ofstream(path) << "name: pm\n"
+                         "robot: {urdf: " + models + "point_mass.urdf, data: " + models + "point_mass.yaml}\n"
+                         "duration_s: " + std::to_string(duration_s) + "\n"
+                         "initial_state: {posture: zero, joints: {x: 0.5}, settle: none}\n"
+                         "controller:\n"
+                         "  type: lexdyn\n"
+                         "  method: gn\n"
+                         "  state_feedback: integrated\n"
+                         "  params: {damping: 1.0}\n" + extra_controller +
+                         "  tasks:\n"
+                         "    - {name: position, type: position, frame: mass, target: [0, 0, 0], gains: {kp: 4.0}}\n"
+                         "    - {name: torque, type: torque_limits}\n"
+                         "  levels:\n"
+                         "    - {name: limits, tasks: [torque]}\n"
+                         "    - {name: position, tasks: [position]}\n"
+                         "  wls_levels:\n"
+                         "    - {name: hard, tasks: [torque]}\n"
+                         "    - {name: objective, tasks: [position], weights: {position: 1.0}}\n"
+                         "sim:\n"
+                         "  contact: {stiffness: 2.0e6, exponent: 1.5, dissipation_s_per_m: 5.0, slip_velocity_m_per_s: 1.0e-3}\n"
+                         "  servo: {setpoint_profile: hermite, gains: [{match: x, kp: 10000, kd: 200}]}\n"
+                         "trace: {frames: [mass]}\n"
+                         "checks:\n"
+                         "  - {name: final, type: task_error, tasks: [position], statistic: final, limit: 0.1}\n"
+                         "  - {name: mean, type: task_error, tasks: [position], statistic: mean, from_s: 0.5, limit: 0.2}\n"
+                         "  - {name: torques, type: torque_limits, source: both, limit_fraction: 0.05}\n"
+                         "  - {name: accel, type: joint_acceleration_sign_changes, source: commanded, limit_per_s: 1.0}\n"
+                         "  - {name: hf, type: joint_velocity_hf_energy, source: measured, cutoff_hz: 5.0, limit_rad2_per_s2: 1e-4}\n"
+                         "  - {name: rate, type: task_error_rate_sign_changes, task: position, limit_per_s: 1.0}\n"
+                         "  - {name: overshoot, type: task_overshoot, task: position, limit_rel: 0.001}\n"
+                         "  - {name: closed, type: task_error_closed_form, task: position, limit_rel: 0.01}\n"
+                         "  - {name: status, type: controller_status}\n"
+                         "  - {name: peak, type: active_set_peak, limit_iterations: 30}\n"
+                         "  - {name: augmented, type: augmented_fraction, level: position, max_fraction: 1.0, methods: [bfgs, ah, gn]}\n"
+                         "  - {name: tick, type: tick_time, timer: tick, percentile: 99, limit_us: 1.0e6}\n"
+                         "comparisons:\n"
+                         "  - {name: gn_not_worse_than_wls, type: method_comparison, tasks: [position], statistic: mean,"
+                         " better: gn, worse: wls}\n"
+                         "  - {name: wls_not_worse_than_gn, type: method_comparison, tasks: [position], statistic: mean,"
+                         " better: wls, worse: gn}\n";
+  return path;
+}
+
+TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
+  const std::string dir = outputDir("ctl_cli_check");
+  const std::string c = pointMassCase(dir, 3.0, "  method_params: {gn: {damping: 0.01}}\n");
+  for (const char* method : {"gn", "wls"}) {
+    const std::string out = dir + "/" + method;
+    const Result run = harness("run " + c + " --out " + out + " --method " + method + " --quiet", dir);
+    ASSERT_TRUE(run.code == 0 || run.code == 1) << run.err;
+    const nlohmann::json summary = nlohmann::json::parse(slurp(out + "/summary.json"));
+    EXPECT_EQ(summary["method"], method);
+    EXPECT_EQ(summary["status"], "completed");
+    // The trace header records the method and the damping of the method (method_params).
+    const checks::TraceTable t = checks::readTrace(out + "/trace.csv");
+    EXPECT_EQ(*checks::findMetadata(t.metadata, "method"), method);
+    const std::string params = *checks::findMetadata(t.metadata, "controller_params");
+    EXPECT_NE(params.find(std::string("damping ") + (std::string(method) == "gn" ? "0.01," : "1,")), std::string::npos) << params;
+    // The augmented_fraction check is for the velocity-domain methods only.
+    const size_t expected_checks = std::string(method) == "wls" ? 11u : 12u;
+    ASSERT_EQ(summary["checks"].size(), expected_checks) << method;
+    // Re-evaluated on the stored trace: the same checks, values, verdicts and details.
+    const Result check = harness("check " + out + "/trace.csv --case " + c + " --json", dir);
+    const nlohmann::json stored = nlohmann::json::parse(check.out);
+    EXPECT_EQ(stored["checks"], summary["checks"]) << method << "\nstored: " << stored.dump(1) << "\nsummary: " << summary["checks"].dump(1);
+    EXPECT_EQ(stored["all_checks_passed"], summary["all_checks_passed"]);
+    EXPECT_EQ(check.code, summary["all_checks_passed"].get<bool>() ? 0 : 1) << check.err;
+    // The expected outcomes: gn (mu 0.01) converges without overshoot, wls (mu 1) overshoots.
+    std::map<std::string, bool> passed;
+    for (const auto& ck : summary["checks"]) passed[ck["name"]] = ck["passed"];
+    EXPECT_EQ(passed["overshoot"], std::string(method) == "gn") << method;
+    EXPECT_EQ(passed["closed"], std::string(method) == "gn") << method;
+    EXPECT_TRUE(passed["status"]);
+    EXPECT_EQ(run.code, std::string(method) == "gn" ? 0 : 1) << run.err;
+  }
+  // compare: the mean error of gn (critically damped, mu 0.01) is below that of wls, not the other way.
+  Result cmp = harness("compare --case " + c + " " + dir + "/gn/trace.csv " + dir + "/wls/trace.csv --json", dir);
+  EXPECT_EQ(cmp.code, 1) << cmp.err;
+  const nlohmann::json j = nlohmann::json::parse(cmp.out);
+  ASSERT_EQ(j["checks"].size(), 2u);
+  EXPECT_EQ(j["checks"][0]["name"], "gn_not_worse_than_wls");
+  EXPECT_TRUE(j["checks"][0]["passed"].get<bool>()) << j.dump(1);
+  EXPECT_LT(j["checks"][0]["value"].get<double>(), 0.0);
+  EXPECT_FALSE(j["checks"][1]["passed"].get<bool>());
+  EXPECT_DOUBLE_EQ(j["checks"][1]["value"].get<double>(), -j["checks"][0]["value"].get<double>());
+  // A trace missing for one of the methods: that comparison fails, naming the methods.
+  cmp = harness("compare --case " + c + " " + dir + "/gn/trace.csv", dir);
+  EXPECT_EQ(cmp.code, 1);
+  EXPECT_NE(cmp.err.find("needs traces of methods gn and wls"), std::string::npos) << cmp.err;
+  // Two traces of one method: bad input.
+  cmp = harness("compare --case " + c + " " + dir + "/gn/trace.csv " + dir + "/gn/trace.csv", dir);
+  EXPECT_EQ(cmp.code, 2);
+  EXPECT_NE(cmp.err.find("a second trace of method gn"), std::string::npos) << cmp.err;
+}
+
+TEST(ControllerCli, TwoProcessesWriteBitIdenticalTracesButForTheWallTimes) {
+  // Determinism across processes for a controller run with its wall-time channels recorded:
+  // every channel but time.* is bit-identical (and the time.* channels are present).
+  const std::string dir = outputDir("ctl_cli_determinism");
+  const std::string pm = pointMassCase(dir, 2.0, "  method_params: {gn: {damping: 0.01}}\n");
+  const std::string exp1 = std::string(LEXDYN_SOURCE_DIR) + "/cases/exp1.yaml";
+  struct Run {
+    std::string case_file, method, duration;
+    size_t rows;
+  };
+  // The point mass with both domains, and the humanoid of exp1 (contacts, sensors) for 0.3 s.
+  for (const Run& run : {Run{pm, "gn", "2", 401}, Run{pm, "wls", "2", 401}, Run{exp1, "ah", "0.3", 61}}) {
+    const std::string method = run.method;
+    for (const char* k : {"a", "b"}) {
+      const Result r = harness("run " + run.case_file + " --method " + method + " --duration " + run.duration + " --out " + dir + "/" +
+                                   method + k + " --quiet",
+                               dir);
+      ASSERT_TRUE(r.code == 0 || r.code == 1) << r.err;
+    }
+    const checks::TraceTable a = checks::readTrace(dir + "/" + method + "a/trace.csv");
+    const checks::TraceTable b = checks::readTrace(dir + "/" + method + "b/trace.csv");
+    ASSERT_EQ(a.names, b.names);
+    ASSERT_EQ(a.rows.size(), b.rows.size());
+    ASSERT_EQ(a.rows.size(), run.rows);
+    int timers = 0;
+    for (size_t i = 0; i < a.names.size(); ++i) {
+      if (a.names[i].rfind("time.", 0) == 0) {
+        ++timers;
+        continue;
+      }
+      for (size_t r = 0; r < a.rows.size(); ++r) {
+        // Bitwise (NaN-safe) equality.
+        ASSERT_EQ(std::memcmp(&a.rows[r][i], &b.rows[r][i], sizeof(double)), 0) << method << " " << a.names[i] << " row " << r;
+      }
+    }
+    EXPECT_EQ(timers, 5);
+    EXPECT_EQ(a.metadata.size(), b.metadata.size());
+  }
+}
+
+TEST(ControllerCli, BadMethodOverridesAreInputErrors) {
+  const std::string dir = outputDir("ctl_cli_method");
+  const std::string c = pointMassCase(dir, 0.1);
+  Result r = harness("run " + c + " --out " + dir + "/out --method lm --quiet", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--method"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out/trace.csv"));
+  // A case without wls_levels cannot run wls.
+  std::string text = slurp(c);
+  text.erase(text.find("  wls_levels:"), text.find("sim:") - text.find("  wls_levels:"));
+  text.erase(text.find("comparisons:"));
+  std::ofstream(dir + "/no_wls.yaml") << text;
+  r = harness("run " + dir + "/no_wls.yaml --out " + dir + "/out --method wls --quiet", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--method: method wls needs controller.wls_levels"), std::string::npos) << r.err;
+  // A stand case (posture servo) has no methods.
+  r = harness("run " + std::string(LEXDYN_SOURCE_DIR) + "/cases/stand.yaml --out " + dir + "/out --method bfgs --quiet", dir);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--method needs a case with controller type lexdyn"), std::string::npos) << r.err;
+}
+
+TEST(ControllerCli, MethodParamsErrorsNameFileLineAndKey) {
+  const std::string dir = outputDir("ctl_cli_method_params");
+  auto errorOf = [&](const std::string& extra) {
+    try {
+      loadCase(pointMassCase(dir, 0.1, extra));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("<no error>");
+  };
+  std::string msg = errorOf("  method_params: {lm: {damping: 0.1}}\n");
+  EXPECT_NE(msg.find("pm.yaml:10: controller.method_params.lm: unknown method 'lm'"), std::string::npos) << msg;
+  msg = errorOf("  method_params: {gn: {dampng: 0.1}}\n");
+  EXPECT_NE(msg.find("controller.method_params.gn.dampng"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("unknown key"), std::string::npos) << msg;
+  msg = errorOf("  method_params: {gn: {damping: -1}}\n");
+  EXPECT_NE(msg.find("controller.method_params.gn.damping"), std::string::npos) << msg;
+  // Without an override every method takes `params`.
+  const CaseSpec spec = loadCase(pointMassCase(dir, 0.1, "  method_params: {wls: {damping: 0.5}}\n"));
+  EXPECT_EQ(spec.controller.lexdyn.params.damping, 1.0);  // gn
+}
+
+TEST(ControllerCli, ClosedFormAndOvershootChecksInTheCaseFile) {
+  const std::string dir = outputDir("ctl_cli_closed_form");
+  auto load = [&](const std::string& check) {
+    std::string text = slurp(pointMassCase(dir, 0.1));
+    text.replace(text.find("comparisons:"), std::string::npos, "");
+    text += "  - " + check + "\n";
+    std::ofstream(dir + "/pm.yaml") << text;
+    return loadCase(dir + "/pm.yaml");
+  };
+  auto errorOf = [&](const std::string& check) {
+    try {
+      load(check);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("<no error>");
+  };
+  // The gains default to the task's: kp 4, kv 2 sqrt(kp) = 4; kv given, or kp alone (kv critical).
+  CaseSpec c = load("{name: cf, type: task_error_closed_form, task: position, limit_rel: 0.01}");
+  EXPECT_EQ(c.checks.back().kp, 4.0);
+  EXPECT_EQ(c.checks.back().kv, 4.0);
+  EXPECT_EQ(c.checks.back().tasks, std::vector<std::string>{"position"});
+  c = load("{name: cf, type: task_error_closed_form, task: position, kp: 0.5, kv: 1.0, limit_rel: 0.01}");
+  EXPECT_EQ(c.checks.back().kp, 0.5);
+  EXPECT_EQ(c.checks.back().kv, 1.0);
+  c = load("{name: cf, type: task_error_closed_form, task: position, kp: 9, limit_rel: 0.01}");
+  EXPECT_EQ(c.checks.back().kv, 6.0);
+  c = load("{name: os, type: task_overshoot, task: position, limit_rel: 0.001, from_s: 0.05}");
+  EXPECT_EQ(c.checks.back().limit, 0.001);
+  EXPECT_EQ(c.checks.back().from_s, 0.05);
+  // Errors name the file, the line and the key.
+  std::string msg = errorOf("{name: cf, type: task_error_closed_form, task: torque, limit_rel: 0.01}");
+  EXPECT_NE(msg.find("pm.yaml:36: checks[12].task"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("has no PD gains; give kp"), std::string::npos) << msg;
+  msg = errorOf("{name: cf, type: task_error_closed_form, task: hand, limit_rel: 0.01}");
+  EXPECT_NE(msg.find("checks[12].task: unknown task 'hand'"), std::string::npos) << msg;
+  msg = errorOf("{name: os, type: task_overshoot, task: position}");
+  EXPECT_NE(msg.find("missing required key 'limit_rel'"), std::string::npos) << msg;
+  msg = errorOf("{name: os, type: task_overshoot, task: position, limit_rel: 0.1, kp: 1}");
+  EXPECT_NE(msg.find("checks[12].kp"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("unknown key"), std::string::npos) << msg;
+}
+
+TEST(ControllerCli, SigintKeepsTheTraceAndWritesTheControllerSummary) {
+  // A long controller run, interrupted as soon as it has written its first rows.
+  const std::string dir = outputDir("ctl_cli_sigint");
+  const std::string c = pointMassCase(dir, 2000.0);
+  const std::string out = dir + "/out";
+  const std::string script = "(" + std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-harness run " + c + " --out " + out +
+                             " --quiet 2> " + dir + "/stderr.txt & pid=$!; "
+                             "while [ ! -s " + out + "/trace.csv.partial ] && kill -0 $pid 2>/dev/null; do sleep 0.01; done; sleep 0.2; "
+                             "kill -INT $pid; wait $pid; echo $? > " + dir + "/code)";
+  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+  std::ifstream code_in(dir + "/code");
+  int code = -1;
+  code_in >> code;
+  EXPECT_EQ(code, 1);
+  ASSERT_TRUE(std::filesystem::exists(out + "/summary.json"));
+  ASSERT_TRUE(std::filesystem::exists(out + "/trace.csv"));
+  EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv.partial"));
+  const nlohmann::json j = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_EQ(j["status"], "interrupted");
+  EXPECT_NE(j["message"].get<std::string>().find("interrupted at t = "), std::string::npos);
+  EXPECT_LT(j["simulated_s"].get<double>(), 2000.0);
+  // The controller's statistics cover the ticks run; the trace holds every tick up to there.
+  const long ticks = j["controller"]["ticks"].get<long>();
+  EXPECT_GT(ticks, 1);
+  EXPECT_TRUE(j["tasks"].contains("position"));
+  EXPECT_TRUE(j["timing_us"].contains("tick"));
+  const checks::TraceTable t = checks::readTrace(out + "/trace.csv");
+  EXPECT_EQ(static_cast<long>(t.rows.size()), ticks);
+  EXPECT_DOUBLE_EQ(t.rows.back()[0], j["simulated_s"].get<double>());
+  // Its checks can be run again; those that need the whole run fail honestly (not a crash).
+  const Result r = harness("check " + out + "/trace.csv --case " + c, dir);
+  EXPECT_TRUE(r.code == 0 || r.code == 1) << r.err;
+}
+
+}  // namespace
+}  // namespace lexdyn::cases

@@ -1,0 +1,250 @@
+// The lexdyn controller in the closed loop (harness/cases/lexdyn_driver.cpp): a short controller
+// case writes the documented channels and summary, reruns bit-identically, applies its events at
+// their ticks (targets, contacts with their simulator grasps, swings, trajectories), stops on a
+// controller failure keeping the trace, and its checks give the same result on the stored trace.
+#include "harness/cases/runner.hpp"
+#include "case_test_utils.hpp"
+#include "lexdyn/common/error.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <limits>
+#include <fstream>
+#include <sstream>
+
+namespace lexdyn::cases {
+namespace {
+
+using testing::lexdynController;
+using testing::minimalLexdynCase;
+using testing::outputDir;
+using testing::writeCase;
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+RunSummary run(const CaseSpec& spec, const std::string& dir) {
+  RunOptions o;
+  o.out_dir = dir;
+  o.progress = false;
+  return runCase(spec, o);
+}
+
+double at(const checks::TraceTable& t, size_t row, const std::string& channel) {
+  const int c = t.column(channel);
+  EXPECT_GE(c, 0) << channel;
+  return c < 0 ? NAN : t.rows[row][static_cast<size_t>(c)];
+}
+
+TEST(ControllerRunner, EveryMethodRunsAndWritesTheControllerChannelsAndSummary) {
+  for (const char* method : {"bfgs", "ah", "gn", "wls"}) {
+    const std::string dir = outputDir(std::string("ctl_runner_") + method);
+    CaseSpec spec = loadCase(writeCase(dir, minimalLexdynCase(0.2)));
+    overrideMethod(spec, method, "test");
+    const RunSummary s = run(spec, dir + "/out");
+    EXPECT_EQ(s.status, "completed") << method << ": " << s.message;
+    EXPECT_EQ(s.method, method);
+    const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
+    ASSERT_EQ(t.rows.size(), 41u);  // t = 0 .. 0.2 s
+    EXPECT_EQ(*checks::findMetadata(t.metadata, "method"), method);
+    for (const char* c : {"ctrl.status", "solver.status", "solver.iterations", "time.tick_us", "time.solver_us",
+                          "task.right_hand.error", "task.right_hand.active", "task.right_hand.engaged", "cmd.q.RLEG_JOINT3",
+                          "cmd.qd.RLEG_JOINT3", "cmd.tau.RLEG_JOINT3", "tau.RLEG_JOINT3", "ctrl_contact.RIGHT_FOOT.active",
+                          "wrench.RIGHT_FOOT.fz", "wrench_sensed.RIGHT_FOOT.fz", "wrench.POLE.fx", "wrench_sensed.POLE.tz",
+                          "target.right_hand.x", "target.com_box.lower_x", "com.x"}) {
+      EXPECT_GE(t.column(c), 0) << c << " (" << method << ")";
+    }
+    const bool wls = std::string(method) == "wls";
+    EXPECT_EQ(t.column("level.hands.augmented") >= 0, !wls) << method;
+    EXPECT_EQ(t.column("level.objective.violation") >= 0, wls) << method;
+    EXPECT_EQ(t.column("task.posture.error") >= 0, wls) << method;  // only the method's tasks
+    EXPECT_EQ(t.column("task.velocity.error") >= 0, !wls) << method;
+    // At rest in the static equilibrium, the feet carry the weight in the controller's plan and
+    // in the sensors, in the same axes (the contact frames) and about the same points.
+    const double fz = at(t, 0, "wrench.RIGHT_FOOT.fz") + at(t, 0, "wrench.LEFT_FOOT.fz");
+    const double fz_sensed = at(t, 0, "wrench_sensed.RIGHT_FOOT.fz") + at(t, 0, "wrench_sensed.LEFT_FOOT.fz");
+    EXPECT_NEAR(fz, 637.65, 0.05 * 637.65) << method;
+    EXPECT_NEAR(fz_sensed, 637.65, 0.05) << method;
+    // The sole's normal force equals the simulator's vertical contact force (the sole is level
+    // to a few mrad).
+    EXPECT_NEAR(at(t, 0, "wrench_sensed.RIGHT_FOOT.fz"), at(t, 0, "contact.RIGHT_FOOT.fz"), 0.05) << method;
+    EXPECT_EQ(at(t, 0, "ctrl_contact.POLE.active"), 0.0);
+    EXPECT_EQ(at(t, 0, "target.right_hand.y"), -0.4);
+    // summary.json
+    const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/out/summary.json"));
+    EXPECT_EQ(j["method"], method);
+    ASSERT_TRUE(j.contains("tasks"));
+    EXPECT_GT(j["tasks"]["right_hand"]["final_error"].get<double>(), 0.0);
+    EXPECT_GT(j["tasks"]["right_hand"]["mean_error"].get<double>(), j["tasks"]["right_hand"]["final_error"].get<double>());
+    EXPECT_GE(j["solver"]["peak_iterations"].get<int>(), 1);
+    for (const char* timer : {"model", "tasks", "hessian", "solver", "tick"}) {
+      const auto& tm = j["timing_us"][timer];
+      EXPECT_LE(tm["median"].get<double>(), tm["p99"].get<double>()) << timer;
+      EXPECT_LE(tm["p99"].get<double>(), tm["max"].get<double>()) << timer;
+    }
+    EXPECT_EQ(j["controller"]["ticks"].get<long>(), 41);
+    EXPECT_EQ(j["checks"].size(), 1u);
+  }
+}
+
+TEST(ControllerRunner, RerunsAreBitIdentical) {
+  const std::string dir = outputDir("ctl_runner_determinism");
+  auto sections = minimalLexdynCase(0.3, "ah");
+  sections["g_trace"] = "trace:\n  frames: [WAIST]\n  timings: false\n";
+  const CaseSpec spec = loadCase(writeCase(dir, sections));
+  ASSERT_EQ(run(spec, dir + "/a").status, "completed");
+  ASSERT_EQ(run(spec, dir + "/b").status, "completed");
+  const std::string a = slurp(dir + "/a/trace.csv"), b = slurp(dir + "/b/trace.csv");
+  EXPECT_GT(a.size(), 50000u);
+  EXPECT_TRUE(a == b) << "traces differ";
+  // With the wall-time channels every other channel is still identical.
+  sections["g_trace"] = "trace:\n  frames: [WAIST]\n";
+  const CaseSpec timed = loadCase(writeCase(dir, sections));
+  ASSERT_EQ(run(timed, dir + "/c").status, "completed");
+  const checks::TraceTable ta = checks::readTrace(dir + "/a/trace.csv"), tc = checks::readTrace(dir + "/c/trace.csv");
+  ASSERT_EQ(ta.rows.size(), tc.rows.size());
+  EXPECT_GE(tc.column("time.tick_us"), 0);
+  EXPECT_LT(ta.column("time.tick_us"), 0);
+  for (size_t i = 0; i < ta.names.size(); ++i) {
+    const int c = tc.column(ta.names[i]);
+    ASSERT_GE(c, 0) << ta.names[i];
+    for (size_t r = 0; r < ta.rows.size(); ++r) ASSERT_EQ(ta.rows[r][i], tc.rows[r][static_cast<size_t>(c)]) << ta.names[i] << " row " << r;
+  }
+}
+
+TEST(ControllerRunner, EventsApplyAtTheirTicks) {
+  const std::string dir = outputDir("ctl_runner_events");
+  std::ofstream(dir + "/path.csv") << "t,x,y,z\n0,0.2,-0.4,0.8\n0.1,0.3,-0.4,0.8\n0.2,0.3,-0.3,0.9\n";
+  auto sections = minimalLexdynCase(0.5);
+  sections["g_events"] =
+      "events:\n"
+      "  - {at_s: 0.1, action: set_target, task: right_hand, value: [0.35, -0.45, 0.95]}\n"
+      "  - {at_s: 0.1, action: add_contact, contact: POLE}\n"
+      "  - {at_s: 0.2, action: set_target, task: com_box, lower: [-0.04, -0.1, -.inf], upper: [0.04, 0.1, .inf]}\n"
+      "  - {at_s: 0.25, action: swing, task: left_hand, from: [0.2, 0.3, 0.7], to: [0.3, 0.5, 0.9], period_s: 0.4}\n"
+      "  - {at_s: 0.3, action: target_trajectory, task: right_hand, file: path.csv, moving_average_s: 0.05}\n"
+      "  - {at_s: 0.4, action: remove_contact, contact: POLE}\n";
+  const CaseSpec spec = loadCase(writeCase(dir, sections));
+  const RunSummary s = run(spec, dir + "/out");
+  ASSERT_EQ(s.status, "completed") << s.message;
+  const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
+  // An event applies at the first tick at or after its time; its target generator starts there.
+  auto tickAt = [&](double at_s) -> double {
+    for (const auto& row : t.rows) {
+      if (row[0] >= at_s - 1e-9) return row[0];
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  };
+  const double swing_start = tickAt(0.25), path_start = tickAt(0.3);
+  const TargetTrajectory path = TargetTrajectory::fromCsv(dir + "/path.csv", 0.05, false);
+  Swing swing;
+  swing.from = Eigen::Vector3d(0.2, 0.3, 0.7);
+  swing.to = Eigen::Vector3d(0.3, 0.5, 0.9);
+  swing.period_s = 0.4;
+  for (size_t r = 0; r < t.rows.size(); ++r) {
+    const double time = t.rows[r][0];
+    // Controller channels show the tick at the row's time, after that time's events.
+    const bool pole = time >= 0.1 - 1e-9 && time < 0.4 - 1e-9;
+    EXPECT_EQ(at(t, r, "ctrl_contact.POLE.active"), pole ? 1.0 : 0.0) << time;
+    // Simulator channels show the state at the row's time: the grasp acts from the event on.
+    const bool grasp = time > 0.1 + 1e-9 && time <= 0.4 + 1e-9;
+    EXPECT_EQ(at(t, r, "grasp.left.active"), grasp ? 1.0 : 0.0) << time;
+    Eigen::Vector3d rh(at(t, r, "target.right_hand.x"), at(t, r, "target.right_hand.y"), at(t, r, "target.right_hand.z"));
+    if (time < 0.1 - 1e-9) {
+      EXPECT_EQ(rh, Eigen::Vector3d(0.3, -0.4, 0.9)) << time;
+    } else if (time < 0.3 - 1e-9) {
+      EXPECT_EQ(rh, Eigen::Vector3d(0.35, -0.45, 0.95)) << time;
+    } else {
+      EXPECT_EQ(rh, path.at(time - path_start)) << time;
+    }
+    EXPECT_EQ(at(t, r, "target.com_box.lower_x"), time < 0.2 - 1e-9 ? -0.03 : -0.04) << time;
+    if (time >= 0.25 - 1e-9) {
+      const Eigen::Vector3d lh(at(t, r, "target.left_hand.x"), at(t, r, "target.left_hand.y"), at(t, r, "target.left_hand.z"));
+      EXPECT_EQ(lh, swing.at(time - swing_start)) << time;
+    }
+  }
+  // The pole contact carries a force in the plan while held (sensed through the grasp).
+  size_t row = 30;  // t = 0.15 s
+  EXPECT_NEAR(t.rows[row][0], 0.15, 1e-12);
+  EXPECT_EQ(at(t, row, "grasp.left.active"), 1.0);
+}
+
+TEST(ControllerRunner, ControllerFailureStopsTheRunKeepingTheTrace) {
+  // Two contradicting joint targets in the WLS hard level: infeasible at the first tick.
+  const std::string dir = outputDir("ctl_runner_failure");
+  auto sections = minimalLexdynCase(0.3, "wls");
+  std::string ctl = lexdynController("wls", "    - {name: head_a, type: joint_position, joints: [HEAD_JOINT0], target: [0.3]}\n"
+                                            "    - {name: head_b, type: joint_position, joints: [HEAD_JOINT0], target: [-0.3]}\n");
+  const std::string from = "{name: hard, tasks: [joint_limits,";
+  ctl.replace(ctl.find(from), from.size(), "{name: hard, tasks: [head_a, head_b, joint_limits,");
+  sections["e_controller"] = ctl;
+  const CaseSpec spec = loadCase(writeCase(dir, sections));
+  const RunSummary s = run(spec, dir + "/out");
+  EXPECT_EQ(s.status, "controller_failure");
+  EXPECT_NE(s.message.find("controller_failure: infeasible at t = 0 s"), std::string::npos) << s.message;
+  EXPECT_EQ(exitCode(s), 1);
+  const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
+  ASSERT_EQ(t.rows.size(), 1u);
+  EXPECT_EQ(at(t, 0, "ctrl.status"), 3.0);  // infeasible (ctrl_status_codes)
+  const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/out/summary.json"));
+  EXPECT_EQ(j["status"], "controller_failure");
+  EXPECT_EQ(j["controller"]["status_counts"]["infeasible"].get<long>(), 1);
+}
+
+TEST(ControllerRunner, StoredTraceChecksEqualTheLiveOnes) {
+  const std::string dir = outputDir("ctl_runner_checks");
+  auto sections = minimalLexdynCase(0.3);
+  sections["h_checks"] =
+      "checks:\n"
+      "  - {name: hands, type: task_error, tasks: [right_hand, left_hand], statistic: mean, limit: 1.0}\n"
+      "  - {name: torques, type: torque_limits, limit_fraction: 0.5}\n"
+      "  - {name: unilateral, type: contact_unilateral, contact: LEFT_FOOT, source: sensed, min_N: 100}\n"
+      "  - {name: cone, type: contact_friction, contact: RIGHT_FOOT}\n"
+      "  - {name: cop, type: contact_cop, contact: RIGHT_FOOT, source: sensed, limit_m: -0.01}\n"
+      "  - {name: match, type: contact_wrench_match, contact: RIGHT_FOOT, limit_N: 50}\n"
+      "  - {name: acc, type: joint_acceleration_sign_changes, dead_band_rad_per_s2: 0.1, limit_per_s: 10}\n"
+      "  - {name: hf, type: joint_velocity_hf_energy, cutoff_hz: 10, limit_rad2_per_s2: 1}\n"
+      "  - {name: rate, type: task_error_rate_sign_changes, task: right_hand, limit_per_s: 5}\n"
+      "  - {name: status, type: controller_status}\n"
+      "  - {name: peak, type: active_set_peak, limit_iterations: 30}\n"
+      "  - {name: aug, type: augmented_fraction, level: hands, max_fraction: 1.0, methods: [bfgs, ah, gn]}\n"
+      "  - {name: tick, type: tick_time, timer: tick, percentile: 50, limit_us: 1.0e6}\n";
+  const CaseSpec spec = loadCase(writeCase(dir, sections));
+  const RunSummary s = run(spec, dir + "/out");
+  ASSERT_EQ(s.status, "completed");
+  ASSERT_EQ(s.checks.size(), 13u);
+  const std::vector<checks::CheckResult> stored = checks::runChecks(spec.checks, checks::readTrace(dir + "/out/trace.csv"));
+  ASSERT_EQ(stored.size(), s.checks.size());
+  for (size_t i = 0; i < stored.size(); ++i) {
+    EXPECT_EQ(stored[i].name, s.checks[i].name);
+    EXPECT_TRUE(stored[i].value == s.checks[i].value || (std::isnan(stored[i].value) && std::isnan(s.checks[i].value)))
+        << stored[i].name << ": " << stored[i].value << " vs " << s.checks[i].value;
+    EXPECT_EQ(stored[i].passed, s.checks[i].passed) << stored[i].name;
+    EXPECT_EQ(stored[i].detail, s.checks[i].detail) << stored[i].name;
+  }
+  // At rest-like conditions over 0.3 s these hold (values, not just pass/fail, are sane).
+  for (const auto& c : s.checks) {
+    if (c.name == "unilateral") {
+      EXPECT_GT(c.value, 250.0);
+    }
+    if (c.name == "status") {
+      EXPECT_EQ(c.value, 0.0);
+    }
+  }
+  // With --method wls the check restricted to the velocity methods is skipped.
+  CaseSpec wls = spec;
+  overrideMethod(wls, "wls", "test");
+  const RunSummary w = run(wls, dir + "/wls");
+  EXPECT_EQ(w.checks.size(), 12u);
+  ASSERT_EQ(w.skipped_checks.size(), 1u);
+  EXPECT_EQ(w.skipped_checks[0], "aug");
+}
+
+}  // namespace
+}  // namespace lexdyn::cases
