@@ -401,7 +401,7 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
     const yaml::Node tn = m.required("tasks");
     c.tasks = readTaskNames(cs, tn);
     requireTasksInHierarchies(cs, tn, c.tasks, methods);
-    c.statistic = m.required("statistic").asEnum({"final", "mean", "max"});
+    c.statistic = m.required("statistic").asEnum({"final", "mean", "max", "range"});
     c.limit = m.required("limit").asNonNegativeDouble();
   } else if (c.type == "torque_limits") {
     c.source = "both";
@@ -596,6 +596,12 @@ EventSpec readEvent(const yaml::Node& en, const CaseSpec& c) {
       e.value.resize(6);
       e.value.head<3>() = asBound3(*lower);
       e.value.tail<3>() = asBound3(*upper);
+    }
+    if (auto r = em.optional("ramp_s")) {
+      e.ramp_s = r->asNonNegativeDouble();
+      // Entry-wise linear interpolation: meaningful for positions, joint values and box bounds,
+      // not for an orientation target (a rotation matrix).
+      if (e.ramp_s > 0.0 && (rpy || e.value.size() == 9)) r->fail("ramp_s is not available for orientation targets");
     }
   } else if (e.action == "target_trajectory") {
     taskRef();

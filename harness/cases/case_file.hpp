@@ -68,6 +68,7 @@ struct EventSpec {
   std::string where;
   std::string task;           ///< set_target, target_trajectory, swing
   Eigen::VectorXd value;      ///< set_target: the task's target (TaskModel::targetSize values)
+  double ramp_s = 0.0;        ///< set_target: reach `value` linearly over this time (0: at once)
   std::string contact;        ///< add_contact, remove_contact
   std::string file;           ///< target_trajectory: the CSV file (resolved)
   TargetTrajectory trajectory;

@@ -68,14 +68,17 @@ struct LexdynDriver::Impl {
   mutable std::unique_ptr<model::ModelData> ctrl_data;
 
   struct Generator {
+    enum class Kind { Trajectory, Swing, Ramp } kind = Kind::Trajectory;
     int task = -1;
     double start = 0.0;
-    bool swing = false;
     TargetTrajectory trajectory;
     Swing sw;
+    double ramp_s = 0.0;
+    Eigen::VectorXd from, to;  ///< ramp: entries not finite at either end take `to` at once
   };
   std::vector<Generator> generators;
   Eigen::VectorXd target3 = Eigen::VectorXd::Zero(3);
+  Eigen::VectorXd rampValue;
 
   // Statistics.
   long ticks = 0;
@@ -184,6 +187,7 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
                       num(p.eps_dt2) + ", newton_target " +
                       (p.newton_target == control::NewtonTarget::Zero ? "zero" : "previous_velocity") + ", damping " +
                       num(p.damping) + ", use_qmod " + (p.use_qmod ? "true" : "false") + ", sr1 " + (p.sr1 ? "true" : "false") + ", newton_identity_weight " + num(p.newton_identity_weight) +
+                      ", stop_after_level " + (p.stop_after_level.empty() ? std::string("(none)") : p.stop_after_level) +
                       ", rank_switching " + (p.rank_switching ? "true" : "false") + ", sign_change_guard " +
                       (p.sign_change_guard ? "true" : "false") + ", wls_infeasibility_tolerance " +
                       num(p.wls_infeasibility_tolerance) + "; feed-forward torque " + (I.lx.feedforward_torque ? "on" : "off") +
@@ -247,13 +251,23 @@ void LexdynDriver::applyEvent(const EventSpec& e, double t, sim::Simulator& simu
   // A new target for a task stops the trajectory or swing that drove it.
   I.generators.erase(std::remove_if(I.generators.begin(), I.generators.end(), [&](const Impl::Generator& g) { return g.task == task; }),
                      I.generators.end());
-  if (e.action == "set_target") {
+  if (e.action == "set_target" && e.ramp_s > 0.0) {
+    Impl::Generator g;
+    g.kind = Impl::Generator::Kind::Ramp;
+    g.task = task;
+    g.start = t;
+    g.ramp_s = e.ramp_s;
+    const tasks::TaskData& d = I.ctl->taskData(task);
+    g.from = d.target_set && d.target.size() == e.value.size() ? d.target : e.value;
+    g.to = e.value;
+    I.generators.push_back(std::move(g));
+  } else if (e.action == "set_target") {
     I.ctl->setTaskTarget(task, e.value);
   } else if (e.action == "target_trajectory" || e.action == "swing") {
     Impl::Generator g;
+    g.kind = e.action == "swing" ? Impl::Generator::Kind::Swing : Impl::Generator::Kind::Trajectory;
     g.task = task;
     g.start = t;
-    g.swing = e.action == "swing";
     g.trajectory = e.trajectory;
     g.sw = e.swing;
     I.generators.push_back(std::move(g));
@@ -262,9 +276,23 @@ void LexdynDriver::applyEvent(const EventSpec& e, double t, sim::Simulator& simu
 
 bool LexdynDriver::tick(double t, const sim::Simulator& simu, sim::JointCommand& cmd, std::string& failure) {
   Impl& I = *impl_;
-  for (const auto& g : I.generators) {
+  for (auto& g : I.generators) {
     const double tau = t - g.start;
-    I.target3 = g.swing ? g.sw.at(tau) : g.trajectory.at(tau);
+    if (g.kind == Impl::Generator::Kind::Ramp) {
+      const double a = std::min(1.0, tau / g.ramp_s);
+      if (a >= 1.0) {
+        I.ctl->setTaskTarget(g.task, g.to);
+      } else {
+        I.rampValue.resize(g.to.size());
+        for (int k = 0; k < g.to.size(); ++k) {
+          const bool finite = std::isfinite(g.from[k]) && std::isfinite(g.to[k]);
+          I.rampValue[k] = finite ? g.from[k] + a * (g.to[k] - g.from[k]) : g.to[k];
+        }
+        I.ctl->setTaskTarget(g.task, I.rampValue);
+      }
+      continue;
+    }
+    I.target3 = g.kind == Impl::Generator::Kind::Swing ? g.sw.at(tau) : g.trajectory.at(tau);
     I.ctl->setTaskTarget(g.task, I.target3);
   }
   if (I.lx.state_feedback == "measured" || I.ticks == 0) {

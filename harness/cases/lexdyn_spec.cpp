@@ -30,6 +30,7 @@ void readParams(yaml::StrictMap& pm, control::ControllerParams& p) {
   if (auto v = pm.optional("use_qmod")) p.use_qmod = v->asBool();
   if (auto v = pm.optional("sr1")) p.sr1 = v->asBool();
   if (auto v = pm.optional("newton_identity_weight")) p.newton_identity_weight = v->asNonNegativeDouble();
+  if (auto v = pm.optional("stop_after_level")) p.stop_after_level = v->asString();
   if (auto v = pm.optional("rank_switching")) p.rank_switching = v->asBool();
   if (auto v = pm.optional("sign_change_guard")) p.sign_change_guard = v->asBool();
   if (auto v = pm.optional("wls_infeasibility_tolerance")) p.wls_infeasibility_tolerance = v->asPositiveDouble();

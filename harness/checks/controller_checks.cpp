@@ -42,22 +42,31 @@ class TaskErrorStat {
       max_ = s;
       t_max_ = t;
     }
+    if (n_ == 0 || s < min_ || std::isnan(s)) {
+      min_ = s;
+      t_min_ = t;
+    }
     sum_ += s;
     last_ = s;
     t_last_ = t;
     ++n_;
   }
   bool seen() const { return n_ > 0; }
-  /// final | mean (time average, trapezoidal over the rows) | max
+  /// final | mean (time average, trapezoidal over the rows) | max | range (max - min: how much
+  /// the error still moves within the window, a convergence measure)
   double value(const std::string& statistic) const {
     if (statistic == "final") return last_;
     if (statistic == "max") return max_;
+    if (statistic == "range") return max_ - min_;
     if (t_last_ > t_first_) return integral_ / (t_last_ - t_first_);
     return sum_ / static_cast<double>(n_);
   }
   std::string describe(const std::string& statistic) const {
     if (statistic == "final") return "at t = " + fmt(t_last_) + " s";
     if (statistic == "max") return "largest at t = " + fmt(t_max_) + " s";
+    if (statistic == "range") {
+      return "largest " + fmt(max_) + " at t = " + fmt(t_max_) + " s, smallest " + fmt(min_) + " at t = " + fmt(t_min_) + " s";
+    }
     return "time average over t = " + fmt(t_first_) + " .. " + fmt(t_last_) + " s";
   }
 
@@ -65,6 +74,7 @@ class TaskErrorStat {
   std::vector<int> cols_;
   long n_ = 0;
   double sum_ = 0.0, integral_ = 0.0, last_ = 0.0, max_ = 0.0, t_max_ = 0.0, t_first_ = 0.0, t_last_ = 0.0;
+  double min_ = 0.0, t_min_ = 0.0;
 };
 
 class TaskError final : public CheckBase {

@@ -61,6 +61,10 @@ struct ControllerParams {
   /// WLS: level-1 violation above this (relative) is a controller failure (the QP is infeasible).
   double wls_infeasibility_tolerance = 1e-6;
   solver::Options solver;                   ///< e.g. solver::Options::paper(dt)
+  /// Name of a configured level: the solver's early-stop rules (paper_rules) apply only once it
+  /// and the levels above it are optimal ("usually ... the contact constraints", sec. VIII-B;
+  /// solver::Options::stop_after_level). Empty: they apply at any iteration.
+  std::string stop_after_level;
 };
 
 /// One level of the hierarchy: task indices, in order. WLS uses exactly two levels: level 0 the

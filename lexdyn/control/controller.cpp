@@ -249,7 +249,23 @@ void Controller::Impl::buildLevels() {
       addLevel(std::move(rest), ls.name);
     }
   }
-  solver.setup(problem, p.solver);
+  solver::Options so = p.solver;
+  if (!p.stop_after_level.empty()) {
+    // The paper's early stop applies once this configured level is optimal (sec. VIII-B): its last
+    // solver level (a bounds-only level is the solver's bounds level).
+    int cl = -1;
+    std::string names;
+    for (size_t l = 0; l < cfg.levels.size(); ++l) {
+      if (cfg.levels[l].name == p.stop_after_level) cl = static_cast<int>(l);
+      names += (l ? ", " : "") + cfg.levels[l].name;
+    }
+    if (cl < 0) throw InputError("controller.stop_after_level", "unknown level \"" + p.stop_after_level + "\" (levels: " + names + ")");
+    int pl = hasBounds ? 0 : -1;
+    for (const SolverLevel& lv : levels)
+      if (lv.config_level == cl) pl = std::max(pl, lv.problem_level);
+    so.stop_after_level = pl;
+  }
+  solver.setup(problem, so);
   aug = std::make_unique<Augmentation>(*model, cfg, layout, problem, levels);
 }
 

@@ -121,7 +121,9 @@ struct Solver::Impl {
   double target(int gid) const;
   void buildTargets();
   void solveEquality();
-  bool dualCheck(bool bland, int& kind, int& idx);
+  // level: the factored level whose multiplier releases the constraint (the levels before it are
+  // optimal).
+  bool dualCheck(bool bland, int& kind, int& idx, int& level);
   void prepareLevels();
   void ensureMult(int kf);
   bool isHeld(int kind, int idx, int levelH, int kf);
@@ -479,7 +481,7 @@ bool Solver::Impl::isHeld(int kind, int idx, int levelH, int kf) {
   return false;
 }
 
-bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx) {
+bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx, int& level) {
   // kind: 0 = variable bound, 1 = general row. Returns true when a constraint must leave.
   const double xnorm = xs.lpNorm<Eigen::Infinity>();
   prepareLevels();
@@ -537,6 +539,7 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx) {
     if (bestKind >= 0) {
       kind = bestKind;
       idx = bestIdx;
+      level = kf;
       if (opt.trace) {
         std::fprintf(stderr, "   dual level %d: release %d:%d measure %.3e res %.3e mu %.3e S %.3e\n", kf, kind, idx, best,
                      kind == 1 ? res(idx) : 0.0, kind == 1 ? mu(idx) : muVar(idx), S);
@@ -550,6 +553,7 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx) {
 void Solver::Impl::run() {
   out.iterations = out.optimality_iterations = out.activations = out.deactivations = 0;
   out.held_after_reblock = 0;
+  out.optimal_through = -1;
   bool optPhase = false;
   int degenerateRun = 0;
   bool bland = false;
@@ -672,12 +676,16 @@ void Solver::Impl::run() {
       ++out.activations;
       pending = true;
     } else {
-      int kind = -1, idx = -1;
-      if (!dualCheck(bland, kind, idx)) {
+      int kind = -1, idx = -1, level = -1;
+      if (!dualCheck(bland, kind, idx, level)) {
         out.status = Status::Solved;
         out.reason = StopReason::Optimal;
+        out.optimal_through = p - 1;
         break;
       }
+      // The levels before the releasing one are optimal; they stay so while it is optimised
+      // (its steps keep the earlier levels' objectives), until a later dual check says otherwise.
+      out.optimal_through = level + first - 1;
       if (opt.trace) std::fprintf(stderr, "   deactivate %d:%d\n", kind, idx);
       lastDropKind = kind;
       lastDropIdx = idx;
@@ -720,12 +728,13 @@ void Solver::Impl::run() {
       out.reason = StopReason::SlackBelowThreshold;
       break;
     }
-    if (opt.stop_optimality_iterations > 0 && out.optimality_iterations >= opt.stop_optimality_iterations) {
+    const bool mayStop = opt.stop_after_level < 0 || out.optimal_through >= opt.stop_after_level;
+    if (mayStop && opt.stop_optimality_iterations > 0 && out.optimality_iterations >= opt.stop_optimality_iterations) {
       out.status = Status::StoppedEarly;
       out.reason = StopReason::OptimalityPhaseLimit;
       break;
     }
-    if (opt.stop_total_iterations > 0 && out.iterations >= opt.stop_total_iterations) {
+    if (mayStop && opt.stop_total_iterations > 0 && out.iterations >= opt.stop_total_iterations) {
       out.status = Status::StoppedEarly;
       out.reason = StopReason::TotalIterationLimit;
       break;

@@ -76,6 +76,11 @@ struct Options {
   double stop_slack_norm = 0.0;        ///< stop when sum of squared slacks <= this (paper: 1e-12 dt^2)
   int stop_optimality_iterations = 0;  ///< stop after this many iterations in the optimality phase (paper: 10)
   int stop_total_iterations = 0;       ///< stop after this many iterations in total (paper: 30)
+  /// The paper stops the search "once a certain level is optimal enough. Usually this would be the
+  /// contact constraints" (sec. VIII-B). With stop_after_level = L >= 0 the two iteration rules
+  /// above apply only once problem levels 0..L are known optimal (a dual check passed them);
+  /// until then the search goes on (up to max_iterations). -1: they apply at any iteration.
+  int stop_after_level = -1;
   bool compute_multipliers = true;     ///< fill Result::lambda
   /// Prints one line per active-set iteration to stderr (debugging; allocates).
   bool trace = false;
@@ -109,6 +114,10 @@ struct Result {
   int activations = 0, deactivations = 0;
   /// Times a released constraint blocked again at once and was kept (anti-cycling safety net).
   int held_after_reblock = 0;
+  /// Problem levels 0..optimal_through are optimal at x (known from the last dual check); the
+  /// last level when Solved with StopReason::Optimal; -1 when nothing is known (e.g. stopped in
+  /// the primal phase).
+  int optimal_through = -1;
   /// Cycles detected (a working set repeated) and broken by raising the tolerances.
   int cycles_broken = 0;
   int bad_level = -1, bad_row = -1;  ///< NonFiniteInput location

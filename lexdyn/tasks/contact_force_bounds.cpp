@@ -30,14 +30,21 @@ void ContactForceBoundsTask::compute(const TickContext& ctx, TaskData& d) const 
   for (int c = 0; c < layout.count(); ++c) {
     const ContactSpec& spec = layout.contact(c);
     const bool active = contactActive(ctx, c);
-    // Active friction contact: gamma >= 0; active fixed contact: free; inactive: gamma = 0.
+    // Active friction contact: gamma >= 0; inactive: gamma = 0. Active fixed contact: no sign
+    // bound, and generator 3 of each point is held at 0: the 4 pyramid directions of a point
+    // span R^3 with one redundant combination (g0 + g1 - g2 - g3 gives no force), which no level
+    // but the last (wrench minimisation) would fix; early-stopped solves then let it drift from
+    // tick to tick without bound. Generators 0..2 alone span R^3 (n +- mu t1 and n + mu t2), so
+    // the set of contact forces is unchanged.
     const double lo = active ? (spec.fixed ? -kInf : 0.0) : 0.0;
     const double hi = active ? kInf : 0.0;
     const int n = 4 * static_cast<int>(spec.points.size());
-    for (int k = layout.offset(c); k < layout.offset(c) + n; ++k) {
-      d.lower[k] = lo;
-      d.upper[k] = hi;
-      d.engaged[static_cast<size_t>(k)] = (active && spec.fixed) ? 0 : 1;
+    for (int j = 0; j < n; ++j) {
+      const int k = layout.offset(c) + j;
+      const bool gauge = active && spec.fixed && j % 4 == 3;
+      d.lower[k] = gauge ? 0.0 : lo;
+      d.upper[k] = gauge ? 0.0 : hi;
+      d.engaged[static_cast<size_t>(k)] = (active && spec.fixed && !gauge) ? 0 : 1;
     }
   }
 }

@@ -123,6 +123,24 @@ TEST(TaskErrorCheck, WindowFromAndTo) {
   EXPECT_TRUE(std::isnan(r.value));
 }
 
+// range = max - min within the window: how much the error still moves (convergence).
+TEST(TaskErrorCheck, RangeOfTheSumInTheWindow) {
+  const TraceTable t = twoTasks();
+  CheckSpec s = spec("task_error", 0.26);
+  s.tasks = {"a", "b"};
+  s.statistic = "range";
+  s.from_s = 1.5;  // a + b goes from 0.35 to 0.1 over [1.5, 2]
+  CheckResult r = runOne(s, t);
+  EXPECT_NEAR(r.value, 0.25, 1e-12);
+  EXPECT_TRUE(r.passed);
+  EXPECT_TRUE(contains(r.detail, "smallest 0.1 at t = 2 s")) << r.detail;
+  s.limit = 0.24;
+  EXPECT_FALSE(runOne(s, t).passed);
+  s.from_s = 0.0;  // the spike at 0.3 s (0.85 + 0.5) is the largest: 1.35 - 0.1
+  s.limit = 2.0;
+  EXPECT_NEAR(runOne(s, t).value, 1.25, 1e-12);
+}
+
 TEST(TaskErrorCheck, NonFiniteErrorsFailAndMissingChannelsAreInputErrors) {
   TraceTable t = twoTasks();
   t.rows[100][1] = std::numeric_limits<double>::quiet_NaN();

@@ -83,3 +83,51 @@ TEST(SolverRegression, DegenerateControllerTick) {
 
 }  // namespace
 }  // namespace lexdyn::solver
+
+namespace lexdyn::solver {
+namespace {
+
+// Sec. VIII-B: "we stop the active set method once a certain level is optimal enough. Usually
+// this would be the contact constraints". With stop_after_level = L, the iteration rules fire
+// only once levels 0..L are optimal: their violations equal those of the full solve, whereas the
+// unprotected rule (stop after 1 iteration) may stop anywhere. Cold solves of the stress regime
+// need tens of iterations, so the unprotected stop really is early.
+TEST(SolverPaperRules, ProtectedLevelsAreOptimalWhenStoppedEarly) {
+  const PaperProblemSequence seq(Regime::Stress);
+  Problem p0 = seq.tick(0);
+  int unprotected_suboptimal = 0, stopped_protected = 0;
+  for (int L : {2, 4}) {
+    Options full, early, protect;
+    early.stop_total_iterations = 1;
+    protect = early;
+    protect.stop_after_level = L;
+    Solver sf, se, sp;
+    sf.setup(p0, full);
+    se.setup(p0, early);
+    sp.setup(p0, protect);
+    for (int k = 0; k < 12; ++k) {
+      const Problem p = seq.tick(k);
+      const Result rf = sf.solve(p);
+      ASSERT_EQ(rf.status, Status::Solved);
+      EXPECT_EQ(rf.optimal_through, p.levelCount() - 1);
+      const Result re = se.solve(p);
+      const Result rp = sp.solve(p);
+      ASSERT_NE(rp.status, Status::IterationLimit) << "tick " << k;
+      EXPECT_GE(rp.optimal_through, L) << "tick " << k;
+      stopped_protected += rp.status == Status::StoppedEarly ? 1 : 0;
+      bool worse = false;
+      for (int l = 0; l <= L; ++l) {
+        EXPECT_NEAR(rp.violation_norm(l), rf.violation_norm(l), 1e-7 * (1 + rf.violation_norm(l))) << "tick " << k << " level " << l;
+        worse = worse || re.violation_norm(l) > rf.violation_norm(l) + 1e-6 * (1 + rf.violation_norm(l));
+      }
+      unprotected_suboptimal += worse ? 1 : 0;
+    }
+  }
+  // The test means something only if the unprotected rule did stop with the protected levels
+  // sub-optimal, and the protected one did stop early (not only run to the optimum).
+  EXPECT_GT(unprotected_suboptimal, 0);
+  EXPECT_GT(stopped_protected, 0);
+}
+
+}  // namespace
+}  // namespace lexdyn::solver

@@ -180,11 +180,22 @@ TEST(ContactForceBounds, FrictionFixedAndInactiveContacts) {
       EXPECT_EQ(d->lower[k], 0.0);
       EXPECT_EQ(d->upper[k], 0.0);
     }
-    for (int k = 32; k < 36; ++k) {
+    // Fixed contact: generators 0..2 free, generator 3 held at 0 (the redundant pyramid
+    // direction; 0..2 span every force).
+    for (int k = 32; k < 35; ++k) {
       EXPECT_EQ(d->lower[k], -kInf);
       EXPECT_EQ(d->upper[k], kInf);
       EXPECT_EQ(d->engaged[static_cast<size_t>(k)], 0);
     }
+    EXPECT_EQ(d->lower[35], 0.0);
+    EXPECT_EQ(d->upper[35], 0.0);
+  }
+  {
+    Eigen::Matrix<double, 3, 4> D;
+    ContactLayout::generators(Eigen::Matrix3d::Identity(), Eigen::Vector3d::UnitZ(), 0.7, D);
+    Eigen::FullPivLU<Eigen::Matrix3d> lu(D.leftCols(3));
+    EXPECT_EQ(lu.rank(), 3);
+    EXPECT_LT((D * Eigen::Vector4d(1, 1, -1, -1)).norm(), 1e-15);  // the redundant combination
   }
   fx.active = {1, 1, 0};
   task.compute(fx.ctx, *d);

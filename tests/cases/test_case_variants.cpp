@@ -1,0 +1,66 @@
+// Case variants are full copies of their base case (a case file is self-contained data), so this
+// test keeps them in step: each variant must equal its base except for the keys listed here.
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <set>
+#include <string>
+#include <vector>
+
+namespace {
+
+const std::string kCases = std::string(LEXDYN_SOURCE_DIR) + "/cases/";
+
+// Paths (a.b.c, list entries by index) where the two documents differ.
+void diff(const YAML::Node& a, const YAML::Node& b, const std::string& path, std::vector<std::string>& out) {
+  if (a.Type() != b.Type()) {
+    out.push_back(path);
+    return;
+  }
+  if (a.IsMap()) {
+    std::set<std::string> keys;
+    for (const auto& kv : a) keys.insert(kv.first.as<std::string>());
+    for (const auto& kv : b) keys.insert(kv.first.as<std::string>());
+    for (const std::string& k : keys) {
+      const std::string p = path.empty() ? k : path + "." + k;
+      if (!a[k] || !b[k]) out.push_back(p);
+      else diff(a[k], b[k], p, out);
+    }
+  } else if (a.IsSequence()) {
+    if (a.size() != b.size()) {
+      out.push_back(path);
+      return;
+    }
+    for (std::size_t i = 0; i < a.size(); ++i) diff(a[i], b[i], path + "[" + std::to_string(i) + "]", out);
+  } else if (a.IsScalar() && a.Scalar() != b.Scalar()) {
+    out.push_back(path);
+  }
+}
+
+std::vector<std::string> differences(const std::string& base, const std::string& variant) {
+  std::vector<std::string> out;
+  diff(YAML::LoadFile(kCases + base), YAML::LoadFile(kCases + variant), "", out);
+  return out;
+}
+
+TEST(CaseVariants, Exp1GnIsExp1WithPureGaussNewton) {
+  EXPECT_EQ(differences("exp1.yaml", "exp1-gn.yaml"),
+            (std::vector<std::string>{"controller.method", "description", "name"}));
+}
+
+TEST(CaseVariants, Exp1WlsWeakIsExp1WithThePostureWeight1e6) {
+  EXPECT_EQ(differences("exp1.yaml", "exp1-wls-weak.yaml"),
+            (std::vector<std::string>{"controller.method", "controller.wls_levels[1].weights.posture", "description", "name"}));
+  EXPECT_EQ(YAML::LoadFile(kCases + "exp1-wls-weak.yaml")["controller"]["wls_levels"][1]["weights"]["posture"].as<double>(), 1e-6);
+}
+
+// The comparison can fail: a changed value is reported at its path.
+TEST(CaseVariants, TheComparisonNamesEveryDifferingPath) {
+  const YAML::Node a = YAML::Load("{x: 1, y: [1, {z: 2}], w: 3}");
+  const YAML::Node b = YAML::Load("{x: 1, y: [1, {z: 3}], v: 3}");
+  std::vector<std::string> out;
+  diff(a, b, "", out);
+  EXPECT_EQ(out, (std::vector<std::string>{"v", "w", "y[1].z"}));
+}
+
+}  // namespace
