@@ -5,4 +5,4 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 cd "$ROOT"
 harness/scripts/install-deps.sh
 harness/scripts/build.sh
-build/bin/lexdyn-solve tests/data/solver/example.json
+harness/scripts/exp1.sh "$@"
