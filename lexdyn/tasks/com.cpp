@@ -26,9 +26,7 @@ ComTask::ComTask(std::string name, const model::RobotModel& model, const ComPara
 void ComTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) const { requireFinite(target, name(), "target"); }
 
 std::unique_ptr<TaskData> ComTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<TaskData>();
   initData(*d, layout);
   std::fill(d->engaged.begin(), d->engaged.end(), 1);
@@ -50,17 +48,8 @@ void ComTask::compute(const TickContext& ctx, TaskData& d) const {
     d.target = c;  // hold
     d.target_set = true;
   }
-  const Eigen::Vector3d bias = model.centerOfMassBias(data);
-  Eigen::Vector3d Ju;
-  Ju.noalias() = d.J * (*ctx.u);
-  d.A.leftCols(nv_) = d.J;
-  for (int i = 0; i < 3; ++i) {
-    const double e = d.target[i] - c[i];
-    d.error[i] = e;
-    const double rhs = pdRowTarget(ctx.domain, ctx.dt, pd_, e, Ju[i], bias[i]);  // eq. 61 / 55
-    d.lower[i] = rhs;
-    d.upper[i] = rhs;
-  }
+  const Eigen::Vector3d e = d.target.head<3>() - c;
+  writePdRows<3>(ctx, pd_, e, model.centerOfMassBias(data), nv_, d);  // eq. 61 / 55
 }
 
 void ComTask::accumulateHessian(const TickContext& ctx, const TaskData&, const Eigen::Ref<const Eigen::VectorXd>& w,

@@ -36,9 +36,7 @@ void ComBoxTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& box) const
 }
 
 std::unique_ptr<TaskData> ComBoxTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<DamperTaskData>();
   initData(*d, layout);
   d->dampers.resize(6);  // lower side of x, y, z, then upper side

@@ -63,19 +63,11 @@ void ContactTask::compute(const TickContext& ctx, TaskData& base) const {
     d.holding = true;
   }
   model.frameJacobian(data, frame_, d.J);  // [linear; angular]
-  const model::Vector6d bias = model.frameBias(data, frame_);
-  Eigen::Matrix<double, 6, 1> Ju, e;
-  Ju.noalias() = d.J * (*ctx.u);
+  Eigen::Matrix<double, 6, 1> e;
   e.head<3>() = d.position - X.translation();
   e.tail<3>() = rotationError(d.rotation, X.linear());  // log(R_d R^T)
-  d.A.leftCols(nv_) = d.J;
-  for (int i = 0; i < 6; ++i) {
-    d.error[i] = e[i];
-    const double rhs = pdRowTarget(ctx.domain, ctx.dt, pd_, e[i], Ju[i], bias[i]);  // eq. 61 / 55
-    d.lower[i] = rhs;
-    d.upper[i] = rhs;
-    d.engaged[static_cast<size_t>(i)] = 1;
-  }
+  writePdRows<6>(ctx, pd_, e, model.frameBias(data, frame_), nv_, d);  // eq. 61 / 55
+  std::fill(d.engaged.begin(), d.engaged.end(), 1);
 }
 
 void ContactTask::accumulateHessian(const TickContext& ctx, const TaskData& base, const Eigen::Ref<const Eigen::VectorXd>& w,

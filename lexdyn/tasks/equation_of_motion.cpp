@@ -12,9 +12,7 @@ EquationOfMotionTask::EquationOfMotionTask(std::string name, const model::RobotM
     : TaskModel(std::move(name)), nv_(model.nv()), rows_(model.jointVelocityOffset()) {}
 
 std::unique_ptr<TaskData> EquationOfMotionTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<DynamicsTaskData>();
   initData(*d, layout);
   d->Jp.setZero(3, layout.nv());

@@ -30,9 +30,7 @@ JointLimitsTask::JointLimitsTask(std::string name, const model::RobotModel& mode
 }
 
 std::unique_ptr<TaskData> JointLimitsTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<DamperTaskData>();
   initData(*d, layout);
   d->dampers.resize(static_cast<size_t>(2 * nj_));  // lower limit of each joint, then upper

@@ -51,9 +51,7 @@ void JointPositionTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& tar
 }
 
 std::unique_ptr<TaskData> JointPositionTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<TaskData>();
   initData(*d, layout);
   for (int r = 0; r < rows(); ++r) {

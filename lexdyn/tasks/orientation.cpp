@@ -37,9 +37,7 @@ void OrientationTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& targe
 }
 
 std::unique_ptr<TaskData> OrientationTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<OrientationTaskData>();
   initData(*d, layout);
   d->J6.setZero(6, nv_);
@@ -66,15 +64,7 @@ void OrientationTask::compute(const TickContext& ctx, TaskData& base) const {
   }
   const Eigen::Vector3d e = rotationError(rotationFromTarget(d.target), R);  // log(R_d R^T)
   const Eigen::Vector3d bias = model.frameBias(data, frame_).tail<3>();       // angular Jdot u
-  Eigen::Vector3d Ju;
-  Ju.noalias() = d.J * (*ctx.u);
-  d.A.leftCols(nv_) = d.J;
-  for (int i = 0; i < 3; ++i) {
-    d.error[i] = e[i];
-    const double rhs = pdRowTarget(ctx.domain, ctx.dt, pd_, e[i], Ju[i], bias[i]);  // eq. 61 / 55
-    d.lower[i] = rhs;
-    d.upper[i] = rhs;
-  }
+  writePdRows<3>(ctx, pd_, e, bias, nv_, d);                                  // eq. 61 / 55
 }
 
 void OrientationTask::accumulateHessian(const TickContext& ctx, const TaskData&, const Eigen::Ref<const Eigen::VectorXd>& w,

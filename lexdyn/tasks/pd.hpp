@@ -52,4 +52,21 @@ inline double pdRowTarget(Domain domain, double dt, const Pd& pd, double e, doub
   return -eddot_ctrl - bias;
 }
 
+/// The N equality rows of a PD task with Jacobian d.J (N x nv, already computed), error e and
+/// bias Jdot u: A = [J, 0], error = e, lower = upper = pdRowTarget per row (eq. 61 / 55).
+/// Fixed-size vectors: allocation-free.
+template <int N>
+void writePdRows(const TickContext& ctx, const Pd& pd, const Eigen::Matrix<double, N, 1>& e,
+                 const Eigen::Matrix<double, N, 1>& bias, int nv, TaskData& d) {
+  Eigen::Matrix<double, N, 1> Ju;
+  Ju.noalias() = d.J * (*ctx.u);
+  d.A.leftCols(nv) = d.J;
+  for (int i = 0; i < N; ++i) {
+    d.error[i] = e[i];
+    const double rhs = pdRowTarget(ctx.domain, ctx.dt, pd, e[i], Ju[i], bias[i]);
+    d.lower[i] = rhs;
+    d.upper[i] = rhs;
+  }
+}
+
 }  // namespace lexdyn::tasks

@@ -25,9 +25,7 @@ void PositionTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) 
 }
 
 std::unique_ptr<TaskData> PositionTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<TaskData>();
   initData(*d, layout);
   std::fill(d->engaged.begin(), d->engaged.end(), 1);
@@ -49,17 +47,8 @@ void PositionTask::compute(const TickContext& ctx, TaskData& d) const {
     d.target = p;  // hold
     d.target_set = true;
   }
-  const Eigen::Vector3d bias = model.pointBias(data, frame_, point_);  // Jdot u
-  Eigen::Vector3d Ju;
-  Ju.noalias() = d.J * (*ctx.u);
-  d.A.leftCols(nv_) = d.J;
-  for (int i = 0; i < 3; ++i) {
-    const double e = d.target[i] - p[i];
-    d.error[i] = e;
-    const double rhs = pdRowTarget(ctx.domain, ctx.dt, pd_, e, Ju[i], bias[i]);  // eq. 61 / 55
-    d.lower[i] = rhs;
-    d.upper[i] = rhs;
-  }
+  const Eigen::Vector3d e = d.target.head<3>() - p;
+  writePdRows<3>(ctx, pd_, e, model.pointBias(data, frame_, point_), nv_, d);  // eq. 61 / 55
 }
 
 void PositionTask::accumulateHessian(const TickContext& ctx, const TaskData&, const Eigen::Ref<const Eigen::VectorXd>& w,

@@ -35,9 +35,7 @@ void PostureTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) c
 }
 
 std::unique_ptr<TaskData> PostureTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<TaskData>();
   initData(*d, layout);
   for (int j = 0; j < nj_; ++j) {

@@ -53,9 +53,7 @@ SelfCollisionTask::SelfCollisionTask(std::string name, const model::RobotModel& 
 }
 
 std::unique_ptr<TaskData> SelfCollisionTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<SelfCollisionTaskData>();
   initData(*d, layout);
   d->point_a.setZero(3, rows());

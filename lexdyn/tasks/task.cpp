@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/tasks/task_params.hpp"
 
 namespace lexdyn::tasks {
 
@@ -32,6 +33,12 @@ void ContactLayout::generators(const Eigen::Matrix3d& R, const Eigen::Vector3d& 
   D.col(1) = (n - mu * t1).normalized();
   D.col(2) = (n + mu * t2).normalized();
   D.col(3) = (n - mu * t2).normalized();
+}
+
+void TaskModel::requireLayoutNv(const ContactLayout& layout, int nv) const {
+  if (layout.nv() != nv) {
+    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv) + ", layout has nv = " + std::to_string(layout.nv()));
+  }
 }
 
 void TaskModel::initData(TaskData& d, const ContactLayout& layout) const {

@@ -172,6 +172,9 @@ class TaskModel {
   /// Sizes the base members of d for this task (A rows x nx, bounds, error, J rows x nv,
   /// engaged, target) and zeroes them; used by createData() overrides of derived data types.
   void initData(TaskData& d, const ContactLayout& layout) const;
+  /// Throws lexdyn::InputError naming the task when the layout's nv is not the model's (`nv`,
+  /// the one the task was built for); used by createData() overrides.
+  void requireLayoutNv(const ContactLayout& layout, int nv) const;
 
  private:
   std::string name_;

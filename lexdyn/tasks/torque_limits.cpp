@@ -19,9 +19,7 @@ TorqueLimitsTask::TorqueLimitsTask(std::string name, const model::RobotModel& mo
 }
 
 std::unique_ptr<TaskData> TorqueLimitsTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<DynamicsTaskData>();
   initData(*d, layout);
   d->Jp.setZero(3, layout.nv());

@@ -13,9 +13,7 @@ TrustRegionTask::TrustRegionTask(std::string name, const model::RobotModel& mode
 }
 
 std::unique_ptr<TaskData> TrustRegionTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<TaskData>();
   initData(*d, layout);
   d->A.leftCols(nv_).setIdentity();

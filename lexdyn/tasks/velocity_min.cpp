@@ -11,9 +11,7 @@ VelocityMinTask::VelocityMinTask(std::string name, const model::RobotModel& mode
     : TaskModel(std::move(name)), nv_(model.nv()) {}
 
 std::unique_ptr<TaskData> VelocityMinTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_) {
-    throwTaskInput(name(), "", "built for nv = " + std::to_string(nv_) + ", layout has nv = " + std::to_string(layout.nv()));
-  }
+  requireLayoutNv(layout, nv_);
   auto d = std::make_unique<TaskData>();
   initData(*d, layout);
   d->A.leftCols(nv_).setIdentity();
