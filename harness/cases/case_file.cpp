@@ -58,33 +58,6 @@ std::string resolvePath(const yaml::Node& n, const std::string& case_path) {
   return norm.string();
 }
 
-std::string joinNames(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-  return s;
-}
-
-int jointByName(const model::RobotDescription& d, const yaml::Node& n) {
-  const std::string name = n.asString();
-  const int j = d.findJoint(name);
-  if (j < 0) {
-    std::vector<std::string> names;
-    for (const auto& jd : d.joints) names.push_back(jd.name);
-    n.fail("unknown joint '" + name + "' (joints: " + joinNames(names) + ")");
-  }
-  return j;
-}
-
-std::string frameByName(const model::RobotDescription& d, const yaml::Node& n) {
-  const std::string name = n.asString();
-  if (d.findFrame(name) < 0) {
-    std::vector<std::string> names;
-    for (const auto& f : d.frames) names.push_back(f.name);
-    n.fail("unknown frame '" + name + "' (frames: " + joinNames(names) + ")");
-  }
-  return name;
-}
-
 std::string surfaceByName(const model::RobotDescription& d, const yaml::Node& n) {
   const std::string name = n.asString();
   std::vector<std::string> names;
@@ -121,7 +94,7 @@ void readController(CaseSpec& c, const yaml::Node& node, const model::RobotDescr
       MotionSpec ms;
       const yaml::Node joints = mm.required("joints");
       if (joints.size() < 1) joints.fail("expected at least one joint");
-      for (const yaml::Node& jn : joints.elements()) ms.joints.push_back(jointByName(d, jn));
+      for (const yaml::Node& jn : joints.elements()) ms.joints.push_back(d.findJoint(jointName(jn, d)));
       ms.amplitude = mm.required("amplitude").asDouble();
       ms.period_s = mm.required("period_s").asPositiveDouble();
       if (auto ph = mm.optional("phase_rad")) ms.phase_rad = ph->asDouble();
@@ -209,7 +182,7 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
       for (const auto& o : s.grasps) {
         if (o.name == g.name) name.fail("duplicate grasp '" + g.name + "'");
       }
-      g.frame = frameByName(d, gm.required("frame"));
+      g.frame = frameName(gm.required("frame"), d);
       g.stiffness_N_per_m = gm.required("stiffness_N_per_m").asPositiveDouble();
       g.damping_Ns_per_m = gm.required("damping_Ns_per_m").asNonNegativeDouble();
       g.rot_stiffness_Nm_per_rad = gm.required("rot_stiffness_Nm_per_rad").asPositiveDouble();
@@ -386,7 +359,7 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
     if (auto j = m.optional("joints")) c.joints = readJointPatterns(*j, d);
   };
   if (c.type == "frame_drift") {
-    c.frame = frameByName(d, m.required("frame"));
+    c.frame = frameName(m.required("frame"), d);
     c.limit = m.required("limit_m").asPositiveDouble();
   } else if (c.type == "force_balance") {
     surfaces();
@@ -395,7 +368,7 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
     surfaces();
     c.limit = m.required("limit_m").asPositiveDouble();
   } else if (c.type == "frame_height") {
-    c.frame = frameByName(d, m.required("frame"));
+    c.frame = frameName(m.required("frame"), d);
     c.limit = m.required("min_m").asDouble();
   } else if (c.type == "task_error") {
     const yaml::Node tn = m.required("tasks");
@@ -586,11 +559,7 @@ EventSpec readEvent(const yaml::Node& en, const CaseSpec& c) {
         e.value = value->asVectorAnySize(1);
       }
     } else if (rpy) {
-      const Eigen::Vector3d a = rpy->asVector3();
-      const Eigen::Matrix3d R = (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
-                                 Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
-                                    .toRotationMatrix();
-      e.value = tasks::rotationToTarget(R);
+      e.value = tasks::rotationToTarget(rotationFromRpy(rpy->asVector3()));
     } else {
       if (!lower || !upper) en.fail("a box target needs both lower and upper");
       e.value.resize(6);
@@ -772,7 +741,7 @@ CaseSpec loadCase(const std::string& path) {
       if (c.trace.flush_every_rows < 1) v->fail("expected an integer >= 1");
     }
     if (auto v = tm.optional("frames")) {
-      for (const yaml::Node& fn : v->elements()) c.trace.frames.push_back(frameByName(d, fn));
+      for (const yaml::Node& fn : v->elements()) c.trace.frames.push_back(frameName(fn, d));
     }
     if (auto v = tm.optional("timings")) c.trace.timings = v->asBool();
     tm.finish();

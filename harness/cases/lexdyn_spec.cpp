@@ -9,12 +9,6 @@ namespace lexdyn::cases {
 
 namespace {
 
-std::string joinNames(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-  return s;
-}
-
 void readParams(yaml::StrictMap& pm, control::ControllerParams& p) {
   if (auto v = pm.optional("nu_dt2")) p.nu_dt2 = v->asNonNegativeDouble();
   if (auto v = pm.optional("xi_dt2")) p.xi_dt2 = v->asNonNegativeDouble();
@@ -91,12 +85,7 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
     }
     if (!found) surface->fail("unknown contact surface '" + c.surface + "' (surfaces: " + joinNames(names) + ")");
   } else {
-    c.frame = frame->asString();
-    if (d.findFrame(c.frame) < 0) {
-      std::vector<std::string> names;
-      for (const auto& f : d.frames) names.push_back(f.name);
-      frame->fail("unknown frame '" + c.frame + "' (frames: " + joinNames(names) + ")");
-    }
+    c.frame = frameName(*frame, d);
     const yaml::Node pts = m.required("points");
     if (pts.size() < 1) pts.fail("expected at least one point");
     for (const yaml::Node& p : pts.elements()) c.points.push_back(p.asVector3());

@@ -17,12 +17,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-std::string joinNames(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-  return s;
-}
-
 void readGains(yaml::StrictMap& m, tasks::PdGains& g) {
   if (auto gn = m.optional("gains")) {
     yaml::StrictMap gm(*gn);
@@ -30,26 +24,6 @@ void readGains(yaml::StrictMap& m, tasks::PdGains& g) {
     if (auto kv = gm.optional("kv")) g.kv = kv->asNonNegativeDouble();
     gm.finish();
   }
-}
-
-std::string frameName(const yaml::Node& n, const model::RobotDescription& d) {
-  const std::string name = n.asString();
-  if (d.findFrame(name) < 0) {
-    std::vector<std::string> names;
-    for (const auto& f : d.frames) names.push_back(f.name);
-    n.fail("unknown frame '" + name + "' (frames: " + joinNames(names) + ")");
-  }
-  return name;
-}
-
-std::string jointName(const yaml::Node& n, const model::RobotDescription& d) {
-  const std::string name = n.asString();
-  if (d.findJoint(name) < 0) {
-    std::vector<std::string> names;
-    for (const auto& j : d.joints) names.push_back(j.name);
-    n.fail("unknown joint '" + name + "' (joints: " + joinNames(names) + ")");
-  }
-  return name;
 }
 
 Eigen::Matrix3d readRotation(const yaml::Node& n) {
@@ -60,12 +34,6 @@ Eigen::Matrix3d readRotation(const yaml::Node& n) {
     n.fail("expected a rotation matrix (orthonormal to 1e-6, determinant +1)");
   }
   return R;
-}
-
-Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy) {
-  return (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
 }
 
 using Reader = void (*)(TaskSpec&, yaml::StrictMap&, const model::RobotDescription&, const std::vector<std::string>&);
@@ -290,6 +258,38 @@ const TaskType* findType(const std::string& name) {
 }
 
 }  // namespace
+
+std::string joinNames(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+std::string frameName(const yaml::Node& n, const model::RobotDescription& d) {
+  const std::string name = n.asString();
+  if (d.findFrame(name) < 0) {
+    std::vector<std::string> names;
+    for (const auto& f : d.frames) names.push_back(f.name);
+    n.fail("unknown frame '" + name + "' (frames: " + joinNames(names) + ")");
+  }
+  return name;
+}
+
+std::string jointName(const yaml::Node& n, const model::RobotDescription& d) {
+  const std::string name = n.asString();
+  if (d.findJoint(name) < 0) {
+    std::vector<std::string> names;
+    for (const auto& j : d.joints) names.push_back(j.name);
+    n.fail("unknown joint '" + name + "' (joints: " + joinNames(names) + ")");
+  }
+  return name;
+}
+
+Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy) {
+  return (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
 
 const std::vector<std::string>& taskTypes() {
   static const std::vector<std::string> names = [] {

@@ -65,6 +65,15 @@ double asBound(const yaml::Node& n);
 /// A sequence of 3 such scalars.
 Eigen::Vector3d asBound3(const yaml::Node& n);
 
+/// "a, b, c" (for error messages listing the valid names).
+std::string joinNames(const std::vector<std::string>& v);
+/// The frame named by n; an unknown one fails at n, listing the robot's frames.
+std::string frameName(const yaml::Node& n, const model::RobotDescription& d);
+/// The joint named by n; an unknown one fails at n, listing the robot's joints.
+std::string jointName(const yaml::Node& n, const model::RobotDescription& d);
+/// R = Rz(yaw) Ry(pitch) Rx(roll) of rpy = [roll, pitch, yaw] (rad).
+Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy);
+
 /// Names used in trace channels: non-empty, letters, digits, '_' and '-' only.
 void requireChannelName(const yaml::Node& n, const std::string& name);
 
