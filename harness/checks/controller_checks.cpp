@@ -577,18 +577,18 @@ double pdClosedForm(double kp, double kv, double t) {
   return (r2 * std::exp(r1 * t) - r1 * std::exp(r2 * t)) / (r2 - r1);
 }
 
-// Largest |e(t) - e0 |x(t - t0)|| / e0 over the window, x the closed form above, (t0, e0) the
-// window's first row: the error norm of a task started at rest against the continuous PD
-// response (for a 1-D task; in more dimensions along a straight line).
-class TaskErrorClosedForm final : public CheckBase {
+// A check on one task's error norm e(t) relative to its value e0 at the window's first row (time
+// t0): the response of a task started at that row. When e0 is not positive and finite there is
+// no response to measure, and the check fails without a value.
+class TaskResponseCheck : public CheckBase {
  public:
-  explicit TaskErrorClosedForm(const CheckSpec& s) : CheckBase(s, "fraction of the initial error") {}
+  TaskResponseCheck(const CheckSpec& s, const char* unit) : CheckBase(s, unit) {}
   void bind(const TraceSchema& schema, const TraceMetadata&) override {
     t_ = require(schema, kTimeChannel, spec_);
     if (spec_.tasks.size() != 1) throw InputError(spec_.where, "check '" + spec_.name + "' needs exactly one task");
     col_ = require(schema, taskChannel(spec_.tasks[0], "error"), spec_);
   }
-  void consume(const double* row) override {
+  void consume(const double* row) final {
     if (!active(row)) return;
     const double t = row[t_], e = row[col_];
     if (!seen_) {
@@ -596,7 +596,46 @@ class TaskErrorClosedForm final : public CheckBase {
       e0_ = e;
       seen_ = true;
     }
-    if (!(e0_ > 0.0) || !std::isfinite(e0_)) return;
+    if (validStart()) sample(t, e);
+  }
+
+ protected:
+  /// One row of the window (only while e0 is usable).
+  virtual void sample(double t, double e) = 0;
+  bool validStart() const { return e0_ > 0.0 && std::isfinite(e0_); }
+  /// The failed result of an unusable e0; `why` is appended to the detail.
+  CheckResult invalidStart(CheckResult r, const std::string& why) const {
+    r.value = kNaN;
+    r.passed = false;
+    r.detail = "the error of " + spec_.tasks[0] + " at the window's start (t = " + fmt(t0_) + " s) is " + fmt(e0_) + why;
+    return r;
+  }
+  /// " (e0 ... at t = ... s" shared by the details.
+  std::string startDetail() const { return " (e0 " + fmt(e0_) + " at t = " + fmt(t0_) + " s"; }
+
+  double t0_ = 0.0, e0_ = 0.0;
+
+ private:
+  int col_ = 0;
+};
+
+// Largest |e(t) - e0 |x(t - t0)|| / e0 over the window, x the closed form above: the error norm
+// of a task started at rest against the continuous PD response (for a 1-D task; in more
+// dimensions along a straight line).
+class TaskErrorClosedForm final : public TaskResponseCheck {
+ public:
+  explicit TaskErrorClosedForm(const CheckSpec& s) : TaskResponseCheck(s, "fraction of the initial error") {}
+  CheckResult result() const override {
+    CheckResult r = CheckBase::result();
+    if (!seen_) return r;
+    if (!validStart()) return invalidStart(r, ": no response to compare");
+    const double zeta = spec_.kp > 0.0 ? spec_.kv / (2.0 * std::sqrt(spec_.kp)) : kInf;
+    r.detail = detail_ + startDetail() + "; kp " + fmt(spec_.kp) + ", kv " + fmt(spec_.kv) + ", damping ratio " + fmt(zeta) + ")";
+    return r;
+  }
+
+ private:
+  void sample(double t, double e) override {
     const double ref = e0_ * std::abs(pdClosedForm(spec_.kp, spec_.kv, t - t0_));
     const double d = std::abs(e - ref) / e0_;
     if (d > worst_ || std::isnan(d)) {
@@ -604,52 +643,31 @@ class TaskErrorClosedForm final : public CheckBase {
       detail_ = "largest at t = " + fmt(t) + " s: |e| " + fmt(e) + ", closed form " + fmt(ref);
     }
   }
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) return r;
-    if (!(e0_ > 0.0) || !std::isfinite(e0_)) {
-      r.value = kNaN;
-      r.passed = false;
-      r.detail = "the error of " + spec_.tasks[0] + " at the window's start (t = " + fmt(t0_) + " s) is " + fmt(e0_) +
-                 ": no response to compare";
-      return r;
-    }
-    const double zeta = spec_.kp > 0.0 ? spec_.kv / (2.0 * std::sqrt(spec_.kp)) : kInf;
-    r.detail = detail_ + " (e0 " + fmt(e0_) + " at t = " + fmt(t0_) + " s; kp " + fmt(spec_.kp) + ", kv " + fmt(spec_.kv) +
-               ", damping ratio " + fmt(zeta) + ")";
-    return r;
-  }
-
- private:
-  int col_ = 0;
-  double t0_ = 0.0, e0_ = 0.0;
 };
 
 // Overshoot of a task: the largest rise of its error norm above its running minimum, relative to
 // the error at the window's first row. A task converging monotonically gives 0; a 1-D task that
 // passes through its target (the norm goes to 0 and rises again) gives its largest excursion past
 // the target.
-class TaskOvershoot final : public CheckBase {
+class TaskOvershoot final : public TaskResponseCheck {
  public:
-  explicit TaskOvershoot(const CheckSpec& s) : CheckBase(s, "fraction of the initial error") {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    t_ = require(schema, kTimeChannel, spec_);
-    if (spec_.tasks.size() != 1) throw InputError(spec_.where, "check '" + spec_.name + "' needs exactly one task");
-    col_ = require(schema, taskChannel(spec_.tasks[0], "error"), spec_);
+  explicit TaskOvershoot(const CheckSpec& s) : TaskResponseCheck(s, "fraction of the initial error") {}
+  CheckResult result() const override {
+    CheckResult r = CheckBase::result();
+    if (!seen_) return r;
+    if (!validStart()) return invalidStart(r, "");
+    r.value = rise_ / e0_;
+    r.passed = r.value <= spec_.limit;
+    r.detail = (detail_.empty() ? std::string("the error never rises") : detail_) + startDetail() + ")";
+    return r;
   }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    const double t = row[t_], e = row[col_];
-    if (!seen_) {
-      t0_ = t;
-      e0_ = e;
+
+ private:
+  void sample(double t, double e) override {
+    if (!have_min_ || e < min_) {
       min_ = e;
       t_min_ = t;
-      seen_ = true;
-    }
-    if (e < min_) {
-      min_ = e;
-      t_min_ = t;
+      have_min_ = true;
     }
     const double rise = e - min_;
     if (rise > rise_ || std::isnan(rise)) {
@@ -658,24 +676,8 @@ class TaskOvershoot final : public CheckBase {
                 fmt(t_min_) + " s";
     }
   }
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) return r;
-    if (!(e0_ > 0.0) || !std::isfinite(e0_)) {
-      r.value = kNaN;
-      r.passed = false;
-      r.detail = "the error of " + spec_.tasks[0] + " at the window's start (t = " + fmt(t0_) + " s) is " + fmt(e0_);
-      return r;
-    }
-    r.value = rise_ / e0_;
-    r.passed = r.value <= spec_.limit;
-    r.detail = (detail_.empty() ? std::string("the error never rises") : detail_) + " (e0 " + fmt(e0_) + " at t = " + fmt(t0_) + " s)";
-    return r;
-  }
-
- private:
-  int col_ = 0;
-  double t0_ = 0.0, e0_ = 0.0, min_ = 0.0, t_min_ = 0.0, rise_ = 0.0;
+  bool have_min_ = false;
+  double min_ = 0.0, t_min_ = 0.0, rise_ = 0.0;
 };
 
 // ---------------------------------------------------------------------------------------------
