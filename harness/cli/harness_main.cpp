@@ -5,7 +5,7 @@
 //   lexdyn-harness check CASE TRACE [--json]              (the same, older argument order)
 //   lexdyn-harness compare --case CASE TRACE... [--json]  (the case's comparisons between methods)
 //   lexdyn-harness golden list [--manifest FILE] [--cases A,B] [--only ID]   (ID CASE_FILE METHOD lines)
-//   lexdyn-harness golden update|check [--manifest FILE] [--cases A,B] [--only CASE.METHOD]
+//   lexdyn-harness golden update|check [--manifest FILE] [--cases A,B] [--only ID]
 //                                      [--work DIR] [--progress]
 //
 // Exit codes: 0 every check (comparison, golden) passed; 1 a check failed, a golden differs or
@@ -141,67 +141,78 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
 }
 
 // One line per selected golden: ID CASE_FILE METHOD ("-" for a case without methods).
-int runGoldenList(const std::string& manifest_path, const std::string& cases_opt, const std::string& only) {
-  const lexdyn::golden::Manifest m = lexdyn::golden::loadManifest(manifest_path);
+/// One golden of the manifest chosen by --cases (case names) and --only (golden ids CASE.METHOD,
+/// or case names: every golden of that case); both given: goldens matching both.
+struct SelectedGolden {
+  const lexdyn::golden::Entry* entry;
+  std::string method, id;
+};
+
+std::vector<SelectedGolden> selectGoldens(const lexdyn::golden::Manifest& m, const std::string& manifest_path,
+                                          const std::string& cases_opt, const std::string& only) {
   const std::vector<std::string> wanted_cases = splitList(cases_opt);
   const std::vector<std::string> wanted_only = splitList(only);
-  int selected = 0;
+  auto listed = [](const std::vector<std::string>& v, const std::string& x) { return std::find(v.begin(), v.end(), x) != v.end(); };
+  std::vector<SelectedGolden> out;
   for (const auto& e : m.entries) {
-    if (!wanted_cases.empty() && std::find(wanted_cases.begin(), wanted_cases.end(), e.case_name) == wanted_cases.end()) continue;
+    if (!wanted_cases.empty() && !listed(wanted_cases, e.case_name)) continue;
     for (const auto& method : e.methods) {
       const std::string id = lexdyn::golden::goldenId(e.case_name, method);
-      if (!wanted_only.empty() && std::find(wanted_only.begin(), wanted_only.end(), id) == wanted_only.end()) continue;
-      ++selected;
-      std::printf("%s %s %s\n", id.c_str(), e.case_path.c_str(), method.empty() ? "-" : method.c_str());
+      if (!wanted_only.empty() && !listed(wanted_only, id) && !listed(wanted_only, e.case_name)) continue;
+      out.push_back({&e, method, id});
     }
   }
-  if (selected == 0) throw lexdyn::InputError(manifest_path, "no golden matches --cases / --only");
+  if (out.empty()) throw lexdyn::InputError(manifest_path, "no golden matches --cases / --only");
+  return out;
+}
+
+int runGoldenList(const std::string& manifest_path, const std::string& cases_opt, const std::string& only) {
+  const lexdyn::golden::Manifest m = lexdyn::golden::loadManifest(manifest_path);
+  for (const SelectedGolden& g : selectGoldens(m, manifest_path, cases_opt, only)) {
+    std::printf("%s %s %s\n", g.id.c_str(), g.entry->case_path.c_str(), g.method.empty() ? "-" : g.method.c_str());
+  }
   return 0;
 }
 
 int runGoldenCommand(bool update, const std::string& manifest_path, const std::string& cases_opt, const std::string& only,
                      std::string work, bool progress) {
   const lexdyn::golden::Manifest m = lexdyn::golden::loadManifest(manifest_path);
-  const std::vector<std::string> wanted_cases = splitList(cases_opt);
-  const std::vector<std::string> wanted_only = splitList(only);
+  const std::vector<SelectedGolden> selected = selectGoldens(m, manifest_path, cases_opt, only);
   bool temp_work = false;
   if (work.empty()) {
     work = (fs::temp_directory_path() / ("lexdyn-golden-" + std::to_string(::getpid()))).string();
     temp_work = true;
   }
-  int selected = 0, failed = 0;
-  for (const auto& e : m.entries) {
-    if (!wanted_cases.empty() && std::find(wanted_cases.begin(), wanted_cases.end(), e.case_name) == wanted_cases.end()) continue;
-    for (const auto& method : e.methods) {
-      const std::string id = lexdyn::golden::goldenId(e.case_name, method);
-      if (!wanted_only.empty() && std::find(wanted_only.begin(), wanted_only.end(), id) == wanted_only.end()) continue;
-      ++selected;
-      const std::string path = lexdyn::golden::goldenPath(m, e.case_name, method);
-      if (!update && !fs::is_regular_file(path)) {
-        std::fprintf(stderr, "  MISSING %s: %s does not exist (lexdyn-harness golden update --only %s)\n", id.c_str(), path.c_str(), id.c_str());
-        ++failed;
-        continue;
-      }
-      std::string status;
-      const lexdyn::checks::TraceTable fresh = lexdyn::golden::runGolden(e, method, m, work, status, progress);
-      if (update) {
-        lexdyn::golden::writeGolden(path, fresh, lexdyn::golden::provenance(e, method, status, m.dir));
-        std::fprintf(stderr, "  wrote %s: %zu rows x %zu channels, %g s, run %s\n", path.c_str(), fresh.rows.size(), fresh.names.size(),
-                     e.duration_s, status.c_str());
-        continue;
-      }
-      const lexdyn::checks::TraceTable golden = lexdyn::checks::readTrace(path);
-      const lexdyn::golden::Comparison c = lexdyn::golden::compare(golden, fresh, m.tolerance, m.channel_tolerances);
-      std::fprintf(stderr, "  %-4s %s: %s\n", c.ok ? "ok" : "FAIL", id.c_str(), c.report().c_str());
-      if (!c.ok) ++failed;
+  int failed = 0;
+  for (const SelectedGolden& g : selected) {
+    const lexdyn::golden::Entry& e = *g.entry;
+    const std::string& method = g.method;
+    const std::string& id = g.id;
+    const std::string path = lexdyn::golden::goldenPath(m, e.case_name, method);
+    if (!update && !fs::is_regular_file(path)) {
+      std::fprintf(stderr, "  MISSING %s: %s does not exist (lexdyn-harness golden update --only %s)\n", id.c_str(), path.c_str(), id.c_str());
+      ++failed;
+      continue;
     }
+    std::string status;
+    const lexdyn::checks::TraceTable fresh = lexdyn::golden::runGolden(e, method, m, work, status, progress);
+    if (update) {
+      lexdyn::golden::writeGolden(path, fresh, lexdyn::golden::provenance(e, method, status, m.dir));
+      std::fprintf(stderr, "  wrote %s: %zu rows x %zu channels, %g s, run %s\n", path.c_str(), fresh.rows.size(), fresh.names.size(),
+                   e.duration_s, status.c_str());
+      continue;
+    }
+    const lexdyn::checks::TraceTable golden = lexdyn::checks::readTrace(path);
+    const lexdyn::golden::Comparison c = lexdyn::golden::compare(golden, fresh, m.tolerance, m.channel_tolerances);
+    std::fprintf(stderr, "  %-4s %s: %s\n", c.ok ? "ok" : "FAIL", id.c_str(), c.report().c_str());
+    if (!c.ok) ++failed;
   }
   if (temp_work) {
     std::error_code ec;
     fs::remove_all(work, ec);
   }
-  if (selected == 0) throw lexdyn::InputError(manifest_path, "no golden matches --cases / --only");
-  if (!update) std::fprintf(stderr, "golden check: %d of %d match\n", selected - failed, selected);
+  const int n = static_cast<int>(selected.size());
+  if (!update) std::fprintf(stderr, "golden check: %d of %d match\n", n - failed, n);
   return failed == 0 ? 0 : 1;
 }
 
@@ -241,11 +252,11 @@ int main(int argc, char** argv) {
   CLI::App* glist = golden->add_subcommand("list", "print the manifest's goldens: ID CASE_FILE METHOD (- for none)");
   glist->add_option("--manifest", manifest, "golden manifest (default: the source tree's golden/manifest.yaml)");
   glist->add_option("--cases", cases_opt, "comma-separated case names");
-  glist->add_option("--only", only, "comma-separated golden ids");
+  glist->add_option("--only", only, "comma-separated golden ids (CASE.METHOD) or case names");
   for (CLI::App* g : {gupdate, gcheck}) {
     g->add_option("--manifest", manifest, "golden manifest (default: the source tree's golden/manifest.yaml)");
     g->add_option("--cases", cases_opt, "comma-separated case names");
-    g->add_option("--only", only, "comma-separated CASE.METHOD ids");
+    g->add_option("--only", only, "comma-separated golden ids (CASE.METHOD) or case names");
     g->add_option("--work", work, "directory for the runs (default: a temporary one, removed)");
     g->add_flag("--progress", progress, "progress lines of the runs");
   }

@@ -56,26 +56,14 @@ cut -d' ' -f2 "$OUT/runs.txt" | sort -u | while read -r case_file; do
   "$HARNESS" compare --case "$case_file" "${traces[@]}" > "$OUT/$name.compare.txt" 2>&1 || true
 done
 
-python3 - "$OUT" <<'PY' | tee "$OUT/table.txt"
-import json, os, sys
-out = sys.argv[1]
-ok = True
-print(f"{'run':<26} {'status':<19} {'sim s':>6} {'wall s':>7} {'peak it':>7} {'tick p99 us':>11}  failed checks")
-for line in open(os.path.join(out, "runs.txt")):
-    run = line.split()[0]
-    p = os.path.join(out, run, "summary.json")
-    if not os.path.exists(p):
-        print(f"{run:<26} (no summary: see {run}/log.txt)")
-        ok = False
-        continue
-    s = json.load(open(p))
-    failed = [c["name"] for c in s["checks"] if not c["passed"]]
-    tick = s.get("timing_us", {}).get("tick", {}).get("p99")
-    print(f"{run:<26} {s['status']:<19} {s['simulated_s']:>6.1f} {s['wall_s']:>7.1f} "
-          f"{s.get('solver', {}).get('peak_iterations', '-'):>7} {'-' if tick is None else f'{tick:.0f}':>11}  "
-          f"{len(failed)}{(': ' + ', '.join(failed)) if failed else ''}")
-for f in sorted(os.listdir(out)):
-    if f.endswith(".compare.txt"):
-        print(f"\n{f}:\n" + open(os.path.join(out, f)).read().rstrip())
-sys.exit(0 if ok else 1)
-PY
+# The table (harness/scripts/summary_table.py), then the comparisons.
+set +e
+python3 "$ROOT/harness/scripts/summary_table.py" --errors right_hand,left_hand \
+  $(cut -d' ' -f1 "$OUT/runs.txt" | sed "s#.*#&=$OUT/&#") > "$OUT/table.txt"
+status=$?
+set -e
+for f in "$OUT"/*.compare.txt; do
+  [ -f "$f" ] && printf '\n%s:\n%s\n' "$(basename "$f")" "$(cat "$f")" >> "$OUT/table.txt"
+done
+cat "$OUT/table.txt"
+exit $status

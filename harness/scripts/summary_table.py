@@ -3,9 +3,10 @@
 
 Usage: summary_table.py [--errors TASK,TASK] LABEL=RUN_DIR ...
 
-One row per run: run status, simulated time, the sum of the --errors tasks' final and
-time-averaged error norms, the peak active-set iterations, per-tick wall time (median, p99,
-max of the whole tick), Newton-augmented ticks and the failed checks. Prints to stdout.
+One row per run: run status, simulated and wall time, the sum of the --errors tasks' final and
+time-averaged error norms ("-" for runs without those tasks), the peak active-set iterations,
+per-tick wall time (median, p99, max of the whole tick), Newton-augmented ticks and the failed
+checks. Prints to stdout; a run without summary.json gets a row saying so and the exit code is 1.
 """
 import argparse
 import json
@@ -17,8 +18,6 @@ def load(path):
     try:
         with open(path) as f:
             return json.load(f)
-    except OSError as e:
-        sys.exit(f"summary_table: {path}: {e.strerror}")
     except json.JSONDecodeError as e:
         sys.exit(f"summary_table: {path}: not JSON ({e})")
 
@@ -33,12 +32,16 @@ def main():
     ap.add_argument("runs", nargs="+", help="LABEL=RUN_DIR (holding summary.json)")
     a = ap.parse_args()
     tasks = [t for t in a.errors.split(",") if t]
-    rows = []
+    rows, missing = [], []
     for r in a.runs:
         if "=" not in r:
             sys.exit(f"summary_table: '{r}': expected LABEL=RUN_DIR")
         label, d = r.split("=", 1)
-        s = load(os.path.join(d, "summary.json"))
+        path = os.path.join(d, "summary.json")
+        if not os.path.exists(path):
+            missing.append(f"{label}  (no summary: see {os.path.join(d, 'log.txt')})")
+            continue
+        s = load(path)
         te = s.get("tasks", {})
         final = mean = None
         if all(t in te and te[t].get("final_error") is not None for t in tasks):
@@ -51,6 +54,7 @@ def main():
             label,
             s.get("status", "?"),
             fmt(s.get("simulated_s"), ".1f"),
+            fmt(s.get("wall_s"), ".1f"),
             fmt(final, ".4f"),
             fmt(mean, ".4f"),
             str(s.get("solver", {}).get("peak_iterations", "-")),
@@ -58,13 +62,16 @@ def main():
             str(sum(aug.values())) if aug else "-",
             (str(len(failed)) + (": " + ", ".join(failed) if failed else "")),
         ])
-    head = ["run", "status", "sim s", "final " + "+".join(tasks) + " (m)", "mean (m)", "peak it",
+    head = ["run", "status", "sim s", "wall s", "final " + "+".join(tasks) + " (m)", "mean (m)", "peak it",
             "tick us med/p99/max", "Newton ticks", "failed checks"]
     widths = [max(len(str(x[i])) for x in rows + [head]) for i in range(len(head) - 1)]
     line = lambda x: "  ".join(str(v).ljust(w) for v, w in zip(x[:-1], widths)) + "  " + str(x[-1])
     print(line(head))
     for x in rows:
         print(line(x))
+    for m in missing:
+        print(m)
+    sys.exit(1 if missing else 0)
 
 
 if __name__ == "__main__":
