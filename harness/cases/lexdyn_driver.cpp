@@ -63,9 +63,6 @@ struct LexdynDriver::Impl {
     model::FrameId sensor_frame = -1;
   };
   std::vector<ContactRec> contacts;
-  // The controller's model at the state it read (planned wrenches are expressed in the contact
-  // frame the controller saw: with `integrated` feedback its own, not the simulator's).
-  mutable std::unique_ptr<model::ModelData> ctrl_data;
 
   struct Generator {
     enum class Kind { Trajectory, Swing, Ramp } kind = Kind::Trajectory;
@@ -129,7 +126,6 @@ struct LexdynDriver::Impl {
       }
       contacts.push_back(c);
     }
-    ctrl_data = std::make_unique<model::ModelData>(model.createData());
     error_sum.assign(tasks.size(), 0.0);
     error_last.assign(tasks.size(), 0.0);
     status_counts.assign(checks::controllerStatusNames().size(), 0);
@@ -368,10 +364,11 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
   for (int j = 0; j < I.nj; ++j) out[i++] = c.u[c.u.size() - I.nj + j];
   for (int j = 0; j < I.nj; ++j) out[i++] = c.tau[j];
   const model::RobotModel& sm = simu.model();
-  if (!I.contacts.empty()) I.model.update(*I.ctrl_data, I.state.q, I.state.u);
   for (const auto& cr : I.contacts) {
     out[i++] = I.ctl->contactActive(cr.index) ? 1.0 : 0.0;
-    const Eigen::Matrix3d Rc = I.model.framePlacement(*I.ctrl_data, cr.ctrl_frame).linear().transpose();
+    // The planned wrench in the contact frame the controller saw (with `integrated` feedback its
+    // own state, not the simulator's).
+    const Eigen::Matrix3d Rc = I.model.framePlacement(I.ctl->modelData(), cr.ctrl_frame).linear().transpose();
     const Eigen::Vector3d f = Rc * r.contact_wrench.col(cr.index).head<3>();
     const Eigen::Vector3d m = Rc * r.contact_wrench.col(cr.index).tail<3>();
     const Eigen::Isometry3d X = sm.framePlacement(simu.data(), cr.frame);

@@ -464,6 +464,7 @@ const solver::Problem& Controller::problem() const { return impl_->problem; }
 const ControllerConfig& Controller::config() const { return impl_->cfg; }
 const tasks::ContactLayout& Controller::contacts() const { return impl_->layout; }
 const model::RobotModel& Controller::model() const { return *impl_->model; }
+const model::ModelData& Controller::modelData() const { return impl_->data; }
 int Controller::taskCount() const { return static_cast<int>(impl_->cfg.tasks.size()); }
 const tasks::TaskModel& Controller::task(int i) const { return *impl_->cfg.tasks[z(i)]; }
 const tasks::TaskData& Controller::taskData(int i) const { return *impl_->td[z(i)]; }

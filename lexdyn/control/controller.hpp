@@ -99,6 +99,8 @@ class Controller {
   const ControllerConfig& config() const;
   const tasks::ContactLayout& contacts() const;
   const model::RobotModel& model() const;
+  /// The model's data at the state of the last tick (poses, Jacobians of the state it read).
+  const model::ModelData& modelData() const;
   int taskCount() const;
   const tasks::TaskModel& task(int i) const;
   const tasks::TaskData& taskData(int i) const;
