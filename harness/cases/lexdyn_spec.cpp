@@ -52,6 +52,18 @@ solver::Options readSolver(yaml::StrictMap& sm, double dt) {
   if (auto v = sm.optional("dual_tolerance")) o.dual_tolerance = v->asPositiveDouble();
   if (auto v = sm.optional("eliminate_first_level")) o.eliminate_first_level = v->asBool();
   if (auto v = sm.optional("elimination_tolerance")) o.elimination_tolerance = v->asPositiveDouble();
+  if (auto v = sm.optional("last_level_projection")) {
+    const std::string mode = v->asString();
+    if (mode == "auto") {
+      o.last_level_projection = solver::Options::LastLevel::Auto;
+    } else if (mode == "never") {
+      o.last_level_projection = solver::Options::LastLevel::Never;
+    } else if (mode == "always") {
+      o.last_level_projection = solver::Options::LastLevel::Always;
+    } else {
+      v->fail("expected auto, never or always, found \"" + mode + "\"");
+    }
+  }
   if (auto v = sm.optional("bland_after_degenerate_steps")) o.bland_after_degenerate_steps = positiveInt(*v);
   if (auto v = sm.optional("cycle_tolerance_factor")) o.cycle_tolerance_factor = v->asPositiveDouble();
   // The paper's termination rules individually (0 disables a rule); override paper_rules.

@@ -52,9 +52,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
     for (int r = 0; r < m_[z(k)]; ++r) levelOf_[z(rowOff_[z(k)] + r)] = k;
 
   A_.assign(z(L), nullptr);
-  Arm_.resize(z(L));
-  for (int k = 0; k < L; ++k) Arm_[z(k)].setZero(m_[z(k)], n);
-  gatherIdx_.assign(z(std::max(n, 1)), 0);
+  gatherIdx_.assign(z(2 * std::max(mTot_, 1)), 0);
   static_.assign(z(L), 0);
   rowNorm_ = Eigen::VectorXd::Zero(std::max(mTot_, 1));
   freeVar_.resize(z(n));
@@ -112,6 +110,16 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
     leftTau_[z(k)].setZero(mk);
   }
 
+  const int mLast = L > 0 ? std::max(m_[z(L - 1)], 1) : 1;
+  Raw_.setZero(nn, mLast);
+  RawB_.setZero(m0max, mLast);
+  RawP_.setZero(nn, mLast);
+  P_.setZero(nn, mLast);
+  Z_.setZero(nn, nn);
+  rawHave_.assign(z(mLast), 0);
+  zvec_.setZero(nn);
+  deferred_ = -1;
+
   S_.setZero(nn, colsW);
   sparseB_.assign(z(colsW), -2);
   tmpGid_.assign(z(colsW), -1);
@@ -140,17 +148,6 @@ void HlsFactorization::computeRowNorms() {
     // Column-wise accumulation: contiguous reads of the column-major matrix.
     auto rn = rowNorm_.segment(rowOff_[z(k)], A.rows());
     rn = A.cwiseAbs2().rowwise().sum().cwiseSqrt();
-    // Row-major copy, column by column: contiguous reads; the writes of one column touch one
-    // cache line per row, all of which stay in L1 for the next columns.
-    auto& R = Arm_[z(k)];
-    const Eigen::Index rows = A.rows(), cols = A.cols();
-    const double* src = A.data();
-    double* dst = R.data();
-    for (Eigen::Index j = 0; j < cols; ++j) {
-      const double* sc = src + j * rows;
-      double* dc = dst + j;
-      for (Eigen::Index i = 0; i < rows; ++i) dc[i * cols] = sc[i];
-    }
   }
 }
 
@@ -212,11 +209,12 @@ bool HlsFactorization::tryEliminate() {
   const int m0 = static_cast<int>(lst.size());
   if (m0 == 0 || m0 > nf_ || m0 > G_.cols()) return false;
   const Eigen::MatrixXd& A0 = *A_[0];
-  // G = A_0^T restricted to the free variables (rows = variables), read row by row.
-  for (int i = 0; i < m0; ++i) {
-    const double* row = Arm_[0].data() + static_cast<Eigen::Index>(lst[z(i)] - rowOff_[0]) * Arm_[0].cols();
-    double* g = G_.col(i).data();
-    for (int f = 0; f < nf_; ++f) g[f] = row[freeVar_[z(f)]];
+  // G = A_0^T restricted to the free variables (rows = variables); columns of A_0 are contiguous.
+  const Eigen::Index ldG = G_.outerStride();
+  for (int f = 0; f < nf_; ++f) {
+    const double* col = A0.data() + static_cast<Eigen::Index>(freeVar_[z(f)]) * A0.rows();
+    double* g = G_.data() + f;
+    for (int i = 0; i < m0; ++i) g[i * ldG] = col[lst[z(i)] - rowOff_[0]];
   }
   // Blocked LU with partial pivoting of the tall G (Eigen's kernel): P G = [L1; L2] U. The pivot
   // rows are the basic variables.
@@ -285,32 +283,44 @@ bool HlsFactorization::updateElimination() {
   return true;
 }
 
-// Loads the active rows of level j found at S_ columns [p0, p1) marked as loaded (colNorm_ == 1):
-// reduced coordinates into S_, basic part into SB_. Reads the column-major rows column by column.
-void HlsFactorization::gatherLevel(int j, int p0, int p1) {
-  // Reads each loaded row contiguously from the row-major copy: reduced coordinates into S_,
-  // basic part into SB_.
-  const auto& Arm = Arm_[z(j)];
+// Loads the active rows of level j found at scratch columns [p0, p1) marked as loaded (colNorm_ == 1):
+// reduced coordinates into S_, basic part into SB. Reads the column-major data one variable
+// (column) at a time; the few destination columns stay in L1 across variables.
+void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Eigen::MatrixXd& SB) {
+  const Eigen::MatrixXd& A = *A_[z(j)];
+  const Eigen::Index lda = A.rows();
   const int off = rowOff_[z(j)];
-  int* idx = gatherIdx_.data();
-  for (int f = 0; f < nr_; ++f) idx[f] = elim_ ? varPerm_[z(m0_ + f)] : freeVar_[z(f)];
+  int* qs = gatherIdx_.data();      // loaded scratch columns
+  int* rows = qs + gatherIdx_.size() / 2;  // their rows in level j
+  int cnt = 0;
   for (int q = p0; q < p1; ++q) {
     if (colNorm_(q) != 1.0) continue;
-    const double* row = Arm.data() + static_cast<Eigen::Index>(tmpGid_[z(q)] - off) * Arm.cols();
-    double* dst = S_.col(q).data();
-    for (int f = 0; f < nr_; ++f) dst[f] = row[idx[f]];
-    if (!elim_) continue;
-    double* db = SB_.col(q).data();
+    qs[cnt] = q;
+    rows[cnt++] = tmpGid_[z(q)] - off;
+  }
+  const Eigen::Index ldS = S.outerStride();
+  for (int f = 0; f < nr_; ++f) {
+    const double* col = A.data() + static_cast<Eigen::Index>(elim_ ? varPerm_[z(m0_ + f)] : freeVar_[z(f)]) * lda;
+    double* dst = S.data() + f;
+    for (int c = 0; c < cnt; ++c) dst[qs[c] * ldS] = col[rows[c]];
+  }
+  if (!elim_) return;
+  const Eigen::Index ldB = SB.outerStride();
+  for (int i = 0; i < m0_; ++i) {
+    const double* col = A.data() + static_cast<Eigen::Index>(varPerm_[z(i)]) * lda;
+    double* dst = SB.data() + i;
+    for (int c = 0; c < cnt; ++c) dst[qs[c] * ldB] = col[rows[c]];
+  }
+  for (int c = 0; c < cnt; ++c) {
+    const double* db = SB.col(qs[c]).data();
     int nz = 0, last = -1;
     for (int i = 0; i < m0_; ++i) {
-      const double a = row[varPerm_[z(i)]];
-      db[i] = a;
-      if (a != 0.0) {
+      if (db[i] != 0.0) {
         ++nz;
         last = i;
       }
     }
-    sparseB_[z(q)] = (nz == 0) ? -1 : (nz == 1 ? last : -2);
+    sparseB_[z(qs[c])] = (nz == 0) ? -1 : (nz == 1 ? last : -2);
   }
 }
 
@@ -325,24 +335,69 @@ void HlsFactorization::applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int
   }
 }
 
+void HlsFactorization::applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int stages) const {
+  for (int k = stages - 1; k >= firstStage_; --k) {
+    const int c0 = col0_[z(k)];
+    const int s = start_[z(k)];
+    for (int i = rank_[z(k)] - 1; i >= 0; --i) {
+      const int len = nr_ - c0 - i;
+      applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), col.segment(c0 + i, len));
+    }
+  }
+}
+
+void HlsFactorization::decideDeferral() {
+  deferred_ = -1;
+  const int k = levelCount() - 1;
+  if (lastMode_ == LastLevel::Standard || k <= firstStage_) return;
+  if (lastMode_ == LastLevel::Auto) {
+    // Projection pays when the level has more active rows than the null space left for it
+    // (estimated with full-rank earlier levels).
+    int earlier = 0;
+    for (int j = firstStage_; j < k; ++j) earlier += static_cast<int>(active_[z(j)].size());
+    if (static_cast<int>(active_[z(k)].size()) <= std::max(nr_ - earlier, 0)) return;
+  }
+  deferred_ = k;
+}
+
 void HlsFactorization::relayout(int c) {
   // Rebuild the columns of levels >= c in the solver's active order, in their pre-stage-c state.
   const int L = levelCount();
   const int sc = (c <= firstStage_) ? 0 : start_[z(c - 1)] + act_[z(c - 1)];
   const int c0 = col0_[z(c)];
   const bool useSnap = (c > 0) && !static_[z(c)] && snapValid_[z(c)];
+  // After a full reset nothing is restored and the layout starts at column 0: the columns are
+  // built in place. Otherwise in scratch, since restored columns are read from their old places.
+  const bool direct = fullLayout_ && c == firstStage_;
+  Eigen::MatrixXd& S = direct ? W_ : S_;
+  Eigen::MatrixXd& SB = direct ? WB_ : SB_;
   int p = 0, fresh = 0;
   for (int j = c; j < L; ++j) {
     const int p0 = p;
     int freshHere = 0;
     for (int gid : active_[z(j)]) {
+      if (j == deferred_) {
+        // Projected level: its raw reduced rows, kept from an earlier layout or loaded.
+        const int row = gid - rowOff_[z(j)];
+        tmpGid_[z(p)] = gid;
+        if (rawHave_[z(row)]) {
+          S.col(p).head(nr_) = Raw_.col(row).head(nr_);
+          if (elim_) SB.col(p).head(m0_) = RawB_.col(row).head(m0_);
+          colNorm_(p) = 0.0;
+        } else {
+          colNorm_(p) = 1.0;
+          ++freshHere;
+        }
+        ++p;
+        continue;
+      }
       const int old = pos_[z(gid)];
       const int sCol = useSnap ? snapCol_[z(c)][z(gid)] : -1;
       tmpGid_[z(p)] = gid;
       if (old >= 0 && sCol >= 0) {
-        S_.col(p).head(c0) = W_.col(old).head(c0);
-        S_.col(p).segment(c0, nr_ - c0) = snap_[z(c)].col(sCol).head(nr_ - c0);
-        if (elim_) SB_.col(p).head(m0_) = WB_.col(old).head(m0_);
+        S.col(p).head(c0) = W_.col(old).head(c0);
+        S.col(p).segment(c0, nr_ - c0) = snap_[z(c)].col(sCol).head(nr_ - c0);
+        if (elim_) SB.col(p).head(m0_) = WB_.col(old).head(m0_);
         colNorm_(p) = 0.0;  // marks a restored column
       } else {
         colNorm_(p) = 1.0;  // marks a loaded column
@@ -350,7 +405,7 @@ void HlsFactorization::relayout(int c) {
       }
       ++p;
     }
-    if (freshHere > 0) gatherLevel(j, p0, p);
+    if (freshHere > 0) gatherLevel(j, p0, p, S, SB);
     fresh += freshHere;
   }
   // Loaded rows: elimination transform a_N - D^T a_B. Rows whose basic part has at most one
@@ -363,27 +418,37 @@ void HlsFactorization::relayout(int c) {
       if (colNorm_(q) != 1.0 || sparseB_[z(q)] != -2) {
         if (colNorm_(q) == 1.0 && sparseB_[z(q)] >= 0) {
           const int i = sparseB_[z(q)];
-          S_.col(q).head(nr_).noalias() -= SB_(i, q) * DT.col(i);
+          S.col(q).head(nr_).noalias() -= SB(i, q) * DT.col(i);
         }
         ++q;
         continue;
       }
       int e = q + 1;
       while (e < p && colNorm_(e) == 1.0 && sparseB_[z(e)] == -2) ++e;
-      S_.block(0, q, nr_, e - q).noalias() -= DT * SB_.block(0, q, m0_, e - q);
+      S.block(0, q, nr_, e - q).noalias() -= DT * SB.block(0, q, m0_, e - q);
       q = e;
     }
   }
+  // Columns of a projected level stay raw (kept for later layouts); the others get the earlier
+  // stages' reflectors.
+  const int pDef = (deferred_ >= c) ? p - static_cast<int>(active_[z(deferred_)].size()) : p;
+  for (int q = pDef; q < p && fresh > 0; ++q) {
+    if (colNorm_(q) != 1.0) continue;
+    const int row = tmpGid_[z(q)] - rowOff_[z(deferred_)];
+    Raw_.col(row).head(nr_) = S.col(q).head(nr_);
+    if (elim_) RawB_.col(row).head(m0_) = SB.col(q).head(m0_);
+    rawHave_[z(row)] = 1;
+  }
   if (c > firstStage_ && fresh > 0) {
-    for (int q = 0; q < p; ++q)
-      if (colNorm_(q) == 1.0) applyEarlierStagesTo(S_.col(q).head(nr_), c);
+    for (int q = 0; q < pDef; ++q)
+      if (colNorm_(q) == 1.0) applyEarlierStagesTo(S.col(q).head(nr_), c);
   }
   for (int q = sc; q < mTot_; ++q) {
     const int gid = colGid_[z(q)];
     if (gid >= 0) pos_[z(gid)] = -1;
     colGid_[z(q)] = -1;
   }
-  if (p > 0) {
+  if (p > 0 && !direct) {
     W_.block(0, sc, nr_, p) = S_.block(0, 0, nr_, p);
     if (elim_) WB_.block(0, sc, m0_, p) = SB_.block(0, 0, m0_, p);
   }
@@ -406,7 +471,8 @@ void HlsFactorization::saveSnapshot(int k) {
   snapGids_[z(k)].clear();
   const int s = start_[z(k)];
   int cnt = 0;
-  for (int j = k; j < L; ++j) cnt += act_[z(j)];
+  for (int j = k; j < L; ++j)
+    if (j != deferred_) cnt += act_[z(j)];  // a projected level restores from its raw rows
   const int c0 = col0_[z(k)];
   const int d = nr_ - c0;
   if (cnt > 0 && d > 0) snap_[z(k)].block(0, 0, d, cnt) = W_.block(c0, s, d, cnt);
@@ -422,6 +488,10 @@ void HlsFactorization::swapColumns(int a, int b) {
   if (a == b) return;
   W_.col(a).head(nr_).swap(W_.col(b).head(nr_));
   if (elim_) WB_.col(a).head(m0_).swap(WB_.col(b).head(m0_));
+  if (deferred_ >= 0 && levelOf_[z(colGid_[z(a)])] == deferred_) {
+    const int s = start_[z(deferred_)];
+    RawP_.col(a - s).head(nr_).swap(RawP_.col(b - s).head(nr_));
+  }
   std::swap(colNorm_(a), colNorm_(b));
   std::swap(colNormRef_(a), colNormRef_(b));
   std::swap(colOrig_(a), colOrig_(b));
@@ -493,7 +563,8 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
 
   // Trailing update of the later levels' columns: C <- Q_k^T C (compact WY, blocked).
   int rest = 0;
-  for (int j = k + 1; j < L; ++j) rest += act_[z(j)];
+  for (int j = k + 1; j < L; ++j)
+    if (j != deferred_) rest += act_[z(j)];  // a projected level is projected when its turn comes
   if (rest > 0 && r > 0) {
     auto C = W_.block(c0, s + m, d, rest);
     if (r <= kDirectReflectors) {
@@ -548,6 +619,29 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   }
 }
 
+// Projected level k (the last): keeps its raw rows in column order (RawP_) for solve() and
+// multipliers(), and writes their projection Z^T a onto the null space of the earlier levels,
+// Z = Q_{<k} [0; I], into rows c0.. of its columns; factorLevel then factorises them as usual.
+// Rows 0..c0 of these columns are not used.
+void HlsFactorization::projectDeferredLevel(int k) {
+  const int s = start_[z(k)];
+  const int m = act_[z(k)];
+  const int c0 = col0_[z(k)];
+  const int d = nr_ - c0;
+  if (m == 0) return;
+  RawP_.block(0, 0, nr_, m) = W_.block(0, s, nr_, m);
+  if (c0 == 0 || d == 0) return;  // no earlier reflector (Z = I), or nothing left to project on
+  auto Z = Z_.block(0, 0, nr_, d);
+  Z.setZero();
+  for (int i = 0; i < d; ++i) {
+    Z(c0 + i, i) = 1.0;
+    applyEarlierStagesQ(Z.col(i), k);
+  }
+  auto P = P_.block(0, 0, d, m);
+  P.noalias() = Z.transpose() * RawP_.block(0, 0, nr_, m);
+  W_.block(c0, s, d, m) = P;
+}
+
 void HlsFactorization::factorize(double rankTol) {
   const int L = levelCount();
   if (dirtyFrom_ >= L) {
@@ -562,6 +656,8 @@ void HlsFactorization::factorize(double rankTol) {
       colGid_[z(q)] = -1;
     }
     std::fill(snapValid_.begin(), snapValid_.end(), 0);
+    std::fill(rawHave_.begin(), rawHave_.end(), 0);
+    fullLayout_ = true;
     if (updateElimination() || tryEliminate()) {
       nrElim_ = nf_ - m0_;
       firstStage_ = 1;
@@ -577,6 +673,7 @@ void HlsFactorization::factorize(double rankTol) {
       nr_ = nf_;
       col0_[0] = 0;
     }
+    decideDeferral();
   } else if (c < firstStage_) {
     c = firstStage_;
   }
@@ -584,10 +681,15 @@ void HlsFactorization::factorize(double rankTol) {
   if (c < L) {
     relayout(c);
     for (int k = c; k < L; ++k) {
-      if (k > 0 && !static_[z(k)]) saveSnapshot(k);
+      if (k == deferred_) {
+        projectDeferredLevel(k);
+      } else if (k > 0 && !static_[z(k)]) {
+        saveSnapshot(k);
+      }
       factorLevel(k, rankTol);
     }
   }
+  fullLayout_ = false;
   dirtyFrom_ = L;
 }
 
@@ -612,7 +714,16 @@ void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen
     auto t = t_.head(m);
     for (int j = 0; j < m; ++j) t(j) = b(colGid_[z(s + j)]);
     if (elim_) t.noalias() -= WB_.block(0, s, m0_, m).transpose() * d_.head(m0_);
-    if (c0 > 0) t.noalias() -= W_.block(0, s, c0, m).transpose() * y.head(c0);
+    if (c0 > 0 && k == deferred_) {
+      // Projected level: a^T Q [y_0..c0; 0] from its raw rows.
+      auto zv = zvec_.head(nr_);
+      zv.head(c0) = y.head(c0);
+      zv.tail(nr_ - c0).setZero();
+      applyEarlierStagesQ(zv, k);
+      t.noalias() -= RawP_.block(0, 0, nr_, m).transpose() * zv;
+    } else if (c0 > 0) {
+      t.noalias() -= W_.block(0, s, c0, m).transpose() * y.head(c0);
+    }
     if (r == m) {
       W_.block(c0, s, r, r).triangularView<Eigen::Upper>().transpose().solveInPlace(t);
       y.segment(c0, r) = t;
@@ -671,7 +782,15 @@ void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref
       u(j) = res(gid);
       mu(gid) = res(gid);
     }
-    if (m > 0 && c0 > 0) G.head(c0).noalias() += W_.block(0, s, c0, m) * u;
+    if (m > 0 && c0 > 0 && k == deferred_) {
+      // Projected level: the first c0 coordinates of Q_{<k}^T (A_k^T u) from its raw rows.
+      auto v = zvec_.head(nr_);
+      v.noalias() = RawP_.block(0, 0, nr_, m) * u;
+      applyEarlierStagesTo(v, k);
+      G.head(c0) += v.head(c0);
+    } else if (m > 0 && c0 > 0) {
+      G.head(c0).noalias() += W_.block(0, s, c0, m) * u;
+    }
     if (elim_ && m > 0) {
       gB_.head(m0_).setZero();
       gB_.head(m0_).noalias() += WB_.block(0, s, m0_, m) * u;

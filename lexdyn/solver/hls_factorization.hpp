@@ -36,7 +36,7 @@ class HlsFactorization {
 
   /// Sets the original rows of general level k (pointer kept; must outlive the calls).
   void setLevelMatrix(int k, const Eigen::MatrixXd* A) { A_[static_cast<size_t>(k)] = A; }
-  /// Recomputes the original row norms and row-major copies (call after the row data changed).
+  /// Recomputes the original row norms (call after the row data changed).
   void computeRowNorms();
   const Eigen::VectorXd& rowNorms() const { return rowNorm_; }
 
@@ -46,6 +46,15 @@ class HlsFactorization {
     elimAllowed_ = allowed;
     elimTol_ = elimTol;
   }
+  /// How the last level is factorised. Standard: like every other level (each earlier stage's
+  /// reflectors are applied to its rows). Projected: its rows are kept in reduced coordinates
+  /// and projected once onto the null space left by the earlier levels, Z^T a with Z formed
+  /// explicitly; cheaper when the level has more active rows than that null space has dimensions
+  /// (a regularisation level over many variables). Auto chooses per full factorisation.
+  enum class LastLevel { Auto, Standard, Projected };
+  void setLastLevelMode(LastLevel mode) { lastMode_ = mode; }
+  /// True when the last factorisation projected the last level.
+  bool lastLevelProjected() const { return deferred_ >= 0; }
   /// Declares level k static (only equality rows: its active set never changes, so it is never
   /// a restart point and needs no snapshot).
   void setStaticLevel(int k, bool isStatic) { static_[static_cast<size_t>(k)] = isStatic ? 1 : 0; }
@@ -92,13 +101,18 @@ class HlsFactorization {
  private:
   bool tryEliminate();
   bool updateElimination();
-  void gatherLevel(int j, int p0, int p1);
+  void gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Eigen::MatrixXd& SB);
   int colGidTmp(int q) const { return tmpGid_[static_cast<size_t>(q)]; }
+  /// col <- Q_{<stages}^T col (the reflectors of the orthogonal stages before `stages`).
   void applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
+  /// col <- Q_{<stages} col.
+  void applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
   void relayout(int c);
   void saveSnapshot(int k);
   void swapColumns(int a, int b);
   void factorLevel(int k, double rankTol);
+  void projectDeferredLevel(int k);
+  void decideDeferral();
 
   int n_ = 0;
   int nf_ = 0;   // free variables
@@ -106,8 +120,6 @@ class HlsFactorization {
   int mTot_ = 0;
   std::vector<int> m_, rowOff_, levelOf_;
   std::vector<const Eigen::MatrixXd*> A_;
-  /// Row-major copies of the levels' rows (refreshed by computeRowNorms): gathers read rows.
-  std::vector<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Arm_;
   std::vector<int> gatherIdx_;
   std::vector<char> static_;
   Eigen::VectorXd rowNorm_;
@@ -158,6 +170,16 @@ class HlsFactorization {
   std::vector<int> tmpGid_;   // relayout: gid of each scratch column
   std::vector<int> sparseB_;  // per loaded column: -2 dense basic part, -1 zero, else its one index
 
+  // Projected last level (deferred_ = its index, or -1): raw reduced rows by row of the level
+  // (RawB_: their basic part), valid where rawHave_; RawP_: the raw rows in the level's current
+  // physical column order; Z_: the null-space basis of the earlier levels (rows c0.. of Q).
+  LastLevel lastMode_ = LastLevel::Auto;
+  int deferred_ = -1;
+  Eigen::MatrixXd Raw_, RawB_, RawP_, Z_, P_;
+  std::vector<char> rawHave_;
+  Eigen::VectorXd zvec_;
+
+  bool fullLayout_ = false;  // the next relayout follows a full reset
   int dirtyFrom_ = 0;
   int lastRestart_ = 0;
 };

@@ -260,6 +260,9 @@ void Solver::Impl::loadData(const Problem& problem) {
     allEq = (l0.lower.array() == l0.upper.array()).all();
   }
   fact.setElimination(opt.eliminate_first_level && allEq, opt.elimination_tolerance);
+  fact.setLastLevelMode(opt.last_level_projection == Options::LastLevel::Never    ? HlsFactorization::LastLevel::Standard
+                        : opt.last_level_projection == Options::LastLevel::Always ? HlsFactorization::LastLevel::Projected
+                                                                                  : HlsFactorization::LastLevel::Auto);
   for (int kf = 0; kf < lg; ++kf) {
     const Level& lv = problem.level(kf + first);
     fact.setStaticLevel(kf, (lv.lower.array() == lv.upper.array()).all());
@@ -751,6 +754,7 @@ void Solver::Impl::run() {
 void Solver::Impl::finish() {
   const Problem& problem = *prob;
   out.x = x;
+  out.last_level_projected = fact.lastLevelProjected();
   // True violations at the final x (Ax is kept up to date along the steps).
   if (hasBounds) {
     const Level& lv = problem.level(0);

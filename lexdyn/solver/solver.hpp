@@ -64,6 +64,13 @@ struct Options {
   /// other levels. Exact either way; much cheaper for an equation-of-motion level.
   bool eliminate_first_level = true;
   double elimination_tolerance = 1e-6;
+  /// How the last general level is factorised. Never: like the others (every earlier stage's
+  /// reflectors are applied to its active rows). Always: its rows are projected once onto the
+  /// null space left by the earlier levels through an explicit basis of it. Auto: projected when
+  /// it has more active rows than that null space has dimensions (a regularisation level over
+  /// many variables, where this saves most of the trailing updates). Exact either way.
+  enum class LastLevel { Auto, Never, Always };
+  LastLevel last_level_projection = LastLevel::Auto;
   /// Hard cap on active-set iterations (equality sub-problems solved).
   int max_iterations = 1000;
   /// After this many consecutive zero-length steps, ties are broken by smallest index (Bland).
@@ -120,6 +127,8 @@ struct Result {
   int optimal_through = -1;
   /// Cycles detected (a working set repeated) and broken by raising the tolerances.
   int cycles_broken = 0;
+  /// The last factorisation projected the last level (Options::last_level_projection).
+  bool last_level_projected = false;
   int bad_level = -1, bad_row = -1;  ///< NonFiniteInput location
 };
 

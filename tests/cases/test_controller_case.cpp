@@ -112,8 +112,13 @@ TEST(ControllerCase, EveryTaskTypeIsBuiltWithEveryParamsField) {
       "    - {name: eom, type: equation_of_motion}\n"
       "    - {name: fb, type: contact_force_bounds}\n";
   s["e_controller"] = lexdynController("bfgs", extra);
+  const std::string solverFrom = "  solver: {paper_rules: true}\n";
+  s["e_controller"].replace(s["e_controller"].find(solverFrom), solverFrom.size(),
+                            "  solver: {paper_rules: true, last_level_projection: never}\n");
   const CaseSpec c = loadCase(writeCase(outputDir("controller_case_registry"), s));
   const LexdynSpec& lx = c.controller.lexdyn;
+  EXPECT_EQ(lx.params.solver.last_level_projection, solver::Options::LastLevel::Never);
+  EXPECT_EQ(lx.params.solver.stop_total_iterations, 30);
   auto task = [&](const std::string& n) -> const TaskSpec& { return lx.tasks[static_cast<size_t>(lx.findTask(n))]; };
   EXPECT_EQ(task("jl").joint_limits.interaction_fraction, 0.2);
   EXPECT_EQ(task("jl").joint_limits.safety_fraction, 0.05);
@@ -178,6 +183,8 @@ TEST(ControllerCase, ErrorsNameFileLineAndKeyPath) {
               {"controller.colour", "unknown key"});
   expectError(with("  solver: {paper_rules: true}\n", "  solver: {paper_rules: true, max_iterations: many}\n"),
               {"controller.solver.max_iterations", "expected an integer"});
+  expectError(with("  solver: {paper_rules: true}\n", "  solver: {paper_rules: true, last_level_projection: sometimes}\n"),
+              {"controller.solver.last_level_projection", "auto, never or always", "sometimes"});
   expectError(with("{name: trust, type: trust_region}", "{name: trust, type: trust_region, delta: -1}"),
               {"controller.tasks[4].delta", "> 0"});
   expectError(with("{name: trust, type: trust_region}", "{name: trust, type: trust_region, radius: 1}"),

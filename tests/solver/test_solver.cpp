@@ -210,6 +210,50 @@ TEST(Solver, WarmStartGivesTheColdAnswer) {
   }
 }
 
+TEST(Solver, ProjectedLastLevelGivesTheStandardAnswer) {
+  // A large last level (minimum norm over all variables) after a few small ones: Auto projects
+  // it onto the null space left by the earlier levels; the answer, the multipliers and the
+  // residuals are those of the standard factorisation.
+  GenOptions g;
+  g.maxRows = 3;
+  g.inequalities = true;
+  int projected = 0;
+  for (std::uint64_t seed = 5000; seed < 5100; ++seed) {
+    g.n = 8 + static_cast<int>(seed % 9);
+    g.levels = 2 + static_cast<int>(seed % 4);
+    Problem p = randomProblem(seed, g);
+    appendMinNorm(p);
+    Options never;
+    never.last_level_projection = Options::LastLevel::Never;
+    Solver s1, s2;
+    const Result r1 = solveOnce(s1, p, never);
+    const Result& r2 = solveOnce(s2, p);
+    ASSERT_EQ(r1.status, Status::Solved) << "seed " << seed;
+    ASSERT_EQ(r2.status, Status::Solved) << "seed " << seed;
+    EXPECT_FALSE(r1.last_level_projected);
+    projected += r2.last_level_projected ? 1 : 0;
+    EXPECT_LE((r2.x - r1.x).norm(), 1e-9 * (1 + r1.x.norm())) << "seed " << seed;
+    for (int l = 0; l < p.levelCount(); ++l)
+      EXPECT_NEAR(r2.violation_norm(l), r1.violation_norm(l), 1e-9 * (1 + r1.violation_norm(l))) << "seed " << seed;
+    EXPECT_LE((r2.lambda - r1.lambda).norm(), 1e-7 * (1 + r1.lambda.norm())) << "seed " << seed;
+    EXPECT_EQ(checkKkt(p, r2), "") << "seed " << seed;
+  }
+  EXPECT_GE(projected, 90);
+  // A last level smaller than the null space left to it is not projected by Auto.
+  Problem q(6);
+  q.addLevel("a", mat(1, 6, {1, 1, 0, 0, 0, 0}), vec({1}), vec({1}));
+  q.addLevel("b", mat(1, 6, {0, 0, 1, 0, 0, 0}), vec({2}), vec({2}));
+  q.addLevel("c", mat(2, 6, {0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1, 0}), vec({-1, -1}), vec({1, 1}));
+  Solver s3;
+  EXPECT_FALSE(solveOnce(s3, q).last_level_projected);
+  Options always;
+  always.last_level_projection = Options::LastLevel::Always;
+  Solver s4;
+  const Result& r4 = solveOnce(s4, q, always);
+  EXPECT_TRUE(r4.last_level_projected);
+  EXPECT_EQ(checkKkt(q, r4), "");
+}
+
 TEST(Solver, ScalingPermutingAndAppendingKeepEarlierOptima) {
   GenOptions g;
   for (std::uint64_t seed = 3000; seed < 3100; ++seed) {

@@ -29,8 +29,11 @@ TEST(SolverAllocation, SolvesOfUnchangedSizeAllocateNothing) {
   g.pConflict = 0.3;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     Problem p = test::randomProblem(seed, g);
+    test::appendMinNorm(p);  // a large last level: projected by default
+    Options o;
+    if (seed % 2 == 0) o.last_level_projection = Options::LastLevel::Never;
     Solver s;
-    s.setup(p);
+    s.setup(p, o);
     s.solve(p);  // warm-up (nothing is lazily allocated, but make the point explicit)
     Problem q = test::randomProblem(seed + 1000, g);
     lexdyn::test::AllocationScope scope;

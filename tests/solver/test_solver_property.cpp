@@ -26,19 +26,36 @@ GenOptions genOptions(int maxN, int maxLevels, int maxRows) {
   return g;
 }
 
+Options withLastLevel(Options::LastLevel mode, bool eliminate = true) {
+  Options o;
+  o.last_level_projection = mode;
+  o.eliminate_first_level = eliminate;
+  return o;
+}
+
 RC_GTEST_PROP(SolverProperty, RandomHierarchiesAreSolvedWithAKktCertificate, ()) {
   const GenOptions g = genOptions(12, 7, 8);
   const auto seed = *rc::gen::inRange<std::uint64_t>(0, std::uint64_t(1) << 62);
   const Problem p = test::randomProblem(seed, g);
-  Solver s;
-  s.setup(p);
-  const Result& r = s.solve(p);
-  RC_ASSERT(r.status == Status::Solved);
-  const std::string kkt = test::checkKkt(p, r);
-  RC_LOG() << kkt;
-  RC_ASSERT(kkt.empty());
-  // The bounds level is never violated.
-  if (p.level(0).kind == LevelKind::Bounds) RC_ASSERT(r.violation_norm(0) <= 1e-9);
+  // The last level factorised like the others and projected: both exact, same optima.
+  Eigen::VectorXd firstNorms;
+  for (const Options& o : {withLastLevel(Options::LastLevel::Never), withLastLevel(Options::LastLevel::Always)}) {
+    Solver s;
+    s.setup(p, o);
+    const Result& r = s.solve(p);
+    RC_ASSERT(r.status == Status::Solved);
+    const std::string kkt = test::checkKkt(p, r);
+    RC_LOG() << kkt;
+    RC_ASSERT(kkt.empty());
+    // The bounds level is never violated.
+    if (p.level(0).kind == LevelKind::Bounds) RC_ASSERT(r.violation_norm(0) <= 1e-9);
+    if (firstNorms.size() == 0) {
+      firstNorms = r.violation_norm;
+      continue;
+    }
+    for (int l = 0; l < p.levelCount(); ++l)
+      RC_ASSERT(std::abs(r.violation_norm(l) - firstNorms(l)) <= 1e-7 * (1 + firstNorms(l)));
+  }
 }
 
 RC_GTEST_PROP(SolverProperty, TinyProblemsMatchBruteForce, ()) {
@@ -67,7 +84,8 @@ RC_GTEST_PROP(SolverProperty, EqualityHierarchiesMatchNullSpaceRecursion, ()) {
   const auto ref = test::nullSpaceReference(p);
   Options noElim;
   noElim.eliminate_first_level = false;
-  for (const Options& o : {Options{}, noElim}) {
+  for (const Options& o : {Options{}, noElim, withLastLevel(Options::LastLevel::Always),
+                           withLastLevel(Options::LastLevel::Always, false)}) {
     Solver s;
     s.setup(p, o);
     const Result& r = s.solve(p);
@@ -86,9 +104,11 @@ RC_GTEST_PROP(SolverProperty, WarmStartFromAnyActiveSetGivesTheColdAnswer, ()) {
   const auto seed = *rc::gen::inRange<std::uint64_t>(0, std::uint64_t(1) << 62);
   Problem p = test::randomProblem(seed, g);
   test::appendMinNorm(p);
+  // The warm solver projects the last level (a restart from its raw rows on every change of
+  // the active set), the cold one does not.
   Solver cold, warm;
-  cold.setup(p);
-  warm.setup(p);
+  cold.setup(p, withLastLevel(Options::LastLevel::Never));
+  warm.setup(p, withLastLevel(Options::LastLevel::Always));
   const Result rc = cold.solve(p);
   RC_ASSERT(rc.status == Status::Solved);
   // A random (generally inconsistent) active set and x.
