@@ -284,7 +284,7 @@ bool HlsFactorization::updateElimination() {
 }
 
 // Loads the active rows of level j found at scratch columns [p0, p1) marked as loaded (colNorm_ == 1):
-// reduced coordinates into S_, basic part into SB. Reads the column-major data one variable
+// reduced coordinates into S, basic part into SB. Reads the column-major data one variable
 // (column) at a time; the few destination columns stay in L1 across variables.
 void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Eigen::MatrixXd& SB) {
   const Eigen::MatrixXd& A = *A_[z(j)];
@@ -745,14 +745,7 @@ void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen
     }
   }
   // Reduced solution x_N = Q y.
-  for (int k = L - 1; k >= firstStage_; --k) {
-    const int s = start_[z(k)];
-    const int c0 = col0_[z(k)];
-    for (int i = rank_[z(k)] - 1; i >= 0; --i) {
-      const int len = nr_ - c0 - i;
-      applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), y.segment(c0 + i, len));
-    }
-  }
+  applyEarlierStagesQ(y, L);
   if (!elim_) {
     for (int f = 0; f < nf_; ++f) x(freeVar_[z(f)]) = y(f);
     return;
