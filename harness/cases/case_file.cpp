@@ -1,5 +1,7 @@
 #include "harness/cases/case_file.hpp"
 
+#include "harness/cases/case_document.hpp"
+
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
 #include "lexdyn/control/controller.hpp"
@@ -12,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 
 namespace lexdyn::cases {
 
@@ -49,12 +52,15 @@ const char* toString(sim::SetpointProfile p) {
 
 namespace {
 
-std::string resolvePath(const yaml::Node& n, const std::string& case_path) {
+// A file named by the case, relative to the case file's directory; recorded in file_fields so
+// that the effective case can name it from elsewhere.
+std::string resolvePath(const yaml::Node& n, CaseSpec& c) {
   const fs::path rel(n.asString());
-  const fs::path p = rel.is_absolute() ? rel : fs::path(case_path).parent_path() / rel;
+  const fs::path p = rel.is_absolute() ? rel : fs::path(c.path).parent_path() / rel;
   const fs::path norm = p.lexically_normal();
   std::error_code ec;
   if (!fs::is_regular_file(norm, ec)) n.fail("file not found: " + norm.string());
+  c.file_fields.emplace_back(n.path(), norm.string());
   return norm.string();
 }
 
@@ -141,6 +147,10 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
                                   : (p == "linear" ? sim::SetpointProfile::Linear : sim::SetpointProfile::Hermite);
     const int nj = static_cast<int>(d.joints.size());
     Eigen::VectorXd kp = Eigen::VectorXd::Constant(nj, -1.0), kd = Eigen::VectorXd::Constant(nj, -1.0);
+    // Scales of every group's gains (a servo perturbation: the real servos are stiffer or softer).
+    double kp_scale = 1.0, kd_scale = 1.0;
+    if (auto v = sm.optional("kp_scale")) kp_scale = v->asPositiveDouble();
+    if (auto v = sm.optional("kd_scale")) kd_scale = v->asPositiveDouble();
     const yaml::Node gains = sm.required("gains");
     for (const yaml::Node& gn : gains.elements()) {
       yaml::StrictMap gm(gn);
@@ -166,8 +176,8 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
       if (kp[j] < 0.0) missing.push_back(d.joints[static_cast<size_t>(j)].name);
     }
     if (!missing.empty()) gains.fail("no gain group matches joint(s) " + joinNames(missing));
-    s.servo.kp = kp;
-    s.servo.kd = kd;
+    s.servo.kp = kp_scale * kp;
+    s.servo.kd = kd_scale * kd;
     sm.finish();
   }
   if (auto grasps = m.optional("grasps")) {
@@ -191,6 +201,44 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
       gm.finish();
       s.grasps.push_back(g);
     }
+  }
+  if (auto model = m.optional("model")) {
+    yaml::StrictMap mm(*model);
+    auto linkPattern = [&](const yaml::Node& n) {
+      const std::string pattern = n.asString();
+      for (const auto& l : d.links) {
+        if (globMatch(pattern, l.name)) return pattern;
+        for (const auto& merged : l.merged_links) {
+          if (globMatch(pattern, merged)) n.fail("'" + merged + "' is lumped into link " + l.name + " (a fixed joint); name " + l.name);
+        }
+      }
+      n.fail("pattern '" + pattern + "' matches no link of the model");
+    };
+    if (auto ms = mm.optional("mass_scale")) {
+      for (const yaml::Node& e : ms->elements()) {
+        yaml::StrictMap em(e);
+        LinkMassScale x;
+        x.match = linkPattern(em.required("match"));
+        const yaml::Node sc = em.required("scale");
+        x.scale = sc.asPositiveDouble();
+        if (x.scale < 0.1 || x.scale > 10.0) sc.fail("expected a scale in [0.1, 10], found " + sc.raw().Scalar());
+        em.finish();
+        c.sim_model.mass_scale.push_back(x);
+      }
+    }
+    if (auto co = mm.optional("com_offset_m")) {
+      for (const yaml::Node& e : co->elements()) {
+        yaml::StrictMap em(e);
+        LinkComOffset x;
+        x.match = linkPattern(em.required("match"));
+        const yaml::Node off = em.required("offset");
+        x.offset_m = off.asVector3();
+        if (x.offset_m.cwiseAbs().maxCoeff() > 0.5) off.fail("expected offsets within +-0.5 m");
+        em.finish();
+        c.sim_model.com_offset.push_back(x);
+      }
+    }
+    mm.finish();
   }
   if (auto integ = m.optional("integrator")) {
     yaml::StrictMap im(*integ);
@@ -509,7 +557,7 @@ checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& cs
   return c;
 }
 
-EventSpec readEvent(const yaml::Node& en, const CaseSpec& c) {
+EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
   yaml::StrictMap em(en);
   EventSpec e;
   e.where = en.where();
@@ -575,7 +623,7 @@ EventSpec readEvent(const yaml::Node& en, const CaseSpec& c) {
   } else if (e.action == "target_trajectory") {
     taskRef();
     const yaml::Node f = em.required("file");
-    e.file = resolvePath(f, c.path);
+    e.file = resolvePath(f, c);
     double window = 0.0;
     if (auto v = em.optional("moving_average_s")) window = v->asNonNegativeDouble();
     bool loop = false;
@@ -671,10 +719,18 @@ std::string methodName(const CaseSpec& spec) {
 void overrideMethod(CaseSpec& spec, const std::string& method, const std::string& where) {
   if (spec.controller.type != "lexdyn") throw InputError(where, "--method needs a case with controller type lexdyn");
   setMethod(spec.controller.lexdyn, control::parseMethod(method, where), where);
+  // The effective case holds it too.
+  if (!spec.document.empty()) {
+    YAML::Node root = YAML::Load(spec.document);
+    root["controller"]["method"] = method;
+    spec.document = doc::emit(root);
+  }
+  spec.overrides.push_back({"controller.method", method, "--method " + method});
 }
 
-CaseSpec loadCase(const std::string& path) {
-  const yaml::Node root = yaml::loadFile(path);
+namespace {
+
+CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
   yaml::StrictMap top(root);
   CaseSpec c;
   c.path = path;
@@ -682,8 +738,8 @@ CaseSpec loadCase(const std::string& path) {
   if (auto desc = top.optional("description")) c.description = desc->asString();
   {
     yaml::StrictMap r(top.required("robot"));
-    c.urdf_path = resolvePath(r.required("urdf"), path);
-    c.data_path = resolvePath(r.required("data"), path);
+    c.urdf_path = resolvePath(r.required("urdf"), c);
+    c.data_path = resolvePath(r.required("data"), c);
     r.finish();
   }
   const model::RobotDescription d = model::loadRobotDescription(c.urdf_path, c.data_path);
@@ -705,6 +761,21 @@ CaseSpec loadCase(const std::string& path) {
       c.initial_state.base_y = v[1];
     }
     if (auto yaw = is.optional("base_yaw_rad")) c.initial_state.base_yaw_rad = yaw->asDouble();
+    if (auto pn = is.optional("perturbation")) {
+      yaml::StrictMap pm(*pn);
+      PosturePerturbation& p = c.initial_state.perturbation;
+      const yaml::Node seed = pm.required("seed");
+      const int sv = seed.asInt();
+      if (sv < 0) seed.fail("expected an integer >= 0");
+      p.seed = static_cast<std::uint64_t>(sv);
+      const yaml::Node amp = pm.required("amplitude_rad");
+      p.amplitude_rad = amp.asNonNegativeDouble();
+      if (p.amplitude_rad > 0.5) amp.fail("expected an amplitude <= 0.5 rad (a small perturbation), found " + amp.raw().Scalar());
+      std::vector<std::string> names = allJoints(d);
+      if (auto j = pm.optional("joints")) names = readJointPatterns(*j, d);
+      for (const auto& n : names) p.joints.push_back(d.findJoint(n));
+      pm.finish();
+    }
     const bool floating = d.base == model::BaseType::FreeFlyer;
     if (auto st = is.optional("settle")) {
       const std::string v = st->asEnum({"static_equilibrium", "base_only", "none"});
@@ -764,9 +835,123 @@ CaseSpec loadCase(const std::string& path) {
       c.comparisons.push_back(cs);
     }
   }
+  std::optional<yaml::Node> stop = top.optional("stop_at_s");
   top.finish();
   if (isLexdyn(c)) validateLexdyn(c, controller_node);
+  if (stop) {
+    c.stop_at_s = stop->asPositiveDouble();
+    if (c.stop_at_s < c.control_period_s) stop->fail("expected at least one control period (" + std::to_string(c.control_period_s) + " s)");
+    c.duration_s = std::min(c.duration_s, c.stop_at_s);
+  }
   return c;
+}
+
+}  // namespace
+
+CaseSpec loadCase(const std::string& path) { return loadCase(path, {}); }
+
+CaseSpec loadCase(const std::string& path, const std::vector<Override>& overrides) {
+  const yaml::Node file_root = yaml::loadFile(path);
+  if (overrides.empty()) {
+    CaseSpec c = parseCase(file_root, path);
+    c.document = doc::emit(file_root.raw());
+    return c;
+  }
+  doc::Document d;
+  d.file = path;
+  d.overrides = overrides;
+  {
+    // The keys the readers accept, recorded on the file as it is (an error there may be what
+    // an override mends: the keys read up to it are known all the same).
+    yaml::KeyRecorder recorder;
+    try {
+      parseCase(file_root, path);
+    } catch (const InputError&) {
+    }
+    d.schema.keys = recorder.paths();
+  }
+  d.root = yaml::loadFile(path).raw();  // a second tree (YAML::Clone would drop the line numbers)
+  for (const Override& o : overrides) d.canonical.push_back(doc::set(d.root, o.path, doc::parseValue(o), d.schema, o.label).canonical);
+  try {
+    CaseSpec c = parseCase(yaml::Node(d.root, path, ""), path);
+    c.overrides = overrides;
+    c.document = doc::emit(d.root);
+    return c;
+  } catch (const InputError& e) {
+    const std::string where = doc::relabel(d, e.where());
+    if (where == e.where()) throw;
+    throw InputError(where, e.detail());
+  }
+}
+
+std::string effectiveCaseText(const CaseSpec& spec, const std::string& dest_dir) {
+  YAML::Node root = YAML::Load(spec.document);
+  const doc::Schema none;
+  for (const auto& [key, resolved] : spec.file_fields) {
+    std::string value = resolved;
+    if (!dest_dir.empty()) {
+      std::error_code ec;
+      const fs::path base = fs::weakly_canonical(fs::absolute(dest_dir), ec);
+      const fs::path target = fs::weakly_canonical(fs::absolute(resolved), ec);
+      // Relative where the two share a folder below the root (the file moves with its tree),
+      // absolute otherwise.
+      const auto first = [](const fs::path& p) { return std::next(p.begin()) == p.end() ? fs::path() : *std::next(p.begin()); };
+      const bool shared = !first(base).empty() && first(base) == first(target);
+      value = shared ? target.lexically_relative(base).string() : target.string();
+      if (value.empty()) value = target.string();
+    } else {
+      value = fs::absolute(resolved).lexically_normal().string();
+    }
+    doc::set(root, key, YAML::Node(value), none, "file field " + key);
+  }
+  std::string header = "# Effective case: " + spec.path;
+  if (spec.overrides.empty()) header += " (no overrides)";
+  for (const Override& o : spec.overrides) header += "\n#   " + o.label;
+  header += "\n# Written by lexdyn-harness; runs on its own: lexdyn-harness run THIS_FILE --out DIR\n";
+  return header + doc::emit(root);
+}
+
+model::RobotDescription simulatedRobot(const CaseSpec& spec) {
+  model::RobotDescription d = model::loadRobotDescription(spec.urdf_path, spec.data_path);
+  for (const LinkMassScale& s : spec.sim_model.mass_scale) {
+    for (auto& l : d.links) {
+      if (!globMatch(s.match, l.name)) continue;
+      l.mass *= s.scale;
+      l.inertia *= s.scale;  // same shape, denser
+    }
+  }
+  for (const LinkComOffset& o : spec.sim_model.com_offset) {
+    for (auto& l : d.links) {
+      if (globMatch(o.match, l.name)) l.com += o.offset_m;
+    }
+  }
+  return d;
+}
+
+namespace {
+// splitmix64: a counter-based generator, the same numbers on every platform.
+std::uint64_t mix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+}  // namespace
+
+Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotModel& model) {
+  const InitialStateSpec& is = spec.initial_state;
+  Eigen::VectorXd q = model.posture(is.posture);
+  for (const auto& [j, v] : is.joints) q[j] = v;
+  const PosturePerturbation& p = is.perturbation;
+  if (p.amplitude_rad > 0.0) {
+    for (int j : p.joints) {
+      // u in [-1, 1] from the top 53 bits of mix64(seed, joint index).
+      const std::uint64_t h = mix64(mix64(p.seed) ^ static_cast<std::uint64_t>(j));
+      const double u = 2.0 * (static_cast<double>(h >> 11) * 0x1.0p-53) - 1.0;
+      q[j] = std::clamp(q[j] + p.amplitude_rad * u, model.jointLowerLimits()[j], model.jointUpperLimits()[j]);
+    }
+  }
+  return q;
 }
 
 }  // namespace lexdyn::cases

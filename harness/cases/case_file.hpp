@@ -11,12 +11,15 @@
 // events and checks are added without changing existing files.
 #pragma once
 
+#include "harness/cases/case_overrides.hpp"
 #include "harness/cases/lexdyn_spec.hpp"
 #include "harness/cases/target_path.hpp"
 #include "harness/checks/checks.hpp"
 #include "harness/sim/simulator.hpp"
 
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lexdyn::cases {
@@ -44,9 +47,19 @@ struct ControllerSpec {
 /// The robot starts at rest in `posture`, its servos holding it; the base keeps (base_x,
 /// base_y, base_yaw_rad) and is put on the ground as `settle` says (sim::Settle; default:
 /// static_equilibrium for a free-flyer with contact surfaces, none otherwise).
+/// A small seeded perturbation of the initial posture (to break exact symmetries): joint j of
+/// `joints` moves by amplitude_rad * u_j, u_j uniform in [-1, 1] from (seed, j) alone
+/// (docs/cases.md, "Perturbations"); the result is clamped to the joint's limits.
+struct PosturePerturbation {
+  std::uint64_t seed = 0;
+  double amplitude_rad = 0.0;
+  std::vector<int> joints;  ///< joint indices (all joints by default)
+};
+
 struct InitialStateSpec {
   std::string posture;
   std::vector<std::pair<int, double>> joints;  ///< overrides of the posture (joint index, value)
+  PosturePerturbation perturbation;
   double base_x = 0.0, base_y = 0.0, base_yaw_rad = 0.0;
   sim::Settle settle = sim::Settle::None;
   bool settle_given = false;   ///< false: the default was taken
@@ -82,6 +95,22 @@ struct TraceSpec {
   bool timings = true;              ///< lexdyn: record the wall-time channels time.*_us
 };
 
+/// The simulated robot differs from the model the controller uses (model mismatch): link masses
+/// scaled (inertias with them) and centres of mass moved, for links whose name matches a
+/// pattern. Later entries act on top of earlier ones (docs/cases.md, "Perturbations").
+struct LinkMassScale {
+  std::string match;
+  double scale = 1.0;
+};
+struct LinkComOffset {
+  std::string match;
+  Eigen::Vector3d offset_m = Eigen::Vector3d::Zero();  ///< in the link frame
+};
+struct SimModelPerturbation {
+  std::vector<LinkMassScale> mass_scale;
+  std::vector<LinkComOffset> com_offset;
+};
+
 struct CaseSpec {
   std::string path;  ///< the case file
   std::string name, description;
@@ -96,12 +125,34 @@ struct CaseSpec {
   TraceSpec trace;
   std::vector<checks::CheckSpec> checks;
   std::vector<checks::ComparisonSpec> comparisons;  ///< evaluated by `lexdyn-harness compare`
+  SimModelPerturbation sim_model;                   ///< sim.model
+  /// stop_at_s (`run --duration`): the run stops there; duration_s is already cut to it.
+  double stop_at_s = 0.0;
+  std::vector<Override> overrides;  ///< applied to the file's document before reading
+  /// The effective case document (the file with the overrides) as YAML text, and the keys that
+  /// hold file paths (key path, resolved path), for effectiveCaseText.
+  std::string document;
+  std::vector<std::pair<std::string, std::string>> file_fields;
 };
 
 /// Reads and validates a case file (and the robot files it names). For a lexdyn controller it
 /// builds the controller of every method the case has a hierarchy for, so that a case that
 /// loads runs with each of them. Throws lexdyn::InputError.
 CaseSpec loadCase(const std::string& path);
+/// The same with overrides applied to the file's document first (case_overrides.hpp); errors at
+/// an overridden value name the override.
+CaseSpec loadCase(const std::string& path, const std::vector<Override>& overrides);
+
+/// The effective case (file + overrides) as one YAML file that reproduces the run on its own:
+/// file paths rewritten relative to `dest_dir` (absolute when dest_dir is empty), a header
+/// comment naming the source file and the overrides.
+std::string effectiveCaseText(const CaseSpec& spec, const std::string& dest_dir);
+
+/// The simulated robot's description: the case's robot files with sim.model applied.
+model::RobotDescription simulatedRobot(const CaseSpec& spec);
+
+/// The initial joint positions: the posture, the case's joint values, the perturbation.
+Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotModel& model);
 
 /// The method of a lexdyn case as a string ("" for other controllers).
 std::string methodName(const CaseSpec& spec);

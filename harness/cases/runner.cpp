@@ -178,12 +178,21 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
   md.emplace_back(checks::kWeightMetadata, num(m.totalMass() * m.gravity().norm()));
   md.emplace_back("control_period_s", num(spec.control_period_s));
   md.emplace_back("duration_s", num(spec.duration_s));
+  if (!spec.overrides.empty()) {
+    std::string o;
+    for (const auto& x : spec.overrides) o += (o.empty() ? "" : "; ") + overrideText(x);
+    md.emplace_back("overrides", o);
+  }
   const InitialStateSpec& is = spec.initial_state;
   std::string init = "posture " + is.posture;
   for (const auto& [j, v] : is.joints) init += (&j == &is.joints.front().first ? " with " : ", ") + m.jointNames()[static_cast<size_t>(j)] + " " + num(v);
   init += ", base_xy [" + num(is.base_x) + ", " + num(is.base_y) + "], base_yaw_rad " +
                      num(is.base_yaw_rad) + "; settle " + sim::toString(rest.settle);
   if (rest.settle != sim::Settle::None) init += " (" + std::to_string(rest.iterations) + " Newton iterations)";
+  if (is.perturbation.amplitude_rad > 0.0) {
+    init += "; perturbed by up to " + num(is.perturbation.amplitude_rad) + " rad on " + std::to_string(is.perturbation.joints.size()) +
+            " joints (seed " + std::to_string(is.perturbation.seed) + ")";
+  }
   init += "; at rest: net force " + num(rest.net_force_N) + " N, net moment " + num(rest.net_moment_Nm) +
           " N m, largest joint imbalance " + num(rest.joint_residual_Nm) + " N m";
   md.emplace_back("initial_state", init);
@@ -199,6 +208,14 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
                                  " m/s; ground z " + num(s.contact.ground_height_m) + " m");
   std::string gains;
   for (const auto& g : spec.gain_groups) gains += (gains.empty() ? "" : "; ") + g.match + " kp " + num(g.kp) + " kd " + num(g.kd);
+  if (!spec.sim_model.mass_scale.empty() || !spec.sim_model.com_offset.empty()) {
+    std::string p = "the simulated robot differs from the controller's model:";
+    for (const auto& x : spec.sim_model.mass_scale) p += " mass x" + num(x.scale) + " on " + x.match + ";";
+    for (const auto& x : spec.sim_model.com_offset) {
+      p += " CoM + [" + num(x.offset_m.x()) + ", " + num(x.offset_m.y()) + ", " + num(x.offset_m.z()) + "] m on " + x.match + ";";
+    }
+    md.emplace_back("sim_model", p);
+  }
   md.emplace_back("servo", std::string("set-point profile ") + toString(s.servo.profile) + "; torque saturated at the URDF effort limit; " + gains);
   if (driver) {
     md.emplace_back("controller", "lexdyn (docs/controller.md)");
@@ -212,13 +229,25 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
   return md;
 }
 
+// Written to PATH.partial, then renamed: a killed run never leaves a half-written file.
+void writeFileAtomically(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".partial";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw InputError(tmp, "cannot open for writing");
+    out << text;
+    if (!out) throw InputError(tmp, "write error");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw InputError(path, "cannot rename into place");
+}
+
 nlohmann::json checksArray(const std::vector<checks::CheckResult>& results) {
   using nlohmann::json;
   auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   json checks = json::array();
   for (const auto& c : results) {
     checks.push_back({{"name", c.name}, {"type", c.type}, {"passed", c.passed}, {"value", number(c.value)},
-                      {"limit", number(c.limit)}, {"unit", c.unit}, {"detail", c.detail}});
+                      {"limit", number(c.limit)}, {"margin", number(checks::margin(c))}, {"unit", c.unit}, {"detail", c.detail}});
   }
   return checks;
 }
@@ -246,6 +275,15 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
                      {"err_test_fails", r.integrator.err_test_fails},
                      {"restarts", r.integrator_restarts}};
   j["checks"] = checksArray(r.checks);
+  if (!r.statistics.empty()) {
+    json st = json::object();
+    for (const auto& c : r.statistics) st[c.name] = {{"value", number(c.value)}, {"detail", c.detail}};
+    j["statistics"] = st;
+  }
+  json overrides = json::array();
+  for (const auto& o : spec.overrides) overrides.push_back({{"path", o.path}, {"value", o.value}});
+  j["overrides"] = overrides;
+  j["effective_case"] = fs::path(r.case_path).filename().string();
   j["skipped_checks"] = r.skipped_checks;
   j["all_checks_passed"] = r.all_checks_passed;
   if (r.has_controller_stats) {
@@ -269,14 +307,7 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
   json build = json::object();
   for (const auto& kv : md) build[kv.first] = kv.second;
   j["trace_header"] = build;
-  const std::string tmp = path + ".partial";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw InputError(tmp, "cannot open for writing");
-    out << j.dump(2) << "\n";
-    if (!out) throw InputError(tmp, "write error");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw InputError(path, "cannot rename the summary into place");
+  writeFileAtomically(path, j.dump(2) + "\n");
 }
 
 }  // namespace
@@ -286,13 +317,12 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   fs::create_directories(options.out_dir, ec);
   if (ec || !fs::is_directory(options.out_dir)) throw InputError(options.out_dir, "cannot create the output directory");
 
-  sim::Simulator simu(spec.urdf_path, spec.data_path, spec.sim);
+  sim::Simulator simu(simulatedRobot(spec), spec.sim);
   const model::RobotModel& m = simu.model();
   // The initial state: at rest, the servos holding the initial posture (docs/simulator.md,
   // "Initial state"). No equilibrium is bad input: nothing is simulated.
   const InitialStateSpec& is = spec.initial_state;
-  Eigen::VectorXd q_init = m.posture(is.posture);
-  for (const auto& [j, v] : is.joints) q_init[j] = v;
+  const Eigen::VectorXd q_init = initialJointPositions(spec, m);
   const sim::RestingState rest =
       simu.restingState(q_init, is.settle, is.base_yaw_rad, Eigen::Vector2d(is.base_x, is.base_y));
   if (!rest.converged) {
@@ -333,16 +363,23 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     check_list.push_back(checks::makeCheck(cs));
     check_list.back()->bind(recorder.channels(), md);
   }
+  std::vector<std::unique_ptr<checks::Check>> statistic_list;
+  for (const auto& cs : options.statistics) {
+    statistic_list.push_back(checks::makeCheck(cs));
+    statistic_list.back()->bind(recorder.channels(), md);
+  }
 
   r.duration_s = spec.duration_s;
   r.trace_path = (fs::path(options.out_dir) / "trace.csv").string();
   r.summary_path = (fs::path(options.out_dir) / "summary.json").string();
+  r.case_path = (fs::path(options.out_dir) / "case.yaml").string();
   // The outputs of an earlier run in the same directory go first, so that a run that is killed
   // never leaves an old summary or trace beside its own partial trace.
-  for (const std::string& old : {r.trace_path, r.summary_path}) {
+  for (const std::string& old : {r.trace_path, r.summary_path, r.case_path}) {
     fs::remove(old, ec);
     if (ec) throw InputError(old, "cannot remove the output of an earlier run: " + ec.message());
   }
+  writeFileAtomically(r.case_path, effectiveCaseText(spec, options.out_dir));
   checks::TraceWriter writer(r.trace_path, recorder.channels(), md, spec.trace.flush_every_rows);
 
   const double T = spec.control_period_s;
@@ -368,6 +405,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     const std::vector<double>& row = recorder.row();
     last_recorded_t = row[0];
     for (auto& c : check_list) c->consume(row.data());
+    for (auto& c : statistic_list) c->consume(row.data());
     if (force_write || k % spec.trace.every_n_ticks == 0) writer.write(row.data());
   };
 
@@ -445,6 +483,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     r.checks.push_back(c->result());
     r.all_checks_passed = r.all_checks_passed && r.checks.back().passed;
   }
+  for (auto& c : statistic_list) r.statistics.push_back(c->result());
   writeSummary(r.summary_path, spec, r, md);
   return r;
 }

@@ -18,6 +18,9 @@ struct RunOptions {
   /// simulation, the trace or the summary.
   double progress_interval_s = 2.0;
   const std::atomic<bool>* interrupt = nullptr;  ///< set (e.g. by SIGINT) to stop after a tick
+  /// Figures to record besides the checks (their limits are ignored): e.g. the per-method
+  /// statistics of a sweep's method comparisons, summary.json "statistics".
+  std::vector<checks::CheckSpec> statistics;
 };
 
 struct RunSummary {
@@ -32,11 +35,13 @@ struct RunSummary {
   sim::CvodeStats integrator;
   long integrator_restarts = 0;
   std::vector<checks::CheckResult> checks;
+  std::vector<checks::CheckResult> statistics;  ///< RunOptions::statistics, evaluated
   std::vector<std::string> skipped_checks;  ///< checks restricted to other methods
   bool all_checks_passed = false;
   bool has_controller_stats = false;
   ControllerStats controller;               ///< lexdyn: per task errors, iterations, timings
   std::string trace_path, summary_path;
+  std::string case_path;  ///< DIR/case.yaml: the effective case (effectiveCaseText)
 };
 
 /// Throws lexdyn::InputError for bad input (nothing is simulated then).

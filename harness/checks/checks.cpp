@@ -147,6 +147,12 @@ class ContactSlip final : public CheckBase {
 
 }  // namespace
 
+double margin(const CheckResult& r) {
+  if (std::isnan(r.value) || !std::isfinite(r.limit)) return std::numeric_limits<double>::quiet_NaN();
+  const bool lower_bound = r.type == "frame_height" || r.type == "contact_unilateral";
+  return lower_bound ? r.value - r.limit : r.limit - r.value;
+}
+
 const std::vector<std::string>& checkTypes() {
   static const std::vector<std::string> types = [] {
     std::vector<std::string> v = {"frame_drift", "force_balance", "contact_slip", "frame_height"};

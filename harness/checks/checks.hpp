@@ -93,6 +93,12 @@ class Check {
   virtual CheckResult result() const = 0;
 };
 
+/// How far a result lies on the passing side of its limit, in the value's unit: limit - value
+/// for the checks that bound a value from above (most, and method comparisons), value - limit
+/// for those that bound it from below (frame_height, contact_unilateral). Negative: failed by
+/// that much; NaN when there is no value.
+double margin(const CheckResult& result);
+
 /// The known check types.
 const std::vector<std::string>& checkTypes();
 std::unique_ptr<Check> makeCheck(const CheckSpec& spec);

@@ -1,6 +1,8 @@
 // lexdyn-harness: runs case files, checks stored traces, compares methods, golden traces.
 //
-//   lexdyn-harness run CASE --out DIR [--method bfgs|ah|gn|wls] [--duration S] [--quiet]
+//   lexdyn-harness run CASE --out DIR [--method bfgs|ah|gn|wls] [--duration S] [--set PATH=VALUE]... [--quiet]
+//   lexdyn-harness case CASE [--method M] [--duration S] [--set PATH=VALUE]... [--out FILE]
+//                                                         (the effective case as one YAML file)
 //   lexdyn-harness check TRACE --case CASE [--json]       (the case's checks on a stored trace)
 //   lexdyn-harness check CASE TRACE [--json]              (the same, older argument order)
 //   lexdyn-harness compare --case CASE TRACE... [--json]  (the case's comparisons between methods)
@@ -224,9 +226,10 @@ int main(int argc, char** argv) {
 
   std::string case_path, out_dir, case_opt, method, manifest = std::string(LEXDYN_SOURCE_DIR) + "/golden/manifest.yaml";
   std::string cases_opt, only, work;
-  double duration = 0.0;
+  std::string duration;
   bool quiet = false, progress = false, json = false;
-  std::vector<std::string> positional, traces;
+  std::vector<std::string> positional, traces, sets;
+  std::string case_out;
 
   CLI::App* run = app.add_subcommand("run", "run a case file");
   run->add_option("case", case_path, "case file (YAML)")->required();
@@ -234,6 +237,14 @@ int main(int argc, char** argv) {
   run->add_option("--method", method, "lexdyn method, overrides the case's: bfgs | ah | gn | wls");
   run->add_option("--duration", duration, "simulate at most this long (s)");
   run->add_flag("--quiet", quiet, "no progress lines");
+  run->add_option("--set", sets, "override a value of the case: PATH=VALUE (docs/cases.md, \"Overrides\"); repeatable");
+
+  CLI::App* casecmd = app.add_subcommand("case", "print the effective case (the file with --method, --duration and --set applied)");
+  casecmd->add_option("case", case_path, "case file (YAML)")->required();
+  casecmd->add_option("--method", method, "lexdyn method: bfgs | ah | gn | wls");
+  casecmd->add_option("--duration", duration, "simulate at most this long (s): stop_at_s");
+  casecmd->add_option("--set", sets, "override a value of the case: PATH=VALUE; repeatable");
+  casecmd->add_option("--out", case_out, "write it to this file (paths relative to it) instead of stdout (absolute paths)");
 
   CLI::App* check = app.add_subcommand("check", "evaluate a case's checks on a stored trace");
   check->add_option("args", positional, "TRACE (with --case CASE), or CASE TRACE")->required()->expected(1, 2);
@@ -275,11 +286,27 @@ int main(int argc, char** argv) {
     if (*compare) return runCompare(case_opt, traces, json);
     if (*golden && *glist) return runGoldenList(manifest, cases_opt, only);
     if (*golden) return runGoldenCommand(static_cast<bool>(*gupdate), manifest, cases_opt, only, work, progress);
-    lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
+    // --duration is an override like --set (stop_at_s), and --method is recorded as one
+    // (controller.method), so that the effective case (DIR/case.yaml) holds them.
+    std::vector<lexdyn::cases::Override> overrides;
+    if (!duration.empty()) overrides.push_back({"stop_at_s", duration, "--duration " + duration});
+    for (const std::string& s : sets) overrides.push_back(lexdyn::cases::parseOverride(s));
+    lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path, overrides);
     if (!method.empty()) lexdyn::cases::overrideMethod(spec, method, "--method");
-    if (run->count("--duration")) {
-      if (!(duration > 0.0)) throw lexdyn::InputError("--duration", "expected a positive number of seconds");
-      spec.duration_s = std::min(spec.duration_s, duration);
+    if (*casecmd) {
+      if (case_out.empty()) {
+        std::fputs(lexdyn::cases::effectiveCaseText(spec, "").c_str(), stdout);
+        return 0;
+      }
+      const fs::path dir = fs::path(case_out).parent_path().empty() ? fs::path(".") : fs::path(case_out).parent_path();
+      const std::string text = lexdyn::cases::effectiveCaseText(spec, dir.string());
+      const std::string tmp = case_out + ".partial";
+      std::FILE* f = std::fopen(tmp.c_str(), "wb");
+      if (!f) throw lexdyn::InputError(case_out, "cannot open for writing");
+      const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+      if (std::fclose(f) != 0 || !ok || std::rename(tmp.c_str(), case_out.c_str()) != 0) throw lexdyn::InputError(case_out, "cannot write");
+      std::fprintf(stderr, "wrote %s\n", case_out.c_str());
+      return 0;
     }
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);

@@ -290,8 +290,11 @@ struct Simulator::Impl final : public OdeSystem {
   }
 };
 
-Simulator::Simulator(const std::string& urdf_path, const std::string& data_path, SimulatorSettings settings) {
-  model::RobotModel m = model::RobotModel::fromFiles(urdf_path, data_path);
+Simulator::Simulator(const std::string& urdf_path, const std::string& data_path, SimulatorSettings settings)
+    : Simulator(model::loadRobotDescription(urdf_path, data_path), std::move(settings)) {}
+
+Simulator::Simulator(model::RobotDescription description, SimulatorSettings settings) {
+  model::RobotModel m(std::move(description));
   impl_ = std::make_unique<Impl>(std::move(m), std::move(settings));
   Impl& s = *impl_;
   const model::RobotModel& model = s.model;

@@ -150,6 +150,8 @@ class Simulator {
  public:
   /// Loads the robot (throws lexdyn::InputError on bad files or settings).
   Simulator(const std::string& urdf_path, const std::string& data_path, SimulatorSettings settings);
+  /// Simulates the robot of `description` (e.g. a perturbed copy of the controller's).
+  Simulator(model::RobotDescription description, SimulatorSettings settings);
   ~Simulator();
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;

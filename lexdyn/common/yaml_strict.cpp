@@ -41,6 +41,16 @@ bool isPlainScalar(const YAML::Node& n) { return n.IsScalar() && n.Tag() != "!";
 
 }  // namespace
 
+namespace {
+thread_local KeyRecorder* t_recorder = nullptr;
+}  // namespace
+
+KeyRecorder::KeyRecorder() : previous_(t_recorder) { t_recorder = this; }
+KeyRecorder::~KeyRecorder() { t_recorder = previous_; }
+void KeyRecorder::record(const std::string& path) {
+  if (t_recorder) t_recorder->paths_.push_back(path);
+}
+
 Node::Node(YAML::Node node, std::string file, std::string path)
     : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {}
 
@@ -157,6 +167,11 @@ std::vector<Node> Node::elements() const {
 }
 
 std::vector<std::pair<std::string, Node>> Node::entries() const {
+  KeyRecorder::record(joinKey(path_, "*"));
+  return entriesOf();
+}
+
+std::vector<std::pair<std::string, Node>> Node::entriesOf() const {
   if (!node_.IsMap()) fail("expected a mapping, found " + describe(node_));
   std::vector<std::pair<std::string, Node>> out;
   for (auto it = node_.begin(); it != node_.end(); ++it) {
@@ -195,7 +210,7 @@ Node loadFile(const std::string& path) {
 }
 
 StrictMap::StrictMap(const Node& node) : node_(node) {
-  for (auto& e : node.entries()) keys_.push_back(e.first);  // entries() checks duplicates
+  for (auto& e : node.entriesOf()) keys_.push_back(e.first);  // entriesOf() checks duplicates
   used_.assign(keys_.size(), false);
 }
 
@@ -208,6 +223,7 @@ bool StrictMap::has(const std::string& key) const {
 
 std::optional<Node> StrictMap::optional(const std::string& key) {
   allowed_.push_back(key);
+  KeyRecorder::record(joinKey(node_.path(), key));
   for (size_t i = 0; i < keys_.size(); ++i) {
     if (keys_[i] == key) {
       used_[i] = true;

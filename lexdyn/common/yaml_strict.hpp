@@ -57,10 +57,13 @@ class Node {
   Node operator[](int i) const;
   std::vector<Node> elements() const;  ///< requires a sequence (an empty one is fine)
 
-  /// Mapping entries in file order (keys must be unique scalars).
+  /// Mapping entries in file order (keys must be unique scalars). A mapping read this way has
+  /// free keys: it is recorded as "path.*" by an alive KeyRecorder.
   std::vector<std::pair<std::string, Node>> entries() const;
 
  private:
+  friend class StrictMap;
+  std::vector<std::pair<std::string, Node>> entriesOf() const;
   YAML::Node node_;
   std::string file_;
   std::string path_;
@@ -89,6 +92,25 @@ class StrictMap {
   std::vector<std::string> keys_;       // file order
   std::vector<std::string> allowed_;    // every key asked for
   std::vector<bool> used_;
+};
+
+/// Records the key paths that StrictMap readers ask for while it is alive (one per thread):
+/// the keys a reader accepts, present in the file or not, in Node::path() form
+/// ("controller.tasks[9].gains.kp"). Case overrides use it to tell a valid absent key from a
+/// misspelt one.
+class KeyRecorder {
+ public:
+  KeyRecorder();
+  ~KeyRecorder();
+  KeyRecorder(const KeyRecorder&) = delete;
+  KeyRecorder& operator=(const KeyRecorder&) = delete;
+  const std::vector<std::string>& paths() const { return paths_; }
+  /// Called by StrictMap; a no-op when no recorder is alive on this thread.
+  static void record(const std::string& path);
+
+ private:
+  std::vector<std::string> paths_;
+  KeyRecorder* previous_ = nullptr;
 };
 
 }  // namespace lexdyn::yaml
