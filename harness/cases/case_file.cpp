@@ -535,27 +535,6 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
   return c;
 }
 
-checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& cs) {
-  yaml::StrictMap m(node);
-  checks::ComparisonSpec c;
-  c.where = node.where();
-  c.name = m.required("name").asString();
-  c.type = m.required("type").asEnum({"method_comparison"});
-  const yaml::Node tn = m.required("tasks");
-  c.tasks = readTaskNames(cs, tn);
-  c.statistic = m.required("statistic").asEnum({"final", "mean", "max"});
-  for (auto [key, field] : {std::pair<const char*, std::string*>{"better", &c.better}, {"worse", &c.worse}}) {
-    const yaml::Node mn = m.required(key);
-    *field = mn.asEnum({"bfgs", "ah", "gn", "wls"});
-    if (!cs.controller.lexdyn.hasHierarchy(control::parseMethod(*field, ""))) mn.fail("the case has no hierarchy for method " + *field);
-  }
-  requireTasksInHierarchies(cs, tn, c.tasks, {c.better, c.worse});
-  if (auto v = m.optional("margin")) c.margin = v->asDouble();
-  if (auto f = m.optional("from_s")) c.from_s = f->asNonNegativeDouble();
-  if (auto t = m.optional("to_s")) c.to_s = t->asNonNegativeDouble();
-  m.finish();
-  return c;
-}
 
 EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
   yaml::StrictMap em(en);
@@ -952,6 +931,28 @@ Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotMo
     }
   }
   return q;
+}
+
+checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& cs) {
+  yaml::StrictMap m(node);
+  checks::ComparisonSpec c;
+  c.where = node.where();
+  c.name = m.required("name").asString();
+  c.type = m.required("type").asEnum({"method_comparison"});
+  const yaml::Node tn = m.required("tasks");
+  c.tasks = readTaskNames(cs, tn);
+  c.statistic = m.required("statistic").asEnum({"final", "mean", "max"});
+  for (auto [key, field] : {std::pair<const char*, std::string*>{"better", &c.better}, {"worse", &c.worse}}) {
+    const yaml::Node mn = m.required(key);
+    *field = mn.asEnum({"bfgs", "ah", "gn", "wls"});
+    if (!cs.controller.lexdyn.hasHierarchy(control::parseMethod(*field, ""))) mn.fail("the case has no hierarchy for method " + *field);
+  }
+  requireTasksInHierarchies(cs, tn, c.tasks, {c.better, c.worse});
+  if (auto v = m.optional("margin")) c.margin = v->asDouble();
+  if (auto f = m.optional("from_s")) c.from_s = f->asNonNegativeDouble();
+  if (auto t = m.optional("to_s")) c.to_s = t->asNonNegativeDouble();
+  m.finish();
+  return c;
 }
 
 }  // namespace lexdyn::cases

@@ -22,6 +22,10 @@
 #include <utility>
 #include <vector>
 
+namespace lexdyn::yaml {
+class Node;
+}
+
 namespace lexdyn::cases {
 
 enum class Waveform { Sine, RaisedCosine };
@@ -147,6 +151,9 @@ CaseSpec loadCase(const std::string& path, const std::vector<Override>& override
 /// file paths rewritten relative to `dest_dir` (absolute when dest_dir is empty), a header
 /// comment naming the source file and the overrides.
 std::string effectiveCaseText(const CaseSpec& spec, const std::string& dest_dir);
+
+/// Reads a method comparison (the case's `comparisons` entries) against a loaded case.
+checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& spec);
 
 /// The simulated robot's description: the case's robot files with sim.model applied.
 model::RobotDescription simulatedRobot(const CaseSpec& spec);

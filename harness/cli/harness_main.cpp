@@ -6,6 +6,7 @@
 //   lexdyn-harness check TRACE --case CASE [--json]       (the case's checks on a stored trace)
 //   lexdyn-harness check CASE TRACE [--json]              (the same, older argument order)
 //   lexdyn-harness compare --case CASE TRACE... [--json]  (the case's comparisons between methods)
+//   lexdyn-harness sweep run|point|chunk|merge|submit|list|check FILE ...   (docs/sweeps.md)
 //   lexdyn-harness golden list [--manifest FILE] [--cases A,B] [--only ID]   (ID CASE_FILE METHOD lines)
 //   lexdyn-harness golden update|check [--manifest FILE] [--cases A,B] [--only ID]
 //                                      [--work DIR] [--progress]
@@ -14,6 +15,7 @@
 // the run stopped early (integrator or controller failure, interruption, an internal error);
 // 2 bad input (the message names the file and the key path).
 #include "harness/cases/runner.hpp"
+#include "harness/cli/sweep_cmd.hpp"
 #include "harness/golden/golden.hpp"
 #include "lexdyn/common/error.hpp"
 
@@ -35,8 +37,12 @@ namespace {
 namespace fs = std::filesystem;
 
 std::atomic<bool> g_interrupt{false};
+std::atomic<int> g_signal{0};
 
-extern "C" void onSignal(int) { g_interrupt.store(true); }
+extern "C" void onSignal(int sig) {
+  g_interrupt.store(true);
+  g_signal.store(sig);
+}
 
 void printChecks(const std::vector<lexdyn::checks::CheckResult>& checks) {
   for (const auto& c : checks) {
@@ -256,6 +262,9 @@ int main(int argc, char** argv) {
   compare->add_option("--case", case_opt, "case file")->required();
   compare->add_flag("--json", json, "also print the results as JSON on stdout");
 
+  lexdyn::cli::SweepCommand sweep;
+  lexdyn::cli::addSweepCommands(app, sweep);
+
   CLI::App* golden = app.add_subcommand("golden", "golden traces: update (regenerate) or check (compare)");
   golden->require_subcommand(1);
   CLI::App* gupdate = golden->add_subcommand("update", "regenerate golden traces");
@@ -282,6 +291,11 @@ int main(int argc, char** argv) {
   }
 
   try {
+    if (*sweep.sweep) {
+      std::signal(SIGINT, onSignal);
+      std::signal(SIGTERM, onSignal);
+      return lexdyn::cli::runSweepCommand(sweep, g_signal, g_interrupt);
+    }
     if (*check) return runCheck(positional, case_opt, json);
     if (*compare) return runCompare(case_opt, traces, json);
     if (*golden && *glist) return runGoldenList(manifest, cases_opt, only);

@@ -1,0 +1,384 @@
+// Shrinking (docs/sweeps.md, "Shrinking"): a failure of a check at a point is reduced to the
+// simplest configuration that still fails the same check. Each trial is a whole run in its own
+// process; trials are cached (OUT/shrink/cache.jsonl) so that a configuration is never run
+// twice, also across runs of the driver.
+#include "harness/sweep/sweep_records.hpp"
+
+#include "lexdyn/common/error.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <condition_variable>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+namespace lexdyn::sweep {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+bool parseNumber(const std::string& t, double& v) {
+  char* end = nullptr;
+  v = std::strtod(t.c_str(), &end);
+  return !t.empty() && end == t.c_str() + t.size() && std::isfinite(v);
+}
+
+std::string configKey(const RunConfig& c) {
+  std::string k = c.method + "|" + numberText(c.duration_s);
+  for (const auto& v : c.values) k += "|" + v;
+  return k;
+}
+
+// FNV-1a of a key: the folder of a trial.
+std::string keyHash(const std::string& k) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : k) h = (h ^ c) * 1099511628211ull;
+  char buf[24];
+  std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+// Trials shared by the shrinks (thread-safe), persisted to OUT/shrink/cache.jsonl.
+class TrialCache {
+ public:
+  TrialCache(const std::string& out_dir, const RunOne& run, int slots) : dir_(fs::path(out_dir) / "shrink"), run_(run), free_(slots) {
+    std::error_code ec;
+    fs::create_directories(dir_, ec);
+    std::ifstream in(dir_ / "cache.jsonl");
+    std::string line;
+    while (std::getline(in, line)) {
+      try {
+        const json j = json::parse(line);
+        results_[j.at("key").get<std::string>()] = fromJson(j.at("result"));
+      } catch (const std::exception&) {
+      }
+    }
+  }
+
+  /// The result of a configuration; `fresh` tells whether it was run now. nullopt: interrupted.
+  std::optional<RunResult> get(const RunConfig& c, bool& fresh) {
+    const std::string key = configKey(c);
+    fresh = false;
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      auto it = results_.find(key);
+      if (it != results_.end()) return it->second;
+    }
+    {
+      std::unique_lock<std::mutex> lock(m_);
+      cv_.wait(lock, [&] { return free_ > 0; });
+      --free_;
+    }
+    const std::optional<RunResult> r = run_(c, (dir_ / "runs" / keyHash(key) / c.method).string());
+    std::lock_guard<std::mutex> lock(m_);
+    ++free_;
+    cv_.notify_one();
+    if (!r) return r;
+    fresh = true;
+    results_[key] = *r;
+    std::ofstream out(dir_ / "cache.jsonl", std::ios::app);
+    out << json{{"key", key}, {"result", toJson(*r)}}.dump() << "\n";
+    return r;
+  }
+
+ private:
+  fs::path dir_;
+  const RunOne& run_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  int free_;
+  std::map<std::string, RunResult> results_;
+};
+
+// A failure: a check (or run_completed) of a method, first seen failing at some points.
+struct Failure {
+  std::string method, check;
+  std::vector<long> points;
+  json first;  // the record of the point shrinking starts from
+};
+
+int movedFromSimplest(const SweepSpec& s, const json& record) {
+  int n = 0;
+  for (const auto& p : s.parameters) n += record["values"].value(p.name, "") != p.simplest ? 1 : 0;
+  return n;
+}
+
+std::vector<Failure> collect(const SweepSpec& s, const std::vector<json>& records) {
+  std::map<std::pair<std::string, std::string>, Failure> by;
+  for (const auto& r : records) {
+    for (const auto& f : r["failures"]) {
+      const std::string text = f.get<std::string>();
+      const size_t colon = text.find(':');
+      Failure& x = by[{text.substr(0, colon), text.substr(colon + 1)}];
+      x.method = text.substr(0, colon);
+      x.check = text.substr(colon + 1);
+      x.points.push_back(r.value("point", -1L));
+      // Start from the failing point nearest the simplest configuration (then the lowest index).
+      if (x.first.is_null() || movedFromSimplest(s, r) < movedFromSimplest(s, x.first)) x.first = r;
+    }
+  }
+  std::vector<Failure> out;
+  for (auto& [k, v] : by) out.push_back(std::move(v));
+  return out;
+}
+
+class Shrinker {
+ public:
+  Shrinker(const SweepSpec& s, const Failure& f, TrialCache& cache) : s_(s), f_(f), cache_(cache) {
+    const RunResult orig = fromJson(f.first["runs"][f.method]);
+    status_ = orig.status;
+    if (const CheckOutcome* c = orig.check(f.check)) value_was_nan_ = std::isnan(c->value);
+    full_duration_ = s.duration_s ? *s.duration_s : s.base.duration_s;
+  }
+
+  /// False when interrupted.
+  bool run() {
+    RunConfig cur{f_.method, {}, full_duration_};
+    for (const auto& p : s_.parameters) cur.values.push_back(f_.first["values"].value(p.name, p.simplest));
+    best_ = cur;
+    best_result_ = fromJson(f_.first["runs"][f_.method]);
+    // 1. All parameters at their simplest values at once, then one at a time (at the full
+    // duration: a shorter run first would hold the parameters where the failure comes sooner).
+    RunConfig all = best_;
+    for (size_t k = 0; k < all.values.size(); ++k) all.values[k] = s_.parameters[k].simplest;
+    if (all.values != best_.values) {
+      int r = tryConfig(all);
+      if (r < 0) return false;
+    }
+    for (size_t k = 0; k < s_.parameters.size(); ++k) {
+      if (best_.values[k] == s_.parameters[k].simplest) continue;
+      RunConfig t = best_;
+      t.values[k] = s_.parameters[k].simplest;
+      if (tryConfig(t) < 0) return false;
+    }
+    // 2. Each parameter still away from its simplest value moves toward it (binary search).
+    for (size_t k = 0; k < s_.parameters.size(); ++k) {
+      if (best_.values[k] == s_.parameters[k].simplest) continue;
+      if (!towardSimplest(k)) return false;
+    }
+    // 3. The shortest duration that still fails.
+    return shrinkDuration();
+  }
+
+  json result(const std::string& out_dir) const {
+    json values = json::object();  // the parameters away from their simplest values
+    for (size_t k = 0; k < s_.parameters.size(); ++k) {
+      if (best_.values[k] != s_.parameters[k].simplest) values[s_.parameters[k].name] = best_.values[k];
+    }
+    json overrides = json::array();
+    for (const auto& o : overridesOf(s_, best_.values)) overrides.push_back({{"path", o.path}, {"value", o.value}});
+    const std::string file = f_.method + "." + f_.check + ".yaml";
+    json j = {{"check", f_.check},
+              {"method", f_.method},
+              {"point", f_.first.value("point", -1L)},
+              {"points_failing", f_.points.size()},
+              {"values", values},
+              {"overrides", overrides},
+              {"duration_s", best_.duration_s},
+              {"case_file", "failures/" + file},
+              {"command", reproduceCommand(s_, best_)},
+              {"shrunk", true},
+              {"runs", runs_},
+              {"budget_exhausted", exhausted_},
+              {"status", best_result_.status}};
+    if (const CheckOutcome* c = best_result_.check(f_.check)) {
+      j["value"] = number(c->value);
+      j["limit"] = number(c->limit);
+      j["margin"] = number(c->margin);
+      j["unit"] = c->unit;
+    }
+    writeCaseFile(out_dir, file);
+    return j;
+  }
+
+ private:
+  // 1: fails the same way (best_ becomes c), 0: does not (or over budget), -1: interrupted.
+  int tryConfig(const RunConfig& c) {
+    bool fresh = false;
+    if (runs_ >= s_.shrink.max_runs) {
+      exhausted_ = true;
+      return 0;
+    }
+    const std::optional<RunResult> r = cache_.get(c, fresh);
+    if (!r) return -1;
+    runs_ += fresh ? 1 : 0;
+    if (!sameFailure(*r)) return 0;
+    best_ = c;
+    best_result_ = *r;
+    return 1;
+  }
+
+  bool sameFailure(const RunResult& r) const {
+    if (f_.check == kRunCompleted) return r.status == status_;
+    const CheckOutcome* c = r.check(f_.check);
+    if (!c || c->passed) return false;
+    return !std::isnan(c->value) || value_was_nan_;  // "no rows in the window" is not the same failure
+  }
+
+  bool shrinkDuration() {
+    const double dt = s_.base.control_period_s;
+    const double step = std::max(s_.shrink.min_duration_s, dt);
+    double lo = 0.0, hi = best_.duration_s;  // hi fails
+    auto rounded = [&](double t) { return std::max(dt, std::round(t / dt) * dt); };
+    while (hi - lo > step) {
+      const double mid = rounded(lo == 0.0 && hi > 4.0 * step ? std::max(step, hi / 4.0) : 0.5 * (lo + hi));
+      if (mid <= lo || mid >= hi) break;
+      RunConfig t = best_;
+      t.duration_s = mid;
+      const int r = tryConfig(t);
+      if (r < 0) return false;
+      if (r == 1) hi = mid;
+      else lo = mid;
+      if (exhausted_) break;
+    }
+    return true;
+  }
+
+  bool towardSimplest(size_t k) {
+    const Parameter& p = s_.parameters[k];
+    if (p.distribution == Distribution::Values || p.distribution == Distribution::Choices) {
+      // The values between the simplest and the failing one, nearest the simplest first.
+      const std::vector<std::string> list = gridValues(p);
+      const auto is = std::find(list.begin(), list.end(), p.simplest);
+      const auto ic = std::find(list.begin(), list.end(), best_.values[k]);
+      if (is == list.end() || ic == list.end()) return true;
+      const long a = is - list.begin(), b = ic - list.begin();
+      const long dir = b > a ? 1 : -1;
+      for (long i = a + dir; i != b; i += dir) {
+        RunConfig t = best_;
+        t.values[k] = list[static_cast<size_t>(i)];
+        const int r = tryConfig(t);
+        if (r < 0) return false;
+        if (r == 1) break;
+      }
+      return true;
+    }
+    double a = 0.0, b = 0.0;
+    if (!parseNumber(p.simplest, a) || !parseNumber(best_.values[k], b)) return true;
+    const bool log = p.distribution == Distribution::LogUniform && a > 0.0 && b > 0.0;
+    const bool integers = p.distribution == Distribution::Integers;
+    for (int i = 0; i < s_.shrink.bisection_steps; ++i) {
+      double mid = log ? std::sqrt(a * b) : 0.5 * (a + b);
+      if (integers) {
+        mid = std::round(mid);
+        if (std::abs(b - a) <= 1.0 || mid == a || mid == b) break;
+      }
+      RunConfig t = best_;
+      t.values[k] = integers ? std::to_string(static_cast<long>(mid)) : numberText(mid);
+      const int r = tryConfig(t);
+      if (r < 0) return false;
+      if (r == 1) b = mid;  // best_ moved
+      else a = mid;
+      if (exhausted_) break;
+    }
+    return true;
+  }
+
+  void writeCaseFile(const std::string& out_dir, const std::string& file) const {
+    const fs::path dir = fs::path(out_dir) / "failures";
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    try {
+      std::vector<cases::Override> o = overridesOf(s_, best_.values);
+      o.push_back({"stop_at_s", numberText(best_.duration_s), "--duration " + numberText(best_.duration_s)});
+      cases::CaseSpec spec = cases::loadCase(s_.base_case, o);
+      cases::overrideMethod(spec, f_.method, "--method");
+      writeAtomically((dir / file).string(), cases::effectiveCaseText(spec, dir.string()));
+    } catch (const InputError& e) {
+      std::fprintf(stderr, "warning: cannot write %s: %s\n", (dir / file).string().c_str(), e.what());
+    }
+  }
+
+  const SweepSpec& s_;
+  const Failure& f_;
+  TrialCache& cache_;
+  std::string status_;
+  bool value_was_nan_ = false;
+  double full_duration_ = 0.0;
+  RunConfig best_;
+  RunResult best_result_;
+  int runs_ = 0;
+  bool exhausted_ = false;
+};
+
+}  // namespace
+
+std::vector<json> minimalFailures(const SweepSpec& s, const std::vector<json>& records, const DriverOptions& o) {
+  (void)o;
+  std::vector<json> out;
+  for (const Failure& f : collect(s, records)) {
+    RunConfig c{f.method, {}, 0.0};
+    json values = json::object();
+    for (const auto& p : s.parameters) {
+      const std::string v = f.first["values"].value(p.name, p.simplest);
+      c.values.push_back(v);
+      if (v != p.simplest) values[p.name] = v;
+    }
+    json overrides = json::array();
+    for (const auto& ov : overridesOf(s, c.values)) overrides.push_back({{"path", ov.path}, {"value", ov.value}});
+    const RunResult r = fromJson(f.first["runs"][f.method]);
+    json j = {{"check", f.check},
+              {"method", f.method},
+              {"point", f.first.value("point", -1L)},
+              {"points_failing", f.points.size()},
+              {"values", values},
+              {"overrides", overrides},
+              {"duration_s", s.duration_s ? *s.duration_s : s.base.duration_s},
+              {"command", reproduceCommand(s, c)},
+              {"shrunk", false},
+              {"status", r.status}};
+    if (const CheckOutcome* co = r.check(f.check)) {
+      j["value"] = number(co->value);
+      j["limit"] = number(co->limit);
+      j["margin"] = number(co->margin);
+      j["unit"] = co->unit;
+    }
+    out.push_back(j);
+  }
+  return out;
+}
+
+std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& records, const DriverOptions& o, const RunOne& run) {
+  std::vector<Failure> failures = collect(s, records);
+  std::vector<json> out(failures.size());
+  if (failures.empty()) return out;
+  TrialCache cache(o.out_dir, run, std::max(1, o.jobs));
+  std::vector<char> ok(failures.size(), 0);
+  // One thread per failure; the cache lets at most `jobs` trials run at once. Each shrink is
+  // sequential, so its outcome does not depend on the others' timing.
+  std::vector<std::thread> threads;
+  for (size_t i = 0; i < failures.size(); ++i) {
+    threads.emplace_back([&, i]() {
+      const Failure& f = failures[i];
+      // Timeouts and crashes are not shrunk (each trial could cost the whole timeout).
+      const std::string status = f.first["runs"][f.method].value("status", "");
+      if (f.check == kRunCompleted && (status == "timeout" || status == "crashed")) return;
+      Shrinker sh(s, f, cache);
+      if (!sh.run()) return;
+      out[i] = sh.result(o.out_dir);
+      ok[i] = 1;
+      if (o.progress) {
+        std::fprintf(stderr, "[sweep %s] shrunk %s %s: %s\n", s.name.c_str(), f.method.c_str(), f.check.c_str(),
+                     out[i].value("command", "").c_str());
+      }
+    });
+  }
+  for (auto& t : threads) t.join();
+  // Failures that were not shrunk (interrupted, or not shrinkable) keep their point.
+  const std::vector<json> plain = minimalFailures(s, records, o);
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (!ok[i]) out[i] = plain[i];
+  }
+  return out;
+}
+
+}  // namespace lexdyn::sweep
