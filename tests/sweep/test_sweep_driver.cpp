@@ -1,0 +1,184 @@
+// The sweep driver on a real sweep (cases/sweeps/pointmass-damping.yaml, the sec. V-A point
+// mass over the damping mu and the gain kp): one record per point, resumption after SIGKILL
+// giving the same records as an uninterrupted run, a crash and a hang recorded as that run's
+// failure, and the shrinker finding the failure boundary known in closed form (eq. 51: the
+// acceleration-domain PD overshoots by exp(-pi/mu) for every kp).
+#include <nlohmann/json.hpp>
+
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const std::string kHarness = std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-harness";
+const std::string kSweep = std::string(LEXDYN_SOURCE_DIR) + "/cases/sweeps/pointmass-damping.yaml";
+
+std::string dirFor(const std::string& name) {
+  const fs::path p = fs::path(LEXDYN_BINARY_DIR) / "test_output" / name;
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p.string();
+}
+
+int run(const std::string& args, const std::string& log) {
+  const int status = std::system((kHarness + " " + args + " > " + log + " 2>&1").c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// results.jsonl without the wall times (the only figures allowed to differ between runs).
+std::string withoutWallTimes(const std::string& path) {
+  std::istringstream in(readText(path));
+  std::string line, out;
+  while (std::getline(in, line)) {
+    json j = json::parse(line);
+    for (auto& [m, r] : j["runs"].items()) r.erase("wall_s");
+    out += j.dump() + "\n";
+  }
+  return out;
+}
+
+// The first time the closed-form response of eq. 51 (x0 = 1, kp, mu) goes past the target by more
+// than `limit`.
+double firstOvershootTime(double mu, double kp, double limit) {
+  const double z = 1.0 / std::sqrt(1.0 + mu * mu), w = std::sqrt(kp / (1.0 + mu * mu)), wd = w * std::sqrt(1.0 - z * z);
+  for (double t = 0.0; t < 60.0; t += 1e-4) {
+    const double e = std::exp(-z * w * t) * (std::cos(wd * t) + z / std::sqrt(1.0 - z * z) * std::sin(wd * t));
+    if (-e > limit) return t;
+  }
+  return NAN;
+}
+
+TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
+  const std::string dir = dirFor("sweep_driver");
+  const std::string a = dir + "/a", b = dir + "/b";
+  // A: uninterrupted, two processes.
+  ASSERT_EQ(run("sweep run " + kSweep + " --out " + a + " -j 2 --db " + dir + "/db.jsonl", dir + "/a.log"), 1) << readText(dir + "/a.log");
+  // One record per point, in index order, each with both methods and a reproducer command.
+  std::istringstream in(readText(a + "/results.jsonl"));
+  std::string line;
+  long n = 0;
+  while (std::getline(in, line)) {
+    const json r = json::parse(line);
+    EXPECT_EQ(r["point"].get<long>(), n);
+    for (const char* m : {"wls", "bfgs"}) {
+      const json& run = r["runs"][m];
+      EXPECT_EQ(run["status"], "completed");
+      EXPECT_EQ(run["checks"].size(), 2u);
+      EXPECT_NE(run["reproduce"].get<std::string>().find("lexdyn-harness run "), std::string::npos);
+      EXPECT_NE(run["rerun"].get<std::string>().find("--index " + std::to_string(n)), std::string::npos);
+    }
+    // The velocity domain never overshoots; the acceleration domain does above mu = 0.4548.
+    const double mu = std::stod(r["values"]["controller.params.damping"].get<std::string>());
+    EXPECT_TRUE(r["runs"]["bfgs"]["checks"][0]["passed"].get<bool>());
+    if (std::abs(mu - 0.4548) > 0.05) {
+      EXPECT_EQ(r["runs"]["wls"]["checks"][0]["passed"].get<bool>(), mu < 0.4548) << "mu " << mu;
+    }
+    ++n;
+  }
+  EXPECT_EQ(n, 12);
+  const json sa = json::parse(readText(a + "/summary.json"));
+  EXPECT_EQ(sa["points"], 12);
+  EXPECT_EQ(sa["completed"], 12);
+  EXPECT_GT(sa["failed_points"].get<int>(), 0);
+
+  // The shrunk failure: kp back at its simplest value, mu just above pi / ln(1000), the
+  // duration just past the first overshoot of 1e-3 (closed form) within the shrink's resolution.
+  ASSERT_EQ(sa["failures"].size(), 1u) << sa["failures"].dump(1);
+  const json& f = sa["failures"][0];
+  EXPECT_EQ(f["method"], "wls");
+  EXPECT_EQ(f["check"], "no_overshoot");
+  EXPECT_TRUE(f["shrunk"].get<bool>());
+  EXPECT_FALSE(f["values"].contains("controller.tasks[position].gains.kp")) << f.dump(1);
+  const double mu = std::stod(f["values"]["controller.params.damping"].get<std::string>());
+  const double mu_boundary = M_PI / std::log(1000.0);  // 0.4548
+  // Bisection from the simplest value 0 toward the failing one (<= 2), 7 steps: within 2 / 2^7.
+  EXPECT_GE(mu, mu_boundary - 0.01) << f.dump(1);
+  EXPECT_LE(mu, mu_boundary + 2.0 / 128.0 + 0.01) << f.dump(1);
+  const double t_first = firstOvershootTime(mu, 1.0, 1e-3);
+  const double d = f["duration_s"].get<double>();
+  EXPECT_GE(d, t_first - 0.1) << "closed form " << t_first;
+  EXPECT_LE(d, t_first + 0.5 + 0.1) << "closed form " << t_first;  // min_duration_s 0.5
+  // Its case file reproduces it on its own.
+  ASSERT_TRUE(fs::is_regular_file(a + "/" + f["case_file"].get<std::string>()));
+  EXPECT_EQ(run("run " + a + "/" + f["case_file"].get<std::string>() + " --out " + dir + "/repro --quiet", dir + "/repro.log"), 1);
+  const json rs = json::parse(readText(dir + "/repro/summary.json"));
+  EXPECT_FALSE(rs["checks"][0]["passed"].get<bool>());
+  EXPECT_EQ(rs["checks"][0]["name"], "no_overshoot");
+
+  // B: killed (SIGKILL) part way, then the same command again: the same records.
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    execl(kHarness.c_str(), kHarness.c_str(), "sweep", "run", kSweep.c_str(), "--out", b.c_str(), "-j", "2", "--no-db", "--quiet", (char*)nullptr);
+    _exit(127);
+  }
+  // Wait until some points are done, then kill the driver.
+  for (int k = 0; k < 400; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    if (fs::exists(b + "/points") && std::distance(fs::directory_iterator(b + "/points"), fs::directory_iterator()) >= 3) break;
+  }
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  const long done_before = std::distance(fs::directory_iterator(b + "/points"), fs::directory_iterator());
+  EXPECT_LT(done_before, 12) << "the driver finished before it was killed";
+  EXPECT_FALSE(fs::exists(b + "/results.jsonl"));
+  ASSERT_EQ(run("sweep run " + kSweep + " --out " + b + " -j 2 --no-db", dir + "/b.log"), 1) << readText(dir + "/b.log");
+  EXPECT_NE(readText(dir + "/b.log").find("runs done"), std::string::npos);
+  EXPECT_EQ(withoutWallTimes(a + "/results.jsonl"), withoutWallTimes(b + "/results.jsonl"));
+  const json sb = json::parse(readText(b + "/summary.json"));
+  EXPECT_EQ(sa["failures"], sb["failures"]);
+  EXPECT_EQ(sa["checks"], sb["checks"]);
+
+  // C: the failure database: the shrunk failure is replayed first, and still fails.
+  ASSERT_EQ(run("sweep run " + kSweep + " --out " + dir + "/c --points 2 --no-shrink --db " + dir + "/db.jsonl", dir + "/c.log"), 1)
+      << readText(dir + "/c.log");
+  const json replay = json::parse(readText(dir + "/c/replays.jsonl"));
+  EXPECT_EQ(replay["check"], "no_overshoot");
+  EXPECT_TRUE(replay["still_fails"].get<bool>());
+  EXPECT_NE(readText(dir + "/c.log").find("replayed 1 earlier failure(s)"), std::string::npos);
+}
+
+TEST(SweepDriver, ACrashOrAHangIsThatRunsRecordedFailure) {
+  // A run that overruns its timeout is killed and recorded; the sweep goes on.
+  const std::string dir = dirFor("sweep_driver_timeout");
+  ASSERT_EQ(run("sweep run " + kSweep + " --out " + dir + "/out --points 1 --timeout 0.05 --no-db --no-shrink", dir + "/log"), 1)
+      << readText(dir + "/log");
+  const json r = json::parse(readText(dir + "/out/results.jsonl"));
+  EXPECT_EQ(r["runs"]["wls"]["status"], "timeout");
+  EXPECT_EQ(r["runs"]["bfgs"]["status"], "timeout");
+  const json s = json::parse(readText(dir + "/out/summary.json"));
+  EXPECT_EQ(s["failed_points"], 1);
+  EXPECT_EQ(s["checks"][0]["check"], "run_completed");
+  EXPECT_EQ(s["checks"][0]["passed"], 0);
+  // Another sweep in the same folder is refused (its results would mix).
+  std::string other = readText(kSweep);
+  other.replace(other.find("base: ../pointmass-damping.yaml"), 31, "base: " + std::string(LEXDYN_SOURCE_DIR) + "/cases/pointmass-damping.yaml");
+  std::ofstream(dir + "/other.yaml") << other << "# changed\n";
+  EXPECT_EQ(run("sweep run " + dir + "/other.yaml --out " + dir + "/out --no-db", dir + "/log2"), 2);
+  EXPECT_NE(readText(dir + "/log2").find("holds the results of another version"), std::string::npos) << readText(dir + "/log2");
+}
+
+}  // namespace
