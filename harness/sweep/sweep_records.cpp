@@ -302,6 +302,9 @@ std::vector<json> writeMaps(const SweepSpec& s, const std::vector<json>& records
     writeAtomically((dir / file).string(), csv);
     maps.push_back({{"x", axis(px)}, {"y", axis(py)}, {"property", c.name}, {"method", c.better + " vs " + c.worse}, {"csv", "maps/" + file}});
   }
+  if (plot_command.empty() && !maps.empty()) {
+    std::fprintf(stderr, "warning: the map pictures are not drawn (needs /usr/bin/python3 with matplotlib and harness/scripts/sweep_plots.py)\n");
+  }
   if (!plot_command.empty()) {
     const std::string cmd = plot_command + " '" + out_dir + "' > '" + (dir / "plot.log").string() + "' 2>&1";
     if (std::system(cmd.c_str()) != 0) {
