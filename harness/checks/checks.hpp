@@ -130,6 +130,10 @@ const std::vector<std::string>& solverStatusNames();      // solved, stopped_ear
 /// `method`) are left out.
 std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace);
 
+/// The figure a comparison compares, for one method: a task_error check of the comparison's
+/// tasks, statistic and window, without a limit (+inf).
+CheckSpec comparisonStatistic(const ComparisonSpec& spec);
+
 /// Evaluates a comparison on two traces (of the methods `better` and `worse`).
 CheckResult compareMethods(const ComparisonSpec& spec, const TraceTable& better, const TraceTable& worse);
 

@@ -841,7 +841,7 @@ std::unique_ptr<Check> makeControllerCheck(const CheckSpec& s) {
 
 }  // namespace detail
 
-CheckResult compareMethods(const ComparisonSpec& spec, const TraceTable& better, const TraceTable& worse) {
+CheckSpec comparisonStatistic(const ComparisonSpec& spec) {
   CheckSpec cs;
   cs.name = spec.name;
   cs.type = "task_error";
@@ -851,6 +851,11 @@ CheckResult compareMethods(const ComparisonSpec& spec, const TraceTable& better,
   cs.tasks = spec.tasks;
   cs.statistic = spec.statistic;
   cs.limit = std::numeric_limits<double>::infinity();
+  return cs;
+}
+
+CheckResult compareMethods(const ComparisonSpec& spec, const TraceTable& better, const TraceTable& worse) {
+  const CheckSpec cs = comparisonStatistic(spec);
   auto evaluate = [&](const TraceTable& t, const std::string& method) {
     const std::string* m = findMetadata(t.metadata, kMethodMetadata);
     if (!m || *m != method) {

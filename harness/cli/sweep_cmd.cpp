@@ -1,6 +1,7 @@
 #include "harness/cli/sweep_cmd.hpp"
 
 #include "harness/sweep/slurm.hpp"
+#include "harness/sweep/sweep_records.hpp"
 #include "harness/sweep/sweep_run.hpp"
 #include "lexdyn/common/error.hpp"
 
@@ -107,7 +108,7 @@ sweep::DriverOptions driverOptions(const SweepCommand& c, const sweep::SweepSpec
   o.harness_exe = selfExe();
   o.interrupt = &signal;
   const std::string script = std::string(LEXDYN_SOURCE_DIR) + "/harness/scripts/sweep_plots.py";
-  if (fs::is_regular_file("/usr/bin/python3") && fs::is_regular_file(script)) o.plot_command = "/usr/bin/python3 '" + script + "'";
+  if (fs::is_regular_file("/usr/bin/python3") && fs::is_regular_file(script)) o.plot_command = "/usr/bin/python3 " + sweep::shellQuote(script);
   return o;
 }
 

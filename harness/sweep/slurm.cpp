@@ -12,12 +12,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string q(const std::string& a) {
-  std::string out = "'";
-  for (char c : a) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
 // Runs a command and returns its standard output (trimmed); `ok` false when it failed.
 std::string capture(const std::string& cmd, bool& ok) {
   std::string out;
@@ -53,14 +47,14 @@ int submitSweep(const SweepSpec& s, const DriverOptions& o, const SlurmOptions& 
   const std::string points_opt = o.points >= 0 ? " --points " + std::to_string(o.points) : "";
   std::string array = head + "#SBATCH --array=0-" + std::to_string(std::max(0L, tasks - 1)) +
                       (so.throttle > 0 ? "%" + std::to_string(so.throttle) : "") + "\n#SBATCH --cpus-per-task=1\n#SBATCH --output=" +
-                      (dir / "task-%a.log").string() + "\n" + "cd " + q(fs::current_path().string()) + "\nexec " + q(o.harness_exe) +
-                      " sweep chunk " + q(file) + " --out " + q(out.string()) + " --points @" + q((dir / "points.txt").string()) +
+                      (dir / "task-%a.log").string() + "\n" + "cd " + shellQuote(fs::current_path().string()) + "\nexec " + shellQuote(o.harness_exe) +
+                      " sweep chunk " + shellQuote(file) + " --out " + shellQuote(out.string()) + " --points @" + shellQuote((dir / "points.txt").string()) +
                       " --chunk-size " + std::to_string(so.chunk) + " --task \"$SLURM_ARRAY_TASK_ID\"" +
                       (o.timeout_s > 0.0 ? " --timeout " + numberText(o.timeout_s) : "") + (o.keep_traces ? " --keep-traces" : "") + "\n";
   std::string merge = head + "#SBATCH --cpus-per-task=" + std::to_string(so.merge_cpus) + "\n#SBATCH --output=" + (dir / "merge.log").string() +
-                      "\n" + "cd " + q(fs::current_path().string()) + "\nexec " + q(o.harness_exe) + " sweep merge " + q(file) + " --out " +
-                      q(out.string()) + points_opt + " -j " + std::to_string(so.merge_cpus) + (o.shrink ? "" : " --no-shrink") +
-                      (o.db_path.empty() ? " --no-db" : " --db " + q(fs::absolute(o.db_path).string())) + " --quiet\n";
+                      "\n" + "cd " + shellQuote(fs::current_path().string()) + "\nexec " + shellQuote(o.harness_exe) + " sweep merge " + shellQuote(file) + " --out " +
+                      shellQuote(out.string()) + points_opt + " -j " + std::to_string(so.merge_cpus) + (o.shrink ? "" : " --no-shrink") +
+                      (o.db_path.empty() ? " --no-db" : " --db " + shellQuote(fs::absolute(o.db_path).string())) + " --quiet\n";
   writeAtomically((dir / "array.sh").string(), array);
   writeAtomically((dir / "merge.sh").string(), merge);
   std::fprintf(stderr, "[sweep %s] %zu missing points in %ld array tasks of %d; scripts in %s\n", s.name.c_str(), missing.size(), tasks, so.chunk,
@@ -69,7 +63,7 @@ int submitSweep(const SweepSpec& s, const DriverOptions& o, const SlurmOptions& 
   bool ok = true;
   std::string dependency;
   if (tasks > 0) {
-    const std::string id = capture(so.sbatch + " --parsable " + q((dir / "array.sh").string()), ok);
+    const std::string id = capture(so.sbatch + " --parsable " + shellQuote((dir / "array.sh").string()), ok);
     if (!ok || id.empty()) {
       std::fprintf(stderr, "lexdyn-harness: sbatch failed for %s: %s\n", (dir / "array.sh").string().c_str(), id.c_str());
       return 3;
@@ -77,7 +71,7 @@ int submitSweep(const SweepSpec& s, const DriverOptions& o, const SlurmOptions& 
     dependency = " --dependency=afterany:" + id.substr(0, id.find(';'));
     std::printf("array job %s\n", id.c_str());
   }
-  const std::string mid = capture(so.sbatch + " --parsable" + dependency + " " + q((dir / "merge.sh").string()), ok);
+  const std::string mid = capture(so.sbatch + " --parsable" + dependency + " " + shellQuote((dir / "merge.sh").string()), ok);
   if (!ok || mid.empty()) {
     std::fprintf(stderr, "lexdyn-harness: sbatch failed for %s: %s\n", (dir / "merge.sh").string().c_str(), mid.c_str());
     return 3;

@@ -21,13 +21,6 @@ namespace {
 json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 double num(const json& v) { return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN(); }
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // Nearest-rank quantile of sorted values.
 double quantile(const std::vector<double>& sorted, double q) {
   if (sorted.empty()) return std::numeric_limits<double>::quiet_NaN();
@@ -36,6 +29,20 @@ double quantile(const std::vector<double>& sorted, double q) {
 }
 
 }  // namespace
+
+std::string readFileText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string shellQuote(const std::string& a) {
+  if (!a.empty() && a.find_first_of(" \t\n'\"\\$`*?[]{}()<>|&;#~!") == std::string::npos) return a;
+  std::string q = "'";
+  for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
 
 void writeAtomically(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".partial";
@@ -65,6 +72,18 @@ json toJson(const RunResult& r) {
           {"peak_iterations", r.peak_iterations}};
 }
 
+CheckOutcome checkFromJson(const json& c) {
+  CheckOutcome o;
+  o.name = c.value("name", "");
+  o.passed = c.value("passed", false);
+  o.value = num(c.value("value", json()));
+  o.limit = num(c.value("limit", json()));
+  o.margin = num(c.value("margin", json()));
+  o.unit = c.value("unit", "");
+  o.detail = c.value("detail", "");
+  return o;
+}
+
 RunResult fromJson(const json& j) {
   RunResult r;
   r.status = j.value("status", "");
@@ -73,17 +92,7 @@ RunResult fromJson(const json& j) {
   r.wall_s = j.value("wall_s", 0.0);
   r.simulated_s = j.value("simulated_s", 0.0);
   r.peak_iterations = j.value("peak_iterations", 0);
-  for (const auto& c : j.value("checks", json::array())) {
-    CheckOutcome o;
-    o.name = c.value("name", "");
-    o.passed = c.value("passed", false);
-    o.value = num(c.value("value", json()));
-    o.limit = num(c.value("limit", json()));
-    o.margin = num(c.value("margin", json()));
-    o.unit = c.value("unit", "");
-    o.detail = c.value("detail", "");
-    r.checks.push_back(o);
-  }
+  for (const auto& c : j.value("checks", json::array())) r.checks.push_back(checkFromJson(c));
   const json st = j.value("statistics", json::object());
   for (auto it = st.begin(); it != st.end(); ++it) r.statistics[it.key()] = num(it.value());
   const json fe = j.value("final_errors", json::object());
@@ -306,7 +315,7 @@ std::vector<json> writeMaps(const SweepSpec& s, const std::vector<json>& records
     std::fprintf(stderr, "warning: the map pictures are not drawn (needs /usr/bin/python3 with matplotlib and harness/scripts/sweep_plots.py)\n");
   }
   if (!plot_command.empty()) {
-    const std::string cmd = plot_command + " '" + out_dir + "' > '" + (dir / "plot.log").string() + "' 2>&1";
+    const std::string cmd = plot_command + " " + shellQuote(out_dir) + " > " + shellQuote((dir / "plot.log").string()) + " 2>&1";
     if (std::system(cmd.c_str()) != 0) {
       std::fprintf(stderr, "warning: the map pictures could not be drawn (%s; see %s)\n", plot_command.c_str(), (dir / "plot.log").string().c_str());
     }
@@ -355,7 +364,7 @@ void printSummary(const SweepSpec& s, const json& summary, std::FILE* out) {
 
 void recordFailures(const SweepSpec& s, const std::vector<json>& failures, const std::string& db_path) {
   std::set<std::string> known;
-  std::string text = readText(db_path);
+  std::string text = readFileText(db_path);
   std::istringstream in(text);
   std::string line;
   while (std::getline(in, line)) {
@@ -379,7 +388,7 @@ void recordFailures(const SweepSpec& s, const std::vector<json>& failures, const
 void replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& run) {
   const std::string out = (fs::path(o.out_dir) / "replays.jsonl").string();
   if (fs::is_regular_file(out)) return;  // done by an earlier, interrupted run of this sweep
-  std::istringstream in(readText(o.db_path));
+  std::istringstream in(readFileText(o.db_path));
   std::string line, records;
   int k = 0, replayed = 0, still = 0;
   while (std::getline(in, line)) {

@@ -19,8 +19,14 @@ namespace lexdyn::sweep {
 constexpr const char* kRunCompleted = "run_completed";
 
 void writeAtomically(const std::string& path, const std::string& text);
+/// The whole file ("" when it cannot be read).
+std::string readFileText(const std::string& path);
+/// A word for the shell: as it is when it is plain, in single quotes otherwise.
+std::string shellQuote(const std::string& word);
 
 nlohmann::json toJson(const RunResult& r);
+/// A check's result as summary.json and result.json write it.
+CheckOutcome checkFromJson(const nlohmann::json& c);
 RunResult fromJson(const nlohmann::json& j);
 
 /// One point's record: index, parameter values, overrides, per method the run's result and its

@@ -41,35 +41,12 @@ const CheckOutcome* RunResult::check(const std::string& name) const {
 
 namespace {
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string quoteArg(const std::string& a) {
-  if (!a.empty() && a.find_first_of(" \t\n'\"\\$`*?[]{}()<>|&;#~!") == std::string::npos) return a;
-  std::string q = "'";
-  for (char c : a) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
 // The statistics a run records for the sweep's comparisons (one task_error figure per side).
 std::vector<checks::CheckSpec> comparisonStatistics(const SweepSpec& s, const std::string& method) {
   std::vector<checks::CheckSpec> out;
   for (const Comparison& c : s.comparisons) {
     if (c.better != method && c.worse != method) continue;
-    checks::CheckSpec cs;
-    cs.name = c.name;
-    cs.type = "task_error";
-    cs.where = c.where;
-    cs.tasks = c.tasks;
-    cs.statistic = c.statistic;
-    cs.from_s = c.from_s;
-    cs.to_s = c.to_s;
-    cs.limit = std::numeric_limits<double>::infinity();
-    out.push_back(cs);
+    out.push_back(checks::comparisonStatistic(c));
   }
   return out;
 }
@@ -111,7 +88,7 @@ RunResult readRunResult(const SweepSpec& s, const std::string& method, const std
   }
   json j;
   try {
-    j = json::parse(readText(summary));
+    j = json::parse(readFileText(summary));
   } catch (const std::exception& e) {
     r.status = "no_summary";
     r.message = std::string("unreadable summary.json: ") + e.what();
@@ -125,15 +102,7 @@ RunResult readRunResult(const SweepSpec& s, const std::string& method, const std
   for (const auto& c : j.value("checks", json::array())) {
     const std::string name = c.value("name", "");
     if (std::find(wanted.begin(), wanted.end(), name) == wanted.end()) continue;
-    CheckOutcome o;
-    o.name = name;
-    o.passed = c.value("passed", false);
-    o.value = num(c.value("value", json()));
-    o.limit = num(c.value("limit", json()));
-    o.margin = num(c.value("margin", json()));
-    o.unit = c.value("unit", "");
-    o.detail = c.value("detail", "");
-    r.checks.push_back(o);
+    r.checks.push_back(checkFromJson(c));
   }
   // Checks the run did not report (it stopped before they were set up) count as failed.
   for (const auto& name : wanted) {
@@ -179,10 +148,10 @@ int runPointHere(const SweepSpec& s, const RunConfig& c, const std::string& out_
 }
 
 std::string reproduceCommand(const SweepSpec& s, const RunConfig& c) {
-  std::string cmd = "lexdyn-harness run " + quoteArg(s.base_case) + " --method " + c.method;
+  std::string cmd = "lexdyn-harness run " + shellQuote(s.base_case) + " --method " + c.method;
   for (const auto& o : runOverrides(s, c)) {
     if (o.path == "stop_at_s") cmd += " --duration " + o.value;
-    else if (o.path != "trace.every_n_ticks") cmd += " --set " + quoteArg(o.path + "=" + o.value);
+    else if (o.path != "trace.every_n_ticks") cmd += " --set " + shellQuote(o.path + "=" + o.value);
   }
   return cmd + " --out DIR";
 }
@@ -196,10 +165,10 @@ void prepareOutDir(const SweepSpec& s, const std::string& out_dir) {
   fs::create_directories(fs::path(out_dir) / "runs", ec);
   if (ec || !fs::is_directory(out_dir)) throw InputError(out_dir, "cannot create the output directory");
   // The sweep file and its base case as they were: resuming with other files would mix results.
-  const std::string text = readText(s.path) + "\n# base case " + s.base_case + ":\n" + readText(s.base_case);
+  const std::string text = readFileText(s.path) + "\n# base case " + s.base_case + ":\n" + readFileText(s.base_case);
   const std::string recorded = (fs::path(out_dir) / "sweep.txt").string();
   if (fs::is_regular_file(recorded)) {
-    if (readText(recorded) != text) {
+    if (readFileText(recorded) != text) {
       throw InputError(out_dir, "holds the results of another version of " + s.path + " or of its base case; use another --out or remove it");
     }
   } else {
@@ -331,7 +300,7 @@ bool runMissing(const SweepSpec& s, const std::vector<long>& points, const Drive
   auto writePoint = [&](long i) {
     const Point pt = pointAt(s, i);
     std::map<std::string, RunResult> runs;
-    for (const auto& m : s.methods) runs[m] = fromJson(json::parse(readText((fs::path(runDir(o.out_dir, i, m)) / "result.json").string())));
+    for (const auto& m : s.methods) runs[m] = fromJson(json::parse(readFileText((fs::path(runDir(o.out_dir, i, m)) / "result.json").string())));
     writeAtomically(pointFile(o.out_dir, i), pointRecord(s, pt, runs).dump() + "\n");
   };
   // Points whose runs are all done but whose record is not (killed in between).
@@ -357,6 +326,15 @@ bool runMissing(const SweepSpec& s, const std::vector<long>& points, const Drive
     progress.finished(!r.failures().empty(), points_done, static_cast<long>(points.size()), points_failed);
   });
   return !(o.interrupt && o.interrupt->load() != 0);
+}
+
+// One configuration at a time through the pool's process runner (shrinking, replays).
+RunOne runnerOf(Pool& pool) {
+  return [&pool](const RunConfig& c, const std::string& dir) -> std::optional<RunResult> {
+    RunResult r;
+    if (!pool.execute({-1, c, dir}, r)) return std::nullopt;
+    return r;
+  };
 }
 
 int interruptedCode(const DriverOptions& o) {
@@ -391,19 +369,14 @@ int mergeSweep(const SweepSpec& s, const DriverOptions& o) {
       ++missing;
       continue;
     }
-    records.push_back(json::parse(readText(f)));
+    records.push_back(json::parse(readFileText(f)));
   }
   std::string lines;
   for (const auto& r : records) lines += r.dump() + "\n";
   writeAtomically((fs::path(o.out_dir) / "results.jsonl").string(), lines);
   // Shrinking, the failure database, the summary and the maps.
   Pool pool(s, o);
-  auto runOne = [&](const RunConfig& c, const std::string& dir) -> std::optional<RunResult> {
-    RunResult r;
-    if (!pool.execute({-1, c, dir}, r)) return std::nullopt;
-    return r;
-  };
-  std::vector<json> failures = o.shrink && s.shrink.enabled ? shrinkFailures(s, records, o, runOne) : minimalFailures(s, records, o);
+  std::vector<json> failures = o.shrink && s.shrink.enabled ? shrinkFailures(s, records, o, runnerOf(pool)) : minimalFailures(s, records, o);
   if (o.interrupt && o.interrupt->load() != 0) return interruptedCode(o);
   if (!o.db_path.empty()) recordFailures(s, failures, o.db_path);
   const std::vector<json> maps = writeMaps(s, records, o.out_dir, o.plot_command);
@@ -421,12 +394,7 @@ int runSweep(const SweepSpec& s, const DriverOptions& o) {
   prepareOutDir(s, o.out_dir);
   if (!o.db_path.empty()) {
     Pool pool(s, o);
-    auto runOne = [&](const RunConfig& c, const std::string& dir) -> std::optional<RunResult> {
-      RunResult r;
-      if (!pool.execute({-1, c, dir}, r)) return std::nullopt;
-      return r;
-    };
-    replayFailures(s, o, runOne);
+    replayFailures(s, o, runnerOf(pool));
     if (o.interrupt && o.interrupt->load() != 0) return interruptedCode(o);
   }
   std::vector<long> all;

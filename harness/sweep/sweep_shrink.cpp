@@ -131,13 +131,41 @@ std::vector<Failure> collect(const SweepSpec& s, const std::vector<json>& record
   return out;
 }
 
+double fullDuration(const SweepSpec& s) { return s.duration_s ? *s.duration_s : s.base.duration_s; }
+
+// summary.json's entry of a failure at configuration `c` (which gave `r`).
+json failureRecord(const SweepSpec& s, const Failure& f, const RunConfig& c, const RunResult& r) {
+  json values = json::object();  // the parameters away from their simplest values
+  for (size_t k = 0; k < s.parameters.size(); ++k) {
+    if (c.values[k] != s.parameters[k].simplest) values[s.parameters[k].name] = c.values[k];
+  }
+  json overrides = json::array();
+  for (const auto& o : overridesOf(s, c.values)) overrides.push_back({{"path", o.path}, {"value", o.value}});
+  json j = {{"check", f.check},
+            {"method", f.method},
+            {"point", f.first.value("point", -1L)},
+            {"points_failing", f.points.size()},
+            {"values", values},
+            {"overrides", overrides},
+            {"duration_s", c.duration_s},
+            {"command", reproduceCommand(s, c)},
+            {"status", r.status}};
+  if (const CheckOutcome* co = r.check(f.check)) {
+    j["value"] = number(co->value);
+    j["limit"] = number(co->limit);
+    j["margin"] = number(co->margin);
+    j["unit"] = co->unit;
+  }
+  return j;
+}
+
 class Shrinker {
  public:
   Shrinker(const SweepSpec& s, const Failure& f, TrialCache& cache) : s_(s), f_(f), cache_(cache) {
     const RunResult orig = fromJson(f.first["runs"][f.method]);
     status_ = orig.status;
     if (const CheckOutcome* c = orig.check(f.check)) value_was_nan_ = std::isnan(c->value);
-    full_duration_ = s.duration_s ? *s.duration_s : s.base.duration_s;
+    full_duration_ = fullDuration(s);
   }
 
   /// False when interrupted.
@@ -170,32 +198,12 @@ class Shrinker {
   }
 
   json result(const std::string& out_dir) const {
-    json values = json::object();  // the parameters away from their simplest values
-    for (size_t k = 0; k < s_.parameters.size(); ++k) {
-      if (best_.values[k] != s_.parameters[k].simplest) values[s_.parameters[k].name] = best_.values[k];
-    }
-    json overrides = json::array();
-    for (const auto& o : overridesOf(s_, best_.values)) overrides.push_back({{"path", o.path}, {"value", o.value}});
     const std::string file = f_.method + "." + f_.check + ".yaml";
-    json j = {{"check", f_.check},
-              {"method", f_.method},
-              {"point", f_.first.value("point", -1L)},
-              {"points_failing", f_.points.size()},
-              {"values", values},
-              {"overrides", overrides},
-              {"duration_s", best_.duration_s},
-              {"case_file", "failures/" + file},
-              {"command", reproduceCommand(s_, best_)},
-              {"shrunk", true},
-              {"runs", runs_},
-              {"budget_exhausted", exhausted_},
-              {"status", best_result_.status}};
-    if (const CheckOutcome* c = best_result_.check(f_.check)) {
-      j["value"] = number(c->value);
-      j["limit"] = number(c->limit);
-      j["margin"] = number(c->margin);
-      j["unit"] = c->unit;
-    }
+    json j = failureRecord(s_, f_, best_, best_result_);
+    j["case_file"] = "failures/" + file;
+    j["shrunk"] = true;
+    j["runs"] = runs_;
+    j["budget_exhausted"] = exhausted_;
     writeCaseFile(out_dir, file);
     return j;
   }
@@ -316,32 +324,10 @@ std::vector<json> minimalFailures(const SweepSpec& s, const std::vector<json>& r
   (void)o;
   std::vector<json> out;
   for (const Failure& f : collect(s, records)) {
-    RunConfig c{f.method, {}, 0.0};
-    json values = json::object();
-    for (const auto& p : s.parameters) {
-      const std::string v = f.first["values"].value(p.name, p.simplest);
-      c.values.push_back(v);
-      if (v != p.simplest) values[p.name] = v;
-    }
-    json overrides = json::array();
-    for (const auto& ov : overridesOf(s, c.values)) overrides.push_back({{"path", ov.path}, {"value", ov.value}});
-    const RunResult r = fromJson(f.first["runs"][f.method]);
-    json j = {{"check", f.check},
-              {"method", f.method},
-              {"point", f.first.value("point", -1L)},
-              {"points_failing", f.points.size()},
-              {"values", values},
-              {"overrides", overrides},
-              {"duration_s", s.duration_s ? *s.duration_s : s.base.duration_s},
-              {"command", reproduceCommand(s, c)},
-              {"shrunk", false},
-              {"status", r.status}};
-    if (const CheckOutcome* co = r.check(f.check)) {
-      j["value"] = number(co->value);
-      j["limit"] = number(co->limit);
-      j["margin"] = number(co->margin);
-      j["unit"] = co->unit;
-    }
+    RunConfig c{f.method, {}, fullDuration(s)};
+    for (const auto& p : s.parameters) c.values.push_back(f.first["values"].value(p.name, p.simplest));
+    json j = failureRecord(s, f, c, fromJson(f.first["runs"][f.method]));
+    j["shrunk"] = false;
     out.push_back(j);
   }
   return out;
