@@ -9,8 +9,8 @@ PACKAGES=(
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev librapidcheck-dev libbenchmark-dev
   python3-numpy python3-matplotlib
-  # The nightly report (docs/report.md): its scripts and its 3D replay.
-  python3-yaml python3-pil libjs-three
+  # The nightly report (docs/report.md): its scripts, its 3D replay and its browser test.
+  python3-yaml python3-pil libjs-three chromium
 )
 
 missing=()
