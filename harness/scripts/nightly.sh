@@ -173,7 +173,15 @@ if [ "$DO_CTEST" -eq 1 ]; then
     say "ctest: the whole suite, $JOBS at a time (log: $OUT/ctest/log.txt)"
     (cd "$BUILD" && exec ctest -j "$JOBS" --output-junit "$OUT/ctest/junit.xml.partial") > "$OUT/ctest/log.txt" 2>&1 &
     RUNNING=($!)
-    wait "${RUNNING[0]}"
+    since=$SECONDS
+    while kill -0 "${RUNNING[0]}" 2>/dev/null && [ "$INTERRUPTED" -eq 0 ]; do
+      sleep 1
+      if [ $((SECONDS - since)) -ge 30 ]; then
+        since=$SECONDS
+        say "ctest: $(grep -a -o -E '^ *[0-9]+/[0-9]+ Test' "$OUT/ctest/log.txt" | tail -1 | tr -d ' ' | sed 's/Test$//') tests done"
+      fi
+    done
+    wait "${RUNNING[0]}" 2>/dev/null
     RUNNING=()
     stop_if_interrupted
     if [ -f "$OUT/ctest/junit.xml.partial" ]; then
