@@ -345,6 +345,7 @@ def trend_figure(metric, per_run, out_dir, name):
         if d["flag"]:
             ax.plot(x[-1:], vals[-1:], "o", ms=7, mfc="none", mec="#c0392b", mew=1.4)
         ax.set_title(rid, fontsize=7)
+        ax.ticklabel_format(axis="y", useOffset=False)
         ax.tick_params(labelsize=6)
         ax.set_xticks([])
         ax.grid(False)

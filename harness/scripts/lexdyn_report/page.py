@@ -252,7 +252,7 @@ class ReportBuilder:
                 if d["flag"]:
                     lo, hi = d["band"]
                     rows.append((f"trend: {d['flag']}", rid, f"{m.label} {fnum(d['value'], m.fmt)} outside "
-                                 f"{fnum(lo, m.fmt)} .. {fnum(hi, m.fmt)}", "fail" if d["flag"] == "worse" else "pass"))
+                                 f"{fnum(lo, '.4g')} .. {fnum(hi, '.4g')}", "fail" if d["flag"] == "worse" else "pass"))
         if rows:
             out.append("<table id='changes-table'><tr><th>change</th><th>run / golden / test</th><th>what</th></tr>")
             for kind, who, what, cls in rows:
@@ -409,7 +409,7 @@ class ReportBuilder:
             for m in hist.METRICS:
                 d = per[m.key]
                 cls = f" class='flag-{d['flag']}'" if d["flag"] else ""
-                band = f" (band {fnum(d['band'][0], m.fmt)} .. {fnum(d['band'][1], m.fmt)})" if d["band"] else ""
+                band = f" (band {fnum(d['band'][0], '.4g')} .. {fnum(d['band'][1], '.4g')})" if d["band"] else ""
                 cells.append(f"<td{cls}>{fnum(d['value'], m.fmt)}{band}</td>")
             out.append(f"<tr><td>{esc(rid)}</td>{''.join(cells)}</tr>")
         out.append("</table>")
