@@ -2,7 +2,7 @@
 """harness/scripts/nightly.sh on short horizons (docs/report.md, "The nightly job"). ctest:
 report.nightly (label report).
 
-  - a night of three exp1 runs (-j 1, cut at a few seconds) stopped by SIGTERM after the first
+  - a night of three exp1 runs (-j 1, cut at 3 s) stopped by SIGTERM after the first
     run: exit code 143, the finished run kept, the interrupted one marked "interrupted", no
     report yet;
   - the same command again resumes: the finished run is not redone (its summary is the same
@@ -52,7 +52,7 @@ class Nightly(unittest.TestCase):
 
     def cmd(self, *extra):
         return ["bash", NIGHTLY, "--out", self.out, "--history", self.history, "--build-dir", ARGS.build_dir,
-                "--no-build", "--no-ctest", "-j", "1", "--only", ",".join(IDS), "--duration", "4", *extra]
+                "--no-build", "--no-ctest", "-j", "1", "--only", ",".join(IDS), "--duration", "3", *extra]
 
     def test_interrupt_resume_and_rerun(self):
         # 1. Interrupted after the first run finished.
@@ -98,7 +98,7 @@ class Nightly(unittest.TestCase):
             with open(os.path.join(self.out, rid, "summary.json")) as f:
                 s = json.load(f)
             self.assertEqual(s["status"], "completed", rid)
-            self.assertEqual(s["simulated_s"], 4.0, rid)
+            self.assertEqual(s["simulated_s"], 3.0, rid)
         self.assertTrue(os.path.isfile(os.path.join(self.out, "compare", "exp1.json")))
         self.assertTrue(os.path.isfile(os.path.join(self.out, "report", "index.html")), r.stderr)
         self.assertEqual(r.returncode, expected_exit_code(self.out), r.stderr)
