@@ -203,13 +203,13 @@ TOTAL=$(wc -l < "$OUT/runs.txt")
 is_done() {  # a run is done when its summary.json exists and says it was not interrupted
   [ -f "$1/summary.json" ] && ! grep -q '"status": "interrupted"' "$1/summary.json"
 }
-TODO=()
+PENDING=()
 while read -r id case_file method; do
   if is_done "$OUT/$id"; then continue; fi
-  TODO+=("$id $case_file $method")
+  PENDING+=("$id $case_file $method")
 done < "$OUT/runs.txt"
-DONE=$((TOTAL - ${#TODO[@]}))
-say "runs: $TOTAL in all, $DONE done earlier, ${#TODO[@]} to run, $JOBS at a time${DURATION:+ (cut at $DURATION s)}"
+DONE=$((TOTAL - ${#PENDING[@]}))
+say "runs: $TOTAL in all, $DONE done earlier, ${#PENDING[@]} to run, $JOBS at a time${DURATION:+ (cut at $DURATION s)}"
 
 start_run() {
   local id="$1" case_file="$2" method="$3" dir="$OUT/$1"
@@ -235,11 +235,11 @@ progress_line() {  # the runs in flight and how far each is (the harness's own p
 
 next=0
 last_progress=$SECONDS
-while [ $next -lt ${#TODO[@]} ] || [ ${#RUNNING[@]} -gt 0 ]; do
+while [ $next -lt ${#PENDING[@]} ] || [ ${#RUNNING[@]} -gt 0 ]; do
   stop_if_interrupted
-  while [ $next -lt ${#TODO[@]} ] && [ ${#RUNNING[@]} -lt "$JOBS" ]; do
+  while [ $next -lt ${#PENDING[@]} ] && [ ${#RUNNING[@]} -lt "$JOBS" ]; do
     # shellcheck disable=SC2086
-    start_run ${TODO[$next]}
+    start_run ${PENDING[$next]}
     next=$((next + 1))
   done
   sleep 1

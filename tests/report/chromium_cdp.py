@@ -63,11 +63,11 @@ class Browser:
         self._w = to_child_w
         self._r = from_child_r
         target = self.call("Target.createTarget", {"url": "about:blank"})["targetId"]
-        self.session = self.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
+        self.page = self.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
         for domain in ("Page", "Runtime", "Log"):
-            self.call(f"{domain}.enable", session=True)
+            self.call(f"{domain}.enable", to_page=True)
         self.call("Emulation.setDeviceMetricsOverride",
-                  {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False}, session=True)
+                  {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False}, to_page=True)
 
     # -- transport ---------------------------------------------------------------------------
     def _send(self, msg):
@@ -109,11 +109,11 @@ class Browser:
                 self.errors.append(f"log error ({e.get('source')}): {e.get('text')} {e.get('url', '')}")
         self._events.append(msg)
 
-    def call(self, method, params=None, session=False, timeout_s=None):
+    def call(self, method, params=None, to_page=False, timeout_s=None):
         self._next_id += 1
         msg = {"id": self._next_id, "method": method, "params": params or {}}
-        if session:
-            msg["sessionId"] = self.session
+        if to_page:
+            msg["sessionId"] = self.page
         self._send(msg)
         deadline = time.monotonic() + (timeout_s or self.timeout_s)
         while True:
@@ -141,12 +141,12 @@ class Browser:
     # -- page --------------------------------------------------------------------------------
     def navigate(self, url):
         self._events = [e for e in self._events if e.get("method") != "Page.loadEventFired"]
-        self.call("Page.navigate", {"url": url}, session=True)
+        self.call("Page.navigate", {"url": url}, to_page=True)
         self.wait_event("Page.loadEventFired")
 
     def evaluate(self, expression, await_promise=False):
         r = self.call("Runtime.evaluate", {"expression": expression, "returnByValue": True,
-                                           "awaitPromise": await_promise}, session=True)
+                                           "awaitPromise": await_promise}, to_page=True)
         if "exceptionDetails" in r:
             d = r["exceptionDetails"]
             raise CdpError(f"evaluate({expression[:80]}...): {d.get('exception', {}).get('description', d.get('text'))}")
@@ -156,7 +156,7 @@ class Browser:
         params = {"format": "png", "captureBeyondViewport": False}
         if clip:
             params["clip"] = dict(clip, scale=1)
-        return base64.b64decode(self.call("Page.captureScreenshot", params, session=True)["data"])
+        return base64.b64decode(self.call("Page.captureScreenshot", params, to_page=True)["data"])
 
     def close(self):
         try:

@@ -119,9 +119,9 @@ class ReportInBrowser(unittest.TestCase):
         cls.build_times = time.time() - t0
         cls.browser = Browser(width=1280, height=900)
         b = cls.browser
-        b.call("Network.enable", session=True)
+        b.call("Network.enable", to_page=True)
         b.call("Network.emulateNetworkConditions", {"offline": True, "latency": 0, "downloadThroughput": -1,
-                                                     "uploadThroughput": -1}, session=True)
+                                                     "uploadThroughput": -1}, to_page=True)
         t0 = time.time()
         b.navigate("file://" + os.path.join(cls.report, "index.html"))
         cls.wait_replay("exp1.bfgs")

@@ -1,4 +1,4 @@
-"""Shared helpers: atomic writes, the method colours, number formatting, input errors."""
+"""Shared pieces: atomic writes, the method colours, number formatting, input errors."""
 import html
 import math
 import os
