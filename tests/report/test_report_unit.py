@@ -308,7 +308,8 @@ def sweep_fixture(d, name="gains", png=True):
         "maps": [{"x": {"path": "controller.params.damping", "values": [0.1, 1.0]},
                   "y": {"path": "controller.tasks[0].gains.kp", "values": [0.5, 1.0]},
                   "property": "no_overshoot", "method": "wls", "csv": "maps/overshoot.csv", "png": "maps/overshoot.png"}],
-        "failures": [{"check": "no_overshoot", "method": "wls", "point": 3,
+        # value and limit are beyond the contract; the report shows them when a sweep gives them.
+        "failures": [{"check": "no_overshoot", "method": "wls", "point": 3, "value": 0.043, "limit": 0.0,
                       "overrides": [{"path": "controller.params.damping", "value": 1.0}], "duration_s": 20.0,
                       "case_file": "failures/p3.yaml",
                       "command": "build/bin/lexdyn-harness run sweep-out/failures/p3.yaml --method wls --out DIR", "shrunk": True}],
@@ -358,6 +359,7 @@ class SweepSection(unittest.TestCase):
             self.assertIn("lexdyn-harness run sweep-out/failures/p3.yaml --method wls", html)
             self.assertIn("controller.params.damping = 1.0", html)
             self.assertIn("(shrunk)", html)
+            self.assertIn("<td>0.043 (0)</td>", html)
             self.assertIn("href='sweeps/gains/failure0.p3.yaml'", html)
             self.assertIn("-0.2 / -0.15 / -0.05 / 0.01 / 0.02", html)
             self.assertEqual(len(warnings), 1)

@@ -525,14 +525,18 @@ def sweeps_section(sweeps, assets):
         fails = s.get("failures", [])
         if fails:
             out.append("<h4>Minimal failing configurations</h4><table class='sweep-failures'><tr><th>check</th><th>method</th>"
-                       "<th>point</th><th>overrides</th><th>run (s)</th><th>case</th><th>reproduce</th></tr>")
+                       "<th>point</th><th>value (limit)</th><th>overrides</th><th>run (s)</th><th>case</th><th>reproduce</th></tr>")
             for i, f in enumerate(fails):
                 ov = "<br>".join(f"{esc(o.get('path'))} = {esc(o.get('value'))}" for o in f.get("overrides", []))
                 case_link = (f"<a href='{esc(a['cases'][i])}'>{esc(os.path.basename(a['cases'][i]))}</a>" if i in a["cases"]
                              else esc(f.get("case_file", "")))
                 shrunk = " (shrunk)" if f.get("shrunk") else ""
+                # value, limit and the run's status are not in the contract; shown when a sweep gives them.
+                vl = f"{fnum(f.get('value'), '.4g')} ({fnum(f.get('limit'), '.4g')})" if "value" in f else "-"
+                if f.get("status") not in (None, "completed"):
+                    vl += f"; run {esc(f['status'])}"
                 out.append(f"<tr class='fail'><td>{esc(f.get('check'))}</td><td>{esc(f.get('method'))}</td><td>{esc(f.get('point'))}{shrunk}</td>"
-                           f"<td>{ov}</td><td class='num'>{fnum(f.get('duration_s'), '.3g')}</td><td>{case_link}</td>"
+                           f"<td>{vl}</td><td>{ov}</td><td class='num'>{fnum(f.get('duration_s'), '.3g')}</td><td>{case_link}</td>"
                            f"<td><pre>{esc(f.get('command', ''))}</pre></td></tr>")
             out.append("</table>")
         counts = sw.method_status_counts()
