@@ -7,6 +7,8 @@
 //   lexdyn-harness check CASE TRACE [--json]              (the same, older argument order)
 //   lexdyn-harness compare --case CASE TRACE... [--json]  (the case's comparisons between methods)
 //   lexdyn-harness sweep run|point|chunk|merge|submit|list|check FILE ...   (docs/sweeps.md)
+//   lexdyn-harness report --runs DIR [--sweeps DIR] [--history FILE] --out DIR [...]
+//                                      (runs harness/scripts/report.py; docs/report.md)
 //   lexdyn-harness golden list [--manifest FILE] [--cases A,B] [--only ID]   (ID CASE_FILE METHOD lines)
 //   lexdyn-harness golden update|check [--manifest FILE] [--cases A,B] [--only ID]
 //                                      [--work DIR] [--progress]
@@ -25,7 +27,9 @@
 
 #include <atomic>
 #include <csignal>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <map>
@@ -265,6 +269,13 @@ int main(int argc, char** argv) {
   lexdyn::cli::SweepCommand sweep;
   lexdyn::cli::addSweepCommands(app, sweep);
 
+  // The report is built by harness/scripts/report.py (Debian's matplotlib through
+  // /usr/bin/python3); its options pass through unchanged.
+  CLI::App* report = app.add_subcommand("report", "build the report from stored results (harness/scripts/report.py; docs/report.md)");
+  report->allow_extras();
+  report->prefix_command();
+  report->set_help_flag();  // report.py answers --help itself
+
   CLI::App* golden = app.add_subcommand("golden", "golden traces: update (regenerate) or check (compare)");
   golden->require_subcommand(1);
   CLI::App* gupdate = golden->add_subcommand("update", "regenerate golden traces");
@@ -291,6 +302,18 @@ int main(int argc, char** argv) {
   }
 
   try {
+    if (*report) {
+      const std::string script = std::string(LEXDYN_SOURCE_DIR) + "/harness/scripts/report.py";
+      if (!fs::is_regular_file("/usr/bin/python3")) throw lexdyn::InputError("report", "needs /usr/bin/python3 (Debian's python3 with python3-matplotlib)");
+      std::vector<std::string> args = {"/usr/bin/python3", script};
+      for (const std::string& a : report->remaining()) args.push_back(a);
+      std::vector<char*> argv_c;
+      for (auto& a : args) argv_c.push_back(a.data());
+      argv_c.push_back(nullptr);
+      std::fflush(stdout);
+      ::execv(argv_c[0], argv_c.data());
+      throw std::runtime_error(std::string("cannot run ") + script + ": " + std::strerror(errno));
+    }
     if (*sweep.sweep) {
       std::signal(SIGINT, onSignal);
       std::signal(SIGTERM, onSignal);

@@ -9,7 +9,10 @@ PACKAGES=(
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev librapidcheck-dev libbenchmark-dev
   python3-numpy python3-matplotlib
+  # Sweeps on Slurm (docs/sweeps.md) and their test's own single-node cluster.
   slurm-wlm munge
+  # The nightly report (docs/report.md): its scripts, its 3D replay and its browser test.
+  python3-yaml python3-pil libjs-three chromium
 )
 
 missing=()

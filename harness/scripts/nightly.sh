@@ -1,0 +1,345 @@
+#!/usr/bin/env bash
+# The nightly job (docs/report.md): build, the ctest suite (golden checks included), every
+# case x method of golden/manifest.yaml at full length, the sweeps of the nightly configuration,
+# then the report (harness/scripts/report.py) and one record appended to the history file.
+#
+# Usage: harness/scripts/nightly.sh [--out DIR] [--history FILE] [-j JOBS] [--config FILE]
+#                                   [--build-dir DIR] [--only ID,...] [--duration S]
+#                                   [--no-build] [--no-ctest]
+#   --out DIR       this night's directory (default out/nightly/<UTC date>); running again with
+#                   the same DIR resumes: a run whose summary.json exists (and is not
+#                   "interrupted") is done, a stored ctest result and sweep output are kept
+#   --history FILE  JSON Lines history (default out/nightly/history.jsonl)
+#   -j JOBS         runs at a time (default LEXDYN_JOBS or the number of cores)
+#   --config FILE   nightly configuration (default harness/nightly.yaml): the sweeps
+#   --only IDS      only these runs (CASE.METHOD or CASE, as `lexdyn-harness golden list --only`)
+#   --duration S    cut every run at S seconds of simulated time (tests; not a nightly)
+#   --no-build, --no-ctest  skip those steps
+# Writes DIR/{nightly.json, runs.txt, <id>/{trace.csv,summary.json,log.txt}, compare/<case>.json,
+# ctest/{junit.xml,log.txt}, sweeps/<name>/, report/index.html}.
+# Exit codes: 0 every run completed and every check, comparison, golden and test passed; 1 a
+# check, comparison, golden or test failed; 2 bad input (options, configuration, a resumed
+# directory of another commit); 3 a run stopped early (integrator or controller failure, no
+# summary) or a step failed (build, report); 130 / 143 interrupted by SIGINT / SIGTERM (what was
+# done is kept; run the same command again to resume).
+set -uo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+OUT=""
+HISTORY=""
+JOBS="${LEXDYN_JOBS:-$(nproc)}"
+CONFIG="$ROOT/harness/nightly.yaml"
+BUILD="$ROOT/build"
+ONLY=""
+DURATION=""
+DO_BUILD=1
+DO_CTEST=1
+PY=/usr/bin/python3
+
+usage() { sed -n '2,26p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//' >&2; }
+die() { echo "nightly: error: $*" >&2; exit 2; }
+say() { echo "[nightly $(date -u +%H:%M:%S)] $*" >&2; }
+
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --out) OUT="${2:?}"; shift 2 ;;
+    --history) HISTORY="${2:?}"; shift 2 ;;
+    -j) JOBS="${2:?}"; shift 2 ;;
+    --config) CONFIG="${2:?}"; shift 2 ;;
+    --build-dir) BUILD="${2:?}"; shift 2 ;;
+    --only) ONLY="${2:?}"; shift 2 ;;
+    --duration) DURATION="${2:?}"; shift 2 ;;
+    --no-build) DO_BUILD=0; shift ;;
+    --no-ctest) DO_CTEST=0; shift ;;
+    -h|--help) usage; exit 0 ;;
+    *) usage; die "unknown option '$1'" ;;
+  esac
+done
+[[ "$JOBS" =~ ^[1-9][0-9]*$ ]] || die "-j: expected a positive integer, found '$JOBS'"
+[ -z "$DURATION" ] || [[ "$DURATION" =~ ^[0-9]*\.?[0-9]+$ ]] || die "--duration: expected seconds, found '$DURATION'"
+[ -f "$CONFIG" ] || die "--config: $CONFIG: no such file"
+OUT="${OUT:-$ROOT/out/nightly/$(date -u +%Y-%m-%d)}"
+HISTORY="${HISTORY:-$ROOT/out/nightly/history.jsonl}"
+mkdir -p "$OUT" || die "--out: cannot create $OUT"
+OUT="$(cd "$OUT" && pwd)"
+HARNESS="$BUILD/bin/lexdyn-harness"
+
+# ------------------------------------------------------------------ signals: keep what was done
+RUNNING=()          # pids of the runs in flight
+declare -A RUN_OF   # pid -> run id
+INTERRUPTED=0
+on_signal() {
+  INTERRUPTED=$1
+  say "interrupted: stopping ${#RUNNING[@]} run(s) (each keeps its trace); run the same command again to resume"
+  for p in "${RUNNING[@]}"; do kill -TERM "$p" 2>/dev/null; done
+}
+trap 'on_signal 130' INT
+trap 'on_signal 143' TERM
+stop_if_interrupted() {
+  if [ "$INTERRUPTED" -ne 0 ]; then
+    for p in "${RUNNING[@]}"; do wait "$p" 2>/dev/null; done
+    exit "$INTERRUPTED"
+  fi
+}
+
+# ------------------------------------------------------------------ configuration (the sweeps)
+SWEEPS="$("$PY" - "$CONFIG" <<'EOF'
+import sys, yaml
+path = sys.argv[1]
+try:
+    doc = yaml.safe_load(open(path)) or {}
+except yaml.YAMLError as e:
+    sys.exit(f"nightly: error: {path}: expected YAML ({e})")
+if not isinstance(doc, dict):
+    sys.exit(f"nightly: error: {path}: expected a mapping at the top level")
+for k in doc:
+    if k not in ("format", "sweeps"):
+        sys.exit(f"nightly: error: {path}: {k}: unknown key (expected format, sweeps)")
+if doc.get("format") != "lexdyn-nightly/1":
+    sys.exit(f"nightly: error: {path}: format: expected 'lexdyn-nightly/1', found {doc.get('format')!r}")
+sweeps = doc.get("sweeps") or []
+if not isinstance(sweeps, list):
+    sys.exit(f"nightly: error: {path}: sweeps: expected a list, found {type(sweeps).__name__}")
+for i, s in enumerate(sweeps):
+    where = f"{path}: sweeps[{i}]"
+    if not isinstance(s, dict):
+        sys.exit(f"nightly: error: {where}: expected {{file, points}}, found {s!r}")
+    for k in s:
+        if k not in ("file", "points", "name"):
+            sys.exit(f"nightly: error: {where}.{k}: unknown key (expected file, points, name)")
+    f, p = s.get("file"), s.get("points")
+    if not isinstance(f, str) or not f:
+        sys.exit(f"nightly: error: {where}.file: expected a sweep file, found {f!r}")
+    if not isinstance(p, int) or isinstance(p, bool) or p <= 0:
+        sys.exit(f"nightly: error: {where}.points: expected a positive integer, found {p!r}")
+    name = s.get("name") or f.rsplit("/", 1)[-1].rsplit(".", 1)[0]
+    print(name, f, p)
+EOF
+)" || exit 2
+
+# ------------------------------------------------------------------ 1. build
+if [ "$DO_BUILD" -eq 1 ]; then
+  say "building into $BUILD (log: $OUT/build.log)"
+  # In the foreground: Ctrl-C stops the build too; a SIGTERM to this script alone lets the
+  # build finish first, then exits 143.
+  if [ "$BUILD" = "$ROOT/build" ]; then
+    LEXDYN_JOBS="$JOBS" "$ROOT/harness/scripts/build.sh" > "$OUT/build.log" 2>&1
+  else
+    { cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release && cmake --build "$BUILD" -j "$JOBS"; } > "$OUT/build.log" 2>&1
+  fi
+  status=$?
+  stop_if_interrupted
+  if [ $status -ne 0 ]; then tail -20 "$OUT/build.log" >&2; say "build failed (see $OUT/build.log)"; exit 3; fi
+fi
+[ -x "$HARNESS" ] || die "$HARNESS not built (run without --no-build, or give --build-dir)"
+
+# ------------------------------------------------------------------ the night's identity
+COMMIT="$(git -C "$ROOT" rev-parse HEAD 2>/dev/null || echo unknown)"
+[ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no 2>/dev/null)" ] && COMMIT="$COMMIT (with uncommitted changes)"
+if [ -f "$OUT/nightly.json" ]; then
+  was="$("$PY" -c 'import json,sys; print(json.load(open(sys.argv[1])).get("commit",""))' "$OUT/nightly.json")"
+  [ "$was" = "$COMMIT" ] || die "$OUT holds a night of commit $was, the checkout is at $COMMIT: give another --out"
+  say "resuming the night in $OUT"
+else
+  "$PY" - "$OUT/nightly.json" "$COMMIT" "$JOBS" "$DURATION" <<'EOF' || exit 3
+import json, os, platform, socket, sys, datetime
+path, commit, jobs, duration = sys.argv[1:5]
+cpu = ""
+try:
+    for line in open("/proc/cpuinfo"):
+        if line.startswith("model name"):
+            cpu = line.split(":", 1)[1].strip()
+            break
+except OSError:
+    pass
+now = datetime.datetime.now(datetime.timezone.utc)
+rec = {"format": "lexdyn-nightly/1", "night": now.strftime("%Y-%m-%dT%H:%M:%SZ") + " " + commit[:12],
+       "commit": commit,
+       "date": now.strftime("%Y-%m-%dT%H:%M:%SZ"),
+       "machine": {"host": socket.gethostname(), "cpu": cpu, "cores": os.cpu_count(), "os": platform.platform()},
+       "jobs": int(jobs), "duration_s": float(duration) if duration else None}
+tmp = path + ".partial"
+with open(tmp, "w") as f:
+    json.dump(rec, f, indent=1)
+os.replace(tmp, path)
+EOF
+fi
+
+# ------------------------------------------------------------------ 2. ctest (goldens included)
+if [ "$DO_CTEST" -eq 1 ]; then
+  mkdir -p "$OUT/ctest"
+  if [ -f "$OUT/ctest/junit.xml" ]; then
+    say "ctest: done earlier ($OUT/ctest/junit.xml)"
+  else
+    say "ctest: the whole suite, $JOBS at a time (log: $OUT/ctest/log.txt)"
+    (cd "$BUILD" && exec ctest -j "$JOBS" --output-junit "$OUT/ctest/junit.xml.partial") > "$OUT/ctest/log.txt" 2>&1 &
+    RUNNING=($!)
+    since=$SECONDS
+    while kill -0 "${RUNNING[0]}" 2>/dev/null && [ "$INTERRUPTED" -eq 0 ]; do
+      sleep 1
+      if [ $((SECONDS - since)) -ge 30 ]; then
+        since=$SECONDS
+        say "ctest: $(grep -a -o -E '^ *[0-9]+/[0-9]+ Test' "$OUT/ctest/log.txt" | tail -1 | tr -d ' ' | sed 's/Test$//') tests done"
+      fi
+    done
+    wait "${RUNNING[0]}" 2>/dev/null
+    RUNNING=()
+    stop_if_interrupted
+    if [ -f "$OUT/ctest/junit.xml.partial" ]; then
+      mv "$OUT/ctest/junit.xml.partial" "$OUT/ctest/junit.xml"
+      say "ctest: $(grep -E 'tests passed|tests failed' "$OUT/ctest/log.txt" | tail -1)"
+    else
+      say "ctest wrote no JUnit file (see $OUT/ctest/log.txt)"
+    fi
+  fi
+fi
+
+# ------------------------------------------------------------------ 3. every case x method, full length
+ONLY_ARGS=()
+[ -n "$ONLY" ] && ONLY_ARGS=(--only "$ONLY")
+"$HARNESS" golden list "${ONLY_ARGS[@]}" > "$OUT/runs.txt.partial" || die "golden list failed (see above)"
+mv "$OUT/runs.txt.partial" "$OUT/runs.txt"
+TOTAL=$(wc -l < "$OUT/runs.txt")
+
+is_done() {  # a run is done when its summary.json exists and says it was not interrupted
+  [ -f "$1/summary.json" ] && ! grep -q '"status": "interrupted"' "$1/summary.json"
+}
+PENDING=()
+while read -r id case_file method; do
+  if is_done "$OUT/$id"; then continue; fi
+  PENDING+=("$id $case_file $method")
+done < "$OUT/runs.txt"
+DONE=$((TOTAL - ${#PENDING[@]}))
+say "runs: $TOTAL in all, $DONE done earlier, ${#PENDING[@]} to run, $JOBS at a time${DURATION:+ (cut at $DURATION s)}"
+
+start_run() {
+  local id="$1" case_file="$2" method="$3" dir="$OUT/$1"
+  local args=(run "$case_file" --out "$dir")
+  [ "$method" != "-" ] && args+=(--method "$method")
+  [ -n "$DURATION" ] && args+=(--duration "$DURATION")
+  mkdir -p "$dir"
+  "$HARNESS" "${args[@]}" > "$dir/log.txt" 2>&1 &
+  RUNNING+=($!)
+  RUN_OF[$!]="$id"
+  say "start $id"
+}
+
+progress_line() {  # the runs in flight and how far each is (the harness's own progress lines)
+  local text="" p id last
+  for p in "${RUNNING[@]}"; do
+    id="${RUN_OF[$p]}"
+    last="$(grep -a '] t = ' "$OUT/$id/log.txt" 2>/dev/null | tail -1 | sed 's/^\[[^]]*\] //')"
+    text+="; $id ${last:-starting}"
+  done
+  say "runs: $DONE of $TOTAL done${text}"
+}
+
+next=0
+last_progress=$SECONDS
+while [ $next -lt ${#PENDING[@]} ] || [ ${#RUNNING[@]} -gt 0 ]; do
+  stop_if_interrupted
+  while [ $next -lt ${#PENDING[@]} ] && [ ${#RUNNING[@]} -lt "$JOBS" ]; do
+    # shellcheck disable=SC2086
+    start_run ${PENDING[$next]}
+    next=$((next + 1))
+  done
+  sleep 1
+  still=()
+  for p in "${RUNNING[@]}"; do
+    if kill -0 "$p" 2>/dev/null; then still+=("$p"); continue; fi
+    wait "$p"
+    code=$?
+    id="${RUN_OF[$p]}"
+    DONE=$((DONE + 1))
+    verdict="$(grep -a -m1 -E '^\[[^]]*\] [a-z_]+: ' "$OUT/$id/log.txt" | sed 's/^\[[^]]*\] //')"
+    failed=$(grep -a -c '^  FAIL' "$OUT/$id/log.txt")
+    say "done  $id ($DONE/$TOTAL): ${verdict:-no summary line, exit code $code}, $failed failed check(s)"
+  done
+  RUNNING=("${still[@]}")
+  if [ $((SECONDS - last_progress)) -ge 30 ] && [ ${#RUNNING[@]} -gt 0 ]; then
+    progress_line
+    last_progress=$SECONDS
+  fi
+done
+stop_if_interrupted
+
+# ------------------------------------------------------------------ 4. the cases' method comparisons
+mkdir -p "$OUT/compare"
+cut -d' ' -f2 "$OUT/runs.txt" | sort -u | while read -r case_file; do
+  grep -q '^comparisons:' "$case_file" || continue
+  traces=()
+  while read -r id cf m; do
+    [ "$cf" = "$case_file" ] && [ -f "$OUT/$id/trace.csv" ] && traces+=("$OUT/$id/trace.csv")
+  done < "$OUT/runs.txt"
+  [ ${#traces[@]} -ge 2 ] || continue
+  name="$(basename "$case_file" .yaml)"
+  "$HARNESS" compare --case "$case_file" --json "${traces[@]}" > "$OUT/compare/$name.json.partial" 2> "$OUT/compare/$name.txt"
+  if grep -q '"checks"' "$OUT/compare/$name.json.partial"; then
+    mv "$OUT/compare/$name.json.partial" "$OUT/compare/$name.json"
+  else
+    rm -f "$OUT/compare/$name.json.partial"
+    say "compare $name: no result (see $OUT/compare/$name.txt)"
+  fi
+done
+
+# ------------------------------------------------------------------ 5. sweeps
+SWEEP_ARGS=()
+if [ -z "$SWEEPS" ]; then
+  say "sweeps: none in $CONFIG (the report's sweep section stays empty)"
+else
+  mkdir -p "$OUT/sweeps"
+  while read -r name file points; do
+    stop_if_interrupted
+    dir="$OUT/sweeps/$name"
+    if [ -f "$dir/summary.json" ]; then say "sweep $name: done earlier"; continue; fi
+    say "sweep $name: $file, $points points, $JOBS at a time (log: $OUT/sweeps/$name.log)"
+    # The failure database lives beside the history: every night replays the failures found before.
+    "$HARNESS" sweep run "$ROOT/$file" --out "$dir" -j "$JOBS" --points "$points" \
+      --db "$(dirname "$HISTORY")/sweep-failures/$name.jsonl" > "$OUT/sweeps/$name.log" 2>&1 &
+    RUNNING=($!)
+    RUN_OF[$!]="sweep $name"
+    wait "${RUNNING[0]}"
+    RUNNING=()
+    stop_if_interrupted
+    [ -f "$dir/summary.json" ] || say "sweep $name wrote no summary (see $OUT/sweeps/$name.log)"
+  done <<< "$SWEEPS"
+  SWEEP_ARGS=(--sweeps "$OUT/sweeps")
+fi
+
+# ------------------------------------------------------------------ 6. the report and the history
+say "report: $OUT/report (history $HISTORY)"
+"$PY" "$ROOT/harness/scripts/report.py" --runs "$OUT" "${SWEEP_ARGS[@]}" --history "$HISTORY" --append-history \
+  --out "$OUT/report" >&2
+rstatus=$?
+stop_if_interrupted
+[ $rstatus -eq 0 ] || { say "the report failed (exit code $rstatus)"; exit 3; }
+
+# ------------------------------------------------------------------ exit code of the night
+"$PY" - "$OUT" <<'EOF'
+import json, os, sys, xml.etree.ElementTree as ET
+out = sys.argv[1]
+stopped, failed = [], []
+for line in open(os.path.join(out, "runs.txt")):
+    rid = line.split()[0]
+    p = os.path.join(out, rid, "summary.json")
+    if not os.path.isfile(p):
+        stopped.append(f"{rid} (no summary)")
+        continue
+    s = json.load(open(p))
+    if s.get("status") != "completed":
+        stopped.append(f"{rid} ({s.get('status')})")
+    failed += [f"{rid}: {c['name']}" for c in s.get("checks", []) if not c.get("passed")]
+cdir = os.path.join(out, "compare")
+for n in sorted(os.listdir(cdir)) if os.path.isdir(cdir) else []:
+    if n.endswith(".json"):
+        failed += [f"{n[:-5]}: {c['name']}" for c in json.load(open(os.path.join(cdir, n))).get("checks", []) if not c.get("passed")]
+junit = os.path.join(out, "ctest", "junit.xml")
+if os.path.isfile(junit):
+    for tc in ET.parse(junit).getroot().iter("testcase"):
+        if tc.find("failure") is not None or tc.get("status") == "fail":
+            failed.append(f"ctest {tc.get('name')}")
+print(f"[nightly] {len(stopped)} run(s) stopped early, {len(failed)} failed check(s), comparison(s), golden(s) or test(s)", file=sys.stderr)
+sys.exit(3 if stopped else (1 if failed else 0))
+EOF
+code=$?
+say "report: $OUT/report/index.html"
+exit $code

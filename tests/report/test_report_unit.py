@@ -1,0 +1,411 @@
+#!/usr/bin/python3
+"""Unit tests of the nightly report's parts (harness/scripts/lexdyn_report; docs/report.md):
+noise bands and "since last night", the history file, trace reading, the replay model and its
+quantisation, and the sweep section rendered from a hand-made fixture of the sweep output
+contract. ctest: report.unit (label report)."""
+import base64
+import json
+import math
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
+sys.path.insert(0, os.path.join(ROOT, "harness", "scripts"))
+
+from lexdyn_report import history as hist  # noqa: E402
+from lexdyn_report import page, replay, runs, sweeps, trace  # noqa: E402
+from lexdyn_report.common import ReportInputError  # noqa: E402
+
+
+def metric(key):
+    return next(m for m in hist.METRICS if m.key == key)
+
+
+def record(night, run_figures, goldens_failed=None):
+    rec = {"format": hist.FORMAT, "night": night, "commit": "c" + night, "date": night, "runs": run_figures}
+    if goldens_failed is not None:
+        rec["goldens"] = {"total": 3, "failed": goldens_failed}
+    return rec
+
+
+class NoiseBand(unittest.TestCase):
+    def flag(self, key, prior, value):
+        recs = [record(f"n{i}", {"r": {key: v, "failed_checks": []}}) for i, v in enumerate(prior)]
+        cur = record("now", {"r": {key: value, "failed_checks": []}})
+        return hist.trend(recs, cur)["r"][key]
+
+    def test_deterministic_figure_flags_any_change(self):
+        self.assertIsNone(self.flag("final_error", [2.2844] * 5, 2.2844)["flag"])
+        self.assertEqual(self.flag("final_error", [2.2844] * 5, 2.2845)["flag"], "worse")
+        self.assertEqual(self.flag("final_error", [2.2844] * 5, 2.2843)["flag"], "better")
+        self.assertEqual(self.flag("peak_iterations", [23] * 3, 24)["flag"], "worse")
+        self.assertIsNone(self.flag("peak_iterations", [23] * 3, 23)["flag"])
+
+    def test_spread_of_earlier_nights_widens_the_band(self):
+        # median 1.0, MAD 0.05: half width 3 * 1.4826 * 0.05 = 0.2224
+        d = self.flag("final_error", [1.0, 1.1, 0.9, 1.05, 0.95], 1.2)
+        self.assertIsNone(d["flag"])
+        self.assertAlmostEqual(d["band"][1], 1.0 + 3 * 1.4826 * 0.05, places=12)
+        self.assertEqual(self.flag("final_error", [1.0, 1.1, 0.9, 1.05, 0.95], 1.25)["flag"], "worse")
+
+    def test_wall_clock_figures_use_a_factor_on_a_log_scale(self):
+        d = self.flag("tick_p50_us", [300, 310, 320], 400)
+        self.assertIsNone(d["flag"])
+        self.assertAlmostEqual(d["band"][0], 310 / 1.5, places=9)
+        self.assertAlmostEqual(d["band"][1], 310 * 1.5, places=9)
+        self.assertEqual(self.flag("tick_p50_us", [300, 310, 320], 470)["flag"], "worse")
+        self.assertEqual(self.flag("tick_p50_us", [300, 310, 320], 200)["flag"], "better")
+        # A lower real-time factor is worse.
+        self.assertEqual(self.flag("realtime_factor", [2.0, 2.0, 2.0], 0.6)["flag"], "worse")
+        self.assertEqual(self.flag("realtime_factor", [2.0, 2.0, 2.0], 6.5)["flag"], "better")
+        self.assertIsNone(self.flag("realtime_factor", [2.0, 2.0, 2.0], 0.7)["flag"])
+
+    def test_no_earlier_night_no_band(self):
+        d = self.flag("final_error", [], 1.0)
+        self.assertIsNone(d["band"])
+        self.assertIsNone(d["flag"])
+        self.assertEqual([v for _, _, v in d["values"]], [1.0])
+
+    def test_the_window_keeps_the_last_nights(self):
+        prior = [5.0] * 20 + [1.0] * hist.WINDOW
+        self.assertIsNone(self.flag("final_error", prior, 1.0)["flag"])
+
+    def test_failed_check_count(self):
+        recs = [record("a", {"r": {"failed_checks": []}})]
+        cur = record("b", {"r": {"failed_checks": ["x", "y"]}})
+        self.assertEqual(hist.trend(recs, cur)["r"]["failed_check_count"]["flag"], "worse")
+
+
+class SinceLastNight(unittest.TestCase):
+    def test_new_failures_fixed_status_goldens_added_missing(self):
+        prev = record("n1", {"exp1.bfgs": {"status": "completed", "failed_checks": ["a", "c"]},
+                             "exp1.wls": {"status": "completed", "failed_checks": []},
+                             "exp2.gn": {"status": "completed", "failed_checks": []}}, goldens_failed=["exp3.ah"])
+        cur = record("n2", {"exp1.bfgs": {"status": "completed", "failed_checks": ["b", "c"]},
+                            "exp1.wls": {"status": "controller_failure", "failed_checks": []},
+                            "exp1.gn": {"status": "completed", "failed_checks": []}}, goldens_failed=["exp1.bfgs", "exp3.ah"])
+        ch = hist.changes([record("n0", {}), prev], cur)
+        self.assertEqual(ch["previous"]["night"], "n1")
+        self.assertEqual(ch["new_failures"], [("exp1.bfgs", "b")])
+        self.assertEqual(ch["fixed"], [("exp1.bfgs", "a")])
+        self.assertEqual(ch["still_failing"], [("exp1.bfgs", "c")])
+        self.assertEqual(ch["status"], [("exp1.wls", "completed", "controller_failure")])
+        self.assertEqual(ch["added"], ["exp1.gn"])
+        self.assertEqual(ch["missing"], ["exp2.gn"])
+        self.assertEqual(ch["goldens_new"], ["exp1.bfgs"])
+        self.assertEqual(ch["goldens_still"], ["exp3.ah"])
+        self.assertEqual(ch["goldens_fixed"], [])
+
+    def test_the_same_night_is_not_its_own_previous(self):
+        cur = record("n1", {"r": {"failed_checks": ["a"]}})
+        ch = hist.changes([record("n1", {"r": {"failed_checks": []}})], cur)
+        self.assertIsNone(ch["previous"])
+        self.assertEqual(ch["new_failures"], [])
+
+
+class HistoryFile(unittest.TestCase):
+    def test_append_replaces_the_same_night(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "sub", "history.jsonl")
+            recs = hist.append_record(path, [], record("n1", {}))
+            recs = hist.append_record(path, recs, record("n2", {}))
+            hist.append_record(path, hist.load_history(path), record("n1", {"r": {}}))
+            loaded = hist.load_history(path)
+            self.assertEqual([r["night"] for r in loaded], ["n2", "n1"])
+            self.assertEqual(loaded[-1]["runs"], {"r": {}})
+            self.assertFalse([n for n in os.listdir(os.path.dirname(path)) if "partial" in n])
+
+    def test_errors_name_the_file_and_line(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "h.jsonl")
+            with open(path, "w") as f:
+                f.write(json.dumps(record("n1", {})) + "\n\n{not json\n")
+            with self.assertRaises(ReportInputError) as e:
+                hist.load_history(path)
+            self.assertIn(f"{path}:3", str(e.exception))
+            with open(path, "w") as f:
+                f.write(json.dumps({"format": "other/1", "night": "x", "runs": {}}) + "\n")
+            with self.assertRaises(ReportInputError) as e:
+                hist.load_history(path)
+            self.assertIn(f"{path}:1", str(e.exception))
+            self.assertIn("lexdyn-nightly-history/1", str(e.exception))
+            with open(path, "w") as f:
+                f.write(json.dumps({"format": hist.FORMAT, "night": "x"}) + "\n")
+            with self.assertRaises(ReportInputError) as e:
+                hist.load_history(path)
+            self.assertIn("'runs'", str(e.exception))
+
+
+class TraceReading(unittest.TestCase):
+    def write(self, d, name, text):
+        p = os.path.join(d, name)
+        with open(p, "w") as f:
+            f.write(text)
+        return p
+
+    def test_values_round_trip_and_partial_traces_drop_a_cut_row(self):
+        with tempfile.TemporaryDirectory() as d:
+            text = "# case: x\n# method: bfgs\nt,a,b\n0,0.1,inf\n0.005,-2.5e-300,nan\n0.01,3"
+            with self.assertRaises(ReportInputError) as e:
+                trace.read_trace(self.write(d, "trace.csv", text))
+            self.assertIn("trace.csv:6", str(e.exception))
+            tr = trace.read_trace(self.write(d, "trace.csv.partial", text))
+            self.assertEqual(tr.rows, 2)
+            self.assertEqual(tr.metadata["method"], "bfgs")
+            self.assertEqual(tr.col("a")[1], -2.5e-300)
+            self.assertTrue(math.isinf(tr.col("b")[0]) and math.isnan(tr.col("b")[1]))
+            only = trace.read_trace(self.write(d, "t2.csv", text[:text.rindex("\n") + 1]), wanted=lambda n: n == "b")
+            self.assertEqual(only.names, ["t", "b"])
+
+    def test_malformed_rows_name_the_line(self):
+        with tempfile.TemporaryDirectory() as d:
+            p = self.write(d, "trace.csv", "# case: x\nt,a\n0,1\n0.005,fast\n")
+            with self.assertRaises(ReportInputError) as e:
+                trace.read_trace(p)
+            self.assertIn("trace.csv:4", str(e.exception))
+            self.assertIn("'fast'", str(e.exception))
+            p = self.write(d, "trace.csv", "# case: x\nt,a\n0,1,2\n")
+            with self.assertRaises(ReportInputError) as e:
+                trace.read_trace(p)
+            self.assertIn("trace.csv:3: expected 2 values, found 3", str(e.exception))
+
+    def test_detail_time(self):
+        self.assertEqual(runs.detail_time("largest sensed ratio at t = 0.82 s (f_n 318 N)"), 0.82)
+        self.assertIsNone(runs.detail_time("no trace row at t >= 100.000000 s"))
+        self.assertIsNone(runs.detail_time(""))
+
+
+def binary_stl(triangles):
+    out = b"\0" * 80 + struct.pack("<I", len(triangles))
+    for tri in triangles:
+        out += struct.pack("<3f", 0, 0, 1) + struct.pack("<9f", *[c for v in tri for c in v]) + b"\0\0"
+    return out
+
+
+class ReplayModel(unittest.TestCase):
+    def test_the_humanoid(self):
+        m = replay.load_model(os.path.join(ROOT, "models/hrp2kai_like/hrp2kai_like.urdf"),
+                              os.path.join(ROOT, "models/hrp2kai_like/hrp2kai_like.yaml"))
+        self.assertEqual(m["name"], "hrp2kai_like")
+        self.assertEqual(m["root"], "WAIST")
+        self.assertTrue(m["floating"])
+        moving = [j for j in m["joints"] if j["type"] in ("revolute", "continuous", "prismatic")]
+        self.assertEqual(len(moving), 32)
+        names = [j["name"] for j in m["joints"]]
+        # Parents before children.
+        seen = {m["root"]}
+        for j in m["joints"]:
+            self.assertIn(j["parent"], seen)
+            seen.add(j["child"])
+        self.assertLess(names.index("RARM_JOINT0"), names.index("RARM_JOINT6"))
+        grasp = next(f for f in m["frames"] if f["name"] == "RGRASP")
+        self.assertEqual((grasp["parent"], grasp["xyz"]), ("RARM_LINK6", [0.0, 0.0, -0.15]))
+        self.assertEqual(m["surfaces"]["LEFT_FOOT"]["frame"], "LSOLE")
+        self.assertEqual(next(j for j in m["joints"] if j["name"] == "RLEG_JOINT3")["effort"], 300.0)
+        self.assertEqual(m["warnings"], [])
+        shapes = {v["geom"]["type"] for link in m["links"].values() for v in link["visuals"]}
+        self.assertEqual(shapes, {"box", "cylinder"})
+
+    def test_meshes_spheres_missing_files_and_bare_links(self):
+        tri = [((0, 0, 0), (1, 0, 0), (0, 1, 0)), ((0, 0, 0), (0, 1, 0), (0, 0, 1))]
+        with tempfile.TemporaryDirectory() as d:
+            os.makedirs(os.path.join(d, "meshes"))
+            with open(os.path.join(d, "meshes", "a.stl"), "wb") as f:
+                f.write(binary_stl(tri))
+            with open(os.path.join(d, "meshes", "b.stl"), "w") as f:
+                f.write("solid b\n" + "".join("facet normal 0 0 1\nouter loop\n" + "".join(f"vertex {x} {y} {z}\n" for x, y, z in t)
+                                              + "endloop\nendfacet\n" for t in tri) + "endsolid b\n")
+            urdf = os.path.join(d, "r.urdf")
+            with open(urdf, "w") as f:
+                f.write("""<robot name="r"><material name="red"><color rgba="1 0 0 1"/></material>
+  <link name="base"><visual><geometry><mesh filename="package://r/meshes/a.stl" scale="2 2 2"/></geometry>
+    <material name="red"/></visual></link>
+  <link name="l1"><visual><origin xyz="0 0 0.1" rpy="0 1.5707963 0"/><geometry><sphere radius="0.1"/></geometry></visual>
+    <visual><geometry><mesh filename="meshes/b.stl"/></geometry></visual></link>
+  <link name="l2"><visual><geometry><mesh filename="meshes/missing.dae"/></geometry></visual></link>
+  <link name="l3"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="1" effort="5" velocity="1"/></joint>
+  <joint name="j2" type="prismatic"><parent link="l1"/><child link="l2"/><origin xyz="0.5 0 0"/></joint>
+  <joint name="j3" type="fixed"><parent link="base"/><child link="l3"/></joint>
+</robot>""")
+            m = replay.load_model(urdf)
+            self.assertEqual(m["root"], "base")
+            self.assertEqual([j["name"] for j in m["joints"]], ["j1", "j2", "j3"])
+            v = m["links"]["base"]["visuals"][0]
+            self.assertEqual((v["geom"]["type"], v["geom"]["scale"], v["rgba"]), ("mesh", [2.0, 2.0, 2.0], [1.0, 0.0, 0.0, 1.0]))
+            a = np.frombuffer(base64.b64decode(m["meshes"][0]), dtype="<f4")
+            b = np.frombuffer(base64.b64decode(m["meshes"][1]), dtype="<f4")
+            self.assertEqual(a.tolist(), [c for t in tri for v in t for c in v])
+            self.assertEqual(a.tolist(), b.tolist())  # binary and ASCII STL read alike
+            self.assertEqual(m["links"]["l1"]["visuals"][0]["geom"], {"type": "sphere", "radius": 0.1})
+            self.assertEqual(m["links"]["l2"]["visuals"], [])   # drawn as a marker
+            self.assertEqual(m["links"]["l3"]["visuals"], [])
+            self.assertEqual(len(m["warnings"]), 1)
+            self.assertIn("missing.dae", m["warnings"][0])
+            self.assertEqual(m["joints"][1]["axis"], [1.0, 0.0, 0.0])  # URDF default axis
+
+    def test_urdf_errors_name_the_file_and_element(self):
+        with tempfile.TemporaryDirectory() as d:
+            urdf = os.path.join(d, "r.urdf")
+            with open(urdf, "w") as f:
+                f.write('<robot name="r"><link name="a"><visual><geometry><box size="1 1"/></geometry></visual></link></robot>')
+            with self.assertRaises(ReportInputError) as e:
+                replay.load_model(urdf)
+            self.assertIn("link 'a'.visual[0].box.size: expected 3 numbers, found 2", str(e.exception))
+            with open(urdf, "w") as f:
+                f.write('<robot name="r"><link name="a"/><link name="b"/></robot>')
+            with self.assertRaises(ReportInputError) as e:
+                replay.load_model(urdf)
+            self.assertIn("expected one root link, found 2", str(e.exception))
+
+
+class Quantisation(unittest.TestCase):
+    def decode(self, ch, n):
+        if "c" in ch:
+            return np.full(n, np.nan if ch["c"] is None else ch["c"])
+        k = np.frombuffer(base64.b64decode(ch["d"]), dtype="<i2").astype(float)
+        return np.where(k == replay.NAN_CODE, np.nan, ch["o"] + ch["s"] * k)
+
+    def test_round_trip_within_half_a_step(self):
+        rng = np.random.RandomState(7)
+        v = np.cumsum(rng.normal(0, 0.01, 5000)) + 0.3
+        ch = replay._encode(v)
+        back = self.decode(ch, len(v))
+        self.assertLessEqual(np.max(np.abs(back - v)), ch["s"] / 2 * (1 + 1e-9))
+        self.assertAlmostEqual(ch["s"], (v.max() - v.min()) / 65000, places=15)
+
+    def test_constants_and_non_finite_values(self):
+        self.assertEqual(replay._encode([1.5, 1.5, 1.5]), {"c": 1.5})
+        self.assertEqual(replay._encode([np.nan, np.inf]), {"c": None})
+        ch = replay._encode([1.0, np.nan, 2.0, np.inf])
+        back = self.decode(ch, 4)
+        self.assertEqual(back[0], 1.0)
+        self.assertEqual(back[2], 2.0)
+        self.assertTrue(np.isnan(back[1]) and np.isnan(back[3]))
+
+
+def sweep_fixture(d, name="gains", png=True):
+    """A sweep output directory written by hand after the contract of docs/report.md
+    ("Sweeps"), only to test how the report renders it."""
+    os.makedirs(d, exist_ok=True)
+    summary = {
+        "format": "lexdyn-sweep-summary/1", "name": name, "base_case": "cases/pointmass-damping.yaml",
+        "methods": ["gn", "wls"], "seed": 11, "points": 4, "completed": 4, "failed_points": 1,
+        "checks": [{"check": "no_overshoot", "method": "gn", "runs": 4, "passed": 4, "pass_rate": 1.0,
+                    "worst_margin": 0.01, "worst_point": 2, "unit": "fraction"},
+                   {"check": "no_overshoot", "method": "wls", "runs": 4, "passed": 3, "pass_rate": 0.75,
+                    "worst_margin": -0.043, "worst_point": 3, "unit": "fraction"}],
+        "comparisons": [{"name": "gn_vs_wls", "better": "gn", "worse": "wls", "points": 4, "wins": 3, "win_rate": 0.75,
+                         "diff": {"min": -0.2, "p10": -0.15, "median": -0.05, "p90": 0.01, "max": 0.02}}],
+        "maps": [{"x": {"path": "controller.params.damping", "values": [0.1, 1.0]},
+                  "y": {"path": "controller.tasks[0].gains.kp", "values": [0.5, 1.0]},
+                  "property": "no_overshoot", "method": "wls", "csv": "maps/overshoot.csv", "png": "maps/overshoot.png"}],
+        # value and limit are beyond the contract; the report shows them when a sweep gives them.
+        "failures": [{"check": "no_overshoot", "method": "wls", "point": 3, "value": 0.043, "limit": 0.0,
+                      "overrides": [{"path": "controller.params.damping", "value": 1.0}], "duration_s": 20.0,
+                      "case_file": "failures/p3.yaml",
+                      "command": "build/bin/lexdyn-harness run sweep-out/failures/p3.yaml --method wls --out DIR", "shrunk": True}],
+    }
+    with open(os.path.join(d, "summary.json"), "w") as f:
+        json.dump(summary, f)
+    with open(os.path.join(d, "results.jsonl"), "w") as f:
+        for p in range(4):
+            f.write(json.dumps({"point": p, "parameters": {"controller.params.damping": [0.1, 1.0][p % 2]},
+                                "methods": {"gn": {"status": "completed"}, "wls": {"status": "completed"}}}) + "\n")
+    os.makedirs(os.path.join(d, "maps"), exist_ok=True)
+    os.makedirs(os.path.join(d, "failures"), exist_ok=True)
+    with open(os.path.join(d, "maps", "overshoot.csv"), "w") as f:
+        f.write("x,y,value\n0.1,0.5,0\n1.0,0.5,0.043\n0.1,1.0,0\n1.0,1.0,0.043\n")
+    if png:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(3, 2))
+        ax.imshow([[0, 0.043], [0, 0.043]])
+        fig.savefig(os.path.join(d, "maps", "overshoot.png"), dpi=50)
+        plt.close(fig)
+    with open(os.path.join(d, "failures", "p3.yaml"), "w") as f:
+        f.write("# minimal failing configuration\nname: p3\n")
+    return summary
+
+
+class SweepSection(unittest.TestCase):
+    def test_rendering_from_the_contract(self):
+        with tempfile.TemporaryDirectory() as d:
+            sweep_fixture(os.path.join(d, "sweeps", "gains"))
+            sweep_fixture(os.path.join(d, "sweeps", "nomap"), name="nomap", png=False)
+            sws = sweeps.load_sweeps(os.path.join(d, "sweeps"))
+            self.assertEqual([s.name for s in sws], ["gains", "nomap"])
+            self.assertEqual(sws[0].method_status_counts(), {"gn": {"completed": 4}, "wls": {"completed": 4}})
+            out = os.path.join(d, "report")
+            assets, warnings = page.sweep_assets(sws, out)
+            html = page.sweeps_section(sws, assets)
+            self.assertTrue(os.path.isfile(os.path.join(out, "sweeps", "gains", "map0.png")))
+            self.assertTrue(os.path.isfile(os.path.join(out, "sweeps", "gains", "map0.csv")))
+            self.assertTrue(os.path.isfile(os.path.join(out, "sweeps", "gains", "failure0.p3.yaml")))
+            self.assertIn("id='sweep-gains'", html)
+            self.assertIn("75.0 %", html)          # wls pass rate and the comparison's win rate
+            self.assertIn("100.0 %", html)
+            self.assertIn("-0.043", html)          # worst margin
+            self.assertIn("src='sweeps/gains/map0.png'", html)
+            self.assertIn("lexdyn-harness run sweep-out/failures/p3.yaml --method wls", html)
+            self.assertIn("controller.params.damping = 1.0", html)
+            self.assertIn("(shrunk)", html)
+            self.assertIn("<td>0.043 (0)</td>", html)
+            self.assertIn("href='sweeps/gains/failure0.p3.yaml'", html)
+            self.assertIn("-0.2 / -0.15 / -0.05 / 0.01 / 0.02", html)
+            self.assertEqual(len(warnings), 1)
+            self.assertIn("maps[0].png", warnings[0])
+            self.assertIn("the map image is missing", html)
+
+    def test_one_sweep_directory_and_errors(self):
+        with tempfile.TemporaryDirectory() as d:
+            s = sweep_fixture(os.path.join(d, "one"), png=False)
+            self.assertEqual(len(sweeps.load_sweeps(os.path.join(d, "one"))), 1)
+            self.assertIn("no sweep results", page.sweeps_section([], {}).lower())
+            s["format"] = "lexdyn-sweep-summary/0"
+            with open(os.path.join(d, "one", "summary.json"), "w") as f:
+                json.dump(s, f)
+            with self.assertRaises(ReportInputError) as e:
+                sweeps.load_sweeps(os.path.join(d, "one"))
+            self.assertIn("summary.json: format", str(e.exception))
+            s["format"] = sweeps.FORMAT
+            del s["checks"][1]["pass_rate"]
+            with open(os.path.join(d, "one", "summary.json"), "w") as f:
+                json.dump(s, f)
+            with self.assertRaises(ReportInputError) as e:
+                sweeps.load_sweeps(os.path.join(d, "one"))
+            self.assertIn("checks[1].pass_rate", str(e.exception))
+
+
+class CommandLine(unittest.TestCase):
+    def run_report(self, *args):
+        return subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "harness", "scripts", "report.py"), *args],
+                              capture_output=True, text=True, timeout=120)
+
+    def test_bad_input_is_exit_code_2_naming_what(self):
+        with tempfile.TemporaryDirectory() as d:
+            r = self.run_report("--runs", os.path.join(d, "nope"), "--out", os.path.join(d, "out"))
+            self.assertEqual(r.returncode, 2, r.stderr)
+            self.assertIn(os.path.join(d, "nope"), r.stderr)
+            os.makedirs(os.path.join(d, "empty"))
+            r = self.run_report("--runs", os.path.join(d, "empty"), "--out", os.path.join(d, "out"))
+            self.assertEqual(r.returncode, 2)
+            self.assertIn("summary.json", r.stderr)
+            r = self.run_report("--runs", os.path.join(d, "empty"), "--out", os.path.join(d, "out"), "--append-history")
+            self.assertEqual(r.returncode, 2)
+            self.assertIn("--history", r.stderr)
+            r = self.run_report("--out", os.path.join(d, "out"))
+            self.assertEqual(r.returncode, 2)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
