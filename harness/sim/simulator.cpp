@@ -221,8 +221,12 @@ struct Simulator::Impl final : public OdeSystem {
     const double* q = yy;
     const double* uu = yy + nqc;
     if (model.hasFreeFlyer() && std::cos(q[1]) < 0.02) {
-      throw std::runtime_error("base orientation at the Euler-angle singularity (pitch " +
-                               fmt(q[1] * 180.0 / M_PI) + " deg): the robot has fallen over");
+      // The base's orientation coordinates (body-fixed X-Y-Z Euler angles) are singular at a
+      // pitch of 90 degrees. The base is then tilted that far: the robot has fallen over, or it
+      // bends its pelvis that far with its feet down (base height tells which).
+      throw std::runtime_error("base orientation at the Euler-angle singularity of the simulator's coordinates (pitch " +
+                               fmt(q[1] * 180.0 / M_PI) + " deg, base height " + fmt(q[5]) +
+                               " m): the base is tilted by 90 degrees (fallen over, or bent that far)");
     }
     model::detail::updateEuler(model, data, q, uu);
     evaluateForces(data, t, q, uu, false);

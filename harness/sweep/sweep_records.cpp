@@ -117,10 +117,16 @@ json pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string,
   }
   json comps = json::array();
   for (const Comparison& c : s.comparisons) {
-    const auto& b = runs.at(c.better).statistics;
-    const auto& w = runs.at(c.worse).statistics;
+    const RunResult& rb = runs.at(c.better);
+    const RunResult& rw = runs.at(c.worse);
+    // Two runs compare only when both ran to the end: a run that stopped early (fell, failed)
+    // has its statistic over a shorter window.
+    json stopped = json::array();
+    for (const RunResult* r : {&rb, &rw}) {
+      if (r->status != "completed") stopped.push_back(r == &rb ? c.better : c.worse);
+    }
     double value = std::numeric_limits<double>::quiet_NaN();
-    if (b.count(c.name) && w.count(c.name)) value = b.at(c.name) - w.at(c.name);
+    if (stopped.empty() && rb.statistics.count(c.name) && rw.statistics.count(c.name)) value = rb.statistics.at(c.name) - rw.statistics.at(c.name);
     const bool has = std::isfinite(value);
     comps.push_back({{"name", c.name},
                      {"better", c.better},
@@ -128,7 +134,8 @@ json pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string,
                      {"value", number(value)},
                      {"limit", c.margin},
                      {"margin", number(has ? c.margin - value : value)},
-                     {"better_wins", has && value <= c.margin}});
+                     {"better_wins", has && value <= c.margin},
+                     {"stopped_early", stopped}});
   }
   return {{"point", p.index}, {"values", values}, {"overrides", overrides}, {"runs", jruns}, {"comparisons", comps}, {"failures", failures}};
 }
@@ -197,11 +204,15 @@ json summarize(const SweepSpec& s, const std::vector<json>& records, long points
   json comps = json::array();
   for (const Comparison& c : s.comparisons) {
     std::vector<double> diffs;
-    long wins = 0;
+    long wins = 0, better_stopped = 0, worse_stopped = 0;
     std::map<std::string, std::map<std::string, std::pair<long, long>>> by;  // param -> value -> (points, wins)
     for (const auto& r : records) {
       for (const auto& jc : r["comparisons"]) {
         if (jc.value("name", "") != c.name) continue;
+        for (const auto& m : jc.value("stopped_early", json::array())) {
+          better_stopped += m == c.better ? 1 : 0;
+          worse_stopped += m == c.worse ? 1 : 0;
+        }
         const double v = num(jc.value("value", json()));
         if (!std::isfinite(v)) continue;
         diffs.push_back(v);
@@ -231,6 +242,8 @@ json summarize(const SweepSpec& s, const std::vector<json>& records, long points
                      {"to_s", number(c.to_s)},
                      {"margin", c.margin},
                      {"points", diffs.size()},
+                     {"better_stopped_early", better_stopped},
+                     {"worse_stopped_early", worse_stopped},
                      {"wins", wins},
                      {"win_rate", diffs.empty() ? 0.0 : static_cast<double>(wins) / static_cast<double>(diffs.size())},
                      {"diff",
@@ -350,7 +363,11 @@ void printSummary(const SweepSpec& s, const json& summary, std::FILE* out) {
       char rate[64];
       std::snprintf(rate, sizeof(rate), "%ld/%ld %.0f%%", c.value("wins", 0L), c.value("points", 0L), 100.0 * c.value("win_rate", 0.0));
       const json& d = c["diff"];
-      std::fprintf(out, "  %-34s %-14s %.4g [%.4g, %.4g]\n", c.value("name", "").c_str(), rate, num(d["median"]), num(d["p10"]), num(d["p90"]));
+      const long bs = c.value("better_stopped_early", 0L), ws = c.value("worse_stopped_early", 0L);
+      std::string stopped;
+      if (bs + ws > 0) stopped = "; left out: " + c.value("better", "") + " stopped early " + std::to_string(bs) + ", " + c.value("worse", "") + " " + std::to_string(ws);
+      std::fprintf(out, "  %-34s %-14s %.4g [%.4g, %.4g]%s\n", c.value("name", "").c_str(), rate, num(d["median"]), num(d["p10"]), num(d["p90"]),
+                   stopped.c_str());
     }
   }
   for (const auto& f : summary["failures"]) {
