@@ -459,6 +459,10 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
       s.shrink.max_runs = v->asInt();
       if (s.shrink.max_runs < 1) v->fail("expected an integer >= 1");
     }
+    if (auto v = sm.optional("max_total_runs")) {
+      s.shrink.max_total_runs = v->asInt();
+      if (s.shrink.max_total_runs < 1) v->fail("expected an integer >= 1");
+    }
     if (auto v = sm.optional("bisection_steps")) {
       s.shrink.bisection_steps = v->asInt();
       if (s.shrink.bisection_steps < 0 || s.shrink.bisection_steps > 30) v->fail("expected an integer in 0..30");

@@ -6,6 +6,7 @@
 #include "lexdyn/common/error.hpp"
 
 #include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <chrono>
@@ -164,8 +165,14 @@ void prepareOutDir(const SweepSpec& s, const std::string& out_dir) {
   fs::create_directories(fs::path(out_dir) / "points", ec);
   fs::create_directories(fs::path(out_dir) / "runs", ec);
   if (ec || !fs::is_directory(out_dir)) throw InputError(out_dir, "cannot create the output directory");
-  // The sweep file and its base case as they were: resuming with other files would mix results.
-  const std::string text = readFileText(s.path) + "\n# base case " + s.base_case + ":\n" + readFileText(s.base_case);
+  // What decides the results: the sweep file (but its description and shrink settings, which
+  // only change the summary) and its base case. Resuming with other ones would mix results.
+  YAML::Node doc = YAML::LoadFile(s.path);
+  doc.remove("description");
+  doc.remove("shrink");
+  YAML::Emitter e;
+  e << doc;
+  const std::string text = std::string(e.c_str()) + "\n# base case " + s.base_case + ":\n" + readFileText(s.base_case);
   const std::string recorded = (fs::path(out_dir) / "sweep.txt").string();
   if (fs::is_regular_file(recorded)) {
     if (readFileText(recorded) != text) {

@@ -50,7 +50,8 @@ std::string keyHash(const std::string& k) {
 // Trials shared by the shrinks (thread-safe), persisted to OUT/shrink/cache.jsonl.
 class TrialCache {
  public:
-  TrialCache(const std::string& out_dir, const RunOne& run, int slots) : dir_(fs::path(out_dir) / "shrink"), run_(run), free_(slots) {
+  TrialCache(const std::string& out_dir, const RunOne& run, int slots, int max_total_runs)
+      : dir_(fs::path(out_dir) / "shrink"), run_(run), free_(slots), left_(max_total_runs) {
     std::error_code ec;
     fs::create_directories(dir_, ec);
     std::ifstream in(dir_ / "cache.jsonl");
@@ -64,14 +65,21 @@ class TrialCache {
     }
   }
 
-  /// The result of a configuration; `fresh` tells whether it was run now. nullopt: interrupted.
-  std::optional<RunResult> get(const RunConfig& c, bool& fresh) {
+  /// The result of a configuration; `fresh` tells whether it was run now. nullopt: interrupted,
+  /// or the sweep's total budget of trials is spent (`exhausted`).
+  std::optional<RunResult> get(const RunConfig& c, bool& fresh, bool& exhausted) {
     const std::string key = configKey(c);
     fresh = false;
+    exhausted = false;
     {
       std::lock_guard<std::mutex> lock(m_);
       auto it = results_.find(key);
       if (it != results_.end()) return it->second;
+      if (left_ <= 0) {
+        exhausted = true;
+        return std::nullopt;
+      }
+      --left_;
     }
     {
       std::unique_lock<std::mutex> lock(m_);
@@ -96,6 +104,7 @@ class TrialCache {
   std::mutex m_;
   std::condition_variable cv_;
   int free_;
+  int left_;  ///< fresh trials the sweep may still run
   std::map<std::string, RunResult> results_;
 };
 
@@ -216,7 +225,12 @@ class Shrinker {
       exhausted_ = true;
       return 0;
     }
-    const std::optional<RunResult> r = cache_.get(c, fresh);
+    bool spent = false;
+    const std::optional<RunResult> r = cache_.get(c, fresh, spent);
+    if (spent) {
+      exhausted_ = true;
+      return 0;
+    }
     if (!r) return -1;
     runs_ += fresh ? 1 : 0;
     if (!sameFailure(*r)) return 0;
@@ -337,7 +351,7 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
   std::vector<Failure> failures = collect(s, records);
   std::vector<json> out(failures.size());
   if (failures.empty()) return out;
-  TrialCache cache(o.out_dir, run, std::max(1, o.jobs));
+  TrialCache cache(o.out_dir, run, std::max(1, o.jobs), s.shrink.max_total_runs);
   std::vector<char> ok(failures.size(), 0);
   // One thread per failure; the cache lets at most `jobs` trials run at once. Each shrink is
   // sequential, so its outcome does not depend on the others' timing.
