@@ -387,7 +387,7 @@ const Command& Controller::tick(const RobotState& s) {
   const auto t4 = Clock::now();
   // 5. Command and record.
   TickStatus st = TickStatus::Ok;
-  if (r.status == solver::Status::NonFiniteInput || !r.x.allFinite()) {
+  if (r.status == solver::Status::NonFiniteInput || r.status == solver::Status::NonFiniteResult || !r.x.allFinite()) {
     st = TickStatus::NonFinite;
   } else if (r.status == solver::Status::IterationLimit) {
     st = TickStatus::SolverIterationLimit;

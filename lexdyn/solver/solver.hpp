@@ -29,6 +29,9 @@ enum class Status {
   StoppedEarly,    ///< a paper termination rule stopped the search: earlier levels optimal, later sub-optimal
   IterationLimit,  ///< hard cap reached: x is the best feasible iterate (monotone primal iterates)
   NonFiniteInput,  ///< NaN in A or bounds, or infinite A: nothing solved (see Result::bad_level/bad_row)
+  /// The arithmetic left the double range (x, a violation or a multiplier is inf or NaN, e.g.
+  /// coefficients near 1e300): the result is not a solution and is never reported as optimal.
+  NonFiniteResult,
 };
 
 enum class StopReason {
@@ -38,6 +41,7 @@ enum class StopReason {
   TotalIterationLimit,
   HardIterationCap,
   NonFiniteInput,
+  NonFiniteResult,
 };
 
 const char* toString(Status s);
