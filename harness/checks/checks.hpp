@@ -82,7 +82,17 @@ struct CheckResult {
   double limit = 0.0;
   std::string unit;
   std::string detail;
+  /// A wall-clock measurement (tick_time): its value depends on the machine and its load.
+  bool machine_dependent = false;
+  /// Counts towards the verdict (all_checks_passed, exit code). False for a machine-dependent
+  /// check unless wall-clock checks were asked to decide (applyWallClockPolicy).
+  bool decides = true;
 };
+
+/// Sets `decides` of a machine-dependent result: it decides only when `wall_clock_checks`.
+void applyWallClockPolicy(CheckResult& r, bool wall_clock_checks);
+/// True when every result that decides passed (an empty list passes).
+bool allPassed(const std::vector<CheckResult>& results);
 
 class Check {
  public:
@@ -121,8 +131,9 @@ const std::vector<std::string>& controllerStatusNames();  // ok, solver_stopped_
 const std::vector<std::string>& solverStatusNames();      // solved, stopped_early, ...
 
 /// Runs checks over a stored trace. Checks that do not apply to the trace's method (metadata
-/// `method`) are left out.
-std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace);
+/// `method`) are left out. Machine-dependent checks decide only with `wall_clock_checks`.
+std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace,
+                                   bool wall_clock_checks = false);
 
 /// Evaluates a comparison on two traces (of the methods `better` and `worse`).
 CheckResult compareMethods(const ComparisonSpec& spec, const TraceTable& better, const TraceTable& worse);

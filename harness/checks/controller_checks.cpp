@@ -791,6 +791,7 @@ class TickTime final : public CheckBase {
   }
   CheckResult result() const override {
     CheckResult r = CheckBase::result();
+    r.machine_dependent = true;
     if (!seen_) return r;
     std::vector<double> v = values_;
     std::sort(v.begin(), v.end());
