@@ -1,16 +1,24 @@
 // lexdyn-harness: runs case files, checks stored traces, compares methods, golden traces.
 //
 //   lexdyn-harness run CASE --out DIR [--method bfgs|ah|gn|wls] [--duration S] [--quiet]
-//   lexdyn-harness check TRACE --case CASE [--json]       (the case's checks on a stored trace)
+//                                     [--wall-clock-checks]
+//   lexdyn-harness check TRACE --case CASE [--json] [--wall-clock-checks]  (the case's checks on a stored trace)
 //   lexdyn-harness check CASE TRACE [--json]              (the same, older argument order)
 //   lexdyn-harness compare --case CASE TRACE... [--json]  (the case's comparisons between methods)
 //   lexdyn-harness golden list [--manifest FILE] [--cases A,B] [--only ID]   (ID CASE_FILE METHOD lines)
 //   lexdyn-harness golden update|check [--manifest FILE] [--cases A,B] [--only ID]
 //                                      [--work DIR] [--progress]
 //
-// Exit codes: 0 every check (comparison, golden) passed; 1 a check failed, a golden differs or
-// the run stopped early (integrator or controller failure, interruption, an internal error);
-// 2 bad input (the message names the file and the key path).
+// Exit codes (docs/architecture.md, "Errors and exit codes"), the first that applies:
+//   130 / 143  interrupted by SIGINT / SIGTERM (a run keeps its trace, marked, and its summary);
+//   2          bad input: case, robot, trace or manifest file, command line (the message names
+//              the file, the line and the key path); nothing is simulated;
+//   3          run failure: integrator, controller or solver failure, an internal error, out of
+//              memory (the trace is kept and marked with the reason);
+//   1          a check, comparison or golden failed, or `check` / `compare` were given the trace
+//              of a run that did not complete;
+//   0          the run completed and every check that decides passed (wall-clock checks decide
+//              only with --wall-clock-checks).
 #include "harness/cases/runner.hpp"
 #include "harness/golden/golden.hpp"
 #include "lexdyn/common/error.hpp"
@@ -20,6 +28,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <exception>
@@ -33,14 +42,33 @@ namespace {
 namespace fs = std::filesystem;
 
 std::atomic<bool> g_interrupt{false};
+std::atomic<int> g_signal{0};
 
-extern "C" void onSignal(int) { g_interrupt.store(true); }
+extern "C" void onSignal(int s) {
+  g_signal.store(s);
+  g_interrupt.store(true);
+}
+
+int interruptedCode() { return lexdyn::cases::kExitInterrupted + (g_signal.load() > 0 ? g_signal.load() : SIGINT); }
 
 void printChecks(const std::vector<lexdyn::checks::CheckResult>& checks) {
   for (const auto& c : checks) {
-    std::fprintf(stderr, "  %-4s %-28s value %-12.6g limit %-10.6g %s%s%s\n", c.passed ? "ok" : "FAIL", c.name.c_str(),
-                 c.value, c.limit, c.unit.c_str(), c.detail.empty() ? "" : "  (", c.detail.empty() ? "" : (c.detail + ")").c_str());
+    // A check that does not decide (a wall-clock measurement without --wall-clock-checks) is
+    // reported as "info", labelled.
+    const char* mark = c.decides ? (c.passed ? "ok" : "FAIL") : "info";
+    std::fprintf(stderr, "  %-4s %-28s value %-12.6g limit %-10.6g %s%s%s%s\n", mark, c.name.c_str(), c.value, c.limit,
+                 c.unit.c_str(), c.detail.empty() ? "" : "  (", c.detail.empty() ? "" : (c.detail + ")").c_str(),
+                 c.decides ? "" : (c.passed ? "  [machine-dependent, reported only: within the limit here]"
+                                            : "  [machine-dependent, reported only: above the limit here]"));
   }
+}
+
+/// A trace that does not end with the mark of a completed run: the checks only saw part of it.
+bool warnIfIncomplete(const std::string& path, const lexdyn::checks::TraceTable& table) {
+  if (table.complete()) return false;
+  std::fprintf(stderr, "lexdyn-harness: %s is not the trace of a complete run (%s): the results cover its rows only and "
+                       "do not pass\n", path.c_str(), table.completeness().c_str());
+  return true;
 }
 
 bool isPartial(const std::string& path) { return path.size() > 8 && path.compare(path.size() - 8, 8, ".partial") == 0; }
@@ -69,7 +97,7 @@ std::vector<std::string> splitList(const std::string& s) {
   return out;
 }
 
-int runCheck(const std::vector<std::string>& positional, const std::string& case_opt, bool json) {
+int runCheck(const std::vector<std::string>& positional, const std::string& case_opt, bool json, bool wall_clock) {
   std::string case_path = case_opt, trace_path;
   if (positional.size() == 2 && case_opt.empty()) {
     case_path = positional[0];
@@ -91,14 +119,14 @@ int runCheck(const std::vector<std::string>& positional, const std::string& case
     std::fprintf(stderr, "lexdyn-harness: warning: %s is a trace of case '%s', not of '%s' (%s)\n", trace_path.c_str(),
                  traced_case->c_str(), spec.name.c_str(), case_path.c_str());
   }
-  const auto results = lexdyn::checks::runChecks(spec.checks, table);
-  bool all = true;
-  for (const auto& r : results) all = all && r.passed;
+  const auto results = lexdyn::checks::runChecks(spec.checks, table, wall_clock);
+  const bool all = lexdyn::checks::allPassed(results);
   const std::string* method = lexdyn::checks::findMetadata(table.metadata, lexdyn::checks::kMethodMetadata);
   describeTrace(spec.name + (method ? " " + *method : ""), trace_path, table);
   printChecks(results);
+  const bool incomplete = warnIfIncomplete(trace_path, table);
   if (json) std::printf("%s\n", lexdyn::cases::checkResultsJson(results).c_str());
-  return all ? 0 : 1;
+  return all && !incomplete ? lexdyn::cases::kExitPass : lexdyn::cases::kExitCheckFailed;
 }
 
 int runCompare(const std::string& case_path, const std::vector<std::string>& traces, bool json) {
@@ -106,6 +134,7 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
   const lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
   if (spec.comparisons.empty()) throw lexdyn::InputError(case_path, "the case has no comparisons");
   std::map<std::string, lexdyn::checks::TraceTable> by_method;
+  bool incomplete = false;
   for (const std::string& p : traces) {
     lexdyn::checks::TraceTable t = lexdyn::checks::readTrace(p);
     const std::string* m = lexdyn::checks::findMetadata(t.metadata, lexdyn::checks::kMethodMetadata);
@@ -115,6 +144,7 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
       std::fprintf(stderr, "lexdyn-harness: warning: %s is a trace of case '%s', not of '%s'\n", p.c_str(), c->c_str(), spec.name.c_str());
     }
     describeTrace(spec.name + " " + *m, p, t);
+    if (warnIfIncomplete(p, t)) incomplete = true;
     if (by_method.count(*m)) throw lexdyn::InputError(p, "a second trace of method " + *m);
     by_method.emplace(*m, std::move(t));
   }
@@ -135,9 +165,7 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
   }
   printChecks(results);
   if (json) std::printf("%s\n", lexdyn::cases::checkResultsJson(results).c_str());
-  bool all = true;
-  for (const auto& r : results) all = all && r.passed;
-  return all ? 0 : 1;
+  return lexdyn::checks::allPassed(results) && !incomplete ? lexdyn::cases::kExitPass : lexdyn::cases::kExitCheckFailed;
 }
 
 // One line per selected golden: ID CASE_FILE METHOD ("-" for a case without methods).
@@ -183,7 +211,7 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
     work = (fs::temp_directory_path() / ("lexdyn-golden-" + std::to_string(::getpid()))).string();
     temp_work = true;
   }
-  int failed = 0;
+  int failed = 0, run_failures = 0;
   for (const SelectedGolden& g : selected) {
     const lexdyn::golden::Entry& e = *g.entry;
     const std::string& method = g.method;
@@ -195,7 +223,21 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
       continue;
     }
     std::string status;
-    const lexdyn::checks::TraceTable fresh = lexdyn::golden::runGolden(e, method, m, work, status, progress);
+    const lexdyn::checks::TraceTable fresh = lexdyn::golden::runGolden(e, method, m, work, status, progress, &g_interrupt);
+    if (g_interrupt.load() || status == "interrupted") {
+      std::fprintf(stderr, "  interrupted during %s: nothing written for it\n", id.c_str());
+      if (temp_work) {
+        std::error_code ec;
+        fs::remove_all(work, ec);
+      }
+      return interruptedCode();
+    }
+    if (status == "internal_error" || status == "input_error") {
+      // The run stopped on an exception: a golden would record that, not the case's behaviour.
+      std::fprintf(stderr, "  FAIL %s: the run stopped with %s (%s)\n", id.c_str(), status.c_str(), fresh.end_message.c_str());
+      ++run_failures;
+      continue;
+    }
     if (update) {
       lexdyn::golden::writeGolden(path, fresh, lexdyn::golden::provenance(e, method, status, m.dir));
       std::fprintf(stderr, "  wrote %s: %zu rows x %zu channels, %g s, run %s\n", path.c_str(), fresh.rows.size(), fresh.names.size(),
@@ -212,8 +254,9 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
     fs::remove_all(work, ec);
   }
   const int n = static_cast<int>(selected.size());
-  if (!update) std::fprintf(stderr, "golden check: %d of %d match\n", n - failed, n);
-  return failed == 0 ? 0 : 1;
+  if (!update) std::fprintf(stderr, "golden check: %d of %d match\n", n - failed - run_failures, n);
+  if (run_failures > 0) return lexdyn::cases::kExitRunFailure;
+  return failed == 0 ? lexdyn::cases::kExitPass : lexdyn::cases::kExitCheckFailed;
 }
 
 }  // namespace
@@ -225,7 +268,7 @@ int main(int argc, char** argv) {
   std::string case_path, out_dir, case_opt, method, manifest = std::string(LEXDYN_SOURCE_DIR) + "/golden/manifest.yaml";
   std::string cases_opt, only, work;
   double duration = 0.0;
-  bool quiet = false, progress = false, json = false;
+  bool quiet = false, progress = false, json = false, wall_clock = false;
   std::vector<std::string> positional, traces;
 
   CLI::App* run = app.add_subcommand("run", "run a case file");
@@ -234,11 +277,13 @@ int main(int argc, char** argv) {
   run->add_option("--method", method, "lexdyn method, overrides the case's: bfgs | ah | gn | wls");
   run->add_option("--duration", duration, "simulate at most this long (s)");
   run->add_flag("--quiet", quiet, "no progress lines");
+  run->add_flag("--wall-clock-checks", wall_clock, "tick_time checks decide pass/fail (machine-dependent; reported otherwise)");
 
   CLI::App* check = app.add_subcommand("check", "evaluate a case's checks on a stored trace");
   check->add_option("args", positional, "TRACE (with --case CASE), or CASE TRACE")->required()->expected(1, 2);
   check->add_option("--case", case_opt, "case file (default: the one the trace names)");
   check->add_flag("--json", json, "also print the results as JSON on stdout (summary.json's checks)");
+  check->add_flag("--wall-clock-checks", wall_clock, "tick_time checks decide pass/fail (machine-dependent; reported otherwise)");
 
   CLI::App* compare = app.add_subcommand("compare", "evaluate a case's comparisons on traces of several methods");
   compare->add_option("traces", traces, "trace files (one per method)")->required();
@@ -267,26 +312,34 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     app.exit(e);
-    return 2;
+    return lexdyn::cases::kExitBadInput;
   }
 
+  // SIGINT / SIGTERM: a run stops after the current tick, keeps its trace (marked) and writes its
+  // summary; golden runs stop; every subcommand then exits 128 + the signal.
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  auto interrupted = [](int code) { return g_interrupt.load() ? interruptedCode() : code; };
   try {
-    if (*check) return runCheck(positional, case_opt, json);
-    if (*compare) return runCompare(case_opt, traces, json);
-    if (*golden && *glist) return runGoldenList(manifest, cases_opt, only);
-    if (*golden) return runGoldenCommand(static_cast<bool>(*gupdate), manifest, cases_opt, only, work, progress);
+    if (*check) return interrupted(runCheck(positional, case_opt, json, wall_clock));
+    if (*compare) return interrupted(runCompare(case_opt, traces, json));
+    if (*golden && *glist) return interrupted(runGoldenList(manifest, cases_opt, only));
+    if (*golden) return interrupted(runGoldenCommand(static_cast<bool>(*gupdate), manifest, cases_opt, only, work, progress));
     lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
     if (!method.empty()) lexdyn::cases::overrideMethod(spec, method, "--method");
     if (run->count("--duration")) {
-      if (!(duration > 0.0)) throw lexdyn::InputError("--duration", "expected a positive number of seconds");
+      if (!(std::isfinite(duration) && duration >= spec.control_period_s)) {
+        throw lexdyn::InputError("--duration", "expected a finite number of seconds, at least one control period (" +
+                                                   std::to_string(spec.control_period_s) + " s), found " + std::to_string(duration));
+      }
       spec.duration_s = std::min(spec.duration_s, duration);
     }
-    std::signal(SIGINT, onSignal);
-    std::signal(SIGTERM, onSignal);
     lexdyn::cases::RunOptions options;
     options.out_dir = out_dir;
     options.progress = !quiet;
     options.interrupt = &g_interrupt;
+    options.interrupt_signal = &g_signal;
+    options.wall_clock_checks = wall_clock;
     const lexdyn::cases::RunSummary s = lexdyn::cases::runCase(spec, options);
     const std::string label = spec.name + (s.method.empty() ? "" : " " + s.method);
     std::fprintf(stderr, "[%s] %s: %.3f s simulated in %.3f s wall (%.1fx real time), %ld ticks\n", label.c_str(),
@@ -312,9 +365,15 @@ int main(int argc, char** argv) {
     return lexdyn::cases::exitCode(s);
   } catch (const lexdyn::InputError& e) {
     std::fprintf(stderr, "lexdyn-harness: error: %s\n", e.what());
-    return 2;
+    return lexdyn::cases::kExitBadInput;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "lexdyn-harness: error: out of memory\n");
+    return lexdyn::cases::kExitRunFailure;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lexdyn-harness: internal error: %s\n", e.what());
-    return 1;
+    return lexdyn::cases::kExitRunFailure;
+  } catch (...) {
+    std::fprintf(stderr, "lexdyn-harness: internal error: an exception of unknown type\n");
+    return lexdyn::cases::kExitRunFailure;
   }
 }

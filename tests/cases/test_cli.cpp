@@ -1,5 +1,6 @@
-// lexdyn-harness exit codes: 0 all checks passed, 1 a check failed, 2 bad input (with a message
-// naming the file and the key path).
+// lexdyn-harness exit codes (docs/architecture.md, "Errors and exit codes"): 0 all checks passed,
+// 1 a check failed, 2 bad input (with a message naming the file and the key path), 3 a run
+// failure, 130 / 143 interrupted; traces carry their end mark.
 #include "case_test_utils.hpp"
 #include "harness/checks/trace.hpp"
 
@@ -99,16 +100,23 @@ TEST(HarnessCli, SigintStopsTheRunAndKeepsTraceAndSummary) {
   std::ifstream code_in(dir + "/code");
   int code = -1;
   code_in >> code;
-  EXPECT_EQ(code, 1);
+  EXPECT_EQ(code, 130);
   ASSERT_TRUE(std::filesystem::exists(out + "/summary.json"));
   ASSERT_TRUE(std::filesystem::exists(out + "/trace.csv"));
   EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv.partial"));
   std::ifstream sj(out + "/summary.json");
   const std::string summary((std::istreambuf_iterator<char>(sj)), std::istreambuf_iterator<char>());
   EXPECT_NE(summary.find("\"status\": \"interrupted\""), std::string::npos) << summary;
-  // The trace holds every tick up to the interruption and its checks can be run again.
+  // The trace is marked as interrupted by itself: separated from its summary it is not taken for
+  // a complete run. Its checks can be run again (on the rows it holds) but do not pass.
+  const checks::TraceTable t = checks::readTrace(out + "/trace.csv");
+  EXPECT_EQ(t.end_status, "interrupted");
+  EXPECT_NE(t.end_message.find("interrupted by SIGINT at t = "), std::string::npos) << t.end_message;
   const Result r = harness("check " + c + " " + out + "/trace.csv", dir);
+  EXPECT_EQ(r.code, 1) << r.stderr_text;
   EXPECT_NE(r.stderr_text.find(" rows, t = 0 .. "), std::string::npos) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("is not the trace of a complete run (the run did not complete: interrupted"), std::string::npos)
+      << r.stderr_text;
 }
 
 TEST(HarnessCli, AKilledRunLeavesItsPartialTraceAndNoOldOutputs) {
@@ -131,8 +139,9 @@ TEST(HarnessCli, AKilledRunLeavesItsPartialTraceAndNoOldOutputs) {
   EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv"));
   ASSERT_TRUE(std::filesystem::exists(out + "/trace.csv.partial"));
   const Result r = harness("check " + c + " " + out + "/trace.csv.partial", dir);
-  EXPECT_EQ(r.code, 0) << r.stderr_text;
+  EXPECT_EQ(r.code, 1) << r.stderr_text;  // the checks run on its rows, but a cut trace never passes
   EXPECT_NE(r.stderr_text.find("partial trace"), std::string::npos) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("no end mark: the run was killed"), std::string::npos) << r.stderr_text;
 }
 
 TEST(HarnessCli, CheckWarnsWhenTheTraceIsOfAnotherCase) {
