@@ -508,6 +508,8 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
     if (auto v = m.optional("limit_count")) c.limit = v->asNonNegativeDouble();
   } else if (c.type == "active_set_peak") {
     c.limit = m.required("limit_iterations").asPositiveDouble();
+  } else if (c.type == "factorization_peak") {
+    c.limit = m.required("limit_factorizations").asPositiveDouble();
   } else if (c.type == "augmented_fraction") {
     const yaml::Node ln = m.required("level");
     c.level = ln.asString();

@@ -267,6 +267,8 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
     j["controller"] = {{"ticks", cs.ticks}, {"status_counts", status}, {"augmented_ticks", augmented}};
     j["solver"] = {{"peak_iterations", cs.peak_iterations},
                    {"peak_iterations_at_s", cs.peak_iterations_at_s},
+                   {"peak_factorizations", cs.peak_factorizations},
+                   {"peak_factorizations_at_s", cs.peak_factorizations_at_s},
                    {"status_counts", solver_status}};
     json timing = json::object();
     for (const auto& t : cs.timing) timing[t.name] = {{"median", t.median_us}, {"p99", t.p99_us}, {"max", t.max_us}};

@@ -11,7 +11,8 @@
 //   task_error, torque_limits, contact_unilateral, contact_friction, contact_cop,
 //   contact_wrench_match, joint_acceleration_sign_changes, joint_velocity_hf_energy,
 //   task_error_rate_sign_changes, task_error_closed_form, task_overshoot, controller_status,
-//   active_set_peak, augmented_fraction, tick_time.
+//   active_set_peak, factorization_peak, augmented_fraction, tick_time (machine-dependent: it
+//   decides only when asked, applyWallClockPolicy).
 // A check passes when it saw at least one row in its window [from_s, to_s] and its value is on
 // the right side of its limit.
 #pragma once
@@ -125,6 +126,7 @@ constexpr const char* kMethodMetadata = "method";
 constexpr const char* kControllerStatusChannel = "ctrl.status";
 constexpr const char* kSolverStatusChannel = "solver.status";
 constexpr const char* kSolverIterationsChannel = "solver.iterations";
+constexpr const char* kSolverFactorizationsChannel = "solver.factorizations";
 /// ctrl.status holds the index of the controller's tick status in this list.
 const std::vector<std::string>& controllerStatusNames();  // ok, solver_stopped_early, ...
 /// solver.status holds the index of the solver's status in this list.

@@ -420,6 +420,7 @@ const Command& Controller::tick(const RobotState& s) {
   rec.solver_status = r.status;
   rec.iterations = r.iterations;
   rec.optimality_iterations = r.optimality_iterations;
+  rec.factorizations = r.factorizations;
   for (size_t i = 0; i < I.td.size(); ++i) {
     const tasks::TaskData& d = *I.td[i];
     rec.task_error_norm(static_cast<Eigen::Index>(i)) = d.error.norm();

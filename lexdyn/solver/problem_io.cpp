@@ -298,6 +298,7 @@ std::string resultToJson(const Problem& problem, const Result& result, bool with
   doc["iterations"] = result.iterations;
   if (withDetails) {
     doc["optimality_iterations"] = result.optimality_iterations;
+    doc["factorizations"] = result.factorizations;
     json act = json::array();
     json rank = json::array();
     for (int l = 0; l < problem.levelCount(); ++l) {

@@ -558,6 +558,7 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx, int& level) {
 
 void Solver::Impl::run() {
   out.iterations = out.optimality_iterations = out.activations = out.deactivations = 0;
+  const long stages0 = fact.stagesFactorized();
   out.held_after_reblock = 0;
   out.optimal_through = -1;
   bool optPhase = false;
@@ -752,6 +753,7 @@ void Solver::Impl::run() {
     solveEquality();
   }
   (void)pending;
+  out.factorizations = static_cast<int>(fact.stagesFactorized() - stages0);
 }
 
 // Arithmetic that left the double range (coefficients near 1e300, a near-singular level scaled

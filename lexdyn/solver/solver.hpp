@@ -121,6 +121,10 @@ struct Result {
   ActiveSet active;
   std::vector<int> rank;  ///< rank of each level's active rows after projection (bounds level: fixed vars)
   int iterations = 0;             ///< active-set iterations (equality sub-problems solved)
+  /// Level stages factorised in this solve, over all its iterations (a restart at level c of L
+  /// factorises L - c stages; the elimination of the first level counts as one): a deterministic
+  /// measure of the solve's work, machine-independent unlike its wall time.
+  int factorizations = 0;
   int optimality_iterations = 0;  ///< iterations since the first deactivation
   int activations = 0, deactivations = 0;
   /// Times a released constraint blocked again at once and was kept (anti-cycling safety net).
