@@ -203,5 +203,10 @@ int main(int argc, char** argv) {
               disagreements, bruteChecked, held, cycles, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0,
               maxIt, secs, g_signal.load() ? "true" : "false");
   if (g_signal.load()) return kExitInterrupted + g_signal.load();
+  if (solved == 0) {
+    // Nothing was verified (e.g. --brute-force with sizes that never give 9 rows or fewer).
+    std::fprintf(stderr, "lexdyn-solver-sweep: no problem was verified (--brute-force takes problems of at most 9 rows)\n");
+    return kExitFailed;
+  }
   return failures == 0 ? kExitPass : kExitFailed;
 }

@@ -26,14 +26,13 @@ int TraceSchema::add(const std::string& name) {
                        "invalid trace channel name '" + name + "'");
   LEXDYN_ALWAYS_ASSERT(find(name) < 0, "duplicate trace channel '" + name + "'");
   names_.push_back(name);
+  index_.emplace(name, static_cast<int>(names_.size()) - 1);
   return static_cast<int>(names_.size()) - 1;
 }
 
 int TraceSchema::find(const std::string& name) const {
-  for (size_t i = 0; i < names_.size(); ++i) {
-    if (names_[i] == name) return static_cast<int>(i);
-  }
-  return -1;
+  const auto it = index_.find(name);
+  return it == index_.end() ? -1 : it->second;
 }
 
 TraceWriter::TraceWriter(const std::string& path, TraceSchema schema, const TraceMetadata& metadata, int flush_every_rows)
@@ -102,7 +101,7 @@ int TraceTable::column(const std::string& name) const {
     if (names[i] == name) return static_cast<int>(i);
   }
   return -1;
-}
+}  // linear: called for a few channels per check
 
 std::string TraceTable::completeness() const {
   if (end_status.empty()) return "no end mark: the run was killed, is still running, or the file was not written by a finished run";

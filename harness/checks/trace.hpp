@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <iosfwd>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -38,6 +39,7 @@ class TraceSchema {
 
  private:
   std::vector<std::string> names_;
+  std::unordered_map<std::string, int> index_;  ///< name -> column (a trace may have 1e5 channels)
 };
 
 class TraceWriter {
