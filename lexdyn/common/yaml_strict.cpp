@@ -3,6 +3,8 @@
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/input_text.hpp"
 
+#include <yaml-cpp/depthguard.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -213,6 +215,11 @@ Node loadString(const std::string& text, const std::string& file) {
   YAML::Node root;
   try {
     root = YAML::Load(text);
+  } catch (const YAML::DeepRecursion& e) {
+    std::string where = file;
+    if (!e.mark.is_null()) where += ":" + std::to_string(e.mark.line + 1);
+    throw InputError(where, "YAML nesting deeper than " + std::to_string(e.depth() - 1) + " levels (sequences or mappings "
+                            "inside each other); case, robot and manifest files need fewer than 10");
   } catch (const YAML::Exception& e) {
     std::string where = file;
     if (!e.mark.is_null()) where += ":" + std::to_string(e.mark.line + 1);
