@@ -39,6 +39,12 @@ constexpr int kExitPass = 0, kExitBadInput = 2, kExitSolverFailure = 3, kExitInt
 std::atomic<int> g_signal{0};
 extern "C" void onSignal(int s) { g_signal.store(s); }
 
+int interrupted() {
+  const int s = g_signal.load();
+  std::fprintf(stderr, "lexdyn-solve: interrupted by %s\n", s == SIGINT ? "SIGINT" : (s == SIGTERM ? "SIGTERM" : "a signal"));
+  return kExitInterrupted + s;
+}
+
 using Clock = std::chrono::steady_clock;
 using lexdyn::solver::Options;
 using lexdyn::solver::Problem;
@@ -105,7 +111,7 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
   std::vector<Problem> ticks;
   ticks.reserve(files.size());
   for (size_t i = 0; i < files.size(); ++i) {
-    if (g_signal.load()) return kExitInterrupted + g_signal.load();
+    if (g_signal.load()) return interrupted();
     ticks.push_back(lexdyn::solver::readProblemJson(files[i]));
     if (detectBounds) ticks.back().detectBoundsLevel();
     if (files.size() >= 200 && (i + 1) % 200 == 0) std::fprintf(stderr, "lexdyn-solve: loaded %zu/%zu\n", i + 1, files.size());
@@ -120,7 +126,7 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
   int coldCap = 0, warmCap = 0;
   double maxAbsX = 0.0;
   for (size_t k = 0; k < ticks.size(); ++k) {
-    if (g_signal.load()) return kExitInterrupted + g_signal.load();
+    if (g_signal.load()) return interrupted();
     const auto a = Clock::now();
     const auto& rc = cold.solve(ticks[k]);
     const auto b = Clock::now();
@@ -190,7 +196,7 @@ int main(int argc, char** argv) {
     Solver solver;
     solver.setup(problem, options);
     const auto& r = solver.solve(problem);
-    if (g_signal.load()) return kExitInterrupted + g_signal.load();
+    if (g_signal.load()) return interrupted();
     std::cout << lexdyn::solver::resultToJson(problem, r, details) << std::endl;
     // Only a solution is a pass: the hard cap leaves an iterate, a non-finite result nothing.
     const bool requested_stop = r.status == Status::StoppedEarly && paperDt > 0.0;
