@@ -51,8 +51,8 @@ inline constexpr int kMaxIntegratorStepsPerTick = 1000000;
 inline constexpr int kMaxTraceEvery = 1000000;       ///< every_n_ticks, flush_every_rows
 /// Task PD gains (1/s^2, 1/s): the discrete law of a task over one period (eq. 61 integrated
 /// with the period dt: e(k+1) = e(k) - dt v(k+1), v(k+1) = (1 - kv dt) v(k) + kp dt e(k)) has the
-/// characteristic polynomial z^2 - (2 - kp dt^2 - kv dt) z + (1 - kv dt); it is stable only for
-/// kv dt < 2 and kp dt^2 + 2 kv dt < 4. Gains outside these bounds are refused.
+/// characteristic polynomial z^2 - (2 - kp dt^2 - kv dt) z + (1 - kv dt); it is stable for
+/// kv dt < 2 and kp dt^2 + 2 kv dt < 4, marginal on these bounds. Gains beyond are refused.
 inline constexpr double kMaxPdKvDt = 2.0;
 inline constexpr double kMaxPdKpDt2Plus2KvDt = 4.0;
 inline constexpr double kMinWeight = 1e-12;          ///< WLS objective weights
