@@ -309,6 +309,30 @@ XmlIndex indexUrdf(const std::string& text, const std::string& file) {
     throw InputError(file, "expected exactly one root link, found " + std::to_string(roots.size()) +
                                (roots.empty() ? " (the joints form a cycle)" : ": " + list));
   }
+  // Every link reachable from the root: a cycle of joints detached from the tree leaves one root
+  // but links no walk from it reaches (and urdfdom would build a cycle of shared pointers).
+  std::map<std::string, std::vector<const XmlJoint*>> children_of;
+  for (const auto& j : idx.joints) children_of[j.parent].push_back(&j);
+  std::map<std::string, bool> reached{{roots[0], true}};
+  std::vector<std::string> stack{roots[0]};
+  while (!stack.empty()) {
+    const std::string l = stack.back();
+    stack.pop_back();
+    for (const XmlJoint* j : children_of[l]) {
+      if (!reached[j->child]) {
+        reached[j->child] = true;
+        stack.push_back(j->child);
+      }
+    }
+  }
+  for (const auto& l : idx.links) {
+    if (!reached[l.name]) {
+      const XmlJoint* j = parent_of.at(l.name);
+      throw InputError(file + ":" + std::to_string(j->line),
+                       "link '" + l.name + "' is not connected to the root link '" + roots[0] + "': its joint '" + j->name +
+                           "' hangs it from '" + j->parent + "', and the joints form a cycle there; a URDF must be a tree");
+    }
+  }
   return idx;
 }
 

@@ -44,6 +44,7 @@ struct ExactVerdict {
   Kind kind = Undecided;
   std::string detail;
   std::vector<double> violation_norm;  ///< exact optimum per proven level (rounded to double)
+  std::vector<double> x;               ///< the exact point of the last proven level (rounded)
 };
 
 inline const char* toString(ExactVerdict::Kind k) {
@@ -372,25 +373,33 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
       out.detail = "level " + std::to_string(k) + ": the primal repairs of the solver's active set did not settle";
       return out;
     }
-    // Descent on the earlier rows held at a bound: while the dual check fails, release one whose
-    // release lowers the level's objective (exactly); each step strictly decreases it.
+    // Descent on the earlier rows held at a bound: while the dual check fails, release one (or,
+    // when no single one helps, two: duplicated rows block each other) whose release lowers the
+    // level's objective exactly; each step strictly decreases it.
     for (int step = 0; !dualFeasible(k, x); ++step) {
       const Q current = objective(k, x);
-      bool improved = false;
-      for (int i = 0; i < M && !improved && step < budget; ++i) {
+      std::vector<int> releasable;
+      for (int i = 0; i < M; ++i) {
         const Row& row = rows[static_cast<size_t>(i)];
         if (row.level >= k) break;
-        if (frozen[static_cast<size_t>(i)] || held[static_cast<size_t>(i)] == 0 || row.equality()) continue;
-        std::vector<int> h = held;
-        h[static_cast<size_t>(i)] = 0;
-        std::vector<Q> xi;
-        if (!solveRepaired(k, h, xi) || !(objective(k, xi) < current)) continue;
-        held = h;
-        x = xi;
-        improved = true;
+        if (!frozen[static_cast<size_t>(i)] && held[static_cast<size_t>(i)] != 0 && !row.equality()) releasable.push_back(i);
+      }
+      bool improved = false;
+      const size_t R = releasable.size();
+      for (size_t a = 0; a < R && !improved && step < budget; ++a) {
+        for (size_t b = a; b < R && !improved; ++b) {
+          std::vector<int> h = held;
+          h[static_cast<size_t>(releasable[a])] = 0;
+          h[static_cast<size_t>(releasable[b])] = 0;
+          std::vector<Q> xi;
+          if (!solveRepaired(k, h, xi) || !(objective(k, xi) < current)) continue;
+          held = h;
+          x = xi;
+          improved = true;
+        }
       }
       if (!improved) {
-        out.detail = "level " + std::to_string(k) + ": no sign-valid multipliers and no single release improves the level";
+        out.detail = "level " + std::to_string(k) + ": no sign-valid multipliers and no release of one or two rows improves the level";
         return out;
       }
     }
@@ -408,6 +417,8 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
       }
     }
     out.violation_norm.push_back(std::sqrt(norm2.get_d()));
+    out.x.assign(static_cast<size_t>(n), 0.0);
+    for (int i = 0; i < n; ++i) out.x[static_cast<size_t>(i)] = x[static_cast<size_t>(i)].get_d();
   }
   for (int l = 0; l < p.levelCount(); ++l) {
     const double e = out.violation_norm[static_cast<size_t>(l)], s = r.violation_norm(l);
