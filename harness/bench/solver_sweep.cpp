@@ -1,69 +1,212 @@
-// lexdyn-solver-sweep: a heavy randomized verification sweep of the solver (not part of ctest).
-// Random hierarchies (rank-deficient, duplicated, zero and conflicting rows, bounds levels,
-// equalities and inequalities) are solved and each result is checked against a KKT certificate
-// built from x and the multipliers alone; with --brute-force, tiny problems are also compared with
-// an enumeration of every active set. Deterministic for a given --seed.
+// lexdyn-solver-sweep: a heavy randomized verification sweep of the solver (not part of ctest;
+// docs/solver.md, "Verification"). Random hierarchies (rank-deficient, duplicated, zero and
+// conflicting rows, bounds levels, equalities and inequalities) are solved and each result is
+// checked:
+//  - status: solved; a hard-cap hit (iteration_limit) or a non-finite result is a failure;
+//  - the KKT certificate built from x and the multipliers alone (tests/solver/reference.hpp);
+//  - a result whose certificate fails goes to the exact reference (rational arithmetic,
+//    tests/solver/exact_reference.hpp), which decides: a result it proves optimal is not a
+//    failure (a false alarm of the double-precision certificate, counted), one it proves wrong
+//    or cannot decide is;
+//  - with --brute-force, tiny problems are also compared with an enumeration of every active set;
+//  - with --exact-every K, every K-th problem also goes to the exact reference, whatever the
+//    certificate said: a disagreement in either direction is counted and printed.
+// Every problem is generated from its own seed (its options too), so a failing problem reruns
+// alone with the command the sweep prints (or from the JSON file --write-failures DIR writes).
+//
+// Exit codes (docs/architecture.md, "Errors and exit codes"): 0 every problem verified; 1 a
+// failure (a wrong result, a cap hit, a non-finite result, a certificate/exact disagreement);
+// 2 bad options; 3 an internal error; 130 / 143 interrupted by SIGINT / SIGTERM (the summary
+// of the problems done so far is printed, with "interrupted": true).
 #include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <random>
 #include <string>
 
+#include "exact_reference.hpp"
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/solver/problem_io.hpp"
 #include "lexdyn/solver/solver.hpp"
 #include "reference.hpp"
 
+namespace {
+
+using namespace lexdyn::solver;
+
+constexpr int kExitPass = 0, kExitFailed = 1, kExitBadInput = 2, kExitInternal = 3, kExitInterrupted = 128;
+
+std::atomic<int> g_signal{0};
+extern "C" void onSignal(int s) { g_signal.store(s); }
+
+/// The generator options of problem `seed`, from its own stream (independent of the other
+/// problems of the sweep, so that one problem reruns alone).
+test::GenOptions optionsFor(std::uint64_t seed, int maxN, int maxLevels, int maxRows) {
+  std::mt19937_64 meta(seed ^ 0x9e3779b97f4a7c15ULL);
+  test::GenOptions g;
+  g.n = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxN));
+  g.levels = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxLevels));
+  g.maxRows = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxRows));
+  g.inequalities = meta() % 4 != 0;
+  g.boundsLevel = meta() % 2;
+  const double pr[] = {0.0, 0.3, 0.8}, pd[] = {0.0, 0.2, 0.5}, pz[] = {0.0, 0.1}, pe[] = {0.1, 0.4, 0.9};
+  g.pRankDeficient = pr[meta() % 3];
+  g.pDuplicate = pd[meta() % 3];
+  g.pConflict = pd[meta() % 3];
+  g.pZeroRow = pz[meta() % 2];
+  g.pEquality = pe[meta() % 3];
+  g.dyadic = true;  // exactly representable rank deficiency: the exact reference applies
+  return g;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  CLI::App app{"Randomized verification sweep of the hierarchical least-squares solver"};
+  CLI::App app{"Randomized verification sweep of the hierarchical least-squares solver (docs/solver.md)"};
   std::uint64_t seed = 1;
   long cases = 100000;
   int maxN = 12, maxLevels = 7, maxRows = 8;
+  long exactEvery = 0;
+  int maxIterations = Options{}.max_iterations;
   bool brute = false;
-  app.add_option("--seed", seed, "first problem seed");
-  app.add_option("--cases", cases, "number of random problems");
-  app.add_option("--max-variables", maxN);
-  app.add_option("--max-levels", maxLevels);
-  app.add_option("--max-rows", maxRows, "maximum rows per level");
+  std::string writeDir;
+  app.add_option("--seed", seed, "seed of the first problem; problem i has seed + i");
+  app.add_option("--cases", cases, "number of random problems")->check(CLI::Range(1L, 1000000000L));
+  app.add_option("--max-variables", maxN, "largest number of variables, in [1, 100]")->check(CLI::Range(1, 100));
+  app.add_option("--max-levels", maxLevels, "largest number of general levels, in [1, 50]")->check(CLI::Range(1, 50));
+  app.add_option("--max-rows", maxRows, "largest number of rows per level, in [1, 100]")->check(CLI::Range(1, 100));
+  app.add_option("--exact-every", exactEvery, "also verify every K-th problem with the exact reference (0: only flagged ones)")
+      ->check(CLI::Range(0L, 1000000000L));
+  app.add_option("--max-iterations", maxIterations, "the solver's hard iteration cap (default 1000)")->check(CLI::Range(1, 1000000));
+  app.add_option("--write-failures", writeDir, "write each failing problem to DIR/problem-SEED.json");
   app.add_flag("--brute-force", brute, "compare tiny problems (<= 9 rows) with active-set enumeration");
-  CLI11_PARSE(app, argc, argv);
-
-  using namespace lexdyn::solver;
-  std::mt19937_64 meta(seed);
-  long fails = 0, held = 0, cycles = 0, iters = 0, solved = 0, maxIt = 0;
-  for (long c = 0; c < cases; ++c) {
-    const std::uint64_t s = seed + static_cast<std::uint64_t>(c);
-    test::GenOptions g;
-    g.n = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxN));
-    g.levels = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxLevels));
-    g.maxRows = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxRows));
-    g.inequalities = meta() % 4 != 0;
-    g.boundsLevel = meta() % 2;
-    const double pr[] = {0.0, 0.3, 0.8}, pd[] = {0.0, 0.2, 0.5}, pz[] = {0.0, 0.1}, pe[] = {0.1, 0.4, 0.9};
-    g.pRankDeficient = pr[meta() % 3];
-    g.pDuplicate = pd[meta() % 3];
-    g.pConflict = pd[meta() % 3];
-    g.pZeroRow = pz[meta() % 2];
-    g.pEquality = pe[meta() % 3];
-    const Problem p = test::randomProblem(s, g);
-    if (brute && p.totalRows() > 9) continue;
-    Solver solver;
-    solver.setup(p);
-    const Result& r = solver.solve(p);
-    ++solved;
-    held += r.held_after_reblock;
-    cycles += r.cycles_broken;
-    iters += r.iterations;
-    maxIt = std::max<long>(maxIt, r.iterations);
-    std::string err = (r.status != Status::Solved) ? std::string("status ") + toString(r.status) : test::checkKkt(p, r);
-    if (err.empty() && brute) {
-      const auto ref = test::bruteForce(p);
-      for (int l = 0; l < p.levelCount() && err.empty(); ++l)
-        if (std::abs(r.violation_norm(l) - ref[static_cast<size_t>(l)]) > 1e-7 * (1 + ref[static_cast<size_t>(l)]))
-          err = "level " + std::to_string(l) + " violation " + std::to_string(r.violation_norm(l)) +
-                " differs from brute force " + std::to_string(ref[static_cast<size_t>(l)]);
-    }
-    if (!err.empty() && ++fails <= 10) std::printf("problem seed %llu: %s\n", static_cast<unsigned long long>(s), err.c_str());
-    if ((c + 1) % 20000 == 0) std::fprintf(stderr, "lexdyn-solver-sweep: %ld/%ld\n", c + 1, cases);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitPass : kExitBadInput;
   }
-  std::printf("{\"solved\": %ld, \"failures\": %ld, \"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld}\n",
-              solved, fails, held, cycles, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0, maxIt);
-  return fails == 0 ? 0 : 1;
+  if (!writeDir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(writeDir, ec);
+    if (ec || !std::filesystem::is_directory(writeDir)) {
+      std::fprintf(stderr, "lexdyn-solver-sweep: error: --write-failures %s: cannot create the directory\n", writeDir.c_str());
+      return kExitBadInput;
+    }
+  }
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+
+  const std::string options = " --max-variables " + std::to_string(maxN) + " --max-levels " + std::to_string(maxLevels) +
+                              " --max-rows " + std::to_string(maxRows) + (brute ? " --brute-force" : "") +
+                              (maxIterations != Options{}.max_iterations ? " --max-iterations " + std::to_string(maxIterations) : "");
+  Options solverOptions;
+  solverOptions.max_iterations = maxIterations;
+  long done = 0, solved = 0, failures = 0, capHits = 0, nonFinite = 0, kktFlagged = 0, exactChecked = 0, exactCleared = 0,
+       exactConfirmed = 0, exactUndecided = 0, disagreements = 0, bruteChecked = 0, held = 0, cycles = 0, iters = 0, maxIt = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    for (long c = 0; c < cases; ++c) {
+      if (g_signal.load()) break;
+      const std::uint64_t s = seed + static_cast<std::uint64_t>(c);
+      const test::GenOptions g = optionsFor(s, maxN, maxLevels, maxRows);
+      const Problem p = test::randomProblem(s, g);
+      ++done;
+      if (brute && p.totalRows() > 9) continue;
+      Solver solver;
+      solver.setup(p, solverOptions);
+      const Result& r = solver.solve(p);
+      ++solved;
+      held += r.held_after_reblock;
+      cycles += r.cycles_broken;
+      iters += r.iterations;
+      maxIt = std::max<long>(maxIt, r.iterations);
+      std::string err;
+      if (r.status == Status::IterationLimit) {
+        ++capHits;
+        err = "hard iteration cap hit (" + std::to_string(r.iterations) + " iterations)";
+      } else if (r.status == Status::NonFiniteResult) {
+        ++nonFinite;
+        err = "non-finite result";
+      } else if (r.status != Status::Solved) {
+        err = std::string("status ") + toString(r.status);
+      }
+      if (err.empty()) {
+        const std::string kkt = test::checkKkt(p, r);
+        const bool sample = exactEvery > 0 && c % exactEvery == 0;
+        if (!kkt.empty()) ++kktFlagged;
+        if (!kkt.empty() || sample) {
+          ++exactChecked;
+          const test::ExactVerdict v = test::exactCheck(p, r);
+          if (!kkt.empty()) {
+            if (v.kind == test::ExactVerdict::Optimal) {
+              ++exactCleared;
+              std::printf("problem seed %llu: the certificate failed (%s) but the exact reference proves the result optimal\n",
+                          static_cast<unsigned long long>(s), kkt.c_str());
+            } else {
+              (v.kind == test::ExactVerdict::NotOptimal ? exactConfirmed : exactUndecided) += 1;
+              err = kkt + "; exact reference: " + test::toString(v.kind) + (v.detail.empty() ? "" : " (" + v.detail + ")");
+            }
+          } else if (v.kind == test::ExactVerdict::NotOptimal) {
+            ++disagreements;
+            err = "the certificate holds but the exact reference proves the result wrong: " + v.detail;
+          } else if (v.kind == test::ExactVerdict::Undecided) {
+            ++exactUndecided;
+          }
+        }
+      }
+      if (err.empty() && brute) {
+        ++bruteChecked;
+        const auto ref = test::bruteForce(p);
+        for (int l = 0; l < p.levelCount() && err.empty(); ++l)
+          if (std::abs(r.violation_norm(l) - ref[static_cast<size_t>(l)]) > 1e-7 * (1 + ref[static_cast<size_t>(l)]))
+            err = "level " + std::to_string(l) + " violation " + std::to_string(r.violation_norm(l)) + " differs from brute force " +
+                  std::to_string(ref[static_cast<size_t>(l)]);
+      }
+      if (!err.empty()) {
+        ++failures;
+        if (failures <= 20) {
+          std::printf("problem seed %llu (%d variables, %d levels, %d rows): %s\n  rerun: lexdyn-solver-sweep --seed %llu --cases 1%s\n",
+                      static_cast<unsigned long long>(s), p.variables(), p.levelCount(), p.totalRows(), err.c_str(),
+                      static_cast<unsigned long long>(s), options.c_str());
+          if (!writeDir.empty()) {
+            const std::string file = writeDir + "/problem-" + std::to_string(s) + ".json";
+            writeProblemJson(p, file);
+            std::printf("  problem: %s (lexdyn-solve --details %s)\n", file.c_str(), file.c_str());
+          }
+          std::fflush(stdout);
+        }
+      }
+      if ((c + 1) % 100000 == 0) std::fprintf(stderr, "lexdyn-solver-sweep: %ld/%ld, %ld failures\n", c + 1, cases, failures);
+    }
+  } catch (const lexdyn::InputError& e) {
+    std::fprintf(stderr, "lexdyn-solver-sweep: error: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "lexdyn-solver-sweep: error: out of memory\n");
+    return kExitInternal;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lexdyn-solver-sweep: internal error: %s\n", e.what());
+    return kExitInternal;
+  }
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("{\"problems\": %ld, \"solved\": %ld, \"failures\": %ld, \"cap_hits\": %ld, \"non_finite\": %ld, "
+              "\"certificate_failures\": %ld, \"exact_checked\": %ld, \"exact_cleared\": %ld, \"exact_confirmed\": %ld, "
+              "\"exact_undecided\": %ld, \"certificate_exact_disagreements\": %ld, \"brute_force_checked\": %ld, "
+              "\"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld, "
+              "\"seconds\": %.1f, \"interrupted\": %s}\n",
+              done, solved, failures, capHits, nonFinite, kktFlagged, exactChecked, exactCleared, exactConfirmed, exactUndecided,
+              disagreements, bruteChecked, held, cycles, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0,
+              maxIt, secs, g_signal.load() ? "true" : "false");
+  if (g_signal.load()) return kExitInterrupted + g_signal.load();
+  if (solved == 0) {
+    // Nothing was verified (e.g. --brute-force with sizes that never give 9 rows or fewer).
+    std::fprintf(stderr, "lexdyn-solver-sweep: no problem was verified (--brute-force takes problems of at most 9 rows)\n");
+    return kExitFailed;
+  }
+  return failures == 0 ? kExitPass : kExitFailed;
 }

@@ -3,6 +3,7 @@
 #include "harness/cases/case_document.hpp"
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/input_ranges.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
 #include "lexdyn/control/controller.hpp"
 #include "lexdyn/model/robot_description.hpp"
@@ -13,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <optional>
 
@@ -51,6 +53,19 @@ const char* toString(sim::SetpointProfile p) {
 }
 
 namespace {
+
+namespace R = lexdyn::ranges;
+
+/// The limits of joint j as a range a value must fall in ("[lo, hi] (rad or m)"), finite.
+void requireWithinJointLimits(const yaml::Node& n, double v, const model::JointDescription& jd) {
+  const double lo = std::max(jd.lower, -R::kMaxJointLimit), hi = std::min(jd.upper, R::kMaxJointLimit);
+  if (!(v >= lo && v <= hi)) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "joint %s: expected a value within its limits [%g, %g] %s, found %g", jd.name.c_str(), lo, hi,
+                  jd.type == model::JointType::Prismatic ? "m" : "rad", v);
+    n.fail(buf);
+  }
+}
 
 // A file named by the case, relative to the case file's directory; recorded in file_fields so
 // that the effective case can name it from elsewhere.
@@ -95,21 +110,42 @@ void readController(CaseSpec& c, const yaml::Node& node, const model::RobotDescr
   }
   c.controller.posture = postureByName(d, m.required("posture"));
   if (auto motions = m.optional("motions")) {
+    // The commanded joints stay within their limits: posture + the motions' offsets.
+    Eigen::VectorXd lo = Eigen::VectorXd::Zero(static_cast<int>(d.joints.size())), hi = lo;
     for (const yaml::Node& mn : motions->elements()) {
       yaml::StrictMap mm(mn);
       MotionSpec ms;
       const yaml::Node joints = mm.required("joints");
       if (joints.size() < 1) joints.fail("expected at least one joint");
       for (const yaml::Node& jn : joints.elements()) ms.joints.push_back(d.findJoint(jointName(jn, d)));
-      ms.amplitude = mm.required("amplitude").asDouble();
-      ms.period_s = mm.required("period_s").asPositiveDouble();
-      if (auto ph = mm.optional("phase_rad")) ms.phase_rad = ph->asDouble();
-      if (auto st = mm.optional("start_s")) ms.start_s = st->asNonNegativeDouble();
+      ms.amplitude = mm.required("amplitude").asDoubleIn(-2.0 * R::kMaxJointLimit, 2.0 * R::kMaxJointLimit);
+      // At least two control periods: a faster motion aliases at the control rate.
+      ms.period_s = mm.required("period_s").asDoubleIn(2.0 * c.control_period_s, R::kMaxTime_s, "s");
+      if (auto ph = mm.optional("phase_rad")) ms.phase_rad = ph->asDoubleIn(-R::kMaxAngle_rad, R::kMaxAngle_rad, "rad");
+      if (auto st = mm.optional("start_s")) ms.start_s = st->asDoubleIn(0.0, R::kMaxTime_s, "s");
       if (auto w = mm.optional("waveform")) {
         ms.waveform = w->asEnum({"sine", "raised_cosine"}) == "sine" ? Waveform::Sine : Waveform::RaisedCosine;
       }
       mm.finish();
+      const double a_lo = ms.waveform == Waveform::Sine ? -std::abs(ms.amplitude) : std::min(0.0, ms.amplitude);
+      const double a_hi = ms.waveform == Waveform::Sine ? std::abs(ms.amplitude) : std::max(0.0, ms.amplitude);
+      for (int j : ms.joints) {
+        lo[j] += a_lo;
+        hi[j] += a_hi;
+      }
       c.controller.motions.push_back(ms);
+    }
+    Eigen::VectorXd posture;
+    for (const auto& p : d.postures) {
+      if (p.first == c.controller.posture) posture = p.second;
+    }
+    for (int j = 0; j < lo.size(); ++j) {
+      const model::JointDescription& jd = d.joints[static_cast<size_t>(j)];
+      if (posture[j] + lo[j] < jd.lower || posture[j] + hi[j] > jd.upper) {
+        motions->fail("joint " + jd.name + " would be commanded over [" + std::to_string(posture[j] + lo[j]) + ", " +
+                      std::to_string(posture[j] + hi[j]) + "], outside its limits [" + std::to_string(jd.lower) + ", " +
+                      std::to_string(jd.upper) + "]");
+      }
     }
   }
   m.finish();
@@ -122,21 +158,24 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
   {
     yaml::StrictMap cm(m.required("contact"));
     sim::ContactSettings& k = s.contact;
-    k.stiffness = cm.required("stiffness").asPositiveDouble();
+    k.stiffness = cm.required("stiffness").asDoubleIn(R::kMinContactStiffness, R::kMaxContactStiffness, "N/m^exponent");
     const yaml::Node ex = cm.required("exponent");
     k.exponent = ex.asDouble();
-    if (!(k.exponent >= 1.0)) ex.fail("expected an exponent >= 1");
-    k.dissipation_s_per_m = cm.required("dissipation_s_per_m").asNonNegativeDouble();
+    if (!(k.exponent >= 1.0 && k.exponent <= R::kMaxContactExponent)) {
+      ex.fail("expected an exponent in [1, 3], found " + ex.raw().Scalar());
+    }
+    k.dissipation_s_per_m = cm.required("dissipation_s_per_m").asDoubleIn(0.0, R::kMaxContactDissipation_s_per_m, "s/m");
     if (auto mu = cm.optional("friction_coefficient")) {
       k.friction_coefficient = mu->asPositiveDouble();
+      if (k.friction_coefficient > R::kMaxFriction) mu->fail("expected a friction coefficient in (0, 10], found " + mu->raw().Scalar());
     } else {
       k.friction_coefficient = d.friction_coefficient;
       if (!(k.friction_coefficient > 0.0) && !d.contact_surfaces.empty()) {
         cm.node().fail("friction_coefficient is not in the robot data file; give it here");
       }
     }
-    k.slip_velocity_m_per_s = cm.required("slip_velocity_m_per_s").asPositiveDouble();
-    if (auto g = cm.optional("ground_height_m")) k.ground_height_m = g->asDouble();
+    k.slip_velocity_m_per_s = cm.required("slip_velocity_m_per_s").asDoubleIn(R::kMinSlipVelocity_mps, R::kMaxSlipVelocity_mps, "m/s");
+    if (auto g = cm.optional("ground_height_m")) k.ground_height_m = g->asDoubleIn(-R::kMaxPosition_m, R::kMaxPosition_m, "m");
     cm.finish();
   }
   {
@@ -157,8 +196,8 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
       GainGroup g;
       const yaml::Node match = gm.required("match");
       g.match = match.asString();
-      g.kp = gm.required("kp").asNonNegativeDouble();
-      g.kd = gm.required("kd").asNonNegativeDouble();
+      g.kp = gm.required("kp").asDoubleIn(0.0, R::kMaxServoKp, "N m/rad (N/m)");
+      g.kd = gm.required("kd").asDoubleIn(0.0, R::kMaxServoKd, "N m s/rad (N s/m)");
       gm.finish();
       int matched = 0;
       for (int j = 0; j < nj; ++j) {
@@ -194,9 +233,13 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
       }
       g.frame = frameName(gm.required("frame"), d);
       g.stiffness_N_per_m = gm.required("stiffness_N_per_m").asPositiveDouble();
-      g.damping_Ns_per_m = gm.required("damping_Ns_per_m").asNonNegativeDouble();
+      if (g.stiffness_N_per_m > R::kMaxGraspStiffness_N_per_m) gm.required("stiffness_N_per_m").asDoubleIn(0.0, R::kMaxGraspStiffness_N_per_m, "N/m");
+      g.damping_Ns_per_m = gm.required("damping_Ns_per_m").asDoubleIn(0.0, R::kMaxGraspDamping_Ns_per_m, "N s/m");
       g.rot_stiffness_Nm_per_rad = gm.required("rot_stiffness_Nm_per_rad").asPositiveDouble();
-      g.rot_damping_Nms_per_rad = gm.required("rot_damping_Nms_per_rad").asNonNegativeDouble();
+      if (g.rot_stiffness_Nm_per_rad > R::kMaxGraspRotStiffness_Nm_per_rad) {
+        gm.required("rot_stiffness_Nm_per_rad").asDoubleIn(0.0, R::kMaxGraspRotStiffness_Nm_per_rad, "N m/rad");
+      }
+      g.rot_damping_Nms_per_rad = gm.required("rot_damping_Nms_per_rad").asDoubleIn(0.0, R::kMaxGraspRotDamping_Nms_per_rad, "N m s/rad");
       if (auto a = gm.optional("initially_active")) g.initially_active = a->asBool();
       gm.finish();
       s.grasps.push_back(g);
@@ -243,18 +286,17 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
   if (auto integ = m.optional("integrator")) {
     yaml::StrictMap im(*integ);
     sim::IntegratorSettings& i = s.integrator;
-    if (auto v = im.optional("rtol")) i.rtol = v->asPositiveDouble();
-    if (auto v = im.optional("atol_position")) i.atol_position = v->asPositiveDouble();
-    if (auto v = im.optional("atol_velocity")) i.atol_velocity = v->asPositiveDouble();
+    if (auto v = im.optional("rtol")) i.rtol = v->asDoubleIn(R::kMinIntegratorRtol, R::kMaxIntegratorRtol);
+    if (auto v = im.optional("atol_position")) i.atol_position = v->asDoubleIn(R::kMinIntegratorAtol, R::kMaxIntegratorAtol, "m or rad");
+    if (auto v = im.optional("atol_velocity")) i.atol_velocity = v->asDoubleIn(R::kMinIntegratorAtol, R::kMaxIntegratorAtol, "m/s or rad/s");
     if (auto v = im.optional("max_order")) {
       i.max_order = v->asInt();
       if (i.max_order < 1 || i.max_order > 5) v->fail("expected an integer in 1..5");
     }
     if (auto v = im.optional("max_steps_per_tick")) {
-      i.max_steps_per_tick = v->asInt();
-      if (i.max_steps_per_tick < 1) v->fail("expected an integer >= 1");
+      i.max_steps_per_tick = v->asIntIn(1, R::kMaxIntegratorStepsPerTick);
     }
-    if (auto v = im.optional("max_step_s")) i.max_step_s = v->asNonNegativeDouble();
+    if (auto v = im.optional("max_step_s")) i.max_step_s = v->asDoubleIn(0.0, c.control_period_s, "s (0: no limit; at most the control period)");
     im.finish();
   }
   m.finish();
@@ -361,7 +403,7 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
   c.type = typeNode.asEnum(checks::checkTypes());
   c.name = c.type;
   if (auto n = m.optional("name")) c.name = n->asString();
-  if (auto f = m.optional("from_s")) c.from_s = f->asNonNegativeDouble();
+  if (auto f = m.optional("from_s")) c.from_s = f->asDoubleIn(0.0, R::kMaxTime_s, "s");
   const bool legacy = c.type == "frame_drift" || c.type == "force_balance" || c.type == "contact_slip" || c.type == "frame_height";
   if (auto v = m.optional("methods")) {
     if (!isLexdyn(cs)) v->fail("methods: applies to the lexdyn controller only");
@@ -417,7 +459,7 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
     c.limit = m.required("limit_m").asPositiveDouble();
   } else if (c.type == "frame_height") {
     c.frame = frameName(m.required("frame"), d);
-    c.limit = m.required("min_m").asDouble();
+    c.limit = m.required("min_m").asDoubleIn(-R::kMaxPosition_m, R::kMaxPosition_m, "m");
   } else if (c.type == "task_error") {
     const yaml::Node tn = m.required("tasks");
     c.tasks = readTaskNames(cs, tn);
@@ -514,6 +556,8 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
     if (auto v = m.optional("limit_count")) c.limit = v->asNonNegativeDouble();
   } else if (c.type == "active_set_peak") {
     c.limit = m.required("limit_iterations").asPositiveDouble();
+  } else if (c.type == "factorization_peak") {
+    c.limit = m.required("limit_factorizations").asPositiveDouble();
   } else if (c.type == "augmented_fraction") {
     const yaml::Node ln = m.required("level");
     c.level = ln.asString();
@@ -586,7 +630,7 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
         e.value = value->asVectorAnySize(1);
       }
     } else if (rpy) {
-      e.value = tasks::rotationToTarget(rotationFromRpy(rpy->asVector3()));
+      e.value = tasks::rotationToTarget(rotationFromRpy(rpy->asVector3In(-R::kMaxAngle_rad, R::kMaxAngle_rad, "rad")));
     } else {
       if (!lower || !upper) en.fail("a box target needs both lower and upper");
       e.value.resize(6);
@@ -594,7 +638,7 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
       e.value.tail<3>() = asBound3(*upper);
     }
     if (auto r = em.optional("ramp_s")) {
-      e.ramp_s = r->asNonNegativeDouble();
+      e.ramp_s = r->asDoubleIn(0.0, R::kMaxTime_s, "s");
       // Entry-wise linear interpolation: meaningful for positions, joint values and box bounds,
       // not for an orientation target (a rotation matrix).
       if (e.ramp_s > 0.0 && (rpy || e.value.size() == 9)) r->fail("ramp_s is not available for orientation targets");
@@ -604,7 +648,7 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
     const yaml::Node f = em.required("file");
     e.file = resolvePath(f, c);
     double window = 0.0;
-    if (auto v = em.optional("moving_average_s")) window = v->asNonNegativeDouble();
+    if (auto v = em.optional("moving_average_s")) window = v->asDoubleIn(0.0, R::kMaxTime_s, "s");
     bool loop = false;
     if (auto v = em.optional("loop")) loop = v->asBool();
     try {
@@ -614,10 +658,10 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
     }
   } else if (e.action == "swing") {
     taskRef();
-    e.swing.from = em.required("from").asVector3();
-    e.swing.to = em.required("to").asVector3();
-    e.swing.period_s = em.required("period_s").asPositiveDouble();
-    if (auto v = em.optional("phase_rad")) e.swing.phase_rad = v->asDouble();
+    e.swing.from = em.required("from").asVector3In(-R::kMaxPosition_m, R::kMaxPosition_m, "m");
+    e.swing.to = em.required("to").asVector3In(-R::kMaxPosition_m, R::kMaxPosition_m, "m");
+    e.swing.period_s = em.required("period_s").asDoubleIn(2.0 * c.control_period_s, R::kMaxTime_s, "s (at least two control periods)");
+    if (auto v = em.optional("phase_rad")) e.swing.phase_rad = v->asDoubleIn(-R::kMaxAngle_rad, R::kMaxAngle_rad, "rad");
   }
   em.finish();
   return e;
@@ -683,6 +727,25 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
       } catch (const InputError& err) {
         throw InputError(e.where, err.what());
       }
+      // The documented ranges (docs/simulator.md, "Ranges"): positions within 1e3 m, joint
+      // targets within the joints' limits.
+      const TaskSpec& ts = lx.tasks[static_cast<size_t>(lx.findTask(e.task))];
+      const model::RobotDescription& d = model.description();
+      for (int k = 0; k < e.value.size(); ++k) {
+        const double v = e.value[k];
+        if ((ts.type == "position" || ts.type == "com" || ts.type == "com_box") && std::isfinite(v) && std::abs(v) > R::kMaxPosition_m) {
+          throw InputError(e.where + ".value[" + std::to_string(k) + "]", "expected a position in [-1000, 1000] m, found " + std::to_string(v));
+        }
+        const int j = ts.type == "joint_position" ? d.findJoint(ts.joint_position.joints[static_cast<size_t>(k)])
+                                                  : (ts.type == "posture" ? k : -1);
+        if (j >= 0) {
+          const model::JointDescription& jd = d.joints[static_cast<size_t>(j)];
+          if (!(v >= std::max(jd.lower, -R::kMaxJointLimit) && v <= std::min(jd.upper, R::kMaxJointLimit))) {
+            throw InputError(e.where + ".value[" + std::to_string(k) + "]", "joint " + jd.name + ": expected a target within its limits [" +
+                                                                                 std::to_string(jd.lower) + ", " + std::to_string(jd.upper) + "], found " + std::to_string(v));
+          }
+        }
+      }
     } else if (n != 3) {
       throw InputError(e.where, e.action + " drives 3-D targets (position, com); task '" + e.task + "' takes " + std::to_string(n) + " values");
     }
@@ -713,7 +776,14 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
   yaml::StrictMap top(root);
   CaseSpec c;
   c.path = path;
-  c.name = top.required("name").asString();
+  const yaml::Node name = top.required("name");
+  c.name = name.asString();
+  // The name names golden files and directories: no path separators or odd characters.
+  if (c.name.size() > 128 || c.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.") != std::string::npos ||
+      c.name[0] == '.') {
+    name.fail("expected a name of at most 128 letters, digits, '_', '-' and '.' (not starting with '.'), found '" +
+              c.name.substr(0, 64) + (c.name.size() > 64 ? "...'" : "'"));
+  }
   if (auto desc = top.optional("description")) c.description = desc->asString();
   {
     yaml::StrictMap r(top.required("robot"));
@@ -722,8 +792,21 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
     r.finish();
   }
   const model::RobotDescription d = model::loadRobotDescription(c.urdf_path, c.data_path);
-  c.duration_s = top.required("duration_s").asPositiveDouble();
-  if (auto p = top.optional("control_period_s")) c.control_period_s = p->asPositiveDouble();
+  const yaml::Node duration = top.required("duration_s");
+  c.duration_s = duration.asPositiveDouble();
+  if (auto p = top.optional("control_period_s")) {
+    c.control_period_s = p->asDoubleIn(R::kMinControlPeriod_s, R::kMaxControlPeriod_s, "s");
+  }
+  // At least one control tick (a shorter run computes nothing and would pass every check) and at
+  // most kMaxTicks (the per-tick statistics and the trace grow with it).
+  if (c.duration_s < c.control_period_s) {
+    duration.fail("expected at least one control period (" + std::to_string(c.control_period_s) + " s), found " + duration.raw().Scalar());
+  }
+  if (c.duration_s / c.control_period_s > static_cast<double>(R::kMaxTicks)) {
+    duration.fail("expected at most " + std::to_string(R::kMaxTicks) + " control ticks (" +
+                  std::to_string(static_cast<double>(R::kMaxTicks) * c.control_period_s) + " s at this control period), found " +
+                  duration.raw().Scalar() + " s (size guard)");
+  }
   {
     yaml::StrictMap is(top.required("initial_state"));
     c.initial_state.posture = postureByName(d, is.required("posture"));
@@ -731,15 +814,17 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
       for (const auto& [key, value] : jn->entries()) {
         const int j = d.findJoint(key);
         if (j < 0) value.fail("unknown joint '" + key + "'");
-        c.initial_state.joints.emplace_back(j, value.asDouble());
+        const double v = value.asDouble();
+        requireWithinJointLimits(value, v, d.joints[static_cast<size_t>(j)]);
+        c.initial_state.joints.emplace_back(j, v);
       }
     }
     if (auto xy = is.optional("base_xy")) {
-      const Eigen::VectorXd v = xy->asVector(2);
+      const Eigen::VectorXd v = xy->asVectorIn(2, -R::kMaxPosition_m, R::kMaxPosition_m, "m");
       c.initial_state.base_x = v[0];
       c.initial_state.base_y = v[1];
     }
-    if (auto yaw = is.optional("base_yaw_rad")) c.initial_state.base_yaw_rad = yaw->asDouble();
+    if (auto yaw = is.optional("base_yaw_rad")) c.initial_state.base_yaw_rad = yaw->asDoubleIn(-R::kMaxAngle_rad, R::kMaxAngle_rad, "rad");
     if (auto pn = is.optional("perturbation")) {
       yaml::StrictMap pm(*pn);
       PosturePerturbation& p = c.initial_state.perturbation;
@@ -783,15 +868,17 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
   if (auto tr = top.optional("trace")) {
     yaml::StrictMap tm(*tr);
     if (auto v = tm.optional("every_n_ticks")) {
-      c.trace.every_n_ticks = v->asInt();
-      if (c.trace.every_n_ticks < 1) v->fail("expected an integer >= 1");
+      c.trace.every_n_ticks = v->asIntIn(1, R::kMaxTraceEvery);
     }
     if (auto v = tm.optional("flush_every_rows")) {
-      c.trace.flush_every_rows = v->asInt();
-      if (c.trace.flush_every_rows < 1) v->fail("expected an integer >= 1");
+      c.trace.flush_every_rows = v->asIntIn(1, R::kMaxTraceEvery);
     }
     if (auto v = tm.optional("frames")) {
-      for (const yaml::Node& fn : v->elements()) c.trace.frames.push_back(frameName(fn, d));
+      for (const yaml::Node& fn : v->elements()) {
+        const std::string f = frameName(fn, d);
+        if (std::find(c.trace.frames.begin(), c.trace.frames.end(), f) != c.trace.frames.end()) fn.fail("frame '" + f + "' listed twice");
+        c.trace.frames.push_back(f);
+      }
     }
     if (auto v = tm.optional("timings")) c.trace.timings = v->asBool();
     tm.finish();
@@ -949,7 +1036,7 @@ checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& cs
   }
   requireTasksInHierarchies(cs, tn, c.tasks, {c.better, c.worse});
   if (auto v = m.optional("margin")) c.margin = v->asDouble();
-  if (auto f = m.optional("from_s")) c.from_s = f->asNonNegativeDouble();
+  if (auto f = m.optional("from_s")) c.from_s = f->asDoubleIn(0.0, R::kMaxTime_s, "s");
   if (auto t = m.optional("to_s")) c.to_s = t->asNonNegativeDouble();
   m.finish();
   return c;

@@ -82,6 +82,8 @@ struct LexdynDriver::Impl {
   std::vector<double> error_sum, error_last;
   int peak_iterations = -1;
   double peak_at = 0.0;
+  int peak_factorizations = -1;
+  double peak_factorizations_at = 0.0;
   std::vector<long> status_counts, solver_counts, augmented;
   std::vector<std::vector<double>> timers;
 
@@ -146,6 +148,7 @@ void LexdynDriver::addChannels(checks::TraceSchema& schema) const {
   schema.add(checks::kSolverStatusChannel);
   schema.add(checks::kSolverIterationsChannel);
   schema.add("solver.optimality_iterations");
+  schema.add(checks::kSolverFactorizationsChannel);
   // The controller's own view of the robot (the state it read: measured or its integrated plan).
   for (const char* a : {"x", "y", "z"}) schema.add(std::string("ctrl.com.") + a);
   for (const char* a : {"x", "y", "z", "pitch"}) schema.add(std::string("ctrl.base.") + a);
@@ -315,6 +318,10 @@ bool LexdynDriver::tick(double t, const sim::Simulator& simu, sim::JointCommand&
     I.peak_iterations = r.iterations;
     I.peak_at = t;
   }
+  if (r.factorizations > I.peak_factorizations) {
+    I.peak_factorizations = r.factorizations;
+    I.peak_factorizations_at = t;
+  }
   const int st = indexOf(checks::controllerStatusNames(), control::toString(r.status));
   if (st >= 0) ++I.status_counts[static_cast<size_t>(st)];
   const int ss = indexOf(checks::solverStatusNames(), solver::toString(r.solver_status));
@@ -344,6 +351,7 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
   out[i++] = indexOf(checks::solverStatusNames(), solver::toString(r.solver_status));
   out[i++] = r.iterations;
   out[i++] = r.optimality_iterations;
+  out[i++] = r.factorizations;
   for (int k = 0; k < 3; ++k) out[i++] = r.com[k];
   for (int k = 0; k < 3; ++k) out[i++] = I.state.q.base_position[k];
   out[i++] = std::asin(std::clamp(-I.state.q.base_rotation(2, 0), -1.0, 1.0));
@@ -403,6 +411,8 @@ ControllerStats LexdynDriver::stats() const {
   }
   s.peak_iterations = std::max(0, I.peak_iterations);
   s.peak_iterations_at_s = I.peak_at;
+  s.peak_factorizations = std::max(0, I.peak_factorizations);
+  s.peak_factorizations_at_s = I.peak_factorizations_at;
   const auto& sn = checks::controllerStatusNames();
   for (size_t k = 0; k < sn.size(); ++k) s.status_counts.emplace_back(sn[k], I.status_counts[k]);
   const auto& vn = checks::solverStatusNames();

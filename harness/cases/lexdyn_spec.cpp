@@ -1,6 +1,7 @@
 #include "harness/cases/lexdyn_spec.hpp"
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/input_ranges.hpp"
 #include "lexdyn/model/robot_model.hpp"
 
 #include <cmath>
@@ -9,25 +10,34 @@ namespace lexdyn::cases {
 
 namespace {
 
+namespace R = lexdyn::ranges;
+
+// Dimensionless controller parameters (thresholds in multiples of dt^2, damping, weights):
+// within [0, 1e6] (docs/simulator.md, "Ranges").
+double dimensionless(const yaml::Node& n) { return n.asDoubleIn(0.0, R::kMaxDimensionless); }
+
 void readParams(yaml::StrictMap& pm, control::ControllerParams& p) {
-  if (auto v = pm.optional("nu_dt2")) p.nu_dt2 = v->asNonNegativeDouble();
-  if (auto v = pm.optional("xi_dt2")) p.xi_dt2 = v->asNonNegativeDouble();
-  if (auto v = pm.optional("zeta_dt2")) p.zeta_dt2 = v->asNonNegativeDouble();
-  if (auto v = pm.optional("new_dof_diagonal_dt2")) p.new_dof_diagonal_dt2 = v->asNonNegativeDouble();
-  if (auto v = pm.optional("rho_dt2")) p.rho_dt2 = v->asNonNegativeDouble();
-  if (auto v = pm.optional("eps_dt2")) p.eps_dt2 = v->asNonNegativeDouble();
+  if (auto v = pm.optional("nu_dt2")) p.nu_dt2 = dimensionless(*v);
+  if (auto v = pm.optional("xi_dt2")) p.xi_dt2 = dimensionless(*v);
+  if (auto v = pm.optional("zeta_dt2")) p.zeta_dt2 = dimensionless(*v);
+  if (auto v = pm.optional("new_dof_diagonal_dt2")) p.new_dof_diagonal_dt2 = dimensionless(*v);
+  if (auto v = pm.optional("rho_dt2")) p.rho_dt2 = dimensionless(*v);
+  if (auto v = pm.optional("eps_dt2")) p.eps_dt2 = dimensionless(*v);
   if (auto v = pm.optional("newton_target")) {
     p.newton_target = v->asEnum({"zero", "previous_velocity"}) == "zero" ? control::NewtonTarget::Zero
                                                                        : control::NewtonTarget::PreviousVelocity;
   }
-  if (auto v = pm.optional("damping")) p.damping = v->asNonNegativeDouble();
+  if (auto v = pm.optional("damping")) p.damping = dimensionless(*v);
   if (auto v = pm.optional("use_qmod")) p.use_qmod = v->asBool();
   if (auto v = pm.optional("sr1")) p.sr1 = v->asBool();
-  if (auto v = pm.optional("newton_identity_weight")) p.newton_identity_weight = v->asNonNegativeDouble();
+  if (auto v = pm.optional("newton_identity_weight")) p.newton_identity_weight = dimensionless(*v);
   if (auto v = pm.optional("stop_after_level")) p.stop_after_level = v->asString();
   if (auto v = pm.optional("rank_switching")) p.rank_switching = v->asBool();
   if (auto v = pm.optional("sign_change_guard")) p.sign_change_guard = v->asBool();
-  if (auto v = pm.optional("wls_infeasibility_tolerance")) p.wls_infeasibility_tolerance = v->asPositiveDouble();
+  if (auto v = pm.optional("wls_infeasibility_tolerance")) {
+    p.wls_infeasibility_tolerance = v->asPositiveDouble();
+    if (p.wls_infeasibility_tolerance > 1.0) v->asDoubleIn(0.0, 1.0);
+  }
 }
 
 solver::Options readSolver(yaml::StrictMap& sm, double dt) {
@@ -35,23 +45,25 @@ solver::Options readSolver(yaml::StrictMap& sm, double dt) {
   if (auto v = sm.optional("paper_rules")) {
     if (v->asBool()) o = solver::Options::paper(dt);
   }
-  auto positiveInt = [](const yaml::Node& n) {
-    const int i = n.asInt();
-    if (i < 1) n.fail("expected an integer >= 1");
-    return i;
-  };
-  auto nonNegativeInt = [](const yaml::Node& n) {
-    const int i = n.asInt();
-    if (i < 0) n.fail("expected an integer >= 0");
-    return i;
+  auto positiveInt = [](const yaml::Node& n) { return n.asIntIn(1, R::kMaxSolverIterations); };
+  auto nonNegativeInt = [](const yaml::Node& n) { return n.asIntIn(0, R::kMaxSolverIterations); };
+  // Tolerances are relative: positive and at most 1e-2 (beyond, every row counts as dependent,
+  // satisfied or optimal).
+  auto tolerance = [](const yaml::Node& n) {
+    const double t = n.asPositiveDouble();
+    if (t > R::kMaxSolverTolerance) n.asDoubleIn(0.0, R::kMaxSolverTolerance);
+    return t;
   };
   if (auto v = sm.optional("max_iterations")) o.max_iterations = positiveInt(*v);
-  if (auto v = sm.optional("rank_tolerance")) o.rank_tolerance = v->asPositiveDouble();
-  if (auto v = sm.optional("feasibility_tolerance")) o.feasibility_tolerance = v->asPositiveDouble();
-  if (auto v = sm.optional("zero_tolerance")) o.zero_tolerance = v->asPositiveDouble();
-  if (auto v = sm.optional("dual_tolerance")) o.dual_tolerance = v->asPositiveDouble();
+  if (auto v = sm.optional("rank_tolerance")) o.rank_tolerance = tolerance(*v);
+  if (auto v = sm.optional("feasibility_tolerance")) o.feasibility_tolerance = tolerance(*v);
+  if (auto v = sm.optional("zero_tolerance")) o.zero_tolerance = tolerance(*v);
+  if (auto v = sm.optional("dual_tolerance")) o.dual_tolerance = tolerance(*v);
   if (auto v = sm.optional("eliminate_first_level")) o.eliminate_first_level = v->asBool();
-  if (auto v = sm.optional("elimination_tolerance")) o.elimination_tolerance = v->asPositiveDouble();
+  if (auto v = sm.optional("elimination_tolerance")) {
+    o.elimination_tolerance = v->asPositiveDouble();
+    if (o.elimination_tolerance > 1.0) v->asDoubleIn(0.0, 1.0);
+  }
   if (auto v = sm.optional("last_level_projection")) {
     const std::string mode = v->asString();
     if (mode == "auto") {
@@ -65,9 +77,9 @@ solver::Options readSolver(yaml::StrictMap& sm, double dt) {
     }
   }
   if (auto v = sm.optional("bland_after_degenerate_steps")) o.bland_after_degenerate_steps = positiveInt(*v);
-  if (auto v = sm.optional("cycle_tolerance_factor")) o.cycle_tolerance_factor = v->asPositiveDouble();
+  if (auto v = sm.optional("cycle_tolerance_factor")) o.cycle_tolerance_factor = v->asDoubleIn(1.0, R::kMaxDimensionless);
   // The paper's termination rules individually (0 disables a rule); override paper_rules.
-  if (auto v = sm.optional("stop_slack_norm")) o.stop_slack_norm = v->asNonNegativeDouble();
+  if (auto v = sm.optional("stop_slack_norm")) o.stop_slack_norm = dimensionless(*v);
   if (auto v = sm.optional("stop_optimality_iterations")) o.stop_optimality_iterations = nonNegativeInt(*v);
   if (auto v = sm.optional("stop_total_iterations")) o.stop_total_iterations = nonNegativeInt(*v);
   return o;
@@ -100,7 +112,7 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
     c.frame = frameName(*frame, d);
     const yaml::Node pts = m.required("points");
     if (pts.size() < 1) pts.fail("expected at least one point");
-    for (const yaml::Node& p : pts.elements()) c.points.push_back(p.asVector3());
+    for (const yaml::Node& p : pts.elements()) c.points.push_back(p.asVector3In(-R::kMaxLength_m, R::kMaxLength_m, "m"));
   }
   if (auto v = m.optional("fixed")) c.fixed = v->asBool();
   if (auto v = m.optional("normal")) {
@@ -110,6 +122,7 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
   }
   if (auto v = m.optional("friction")) {
     c.friction = v->asPositiveDouble();
+    if (c.friction > R::kMaxFriction) v->asDoubleIn(0.0, R::kMaxFriction);
   } else if (d.friction_coefficient > 0.0) {
     c.friction = d.friction_coefficient;
   } else {
@@ -168,7 +181,7 @@ std::vector<LevelEntry> readLevels(const yaml::Node& node, const LexdynSpec& spe
         size_t k = 0;
         while (k < e.tasks.size() && e.tasks[k] != task) ++k;
         if (k == e.tasks.size()) value.fail("task '" + task + "' is not on this level (tasks: " + joinNames(e.tasks) + ")");
-        e.weights[k] = value.asPositiveDouble();
+        e.weights[k] = value.asDoubleIn(R::kMinWeight, R::kMaxWeight);
       }
       std::vector<std::string> missing;
       for (size_t k = 0; k < e.tasks.size(); ++k) {
@@ -261,7 +274,7 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
   }
   const yaml::Node tasks = m.required("tasks");
   for (const yaml::Node& tn : tasks.elements()) {
-    TaskSpec t = readTaskSpec(tn, d, contact_names);
+    TaskSpec t = readTaskSpec(tn, d, contact_names, dt);
     if (s.findTask(t.name) >= 0) tn.fail("duplicate task name '" + t.name + "'");
     s.tasks.push_back(std::move(t));
   }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -248,6 +249,11 @@ nlohmann::json checksArray(const std::vector<checks::CheckResult>& results) {
   for (const auto& c : results) {
     checks.push_back({{"name", c.name}, {"type", c.type}, {"passed", c.passed}, {"value", number(c.value)},
                       {"limit", number(c.limit)}, {"margin", number(checks::margin(c))}, {"unit", c.unit}, {"detail", c.detail}});
+    // Wall-clock checks: reported, and a verdict only when asked for (docs/cases.md, "Checks").
+    if (c.machine_dependent) {
+      checks.back()["machine_dependent"] = true;
+      checks.back()["decides"] = c.decides;
+    }
   }
   return checks;
 }
@@ -286,6 +292,7 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
   j["effective_case"] = fs::path(r.case_path).filename().string();
   j["skipped_checks"] = r.skipped_checks;
   j["all_checks_passed"] = r.all_checks_passed;
+  j["exit_code"] = exitCode(r);
   if (r.has_controller_stats) {
     const ControllerStats& cs = r.controller;
     json tasks = json::object();
@@ -298,6 +305,8 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
     j["controller"] = {{"ticks", cs.ticks}, {"status_counts", status}, {"augmented_ticks", augmented}};
     j["solver"] = {{"peak_iterations", cs.peak_iterations},
                    {"peak_iterations_at_s", cs.peak_iterations_at_s},
+                   {"peak_factorizations", cs.peak_factorizations},
+                   {"peak_factorizations_at_s", cs.peak_factorizations_at_s},
                    {"status_counts", solver_status}};
     json timing = json::object();
     for (const auto& t : cs.timing) timing[t.name] = {{"median", t.median_us}, {"p99", t.p99_us}, {"max", t.max_us}};
@@ -414,6 +423,14 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   double last_progress_wall = 0.0;
   long k = 0;
   std::string failure;
+  // An exception once the run has started (an internal error, out of memory, an input error that
+  // only the run could reveal) stops it like a failure: the trace keeps its rows and says why.
+  auto stopOnException = [&](const char* status, const std::string& what) {
+    r.status = status;
+    r.message = std::string(status == std::string("input_error") ? "bad input found at " : "internal error at ") + "t = " +
+                num(simu.time()) + " s: " + what;
+  };
+  try {
   for (; k < n_ticks; ++k) {
     const double t = static_cast<double>(k) * T;
     recorder.fillSim();
@@ -433,7 +450,9 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     }
     if (options.interrupt && options.interrupt->load()) {
       r.status = "interrupted";
-      r.message = "interrupted at t = " + num(t) + " s";
+      r.signal = options.interrupt_signal ? options.interrupt_signal->load() : 0;
+      r.message = std::string("interrupted") + (r.signal == SIGINT ? " by SIGINT" : (r.signal == SIGTERM ? " by SIGTERM" : "")) +
+                  " at t = " + num(t) + " s";
       break;
     }
     const sim::StepResult sr = simu.step(cmd);
@@ -466,13 +485,20 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     }
     write(k, true);
   }
+  } catch (const InputError& e) {
+    stopOnException("input_error", e.what());
+  } catch (const std::bad_alloc&) {
+    stopOnException("internal_error", "out of memory");
+  } catch (const std::exception& e) {
+    stopOnException("internal_error", e.what());
+  }
   r.wall_s = wallNow();
   r.simulated_s = simu.time();
   r.ticks = simu.tick();
   r.realtime_factor = r.wall_s > 0.0 ? r.simulated_s / r.wall_s : 0.0;
   r.integrator = simu.integratorStats();
   r.integrator_restarts = simu.integratorRestarts();
-  writer.finish();
+  writer.finish(r.status, r.message);
   if (driver) {
     r.has_controller_stats = true;
     r.controller = driver->stats();
@@ -481,20 +507,32 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   r.all_checks_passed = true;
   for (auto& c : check_list) {
     r.checks.push_back(c->result());
-    r.all_checks_passed = r.all_checks_passed && r.checks.back().passed;
+    checks::applyWallClockPolicy(r.checks.back(), options.wall_clock_checks);
   }
   for (auto& c : statistic_list) r.statistics.push_back(c->result());
+  r.all_checks_passed = checks::allPassed(r.checks);
   writeSummary(r.summary_path, spec, r, md);
   return r;
 }
 
 std::string checkResultsJson(const std::vector<checks::CheckResult>& results) {
-  bool all = true;
-  for (const auto& c : results) all = all && c.passed;
-  const nlohmann::json j = {{"checks", checksArray(results)}, {"all_checks_passed", all}};
+  const nlohmann::json j = {{"checks", checksArray(results)}, {"all_checks_passed", checks::allPassed(results)}};
   return j.dump(2);
 }
 
-int exitCode(const RunSummary& s) { return (s.status == "completed" && s.all_checks_passed) ? 0 : 1; }
+int exitCode(const RunSummary& s) {
+  if (s.status == "interrupted") return kExitInterrupted + (s.signal > 0 ? s.signal : 2);
+  if (s.status == "input_error") return kExitBadInput;
+  if (s.status != "completed") return kExitRunFailure;
+  return s.all_checks_passed ? kExitPass : kExitCheckFailed;
+}
+
+std::vector<std::string> traceChannels(const CaseSpec& spec) {
+  sim::Simulator simu(spec.urdf_path, spec.data_path, spec.sim);
+  std::unique_ptr<LexdynDriver> driver;
+  if (spec.controller.type == "lexdyn") driver = std::make_unique<LexdynDriver>(spec, simu);
+  const Recorder recorder(spec, simu, driver.get());
+  return recorder.channels().names();
+}
 
 }  // namespace lexdyn::cases

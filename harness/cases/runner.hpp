@@ -21,10 +21,17 @@ struct RunOptions {
   /// Figures to record besides the checks (their limits are ignored): e.g. the per-method
   /// statistics of a sweep's method comparisons, summary.json "statistics".
   std::vector<checks::CheckSpec> statistics;
+  /// The signal that set `interrupt` (SIGINT, SIGTERM), named in the trace's end mark and the
+  /// summary; 0 when unknown.
+  const std::atomic<int>* interrupt_signal = nullptr;
+  /// Wall-clock checks (tick_time) decide pass/fail only when true; otherwise they are reported
+  /// and labelled machine-dependent (docs/cases.md, "Checks").
+  bool wall_clock_checks = false;
 };
 
 struct RunSummary {
-  std::string status;   ///< completed | integrator_failure | controller_failure | interrupted
+  /// completed | integrator_failure | controller_failure | internal_error | interrupted
+  std::string status;
   std::string message;  ///< what stopped the run early
   std::string method;   ///< lexdyn: bfgs | ah | gn | wls ("" for other controllers)
   double duration_s = 0.0;
@@ -32,6 +39,7 @@ struct RunSummary {
   double wall_s = 0.0;
   double realtime_factor = 0.0;
   long ticks = 0;
+  int signal = 0;       ///< interrupted: the signal (SIGINT, SIGTERM), 0 when unknown
   sim::CvodeStats integrator;
   long integrator_restarts = 0;
   std::vector<checks::CheckResult> checks;
@@ -44,14 +52,28 @@ struct RunSummary {
   std::string case_path;  ///< DIR/case.yaml: the effective case (effectiveCaseText)
 };
 
-/// Throws lexdyn::InputError for bad input (nothing is simulated then).
+/// Throws lexdyn::InputError for bad input (nothing is simulated then). An exception once the
+/// run has started (an internal error, out of memory) stops it: the trace is kept with the end
+/// mark internal_error, the summary says why (status internal_error).
 RunSummary runCase(const CaseSpec& spec, const RunOptions& options);
 
-/// 0: completed and every check passed; 1: a check failed or the run stopped early.
+/// The exit codes of docs/architecture.md ("Errors and exit codes").
+inline constexpr int kExitPass = 0;          ///< completed, every check that decides passed
+inline constexpr int kExitCheckFailed = 1;   ///< a check, comparison or golden failed
+inline constexpr int kExitBadInput = 2;      ///< bad input: file, line and key path named
+inline constexpr int kExitRunFailure = 3;    ///< integrator, controller or solver failure, internal error
+inline constexpr int kExitInterrupted = 128; ///< + the signal: 130 SIGINT, 143 SIGTERM
+
+/// 128 + signal when interrupted (130 when the signal is unknown); 3 on a run failure; 1 when a
+/// check that decides failed; 0 otherwise.
 int exitCode(const RunSummary& summary);
 
 /// {"checks": [...], "all_checks_passed": bool} with the checks as summary.json writes them
 /// (`lexdyn-harness check --json`, `compare --json`).
 std::string checkResultsJson(const std::vector<checks::CheckResult>& results);
+
+/// The channel names a run of the case (its current method) records, in trace order, without
+/// running it (the simulator and the controller are built, nothing is simulated).
+std::vector<std::string> traceChannels(const CaseSpec& spec);
 
 }  // namespace lexdyn::cases

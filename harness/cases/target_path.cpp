@@ -1,12 +1,15 @@
 #include "harness/cases/target_path.hpp"
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/input_ranges.hpp"
+#include "lexdyn/common/input_text.hpp"
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 
 namespace lexdyn::cases {
 
@@ -38,8 +41,7 @@ bool parseNumber(const std::string& s, double& v) {
 }  // namespace
 
 TargetTrajectory TargetTrajectory::fromCsv(const std::string& path, double moving_average_s, bool loop) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open the trajectory file for reading");
+  std::istringstream in(readTextFile(path, "trajectory"));
   std::vector<double> t;
   std::vector<Eigen::Vector3d> x;
   std::string line;
@@ -63,7 +65,14 @@ TargetTrajectory TargetTrajectory::fromCsv(const std::string& path, double movin
         throw InputError(where, std::string("column ") + "txyz"[i] + ": expected a finite number, found '" + f[static_cast<size_t>(i)] + "'");
       }
     }
-    if (v[0] < 0.0) throw InputError(where, "times must be >= 0 (seconds since the event), found " + f[0]);
+    if (v[0] < 0.0 || v[0] > ranges::kMaxTime_s) {
+      throw InputError(where, "times must be >= 0 and at most 1e6 s (seconds since the event), found " + f[0]);
+    }
+    for (int i = 1; i < 4; ++i) {
+      if (std::abs(v[i]) > ranges::kMaxPosition_m) {
+        throw InputError(where, std::string("column ") + "txyz"[i] + ": expected a position in [-1000, 1000] m, found " + f[static_cast<size_t>(i)]);
+      }
+    }
     if (!t.empty() && !(v[0] > t.back())) throw InputError(where, "times must increase strictly, found " + f[0] + " after " + std::to_string(t.back()));
     t.push_back(v[0]);
     x.emplace_back(v[1], v[2], v[3]);

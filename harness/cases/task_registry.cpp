@@ -1,6 +1,7 @@
 #include "harness/cases/task_registry.hpp"
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/input_ranges.hpp"
 #include "lexdyn/tasks/contact_force_bounds.hpp"
 #include "lexdyn/tasks/equation_of_motion.hpp"
 #include "lexdyn/tasks/velocity_min.hpp"
@@ -9,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace lexdyn::cases {
@@ -17,13 +19,43 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-void readGains(yaml::StrictMap& m, tasks::PdGains& g) {
+namespace R = lexdyn::ranges;
+
+std::string fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%g", v);
+  return buf;
+}
+
+// PD gains (kp 1/s^2, kv 1/s; kv absent: 2 sqrt(kp)). The task's discrete PD law over one
+// control period dt is stable only for kv dt < 2 and kp dt^2 + 2 kv dt < 4 (lexdyn/common/
+// input_ranges.hpp): gains beyond are refused here, naming the key, instead of a run that
+// diverges to inf.
+void readGains(yaml::StrictMap& m, tasks::PdGains& g, double dt) {
   if (auto gn = m.optional("gains")) {
     yaml::StrictMap gm(*gn);
-    if (auto kp = gm.optional("kp")) g.kp = kp->asNonNegativeDouble();
-    if (auto kv = gm.optional("kv")) g.kv = kv->asNonNegativeDouble();
+    auto kp = gm.optional("kp");
+    auto kv = gm.optional("kv");
+    if (kp) g.kp = kp->asNonNegativeDouble();
+    if (kv) g.kv = kv->asNonNegativeDouble();
     gm.finish();
+    const double kvv = g.kv ? *g.kv : 2.0 * std::sqrt(g.kp);
+    if (dt > 0.0 && (kvv * dt > R::kMaxPdKvDt || g.kp * dt * dt + 2.0 * kvv * dt > R::kMaxPdKpDt2Plus2KvDt)) {
+      const yaml::Node& at = kv && kvv * dt > R::kMaxPdKvDt ? *kv : (kp ? *kp : *kv);
+      at.fail("gains kp " + fmt(g.kp) + " /s^2, kv " + fmt(kvv) + " /s" + (g.kv ? "" : " (2 sqrt(kp))") +
+              " make the task's discrete PD law unstable at the control period " + fmt(dt) + " s: expected kv dt < " +
+              fmt(R::kMaxPdKvDt) + " and kp dt^2 + 2 kv dt < " + fmt(R::kMaxPdKpDt2Plus2KvDt) + ", found " + fmt(kvv * dt) + " and " +
+              fmt(g.kp * dt * dt + 2.0 * kvv * dt));
+    }
   }
+}
+
+Eigen::Vector3d position3(const yaml::Node& n) { return n.asVector3In(-R::kMaxPosition_m, R::kMaxPosition_m, "m"); }
+
+// A joint target within the joint's limits (rad or m).
+void requireWithinLimits(const yaml::Node& n, double v, const model::JointDescription& jd) {
+  const double lo = std::max(jd.lower, -R::kMaxJointLimit), hi = std::min(jd.upper, R::kMaxJointLimit);
+  if (!(v >= lo && v <= hi)) n.fail("joint " + jd.name + ": expected a target within its limits [" + fmt(lo) + ", " + fmt(hi) + "], found " + fmt(v));
 }
 
 Eigen::Matrix3d readRotation(const yaml::Node& n) {
@@ -36,7 +68,7 @@ Eigen::Matrix3d readRotation(const yaml::Node& n) {
   return R;
 }
 
-using Reader = void (*)(TaskSpec&, yaml::StrictMap&, const model::RobotDescription&, const std::vector<std::string>&);
+using Reader = void (*)(TaskSpec&, yaml::StrictMap&, const model::RobotDescription&, const std::vector<std::string>&, double dt);
 using Maker = std::unique_ptr<tasks::TaskModel> (*)(const TaskSpec&, const model::RobotModel&, const tasks::ContactLayout&);
 
 struct TaskType {
@@ -45,9 +77,9 @@ struct TaskType {
   Maker make;
 };
 
-void readNothing(TaskSpec&, yaml::StrictMap&, const model::RobotDescription&, const std::vector<std::string>&) {}
+void readNothing(TaskSpec&, yaml::StrictMap&, const model::RobotDescription&, const std::vector<std::string>&, double) {}
 
-void readJointLimits(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&) {
+void readJointLimits(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double) {
   tasks::JointLimitsParams& p = s.joint_limits;
   if (auto v = m.optional("interaction_fraction")) p.interaction_fraction = v->asNonNegativeDouble();
   if (auto v = m.optional("safety_fraction")) p.safety_fraction = v->asNonNegativeDouble();
@@ -56,18 +88,21 @@ void readJointLimits(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescript
   if (auto v = m.optional("velocity_limits")) p.velocity_limits = v->asBool();
 }
 
-void readTorqueLimits(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&) {
+void readTorqueLimits(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double) {
   if (auto v = m.optional("scale")) {
     s.torque_limits.scale = v->asPositiveDouble();
     if (s.torque_limits.scale > 1.0) v->fail("expected a fraction of the URDF effort limit in (0, 1]");
   }
 }
 
-void readTrustRegion(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&) {
-  if (auto v = m.optional("delta")) s.trust_region.delta = v->asPositiveDouble();
+void readTrustRegion(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double) {
+  if (auto v = m.optional("delta")) {
+    s.trust_region.delta = v->asPositiveDouble();
+    if (s.trust_region.delta > R::kMaxDimensionless) v->asDoubleIn(0.0, R::kMaxDimensionless);
+  }
 }
 
-void readSelfCollision(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&) {
+void readSelfCollision(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double) {
   tasks::SelfCollisionParams& p = s.self_collision;
   if (auto pairs = m.optional("pairs")) {
     for (const yaml::Node& pn : pairs->elements()) {
@@ -83,75 +118,87 @@ void readSelfCollision(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescri
       p.pairs.emplace_back(a, b);
     }
   }
-  if (auto v = m.optional("interaction_distance")) p.interaction_distance = v->asPositiveDouble();
-  if (auto v = m.optional("safety_distance")) p.safety_distance = v->asNonNegativeDouble();
+  if (auto v = m.optional("interaction_distance")) {
+    p.interaction_distance = v->asPositiveDouble();
+    if (p.interaction_distance > R::kMaxLength_m) v->asDoubleIn(0.0, R::kMaxLength_m, "m");
+  }
+  if (auto v = m.optional("safety_distance")) p.safety_distance = v->asDoubleIn(0.0, R::kMaxLength_m, "m");
   if (auto v = m.optional("xi")) p.xi = v->asPositiveDouble();
   if (auto v = m.optional("adaptive")) p.adaptive = v->asBool();
 }
 
-void readContact(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>& contacts) {
+void readContact(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>& contacts, double dt) {
   const yaml::Node c = m.required("contact");
   s.contact.contact = c.asString();
   bool known = false;
   for (const auto& n : contacts) known = known || n == s.contact.contact;
   if (!known) c.fail("unknown contact '" + s.contact.contact + "' (controller.contacts: " + joinNames(contacts) + ")");
-  readGains(m, s.contact.gains);
+  readGains(m, s.contact.gains, dt);
 }
 
-void readPosition(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&) {
+void readPosition(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double dt) {
   tasks::PositionParams& p = s.position;
   p.frame = frameName(m.required("frame"), d);
-  if (auto v = m.optional("point")) p.point = v->asVector3();
-  if (auto v = m.optional("target")) p.target = v->asVector3();
-  readGains(m, p.gains);
+  if (auto v = m.optional("point")) p.point = position3(*v);
+  if (auto v = m.optional("target")) p.target = position3(*v);
+  readGains(m, p.gains, dt);
 }
 
-void readOrientation(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&) {
+void readOrientation(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double dt) {
   tasks::OrientationParams& p = s.orientation;
   p.frame = frameName(m.required("frame"), d);
   auto target = m.optional("target");
   auto rpy = m.optional("target_rpy_rad");
   if (target && rpy) rpy->fail("give either target or target_rpy_rad, not both");
   if (target) p.target = readRotation(*target);
-  if (rpy) p.target = rotationFromRpy(rpy->asVector3());
-  readGains(m, p.gains);
+  if (rpy) p.target = rotationFromRpy(rpy->asVector3In(-R::kMaxAngle_rad, R::kMaxAngle_rad, "rad"));
+  readGains(m, p.gains, dt);
 }
 
-void readCom(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&) {
-  if (auto v = m.optional("target")) s.com.target = v->asVector3();
-  readGains(m, s.com.gains);
+void readCom(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double dt) {
+  if (auto v = m.optional("target")) s.com.target = position3(*v);
+  readGains(m, s.com.gains, dt);
 }
 
-void readComBox(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&) {
+void readComBox(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double) {
   tasks::ComBoxParams& p = s.com_box;
   if (auto v = m.optional("lower")) p.lower = asBound3(*v);
   if (auto v = m.optional("upper")) p.upper = asBound3(*v);
   if (auto dn = m.optional("damper")) {
     yaml::StrictMap dm(*dn);
-    if (auto v = dm.optional("interaction")) p.damper.interaction = v->asPositiveDouble();
-    if (auto v = dm.optional("safety")) p.damper.safety = v->asNonNegativeDouble();
+    if (auto v = dm.optional("interaction")) {
+      p.damper.interaction = v->asPositiveDouble();
+      if (p.damper.interaction > R::kMaxPosition_m) v->asDoubleIn(0.0, R::kMaxPosition_m, "m");
+    }
+    if (auto v = dm.optional("safety")) p.damper.safety = v->asDoubleIn(0.0, R::kMaxPosition_m, "m");
     if (auto v = dm.optional("xi")) p.damper.xi = v->asPositiveDouble();
     if (auto v = dm.optional("adaptive")) p.damper.adaptive = v->asBool();
     dm.finish();
   }
 }
 
-void readJointPosition(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&) {
+void readJointPosition(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double dt) {
   tasks::JointPositionParams& p = s.joint_position;
   const yaml::Node joints = m.required("joints");
   if (joints.size() < 1) joints.fail("expected at least one joint");
   for (const yaml::Node& jn : joints.elements()) p.joints.push_back(jointName(jn, d));
-  if (auto v = m.optional("target")) p.target = v->asVector(static_cast<int>(p.joints.size()));
-  readGains(m, p.gains);
+  if (auto v = m.optional("target")) {
+    p.target = v->asVector(static_cast<int>(p.joints.size()));
+    for (int k = 0; k < p.target.size(); ++k) requireWithinLimits((*v)[k], p.target[k], d.joints[static_cast<size_t>(d.findJoint(p.joints[static_cast<size_t>(k)]))]);
+  }
+  readGains(m, p.gains, dt);
 }
 
-void readPosture(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&) {
+void readPosture(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double dt) {
   tasks::PostureParams& p = s.posture;
   const int nj = static_cast<int>(d.joints.size());
   auto target = m.optional("target");
   auto posture = m.optional("posture");
   if (target && posture) posture->fail("give either target or posture, not both");
-  if (target) p.target = target->asVector(nj);
+  if (target) {
+    p.target = target->asVector(nj);
+    for (int k = 0; k < nj; ++k) requireWithinLimits((*target)[k], p.target[k], d.joints[static_cast<size_t>(k)]);
+  }
   if (posture) {
     const std::string name = posture->asString();
     std::vector<std::string> names;
@@ -174,9 +221,10 @@ void readPosture(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&
       const int j = d.findJoint(key);
       if (j < 0) value.fail("unknown joint '" + key + "'");
       p.target[j] = value.asDouble();
+      requireWithinLimits(value, p.target[j], d.joints[static_cast<size_t>(j)]);
     }
   }
-  readGains(m, p.gains);
+  readGains(m, p.gains, dt);
 }
 
 template <class T>
@@ -306,7 +354,7 @@ double asBound(const yaml::Node& n) {
     if (s == ".inf" || s == "+.inf" || s == "inf" || s == "+inf" || s == ".Inf" || s == ".INF") return kInf;
     if (s == "-.inf" || s == "-inf" || s == "-.Inf" || s == "-.INF") return -kInf;
   }
-  return n.asDouble();
+  return n.asDoubleIn(-R::kMaxPosition_m, R::kMaxPosition_m, "m (or .inf, -.inf)");
 }
 
 Eigen::Vector3d asBound3(const yaml::Node& n) {
@@ -321,7 +369,8 @@ void requireChannelName(const yaml::Node& n, const std::string& name) {
   }
 }
 
-TaskSpec readTaskSpec(const yaml::Node& node, const model::RobotDescription& robot, const std::vector<std::string>& contacts) {
+TaskSpec readTaskSpec(const yaml::Node& node, const model::RobotDescription& robot, const std::vector<std::string>& contacts,
+                      double control_period_s) {
   yaml::StrictMap m(node);
   TaskSpec s;
   s.where = node.where();
@@ -331,7 +380,7 @@ TaskSpec readTaskSpec(const yaml::Node& node, const model::RobotDescription& rob
   const yaml::Node type = m.required("type");
   s.type = type.asEnum(taskTypes());
   const TaskType* t = findType(s.type);
-  t->read(s, m, robot, contacts);
+  t->read(s, m, robot, contacts, control_period_s);
   m.finish();
   return s;
 }

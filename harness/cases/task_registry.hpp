@@ -50,10 +50,12 @@ struct TaskSpec {
 const std::vector<std::string>& taskTypes();
 
 /// Reads one entry of `controller.tasks` (a mapping with `name`, `type` and the type's keys).
-/// `contacts` are the names of the controller's contacts (for `contact` tasks). Throws
+/// `contacts` are the names of the controller's contacts (for `contact` tasks). Values are
+/// checked against the ranges of lexdyn/common/input_ranges.hpp: positions, joint targets within
+/// the joints' limits, PD gains stable at `control_period_s` (0: not checked). Throws
 /// lexdyn::InputError naming the file, line and key path.
 TaskSpec readTaskSpec(const yaml::Node& node, const model::RobotDescription& robot,
-                      const std::vector<std::string>& contacts);
+                      const std::vector<std::string>& contacts, double control_period_s = 0.0);
 
 /// Builds the task. Errors of the task's own validation are rethrown naming the case file
 /// entry (TaskSpec::where).

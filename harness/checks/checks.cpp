@@ -194,11 +194,23 @@ const std::vector<std::string>& controllerStatusNames() {
 }
 
 const std::vector<std::string>& solverStatusNames() {
-  static const std::vector<std::string> names = {"solved", "stopped_early", "iteration_limit", "non_finite_input"};
+  static const std::vector<std::string> names = {"solved", "stopped_early", "iteration_limit", "non_finite_input",
+                                                 "non_finite_result"};
   return names;
 }
 
-std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace) {
+void applyWallClockPolicy(CheckResult& r, bool wall_clock_checks) {
+  if (r.machine_dependent) r.decides = wall_clock_checks;
+}
+
+bool allPassed(const std::vector<CheckResult>& results) {
+  for (const auto& r : results) {
+    if (r.decides && !r.passed) return false;
+  }
+  return true;
+}
+
+std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace, bool wall_clock_checks) {
   TraceSchema schema;
   for (const auto& n : trace.names) schema.add(n);
   const std::string* method = findMetadata(trace.metadata, kMethodMetadata);
@@ -209,6 +221,7 @@ std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const Tr
     c->bind(schema, trace.metadata);
     for (const auto& row : trace.rows) c->consume(row.data());
     out.push_back(c->result());
+    applyWallClockPolicy(out.back(), wall_clock_checks);
   }
   return out;
 }

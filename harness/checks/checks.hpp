@@ -11,7 +11,8 @@
 //   task_error, torque_limits, contact_unilateral, contact_friction, contact_cop,
 //   contact_wrench_match, joint_acceleration_sign_changes, joint_velocity_hf_energy,
 //   task_error_rate_sign_changes, task_error_closed_form, task_overshoot, controller_status,
-//   active_set_peak, augmented_fraction, tick_time.
+//   active_set_peak, factorization_peak, augmented_fraction, tick_time (machine-dependent: it
+//   decides only when asked, applyWallClockPolicy).
 // A check passes when it saw at least one row in its window [from_s, to_s] and its value is on
 // the right side of its limit.
 #pragma once
@@ -82,7 +83,17 @@ struct CheckResult {
   double limit = 0.0;
   std::string unit;
   std::string detail;
+  /// A wall-clock measurement (tick_time): its value depends on the machine and its load.
+  bool machine_dependent = false;
+  /// Counts towards the verdict (all_checks_passed, exit code). False for a machine-dependent
+  /// check unless wall-clock checks were asked to decide (applyWallClockPolicy).
+  bool decides = true;
 };
+
+/// Sets `decides` of a machine-dependent result: it decides only when `wall_clock_checks`.
+void applyWallClockPolicy(CheckResult& r, bool wall_clock_checks);
+/// True when every result that decides passed (an empty list passes).
+bool allPassed(const std::vector<CheckResult>& results);
 
 class Check {
  public:
@@ -121,14 +132,16 @@ constexpr const char* kMethodMetadata = "method";
 constexpr const char* kControllerStatusChannel = "ctrl.status";
 constexpr const char* kSolverStatusChannel = "solver.status";
 constexpr const char* kSolverIterationsChannel = "solver.iterations";
+constexpr const char* kSolverFactorizationsChannel = "solver.factorizations";
 /// ctrl.status holds the index of the controller's tick status in this list.
 const std::vector<std::string>& controllerStatusNames();  // ok, solver_stopped_early, ...
 /// solver.status holds the index of the solver's status in this list.
 const std::vector<std::string>& solverStatusNames();      // solved, stopped_early, ...
 
 /// Runs checks over a stored trace. Checks that do not apply to the trace's method (metadata
-/// `method`) are left out.
-std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace);
+/// `method`) are left out. Machine-dependent checks decide only with `wall_clock_checks`.
+std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace,
+                                   bool wall_clock_checks = false);
 
 /// The figure a comparison compares, for one method: a task_error check of the comparison's
 /// tasks, statistic and window, without a limit (+inf).

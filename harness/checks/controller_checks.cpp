@@ -749,6 +749,29 @@ class ActiveSetPeak final : public CheckBase {
   int col_ = 0;
 };
 
+// Largest number of level stages the solver factorised in a tick: the deterministic proxy of a
+// tick's solver time (the same on every machine and under any load, unlike tick_time).
+class FactorizationPeak final : public CheckBase {
+ public:
+  explicit FactorizationPeak(const CheckSpec& s) : CheckBase(s, "level factorisations") {}
+  void bind(const TraceSchema& schema, const TraceMetadata&) override {
+    t_ = require(schema, kTimeChannel, spec_);
+    col_ = require(schema, kSolverFactorizationsChannel, spec_);
+  }
+  void consume(const double* row) override {
+    if (!active(row)) return;
+    const double v = row[col_];
+    if (!seen_ || v > worst_ || std::isnan(v)) {
+      worst_ = v;
+      detail_ = "at t = " + fmt(row[t_]) + " s";
+    }
+    seen_ = true;
+  }
+
+ private:
+  int col_ = 0;
+};
+
 // Fraction of rows at which a level was augmented with Newton rows.
 class AugmentedFraction final : public CheckBase {
  public:
@@ -791,6 +814,7 @@ class TickTime final : public CheckBase {
   }
   CheckResult result() const override {
     CheckResult r = CheckBase::result();
+    r.machine_dependent = true;
     if (!seen_) return r;
     std::vector<double> v = values_;
     std::sort(v.begin(), v.end());
@@ -816,7 +840,7 @@ const std::vector<std::string>& controllerCheckTypes() {
       "task_error",        "torque_limits",       "contact_unilateral", "contact_friction",
       "contact_cop",       "contact_wrench_match", "joint_acceleration_sign_changes",
       "joint_velocity_hf_energy", "task_error_rate_sign_changes", "task_error_closed_form", "task_overshoot",
-      "controller_status", "active_set_peak", "augmented_fraction", "tick_time"};
+      "controller_status", "active_set_peak", "factorization_peak", "augmented_fraction", "tick_time"};
   return types;
 }
 
@@ -834,6 +858,7 @@ std::unique_ptr<Check> makeControllerCheck(const CheckSpec& s) {
   if (s.type == "task_overshoot") return std::make_unique<TaskOvershoot>(s);
   if (s.type == "controller_status") return std::make_unique<ControllerStatus>(s);
   if (s.type == "active_set_peak") return std::make_unique<ActiveSetPeak>(s);
+  if (s.type == "factorization_peak") return std::make_unique<FactorizationPeak>(s);
   if (s.type == "augmented_fraction") return std::make_unique<AugmentedFraction>(s);
   if (s.type == "tick_time") return std::make_unique<TickTime>(s);
   return nullptr;

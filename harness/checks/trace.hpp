@@ -1,15 +1,21 @@
 // Traces: one row of named channels per control tick, written as CSV.
 //
-// File format (docs/simulator.md, "Trace files"): metadata lines "# key: value", then one line
+// File format (docs/file-formats.md, "Trace files"): metadata lines "# key: value", then one line
 // of channel names, then one line per row, every value in the shortest form that reads back to
-// the same double (so a trace round-trips bit for bit). The writer writes to "<path>.partial", flushes every
-// `flush_every_rows` rows so that an interrupted run keeps its data, and renames the file to
-// <path> in finish(). Channels are registered before the first row; later components (the
-// controller, tasks) add their own channels the same way.
+// the same double (so a trace round-trips bit for bit), then the end mark "# end: STATUS[: why]"
+// written by finish(): a trace carries its own verdict on completeness (completed, interrupted,
+// integrator_failure, ...), so that a trace separated from its summary is never taken for a
+// complete run; a trace without the mark was cut (killed run) or not written by a finished run.
+// The writer writes to "<path>.partial", flushes every `flush_every_rows` rows so that an
+// interrupted run keeps its data, and renames the file to <path> in finish(). Channels are
+// registered before the first row; later components (the controller, tasks) add their own
+// channels the same way.
 #pragma once
 
 #include <cstdio>
+#include <iosfwd>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -33,6 +39,7 @@ class TraceSchema {
 
  private:
   std::vector<std::string> names_;
+  std::unordered_map<std::string, int> index_;  ///< name -> column (a trace may have 1e5 channels)
 };
 
 class TraceWriter {
@@ -45,8 +52,10 @@ class TraceWriter {
   const TraceSchema& schema() const { return schema_; }
   /// Writes one row of schema().size() values.
   void write(const double* row);
-  /// Flushes, closes and renames the file to its final name. Idempotent.
-  void finish();
+  /// Writes the end mark "# end: <end_status>[: <why>]" (newlines become spaces), flushes, closes
+  /// and renames the file to its final name. Idempotent.
+  void finish(const std::string& end_status = kTraceCompleted, const std::string& why = "");
+  static constexpr const char* kTraceCompleted = "completed";
   long rows() const { return rows_; }
   const std::string& path() const { return path_; }
   const std::string& partialPath() const { return partial_; }
@@ -65,12 +74,28 @@ struct TraceTable {
   TraceMetadata metadata;
   std::vector<std::string> names;
   std::vector<std::vector<double>> rows;
+  /// The end mark: "completed", "interrupted", "integrator_failure", "controller_failure",
+  /// "internal_error", ... and why; empty when the file has none (cut, or an older writer).
+  std::string end_status, end_message;
   int column(const std::string& name) const;  ///< -1 when absent
+  /// True when the end mark says the run completed.
+  bool complete() const { return end_status == TraceWriter::kTraceCompleted; }
+  /// One sentence on completeness for messages ("the run completed", "interrupted: ...",
+  /// "no end mark: the run was killed or is still running").
+  std::string completeness() const;
 };
+
+/// Size guard of trace files: channels per row.
+inline constexpr long kMaxTraceChannels = 200000;
 
 /// Reads a trace file; throws lexdyn::InputError naming the file and line on malformed input.
 /// For a "<path>.partial" file (a run that was killed) an unterminated last row, cut by the
-/// kill in the middle of a write, is dropped; in any other file it is an error.
+/// kill in the middle of a write, is dropped; in any other file it is an error. Validated: the
+/// time channel `t` (when present) is finite, >= 0 and strictly increasing, on the grid of the
+/// header's control_period_s and within its duration_s (when the header has them); values are
+/// numbers as the writer writes them (inf, -inf and nan allowed outside `t`).
 TraceTable readTrace(const std::string& path);
+/// The same from a stream; `name` names it in messages, `partial` as for a ".partial" file.
+TraceTable parseTrace(std::istream& in, const std::string& name, bool partial);
 
 }  // namespace lexdyn::checks

@@ -1,9 +1,10 @@
 // lexdyn-harness: runs case files, checks stored traces, compares methods, golden traces.
 //
 //   lexdyn-harness run CASE --out DIR [--method bfgs|ah|gn|wls] [--duration S] [--set PATH=VALUE]... [--quiet]
+//                                     [--wall-clock-checks]
 //   lexdyn-harness case CASE [--method M] [--duration S] [--set PATH=VALUE]... [--out FILE]
 //                                                         (the effective case as one YAML file)
-//   lexdyn-harness check TRACE --case CASE [--json]       (the case's checks on a stored trace)
+//   lexdyn-harness check TRACE --case CASE [--json] [--wall-clock-checks]  (the case's checks on a stored trace)
 //   lexdyn-harness check CASE TRACE [--json]              (the same, older argument order)
 //   lexdyn-harness compare --case CASE TRACE... [--json]  (the case's comparisons between methods)
 //   lexdyn-harness sweep run|point|chunk|merge|submit|list|check FILE ...   (docs/sweeps.md)
@@ -13,9 +14,16 @@
 //   lexdyn-harness golden update|check [--manifest FILE] [--cases A,B] [--only ID]
 //                                      [--work DIR] [--progress]
 //
-// Exit codes: 0 every check (comparison, golden) passed; 1 a check failed, a golden differs or
-// the run stopped early (integrator or controller failure, interruption, an internal error);
-// 2 bad input (the message names the file and the key path).
+// Exit codes (docs/architecture.md, "Errors and exit codes"), the first that applies:
+//   130 / 143  interrupted by SIGINT / SIGTERM (a run keeps its trace, marked, and its summary);
+//   2          bad input: case, robot, trace or manifest file, command line (the message names
+//              the file, the line and the key path); nothing is simulated;
+//   3          run failure: integrator, controller or solver failure, an internal error, out of
+//              memory (the trace is kept and marked with the reason);
+//   1          a check, comparison or golden failed, or `check` / `compare` were given the trace
+//              of a run that did not complete;
+//   0          the run completed and every check that decides passed (wall-clock checks decide
+//              only with --wall-clock-checks).
 #include "harness/cases/runner.hpp"
 #include "harness/cli/sweep_cmd.hpp"
 #include "harness/golden/golden.hpp"
@@ -26,6 +34,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cerrno>
 #include <cstdio>
@@ -43,16 +52,31 @@ namespace fs = std::filesystem;
 std::atomic<bool> g_interrupt{false};
 std::atomic<int> g_signal{0};
 
-extern "C" void onSignal(int sig) {
+extern "C" void onSignal(int s) {
+  g_signal.store(s);
   g_interrupt.store(true);
-  g_signal.store(sig);
 }
+
+int interruptedCode() { return lexdyn::cases::kExitInterrupted + (g_signal.load() > 0 ? g_signal.load() : SIGINT); }
 
 void printChecks(const std::vector<lexdyn::checks::CheckResult>& checks) {
   for (const auto& c : checks) {
-    std::fprintf(stderr, "  %-4s %-28s value %-12.6g limit %-10.6g %s%s%s\n", c.passed ? "ok" : "FAIL", c.name.c_str(),
-                 c.value, c.limit, c.unit.c_str(), c.detail.empty() ? "" : "  (", c.detail.empty() ? "" : (c.detail + ")").c_str());
+    // A check that does not decide (a wall-clock measurement without --wall-clock-checks) is
+    // reported as "info", labelled.
+    const char* mark = c.decides ? (c.passed ? "ok" : "FAIL") : "info";
+    std::fprintf(stderr, "  %-4s %-28s value %-12.6g limit %-10.6g %s%s%s%s\n", mark, c.name.c_str(), c.value, c.limit,
+                 c.unit.c_str(), c.detail.empty() ? "" : "  (", c.detail.empty() ? "" : (c.detail + ")").c_str(),
+                 c.decides ? "" : (c.passed ? "  [machine-dependent, reported only: within the limit here]"
+                                            : "  [machine-dependent, reported only: above the limit here]"));
   }
+}
+
+/// A trace that does not end with the mark of a completed run: the checks only saw part of it.
+bool warnIfIncomplete(const std::string& path, const lexdyn::checks::TraceTable& table) {
+  if (table.complete()) return false;
+  std::fprintf(stderr, "lexdyn-harness: %s is not the trace of a complete run (%s): the results cover its rows only and "
+                       "do not pass\n", path.c_str(), table.completeness().c_str());
+  return true;
 }
 
 bool isPartial(const std::string& path) { return path.size() > 8 && path.compare(path.size() - 8, 8, ".partial") == 0; }
@@ -81,7 +105,7 @@ std::vector<std::string> splitList(const std::string& s) {
   return out;
 }
 
-int runCheck(const std::vector<std::string>& positional, const std::string& case_opt, bool json) {
+int runCheck(const std::vector<std::string>& positional, const std::string& case_opt, bool json, bool wall_clock) {
   std::string case_path = case_opt, trace_path;
   if (positional.size() == 2 && case_opt.empty()) {
     case_path = positional[0];
@@ -103,14 +127,14 @@ int runCheck(const std::vector<std::string>& positional, const std::string& case
     std::fprintf(stderr, "lexdyn-harness: warning: %s is a trace of case '%s', not of '%s' (%s)\n", trace_path.c_str(),
                  traced_case->c_str(), spec.name.c_str(), case_path.c_str());
   }
-  const auto results = lexdyn::checks::runChecks(spec.checks, table);
-  bool all = true;
-  for (const auto& r : results) all = all && r.passed;
+  const auto results = lexdyn::checks::runChecks(spec.checks, table, wall_clock);
+  const bool all = lexdyn::checks::allPassed(results);
   const std::string* method = lexdyn::checks::findMetadata(table.metadata, lexdyn::checks::kMethodMetadata);
   describeTrace(spec.name + (method ? " " + *method : ""), trace_path, table);
   printChecks(results);
+  const bool incomplete = warnIfIncomplete(trace_path, table);
   if (json) std::printf("%s\n", lexdyn::cases::checkResultsJson(results).c_str());
-  return all ? 0 : 1;
+  return all && !incomplete ? lexdyn::cases::kExitPass : lexdyn::cases::kExitCheckFailed;
 }
 
 int runCompare(const std::string& case_path, const std::vector<std::string>& traces, bool json) {
@@ -118,6 +142,7 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
   const lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
   if (spec.comparisons.empty()) throw lexdyn::InputError(case_path, "the case has no comparisons");
   std::map<std::string, lexdyn::checks::TraceTable> by_method;
+  bool incomplete = false;
   for (const std::string& p : traces) {
     lexdyn::checks::TraceTable t = lexdyn::checks::readTrace(p);
     const std::string* m = lexdyn::checks::findMetadata(t.metadata, lexdyn::checks::kMethodMetadata);
@@ -127,6 +152,7 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
       std::fprintf(stderr, "lexdyn-harness: warning: %s is a trace of case '%s', not of '%s'\n", p.c_str(), c->c_str(), spec.name.c_str());
     }
     describeTrace(spec.name + " " + *m, p, t);
+    if (warnIfIncomplete(p, t)) incomplete = true;
     if (by_method.count(*m)) throw lexdyn::InputError(p, "a second trace of method " + *m);
     by_method.emplace(*m, std::move(t));
   }
@@ -147,9 +173,7 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
   }
   printChecks(results);
   if (json) std::printf("%s\n", lexdyn::cases::checkResultsJson(results).c_str());
-  bool all = true;
-  for (const auto& r : results) all = all && r.passed;
-  return all ? 0 : 1;
+  return lexdyn::checks::allPassed(results) && !incomplete ? lexdyn::cases::kExitPass : lexdyn::cases::kExitCheckFailed;
 }
 
 // One line per selected golden: ID CASE_FILE METHOD ("-" for a case without methods).
@@ -195,7 +219,7 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
     work = (fs::temp_directory_path() / ("lexdyn-golden-" + std::to_string(::getpid()))).string();
     temp_work = true;
   }
-  int failed = 0;
+  int failed = 0, run_failures = 0;
   for (const SelectedGolden& g : selected) {
     const lexdyn::golden::Entry& e = *g.entry;
     const std::string& method = g.method;
@@ -207,7 +231,21 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
       continue;
     }
     std::string status;
-    const lexdyn::checks::TraceTable fresh = lexdyn::golden::runGolden(e, method, m, work, status, progress);
+    const lexdyn::checks::TraceTable fresh = lexdyn::golden::runGolden(e, method, m, work, status, progress, &g_interrupt);
+    if (g_interrupt.load() || status == "interrupted") {
+      std::fprintf(stderr, "  interrupted during %s: nothing written for it\n", id.c_str());
+      if (temp_work) {
+        std::error_code ec;
+        fs::remove_all(work, ec);
+      }
+      return interruptedCode();
+    }
+    if (status == "internal_error" || status == "input_error") {
+      // The run stopped on an exception: a golden would record that, not the case's behaviour.
+      std::fprintf(stderr, "  FAIL %s: the run stopped with %s (%s)\n", id.c_str(), status.c_str(), fresh.end_message.c_str());
+      ++run_failures;
+      continue;
+    }
     if (update) {
       lexdyn::golden::writeGolden(path, fresh, lexdyn::golden::provenance(e, method, status, m.dir));
       std::fprintf(stderr, "  wrote %s: %zu rows x %zu channels, %g s, run %s\n", path.c_str(), fresh.rows.size(), fresh.names.size(),
@@ -224,8 +262,9 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
     fs::remove_all(work, ec);
   }
   const int n = static_cast<int>(selected.size());
-  if (!update) std::fprintf(stderr, "golden check: %d of %d match\n", n - failed, n);
-  return failed == 0 ? 0 : 1;
+  if (!update) std::fprintf(stderr, "golden check: %d of %d match\n", n - failed - run_failures, n);
+  if (run_failures > 0) return lexdyn::cases::kExitRunFailure;
+  return failed == 0 ? lexdyn::cases::kExitPass : lexdyn::cases::kExitCheckFailed;
 }
 
 }  // namespace
@@ -237,7 +276,7 @@ int main(int argc, char** argv) {
   std::string case_path, out_dir, case_opt, method, manifest = std::string(LEXDYN_SOURCE_DIR) + "/golden/manifest.yaml";
   std::string cases_opt, only, work;
   std::string duration;
-  bool quiet = false, progress = false, json = false;
+  bool quiet = false, progress = false, json = false, wall_clock = false;
   std::vector<std::string> positional, traces, sets;
   std::string case_out;
 
@@ -255,11 +294,13 @@ int main(int argc, char** argv) {
   casecmd->add_option("--duration", duration, "simulate at most this long (s): stop_at_s");
   casecmd->add_option("--set", sets, "override a value of the case: PATH=VALUE; repeatable");
   casecmd->add_option("--out", case_out, "write it to this file (paths relative to it) instead of stdout (absolute paths)");
+  run->add_flag("--wall-clock-checks", wall_clock, "tick_time checks decide pass/fail (machine-dependent; reported otherwise)");
 
   CLI::App* check = app.add_subcommand("check", "evaluate a case's checks on a stored trace");
   check->add_option("args", positional, "TRACE (with --case CASE), or CASE TRACE")->required()->expected(1, 2);
   check->add_option("--case", case_opt, "case file (default: the one the trace names)");
   check->add_flag("--json", json, "also print the results as JSON on stdout (summary.json's checks)");
+  check->add_flag("--wall-clock-checks", wall_clock, "tick_time checks decide pass/fail (machine-dependent; reported otherwise)");
 
   CLI::App* compare = app.add_subcommand("compare", "evaluate a case's comparisons on traces of several methods");
   compare->add_option("traces", traces, "trace files (one per method)")->required();
@@ -298,9 +339,14 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     app.exit(e);
-    return 2;
+    return lexdyn::cases::kExitBadInput;
   }
 
+  // SIGINT / SIGTERM: a run stops after the current tick, keeps its trace (marked) and writes its
+  // summary; golden runs stop; every subcommand then exits 128 + the signal.
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  auto interrupted = [](int code) { return g_interrupt.load() ? interruptedCode() : code; };
   try {
     if (*report) {
       const std::string script = std::string(LEXDYN_SOURCE_DIR) + "/harness/scripts/report.py";
@@ -314,15 +360,11 @@ int main(int argc, char** argv) {
       ::execv(argv_c[0], argv_c.data());
       throw std::runtime_error(std::string("cannot run ") + script + ": " + std::strerror(errno));
     }
-    if (*sweep.sweep) {
-      std::signal(SIGINT, onSignal);
-      std::signal(SIGTERM, onSignal);
-      return lexdyn::cli::runSweepCommand(sweep, g_signal, g_interrupt);
-    }
-    if (*check) return runCheck(positional, case_opt, json);
-    if (*compare) return runCompare(case_opt, traces, json);
-    if (*golden && *glist) return runGoldenList(manifest, cases_opt, only);
-    if (*golden) return runGoldenCommand(static_cast<bool>(*gupdate), manifest, cases_opt, only, work, progress);
+    if (*sweep.sweep) return lexdyn::cli::runSweepCommand(sweep, g_signal, g_interrupt);
+    if (*check) return interrupted(runCheck(positional, case_opt, json, wall_clock));
+    if (*compare) return interrupted(runCompare(case_opt, traces, json));
+    if (*golden && *glist) return interrupted(runGoldenList(manifest, cases_opt, only));
+    if (*golden) return interrupted(runGoldenCommand(static_cast<bool>(*gupdate), manifest, cases_opt, only, work, progress));
     // --duration is an override like --set (stop_at_s), and --method is recorded as one
     // (controller.method), so that the effective case (DIR/case.yaml) holds them.
     std::vector<lexdyn::cases::Override> overrides;
@@ -345,12 +387,12 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "wrote %s\n", case_out.c_str());
       return 0;
     }
-    std::signal(SIGINT, onSignal);
-    std::signal(SIGTERM, onSignal);
     lexdyn::cases::RunOptions options;
     options.out_dir = out_dir;
     options.progress = !quiet;
     options.interrupt = &g_interrupt;
+    options.interrupt_signal = &g_signal;
+    options.wall_clock_checks = wall_clock;
     const lexdyn::cases::RunSummary s = lexdyn::cases::runCase(spec, options);
     const std::string label = spec.name + (s.method.empty() ? "" : " " + s.method);
     std::fprintf(stderr, "[%s] %s: %.3f s simulated in %.3f s wall (%.1fx real time), %ld ticks\n", label.c_str(),
@@ -376,9 +418,15 @@ int main(int argc, char** argv) {
     return lexdyn::cases::exitCode(s);
   } catch (const lexdyn::InputError& e) {
     std::fprintf(stderr, "lexdyn-harness: error: %s\n", e.what());
-    return 2;
+    return lexdyn::cases::kExitBadInput;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "lexdyn-harness: error: out of memory\n");
+    return lexdyn::cases::kExitRunFailure;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lexdyn-harness: internal error: %s\n", e.what());
-    return 1;
+    return lexdyn::cases::kExitRunFailure;
+  } catch (...) {
+    std::fprintf(stderr, "lexdyn-harness: internal error: an exception of unknown type\n");
+    return lexdyn::cases::kExitRunFailure;
   }
 }

@@ -5,11 +5,22 @@
 //   lexdyn-solve --bench FILES...     consecutive ticks: each solved cold and warm-started from the
 //                                     previous tick; prints timing statistics as JSON
 //
-// Exit codes: 0 a solution was produced (relaxed levels included), 2 bad input.
+// Exit codes (docs/architecture.md, "Errors and exit codes"):
+//   0    a solution was produced: status solved (relaxed levels included), or stopped_early by the
+//        paper's rules when --paper-rules asked for them;
+//   2    bad input: the problem file (file and key path named; size guards of docs/file-formats.md)
+//        or the command line;
+//   3    solver failure: the hard iteration cap (iteration_limit), a non-finite result, an
+//        internal error, out of memory; the JSON result is still printed when there is one;
+//   130 / 143  interrupted by SIGINT / SIGTERM (--bench stops between solves, prints nothing).
+// lexdyn-solve runs no check, so it never exits 1.
 #include <CLI/CLI.hpp>
 #include <Eigen/QR>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -22,6 +33,17 @@
 #include "lexdyn/solver/solver.hpp"
 
 namespace {
+
+constexpr int kExitPass = 0, kExitBadInput = 2, kExitSolverFailure = 3, kExitInterrupted = 128;
+
+std::atomic<int> g_signal{0};
+extern "C" void onSignal(int s) { g_signal.store(s); }
+
+int interrupted() {
+  const int s = g_signal.load();
+  std::fprintf(stderr, "lexdyn-solve: interrupted by %s\n", s == SIGINT ? "SIGINT" : (s == SIGTERM ? "SIGTERM" : "a signal"));
+  return kExitInterrupted + s;
+}
 
 using Clock = std::chrono::steady_clock;
 using lexdyn::solver::Options;
@@ -89,6 +111,7 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
   std::vector<Problem> ticks;
   ticks.reserve(files.size());
   for (size_t i = 0; i < files.size(); ++i) {
+    if (g_signal.load()) return interrupted();
     ticks.push_back(lexdyn::solver::readProblemJson(files[i]));
     if (detectBounds) ticks.back().detectBoundsLevel();
     if (files.size() >= 200 && (i + 1) % 200 == 0) std::fprintf(stderr, "lexdyn-solve: loaded %zu/%zu\n", i + 1, files.size());
@@ -103,6 +126,7 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
   int coldCap = 0, warmCap = 0;
   double maxAbsX = 0.0;
   for (size_t k = 0; k < ticks.size(); ++k) {
+    if (g_signal.load()) return interrupted();
     const auto a = Clock::now();
     const auto& rc = cold.solve(ticks[k]);
     const auto b = Clock::now();
@@ -129,7 +153,8 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
   out["warm"] = stats(warmUs, warmIt, warmCap, unit);
   out["max_abs_x"] = maxAbsX;
   std::cout << out.dump(2) << std::endl;
-  return 0;
+  // A benchmark measures time; a tick that hit the cap is counted in iteration_limit_hits.
+  return kExitPass;
 }
 
 }  // namespace
@@ -143,32 +168,53 @@ int main(int argc, char** argv) {
   app.add_flag("--bench", bench, "treat the files as consecutive ticks and print timing statistics");
   app.add_flag("--details", details, "also print the active set, ranks and per-row violations");
   app.add_flag("--no-bounds-level", noBounds, "do not treat a first level of single-variable rows as bounds");
-  app.add_option("--max-iterations", maxIterations, "hard cap on active-set iterations")->check(CLI::PositiveNumber);
-  app.add_option("--paper-rules", paperDt, "enable the paper's termination rules for this control period (s)");
+  app.add_option("--max-iterations", maxIterations, "hard cap on active-set iterations")->check(CLI::Range(1, 1000000));
+  app.add_option("--paper-rules", paperDt, "enable the paper's termination rules for this control period (s, in [1e-6, 10])");
   app.add_option("files", files, "problem files (JSON)")->required();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
-    return code == 0 ? 0 : 2;
+    return code == 0 ? kExitPass : kExitBadInput;
   }
+  if (app.count("--paper-rules") && !(paperDt >= 1e-6 && paperDt <= 10.0)) {
+    std::fprintf(stderr, "lexdyn-solve: error: --paper-rules: expected a control period in [1e-6, 10] s, found %g\n", paperDt);
+    return kExitBadInput;
+  }
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
   Options options = paperDt > 0.0 ? Options::paper(paperDt) : Options{};
   options.max_iterations = maxIterations;
   try {
     if (bench) return runBench(files, options, !noBounds);
     if (files.size() != 1) {
-      std::fprintf(stderr, "lexdyn-solve: expected one problem file (use --bench for several)\n");
-      return 2;
+      std::fprintf(stderr, "lexdyn-solve: error: expected one problem file, found %zu (use --bench for several)\n", files.size());
+      return kExitBadInput;
     }
     Problem problem = lexdyn::solver::readProblemJson(files[0]);
     if (!noBounds) problem.detectBoundsLevel();
     Solver solver;
     solver.setup(problem, options);
     const auto& r = solver.solve(problem);
+    if (g_signal.load()) return interrupted();
     std::cout << lexdyn::solver::resultToJson(problem, r, details) << std::endl;
-    return 0;
+    // Only a solution is a pass: the hard cap leaves an iterate, a non-finite result nothing.
+    const bool requested_stop = r.status == Status::StoppedEarly && paperDt > 0.0;
+    if (r.status == Status::Solved || requested_stop) return kExitPass;
+    std::fprintf(stderr, "lexdyn-solve: solver failure on %s: status %s (%s) after %d iterations\n", files[0].c_str(),
+                 lexdyn::solver::toString(r.status), lexdyn::solver::toString(r.reason), r.iterations);
+    return kExitSolverFailure;
   } catch (const lexdyn::InputError& e) {
     std::fprintf(stderr, "lexdyn-solve: error: %s\n", e.what());
-    return 2;
+    return kExitBadInput;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "lexdyn-solve: error: out of memory\n");
+    return kExitSolverFailure;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lexdyn-solve: internal error: %s\n", e.what());
+    return kExitSolverFailure;
+  } catch (...) {
+    std::fprintf(stderr, "lexdyn-solve: internal error: an exception of unknown type\n");
+    return kExitSolverFailure;
   }
 }

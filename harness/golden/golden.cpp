@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <set>
 
 namespace lexdyn::golden {
 
@@ -23,12 +24,29 @@ std::string num(double v) {
   return buf;
 }
 
+// A tolerance beyond 1e6 (absolute) or 1 (relative) would accept anything a golden can hold.
+constexpr double kMaxAbsTolerance = 1e6, kMaxRelTolerance = 1.0;
+
 Tolerance readTolerance(const yaml::Node& n, Tolerance t) {
   yaml::StrictMap m(n);
-  if (auto v = m.optional("abs")) t.abs = v->asNonNegativeDouble();
-  if (auto v = m.optional("rel")) t.rel = v->asNonNegativeDouble();
+  if (auto v = m.optional("abs")) t.abs = v->asDoubleIn(0.0, kMaxAbsTolerance);
+  if (auto v = m.optional("rel")) t.rel = v->asDoubleIn(0.0, kMaxRelTolerance);
   m.finish();
   return t;
+}
+
+/// Glob patterns of a manifest list: non-empty strings, each once.
+std::vector<std::string> readPatterns(const yaml::Node& list, bool allow_empty_list, std::vector<yaml::Node>* nodes) {
+  std::vector<std::string> out;
+  const std::vector<yaml::Node> items = list.elements();
+  if (items.empty() && !allow_empty_list) list.fail("expected at least one channel pattern (\"t\" is always kept; \"*\" keeps every channel)");
+  for (const yaml::Node& n : items) {
+    const std::string p = n.asString();
+    if (std::find(out.begin(), out.end(), p) != out.end()) n.fail("pattern '" + p + "' listed twice");
+    out.push_back(p);
+    if (nodes) nodes->push_back(n);
+  }
+  return out;
 }
 
 bool matchesAny(const std::vector<std::string>& patterns, const std::string& name) {
@@ -60,26 +78,37 @@ Manifest loadManifest(const std::string& path) {
   const yaml::Node format = top.required("format");
   format.asEnum({"lexdyn-golden-manifest/1"});
   if (auto t = top.optional("tolerance")) m.tolerance = readTolerance(*t, m.tolerance);
+  // Every pattern (channels, exclude, channel_tolerances) must match a channel of some golden
+  // run: a misspelt pattern would silently keep, drop or loosen nothing.
+  std::vector<std::pair<std::string, yaml::Node>> patterns;
   if (auto ct = top.optional("channel_tolerances")) {
     for (const yaml::Node& n : ct->elements()) {
       yaml::StrictMap cm(n);
       ChannelTolerance c;
-      c.match = cm.required("match").asString();
+      const yaml::Node match = cm.required("match");
+      c.match = match.asString();
+      patterns.emplace_back(c.match, match);
       c.tolerance = m.tolerance;
-      if (auto v = cm.optional("abs")) c.tolerance.abs = v->asNonNegativeDouble();
-      if (auto v = cm.optional("rel")) c.tolerance.rel = v->asNonNegativeDouble();
+      if (auto v = cm.optional("abs")) c.tolerance.abs = v->asDoubleIn(0.0, kMaxAbsTolerance);
+      if (auto v = cm.optional("rel")) c.tolerance.rel = v->asDoubleIn(0.0, kMaxRelTolerance);
       cm.finish();
       m.channel_tolerances.push_back(c);
     }
   }
   if (auto ch = top.optional("channels")) {
-    m.channels.clear();
-    for (const yaml::Node& n : ch->elements()) m.channels.push_back(n.asString());
+    std::vector<yaml::Node> nodes;
+    m.channels = readPatterns(*ch, false, &nodes);
+    for (size_t i = 0; i < nodes.size(); ++i) patterns.emplace_back(m.channels[i], nodes[i]);
   }
   if (auto ex = top.optional("exclude")) {
-    for (const yaml::Node& n : ex->elements()) m.exclude.push_back(n.asString());
+    std::vector<yaml::Node> nodes;
+    m.exclude = readPatterns(*ex, true, &nodes);
+    for (size_t i = 0; i < nodes.size(); ++i) patterns.emplace_back(m.exclude[i], nodes[i]);
   }
   const yaml::Node entries = top.required("entries");
+  const bool patterns_to_check = !patterns.empty();
+  std::set<std::string> channel_union;
+  if (entries.size() < 1) entries.fail("expected at least one entry");
   for (const yaml::Node& en : entries.elements()) {
     yaml::StrictMap em(en);
     Entry e;
@@ -94,6 +123,7 @@ Manifest loadManifest(const std::string& path) {
       if (spec.controller.type != "lexdyn") methods->fail("the case's controller (" + spec.controller.type + ") has no methods");
       for (const yaml::Node& mn : methods->elements()) {
         const std::string method = mn.asEnum({"bfgs", "ah", "gn", "wls"});
+        if (std::find(e.methods.begin(), e.methods.end(), method) != e.methods.end()) mn.fail("method " + method + " listed twice");
         try {
           cases::overrideMethod(spec, method, mn.where());
         } catch (const InputError& err) {
@@ -109,9 +139,20 @@ Manifest loadManifest(const std::string& path) {
     const yaml::Node d = em.required("duration_s");
     e.duration_s = d.asPositiveDouble();
     if (e.duration_s > spec.duration_s + 1e-12) d.fail("longer than the case (" + num(spec.duration_s) + " s)");
+    if (e.duration_s < spec.control_period_s) d.fail("shorter than one control period of the case (" + num(spec.control_period_s) + " s)");
+    const long ticks = std::lround(e.duration_s / spec.control_period_s);
     if (auto v = em.optional("every_n_ticks")) {
       e.every_n_ticks = v->asInt();
-      if (e.every_n_ticks < 1) v->fail("expected an integer >= 1");
+      if (e.every_n_ticks < 1 || e.every_n_ticks > ticks) {
+        v->fail("expected an integer in [1, " + std::to_string(ticks) + "] (the ticks of the golden's horizon), found " + v->raw().Scalar());
+      }
+    }
+    if (patterns_to_check) {
+      for (const std::string& method : e.methods) {
+        cases::CaseSpec ms = spec;
+        if (!method.empty()) cases::overrideMethod(ms, method, e.where);
+        for (const std::string& c : cases::traceChannels(ms)) channel_union.insert(c);
+      }
     }
     em.finish();
     for (const auto& o : m.entries) {
@@ -120,6 +161,16 @@ Manifest loadManifest(const std::string& path) {
     m.entries.push_back(e);
   }
   top.finish();
+  for (const auto& [pattern, node] : patterns) {
+    bool matched = false;
+    for (const std::string& c : channel_union) {
+      if (cases::globMatch(pattern, c)) {
+        matched = true;
+        break;
+      }
+    }
+    if (!matched) node.fail("pattern '" + pattern + "' matches no channel of any golden run of the manifest");
+  }
   return m;
 }
 
@@ -153,7 +204,7 @@ checks::TraceTable selectChannels(const checks::TraceTable& t, const Manifest& m
 }
 
 checks::TraceTable runGolden(const Entry& e, const std::string& method, const Manifest& m, const std::string& work_dir,
-                             std::string& status, bool progress) {
+                             std::string& status, bool progress, const std::atomic<bool>* interrupt) {
   cases::CaseSpec spec = cases::loadCase(e.case_path);
   if (!method.empty()) cases::overrideMethod(spec, method, e.where);
   spec.duration_s = std::min(spec.duration_s, e.duration_s);
@@ -168,9 +219,13 @@ checks::TraceTable runGolden(const Entry& e, const std::string& method, const Ma
   cases::RunOptions o;
   o.out_dir = (fs::path(work_dir) / goldenId(e.case_name, method)).string();
   o.progress = progress;
+  o.interrupt = interrupt;
   const cases::RunSummary s = cases::runCase(spec, o);
   status = s.status;
-  checks::TraceTable t = selectChannels(checks::readTrace(s.trace_path), m);
+  const checks::TraceTable full = checks::readTrace(s.trace_path);
+  checks::TraceTable t = selectChannels(full, m);
+  t.end_status = full.end_status;
+  t.end_message = full.end_message;
   t.metadata.emplace_back("golden_run_status", status);
   return t;
 }

@@ -9,6 +9,7 @@
 
 #include "harness/checks/trace.hpp"
 
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -58,9 +59,10 @@ std::string goldenPath(const Manifest& m, const std::string& case_name, const st
 checks::TraceTable selectChannels(const checks::TraceTable& t, const Manifest& m);
 
 /// Runs one case x method over the entry's horizon with its decimation (quietly, timings off)
-/// in `work_dir`, returns the selected trace and the run status in `status`.
+/// in `work_dir`, returns the selected trace and the run status in `status`. `interrupt` (e.g.
+/// set by SIGINT) stops the run after a tick (status "interrupted").
 checks::TraceTable runGolden(const Entry& e, const std::string& method, const Manifest& m, const std::string& work_dir,
-                             std::string& status, bool progress);
+                             std::string& status, bool progress, const std::atomic<bool>* interrupt = nullptr);
 
 /// Header lines recorded in a golden besides the trace's own (which hold the build: compiler,
 /// flags, library versions): format, case, method, horizon, decimation, run status, git revision.

@@ -7,8 +7,11 @@
 #   defaults: build/, 2 jobs, golden/manifest.yaml.
 # Afterwards re-run cmake in BUILD_DIR (done here) so that ctest registers new golden files, then
 # review `git diff --stat golden/` and run `ctest -L regression`.
+# Exit codes (harness/scripts/exit-codes.sh): the worst of the `golden update` runs: 130/143
+# interrupted, 2 bad input, 3 a run failure, 0 every golden written.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$ROOT/harness/scripts/exit-codes.sh"
 BUILD="$ROOT/build"
 JOBS=2
 MANIFEST="$ROOT/golden/manifest.yaml"
@@ -28,9 +31,12 @@ ONLY=()
 if [ $# -gt 0 ]; then ONLY=(--only "$(IFS=,; echo "$*")"); fi
 IDS="$("$HARNESS" golden list --manifest "$MANIFEST" "${ONLY[@]}" | cut -d' ' -f1)"
 echo "golden-update: $(echo "$IDS" | wc -l) golden(s), $JOBS at a time" >&2
-export HARNESS MANIFEST
+CODES="$(mktemp)"
+export HARNESS MANIFEST CODES
 # One process per golden (each writes its own file atomically); a failing run stops nothing else.
+echo "$IDS" | xargs -P "$JOBS" -I{} bash -c '"$HARNESS" golden update --manifest "$MANIFEST" --only "$0"; echo $? >> "$CODES"' {} || true
 status=0
-echo "$IDS" | xargs -P "$JOBS" -I{} bash -c '"$HARNESS" golden update --manifest "$MANIFEST" --only "$0"' {} || status=$?
+while read -r c; do status=$(lexdyn_worse "$status" "$c"); done < "$CODES"
+rm -f "$CODES"
 if [ -f "$BUILD/CMakeCache.txt" ]; then cmake "$BUILD" > /dev/null; fi
-exit $status
+exit "$status"

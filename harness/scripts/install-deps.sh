@@ -8,6 +8,7 @@ PACKAGES=(
   libeigen3-dev libsimbody-dev libsundials-dev liburdfdom-dev
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev librapidcheck-dev libbenchmark-dev
+  libgmp-dev
   python3-numpy python3-matplotlib
   # Sweeps on Slurm (docs/sweeps.md) and their test's own single-node cluster.
   slurm-wlm munge

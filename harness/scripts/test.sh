@@ -6,4 +6,5 @@ cd "$ROOT"
 harness/scripts/install-deps.sh
 harness/scripts/build.sh
 cd build
-ctest --output-on-failure -j "${LEXDYN_JOBS:-$(nproc)}" "$@"
+# Exit codes: 0 every test passed, 1 a test failed (ctest's own status is 8).
+ctest --output-on-failure -j "${LEXDYN_JOBS:-$(nproc)}" "$@" || exit 1

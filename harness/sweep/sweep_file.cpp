@@ -404,6 +404,11 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
             found = found || ck.name == name;
           }
           if (!found) cn.fail("the base case has no check '" + name + "' (checks: " + cases::joinNames(names) + ")");
+          for (const auto& ck : s.base.checks) {
+            if (ck.name == name && ck.type == "tick_time") {
+              cn.fail("check '" + name + "' is a wall-clock check (machine-dependent): a sweep's verdicts may not depend on the machine");
+            }
+          }
           bool any = false;
           for (const auto& m : s.methods) {
             for (const auto& ck : s.base.checks) any = any || (ck.name == name && checks::appliesTo(ck, m));

@@ -392,7 +392,7 @@ int mergeSweep(const SweepSpec& s, const DriverOptions& o) {
   printSummary(s, summary, stderr);
   if (missing > 0) {
     std::fprintf(stderr, "[sweep %s] %ld of %ld points have no result yet (run the same command again)\n", s.name.c_str(), missing, n);
-    return 4;
+    return cases::kExitRunFailure;  // incomplete: neither a pass nor a failed property
   }
   return summary.value("failed_points", 0) == 0 ? 0 : 1;
 }

@@ -1,9 +1,13 @@
 #include "lexdyn/common/yaml_strict.hpp"
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/input_text.hpp"
+
+#include <yaml-cpp/depthguard.h>
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -88,6 +92,31 @@ double Node::asNonNegativeDouble() const {
   return v;
 }
 
+namespace {
+std::string fmtRange(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  return buf;
+}
+}  // namespace
+
+double Node::asDoubleIn(double lo, double hi, const std::string& unit) const {
+  const double v = asDouble();
+  if (!(v >= lo && v <= hi)) {
+    fail("expected a number in [" + fmtRange(lo) + ", " + fmtRange(hi) + "]" + (unit.empty() ? "" : " " + unit) +
+         ", found " + node_.Scalar());
+  }
+  return v;
+}
+
+int Node::asIntIn(int lo, int hi) const {
+  const int v = asInt();
+  if (v < lo || v > hi) {
+    fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], found " + node_.Scalar());
+  }
+  return v;
+}
+
 int Node::asInt() const {
   if (!isPlainScalar(node_)) fail("expected an integer, found " + describe(node_));
   const std::string& s = node_.Scalar();
@@ -140,6 +169,15 @@ Eigen::VectorXd Node::asVector(int n) const {
 
 Eigen::Vector3d Node::asVector3() const { return asVector(3); }
 
+Eigen::VectorXd Node::asVectorIn(int n, double lo, double hi, const std::string& unit) const {
+  asVector(n);  // shape and numbers first
+  Eigen::VectorXd v(n);
+  for (int i = 0; i < n; ++i) v[i] = (*this)[i].asDoubleIn(lo, hi, unit);
+  return v;
+}
+
+Eigen::Vector3d Node::asVector3In(double lo, double hi, const std::string& unit) const { return asVectorIn(3, lo, hi, unit); }
+
 std::string Node::asEnum(const std::vector<std::string>& choices) const {
   const std::string s = asString();
   for (const auto& c : choices) {
@@ -188,9 +226,15 @@ std::vector<std::pair<std::string, Node>> Node::entriesOf() const {
 }
 
 Node loadString(const std::string& text, const std::string& file) {
+  requireText(text, file, "YAML");
   YAML::Node root;
   try {
     root = YAML::Load(text);
+  } catch (const YAML::DeepRecursion& e) {
+    std::string where = file;
+    if (!e.mark.is_null()) where += ":" + std::to_string(e.mark.line + 1);
+    throw InputError(where, "YAML nesting deeper than " + std::to_string(e.depth() - 1) + " levels (sequences or mappings "
+                            "inside each other); case, robot and manifest files need fewer than 10");
   } catch (const YAML::Exception& e) {
     std::string where = file;
     if (!e.mark.is_null()) where += ":" + std::to_string(e.mark.line + 1);
@@ -201,13 +245,7 @@ Node loadString(const std::string& text, const std::string& file) {
   return n;
 }
 
-Node loadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open file for reading");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return loadString(ss.str(), path);
-}
+Node loadFile(const std::string& path) { return loadString(readTextFile(path, "YAML"), path); }
 
 StrictMap::StrictMap(const Node& node) : node_(node) {
   for (auto& e : node.entriesOf()) keys_.push_back(e.first);  // entriesOf() checks duplicates

@@ -41,6 +41,10 @@ class Node {
   double asDouble() const;            ///< plain finite number
   double asPositiveDouble() const;    ///< > 0
   double asNonNegativeDouble() const; ///< >= 0
+  /// A plain finite number in [lo, hi]; the error names the range and `unit` (e.g. "s", "m").
+  double asDoubleIn(double lo, double hi, const std::string& unit = "") const;
+  /// A plain integer in [lo, hi].
+  int asIntIn(int lo, int hi) const;
   int asInt() const;                  ///< plain integer
   bool asBool() const;                ///< true / false
   std::string asString() const;       ///< any scalar, non-empty
@@ -49,6 +53,9 @@ class Node {
   /// A sequence of any length >= min_size of numbers.
   Eigen::VectorXd asVectorAnySize(int min_size = 0) const;
   Eigen::Vector3d asVector3() const;
+  /// A sequence of exactly `n` numbers, each in [lo, hi] (errors name the element).
+  Eigen::VectorXd asVectorIn(int n, double lo, double hi, const std::string& unit = "") const;
+  Eigen::Vector3d asVector3In(double lo, double hi, const std::string& unit = "") const;
   /// One of `choices` (error lists them).
   std::string asEnum(const std::vector<std::string>& choices) const;
 
@@ -69,8 +76,9 @@ class Node {
   std::string path_;
 };
 
-/// Loads a YAML file; throws InputError naming the file (and line) when it cannot be read or
-/// parsed. The top-level node must be a mapping.
+/// Loads a YAML file; throws InputError naming the file (and line) when it cannot be read, is
+/// not text (lexdyn/common/input_text.hpp) or cannot be parsed (also: nesting deeper than
+/// yaml-cpp's limit). The top-level node must be a mapping.
 Node loadFile(const std::string& path);
 /// Parses YAML text; `file` is used in messages only.
 Node loadString(const std::string& text, const std::string& file);

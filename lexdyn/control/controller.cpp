@@ -387,7 +387,7 @@ const Command& Controller::tick(const RobotState& s) {
   const auto t4 = Clock::now();
   // 5. Command and record.
   TickStatus st = TickStatus::Ok;
-  if (r.status == solver::Status::NonFiniteInput || !r.x.allFinite()) {
+  if (r.status == solver::Status::NonFiniteInput || r.status == solver::Status::NonFiniteResult || !r.x.allFinite()) {
     st = TickStatus::NonFinite;
   } else if (r.status == solver::Status::IterationLimit) {
     st = TickStatus::SolverIterationLimit;
@@ -420,6 +420,7 @@ const Command& Controller::tick(const RobotState& s) {
   rec.solver_status = r.status;
   rec.iterations = r.iterations;
   rec.optimality_iterations = r.optimality_iterations;
+  rec.factorizations = r.factorizations;
   for (size_t i = 0; i < I.td.size(); ++i) {
     const tasks::TaskData& d = *I.td[i];
     rec.task_error_norm(static_cast<Eigen::Index>(i)) = d.error.norm();

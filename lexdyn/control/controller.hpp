@@ -55,6 +55,7 @@ struct TickRecord {
   solver::Status solver_status = solver::Status::Solved;
   int iterations = 0;             ///< active-set iterations
   int optimality_iterations = 0;
+  int factorizations = 0;         ///< level stages the solver factorised (solver::Result::factorizations)
   // Wall time, microseconds (measurement only; never used for decisions).
   double model_us = 0.0, tasks_us = 0.0, hessian_us = 0.0, solver_us = 0.0, tick_us = 0.0;
   Eigen::VectorXd task_error_norm;        ///< per task: ||e||

@@ -1,13 +1,17 @@
 #include "lexdyn/model/robot_description.hpp"
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/input_ranges.hpp"
+#include "lexdyn/common/input_text.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -20,13 +24,12 @@ namespace {
 
 constexpr const char* kDataFormat = "lexdyn-robot-data/1";
 
-std::string readText(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, std::string("cannot open the ") + what + " file for reading");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+std::string readText(const std::string& path, const char* what) { return readTextFile(path, what); }
+
+/// Size guards of a URDF: element nesting (TinyXML and urdfdom recurse on it), links and joints
+/// (the tree is walked recursively and the name checks are quadratic).
+constexpr int kMaxLinks = 1000;
+constexpr int kMaxJoints = 1000;
 
 // Names become trace channel names and file keys: no whitespace, commas or quotes.
 bool validName(const std::string& n) {
@@ -59,20 +62,173 @@ struct XmlIndex {
   std::vector<XmlJoint> joints;
 };
 
+// The deepest element nesting of an XML text and the line where it passes `limit`, found by a
+// scan of the tags (comments, CDATA, processing instructions and declarations skipped), before
+// any parser recurses on it: a URDF nested 100000 elements deep overflows the parsers' stacks.
+void requireShallowXml(const std::string& text, const std::string& file, int limit) {
+  int depth = 0, line = 1;
+  const size_t n = text.size();
+  auto skipTo = [&](size_t i, const char* end) {
+    const size_t e = text.find(end, i);
+    const size_t stop = e == std::string::npos ? n : e + std::char_traits<char>::length(end);
+    for (size_t k = i; k < stop; ++k) line += text[k] == '\n';
+    return stop;
+  };
+  for (size_t i = 0; i < n;) {
+    const char c = text[i];
+    if (c == '\n') ++line;
+    if (c != '<') {
+      ++i;
+      continue;
+    }
+    if (text.compare(i, 4, "<!--") == 0) {
+      i = skipTo(i, "-->");
+    } else if (text.compare(i, 9, "<![CDATA[") == 0) {
+      i = skipTo(i, "]]>");
+    } else if (i + 1 < n && (text[i + 1] == '?' || text[i + 1] == '!')) {
+      i = skipTo(i, ">");
+    } else if (i + 1 < n && text[i + 1] == '/') {
+      if (depth > 0) --depth;
+      i = skipTo(i, ">");
+    } else {
+      const size_t start = i;
+      i = skipTo(i, ">");
+      const bool self_closing = i >= 2 && i - 2 > start && text[i - 2] == '/';
+      if (!self_closing && ++depth > limit) {
+        throw InputError(file + ":" + std::to_string(line), "elements are nested more than " + std::to_string(limit) +
+                                                               " deep (a URDF needs 4: robot, link, inertial, origin)");
+      }
+    }
+  }
+}
+
+// A URDF number attribute as urdfdom will read it, checked first so that errors name the file,
+// the line and the attribute: `count` whitespace-separated finite numbers, each within
+// [lo, hi]. Absent attributes are urdfdom's business (defaults or its own errors).
+std::vector<double> urdfNumbers(const TiXmlElement* e, const char* attr, int count, double lo, double hi, const char* unit,
+                                const std::string& file, const std::string& owner) {
+  std::vector<double> out;
+  const char* raw = e ? e->Attribute(attr) : nullptr;
+  if (!raw) return out;
+  const std::string where = file + ":" + std::to_string(e->Row());
+  const std::string what = owner + ": <" + std::string(e->Value()) + " " + attr + "=\"" + raw + "\">: ";
+  std::istringstream in{std::string(raw)};
+  std::string tok;
+  while (in >> tok) {
+    errno = 0;
+    char* end = nullptr;
+    const double v = std::strtod(tok.c_str(), &end);
+    if (end != tok.c_str() + tok.size() || errno == ERANGE || !std::isfinite(v)) {
+      throw InputError(where, what + "expected finite numbers, found '" + tok + "'");
+    }
+    if (!(v >= lo && v <= hi)) {
+      throw InputError(where, what + "expected values in [" + fmt(lo) + ", " + fmt(hi) + "]" + (*unit ? std::string(" ") + unit : "") +
+                                  ", found " + tok);
+    }
+    out.push_back(v);
+  }
+  if (static_cast<int>(out.size()) != count) {
+    throw InputError(where, what + "expected " + std::to_string(count) + " number" + (count > 1 ? "s" : "") + ", found " +
+                                std::to_string(out.size()));
+  }
+  return out;
+}
+
+void checkOrigin(const TiXmlElement* parent, const std::string& file, const std::string& owner) {
+  const TiXmlElement* o = parent ? parent->FirstChildElement("origin") : nullptr;
+  urdfNumbers(o, "xyz", 3, -ranges::kMaxLength_m, ranges::kMaxLength_m, "m", file, owner);
+  urdfNumbers(o, "rpy", 3, -ranges::kMaxAngle_rad, ranges::kMaxAngle_rad, "rad", file, owner);
+}
+
+// A single-number attribute checked against (lo, hi] or [lo, hi]: `positive` says which; the
+// error names the element's line, its owner and the attribute.
+void urdfPositive(const TiXmlElement* e, const char* attr, const char* label, double lo, double hi, const char* unit,
+                  const std::string& file, const std::string& owner) {
+  const std::vector<double> v = urdfNumbers(e, attr, 1, -std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+                                            unit, file, owner);
+  if (v.empty()) return;
+  const std::string where = file + ":" + std::to_string(e->Row());
+  if (!(v[0] > 0.0)) throw InputError(where, owner + ": " + label + " must be > 0, found " + fmt(v[0]));
+  if (v[0] < lo || v[0] > hi) {
+    throw InputError(where, owner + ": " + label + " must be in [" + fmt(lo) + ", " + fmt(hi) + "] " + unit + ", found " + fmt(v[0]));
+  }
+}
+
+// The numbers and elements lexdyn reads from a URDF (mass properties, joint types, placements,
+// axes, limits), checked before urdfdom reads them so that an error names the file, the line,
+// the link or joint and the attribute (urdfdom's own messages name neither the file nor the line).
+void checkUrdfNumbers(const TiXmlElement* robot, const std::string& file) {
+  for (const TiXmlElement* e = robot->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
+    const std::string owner = std::string("link '") + (e->Attribute("name") ? e->Attribute("name") : "") + "'";
+    const TiXmlElement* in = e->FirstChildElement("inertial");
+    if (!in) continue;
+    const std::string where = file + ":" + std::to_string(in->Row());
+    checkOrigin(in, file, owner);
+    const TiXmlElement* mass = in->FirstChildElement("mass");
+    if (!mass || !mass->Attribute("value")) throw InputError(where, owner + ": <inertial> needs <mass value=\"...\"/>");
+    const std::vector<double> m = urdfNumbers(mass, "value", 1, -std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+                                              "kg", file, owner);
+    const std::string mwhere = file + ":" + std::to_string(mass->Row());
+    if (m[0] < 0.0) throw InputError(mwhere, owner + ": mass must be > 0, found " + fmt(m[0]));
+    if (m[0] > ranges::kMaxLinkMass_kg || (m[0] > 0.0 && m[0] < ranges::kMinLinkMass_kg)) {
+      throw InputError(mwhere, owner + ": mass must be in [" + fmt(ranges::kMinLinkMass_kg) + ", " + fmt(ranges::kMaxLinkMass_kg) +
+                                   "] kg (or 0 for a massless fixed part), found " + fmt(m[0]));
+    }
+    const TiXmlElement* inertia = in->FirstChildElement("inertia");
+    if (!inertia) throw InputError(where, owner + ": <inertial> needs <inertia ixx=... ixy=... ixz=... iyy=... iyz=... izz=.../>");
+    for (const char* a : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) {
+      if (!inertia->Attribute(a)) throw InputError(file + ":" + std::to_string(inertia->Row()), owner + ": <inertia> has no " + a + " attribute");
+      urdfNumbers(inertia, a, 1, -ranges::kMaxPrincipalInertia_kgm2, ranges::kMaxPrincipalInertia_kgm2, "kg m^2", file, owner);
+    }
+  }
+  for (const TiXmlElement* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
+    const std::string owner = std::string("joint '") + (e->Attribute("name") ? e->Attribute("name") : "") + "'";
+    const std::string where = file + ":" + std::to_string(e->Row());
+    const std::string type = e->Attribute("type") ? e->Attribute("type") : "";
+    if (type != "revolute" && type != "continuous" && type != "prismatic" && type != "fixed") {
+      throw InputError(where, owner + ": type '" + type + "' is not supported (revolute, continuous, prismatic, fixed)");
+    }
+    checkOrigin(e, file, owner);
+    const TiXmlElement* axis = e->FirstChildElement("axis");
+    const std::vector<double> a = urdfNumbers(axis, "xyz", 3, -ranges::kMaxLength_m, ranges::kMaxLength_m, "", file, owner);
+    if (!a.empty() && std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) < 1e-6) {
+      throw InputError(file + ":" + std::to_string(axis->Row()), owner + ": <axis> must be a non-zero vector (norm >= 1e-6)");
+    }
+    const TiXmlElement* lim = e->FirstChildElement("limit");
+    if (type == "fixed") continue;
+    if (!lim) throw InputError(where, owner + ": a <limit effort=... velocity=...> element is required");
+    urdfNumbers(lim, "lower", 1, -ranges::kMaxJointLimit, ranges::kMaxJointLimit, "(rad or m)", file, owner);
+    urdfNumbers(lim, "upper", 1, -ranges::kMaxJointLimit, ranges::kMaxJointLimit, "(rad or m)", file, owner);
+    urdfPositive(lim, "effort", "effort limit", ranges::kMinEffortLimit, ranges::kMaxEffortLimit, "N m or N", file, owner);
+    urdfPositive(lim, "velocity", "velocity limit", ranges::kMinVelocityLimit, ranges::kMaxVelocityLimit, "rad/s or m/s", file, owner);
+  }
+}
+
 XmlIndex indexUrdf(const std::string& text, const std::string& file) {
+  requireShallowXml(text, file, ranges::kMaxXmlDepth);
   TiXmlDocument doc;
   doc.Parse(text.c_str());
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(file, "the URDF file is empty");
   if (doc.Error()) {
-    throw InputError(file + ":" + std::to_string(doc.ErrorRow()),
+    throw InputError(file + (doc.ErrorRow() > 0 ? ":" + std::to_string(doc.ErrorRow()) : std::string()),
                      std::string("XML syntax error: ") + doc.ErrorDesc());
   }
   const TiXmlElement* robot = doc.RootElement();
   if (!robot || std::string(robot->Value()) != "robot") {
-    throw InputError(file, "expected a <robot> root element");
+    throw InputError(file, std::string("expected a <robot> root element, found ") +
+                               (robot ? "<" + std::string(robot->Value()) + ">" : std::string("no element")));
   }
   XmlIndex idx;
   if (const char* n = robot->Attribute("name")) idx.robot_name = n;
   if (idx.robot_name.empty()) throw InputError(file + ":" + std::to_string(robot->Row()), "<robot> has no name");
+  int n_links = 0, n_joints = 0;
+  for (const TiXmlElement* e = robot->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
+    if (++n_links > kMaxLinks) throw InputError(file + ":" + std::to_string(e->Row()), "more than " + std::to_string(kMaxLinks) + " links (size guard)");
+  }
+  for (const TiXmlElement* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
+    if (++n_joints > kMaxJoints) throw InputError(file + ":" + std::to_string(e->Row()), "more than " + std::to_string(kMaxJoints) + " joints (size guard)");
+  }
+  checkUrdfNumbers(robot, file);
 
   for (const TiXmlElement* e = robot->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
     const char* n = e->Attribute("name");
@@ -153,6 +309,30 @@ XmlIndex indexUrdf(const std::string& text, const std::string& file) {
     throw InputError(file, "expected exactly one root link, found " + std::to_string(roots.size()) +
                                (roots.empty() ? " (the joints form a cycle)" : ": " + list));
   }
+  // Every link reachable from the root: a cycle of joints detached from the tree leaves one root
+  // but links no walk from it reaches (and urdfdom would build a cycle of shared pointers).
+  std::map<std::string, std::vector<const XmlJoint*>> children_of;
+  for (const auto& j : idx.joints) children_of[j.parent].push_back(&j);
+  std::map<std::string, bool> reached{{roots[0], true}};
+  std::vector<std::string> stack{roots[0]};
+  while (!stack.empty()) {
+    const std::string l = stack.back();
+    stack.pop_back();
+    for (const XmlJoint* j : children_of[l]) {
+      if (!reached[j->child]) {
+        reached[j->child] = true;
+        stack.push_back(j->child);
+      }
+    }
+  }
+  for (const auto& l : idx.links) {
+    if (!reached[l.name]) {
+      const XmlJoint* j = parent_of.at(l.name);
+      throw InputError(file + ":" + std::to_string(j->line),
+                       "link '" + l.name + "' is not connected to the root link '" + roots[0] + "': its joint '" + j->name +
+                           "' hangs it from '" + j->parent + "', and the joints form a cycle there; a URDF must be a tree");
+    }
+  }
   return idx;
 }
 
@@ -179,6 +359,10 @@ std::string inertiaProblem(const Eigen::Matrix3d& I) {
   if (!(ev.minCoeff() > 0.0)) {
     return "is not positive definite (principal moments " + fmt(ev[0]) + ", " + fmt(ev[1]) + ", " +
            fmt(ev[2]) + " kg m^2)";
+  }
+  if (ev.minCoeff() < ranges::kMinPrincipalInertia_kgm2 || ev.maxCoeff() > ranges::kMaxPrincipalInertia_kgm2) {
+    return "has principal moments " + fmt(ev[0]) + ", " + fmt(ev[1]) + ", " + fmt(ev[2]) + " kg m^2, outside [" +
+           fmt(ranges::kMinPrincipalInertia_kgm2) + ", " + fmt(ranges::kMaxPrincipalInertia_kgm2) + "]";
   }
   const double tol = 1e-12 * ev.maxCoeff();
   if (ev[0] + ev[1] < ev[2] - tol) {
@@ -439,8 +623,14 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, const std::string
   d.name = urdf_robot_name;
   // base is read by the caller before the tree is built.
   top.required("base");
-  if (auto g = top.optional("gravity")) d.gravity = g->asVector3();
-  if (auto mu = top.optional("friction_coefficient")) d.friction_coefficient = mu->asPositiveDouble();
+  if (auto g = top.optional("gravity")) {
+    d.gravity = g->asVector3();
+    if (!(d.gravity.norm() <= ranges::kMaxGravity_mps2)) g->fail("expected |gravity| <= " + fmt(ranges::kMaxGravity_mps2) + " m/s^2, found " + fmt(d.gravity.norm()));
+  }
+  if (auto mu = top.optional("friction_coefficient")) {
+    d.friction_coefficient = mu->asPositiveDouble();
+    if (d.friction_coefficient > ranges::kMaxFriction) mu->fail("expected a friction coefficient in (0, " + fmt(ranges::kMaxFriction) + "], found " + fmt(d.friction_coefficient));
+  }
 
   auto frameNames = [&]() {
     std::string s;
@@ -463,8 +653,8 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, const std::string
       if (d.findFrame(fname) >= 0) name.fail("frame name '" + fname + "' is already used by a link or frame");
       const int parent = lookupFrame(m.required("parent"));
       Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-      if (auto xyz = m.optional("xyz")) X.translation() = xyz->asVector3();
-      if (auto rpy = m.optional("rpy")) X.linear() = rotationFromRpy(rpy->asVector3());
+      if (auto xyz = m.optional("xyz")) X.translation() = xyz->asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m");
+      if (auto rpy = m.optional("rpy")) X.linear() = rotationFromRpy(rpy->asVector3In(-ranges::kMaxAngle_rad, ranges::kMaxAngle_rad, "rad"));
       m.finish();
       FrameDescription f;
       f.name = fname;
@@ -487,7 +677,7 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, const std::string
       s.frame = lookupFrame(m.required("frame"));
       const yaml::Node pts = m.required("points");
       if (pts.size() < 1) pts.fail("a contact surface needs at least one point");
-      for (const yaml::Node& p : pts.elements()) s.points.push_back(p.asVector3());
+      for (const yaml::Node& p : pts.elements()) s.points.push_back(p.asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m"));
       m.finish();
       d.contact_surfaces.push_back(s);
     }
@@ -523,9 +713,11 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, const std::string
       const int frame = lookupFrame(m.required("parent"));
       const Eigen::Isometry3d& X = d.frames[static_cast<size_t>(frame)].placement;
       c.link = d.frames[static_cast<size_t>(frame)].link;
-      c.p0 = X * m.required("p0").asVector3();
-      c.p1 = X * m.required("p1").asVector3();
-      c.radius = m.required("radius").asPositiveDouble();
+      c.p0 = X * m.required("p0").asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m");
+      c.p1 = X * m.required("p1").asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m");
+      const yaml::Node rn = m.required("radius");
+      c.radius = rn.asPositiveDouble();
+      if (c.radius > ranges::kMaxLength_m) rn.fail("expected a radius in (0, " + fmt(ranges::kMaxLength_m) + "] m, found " + fmt(c.radius));
       m.finish();
       d.capsules.push_back(c);
     }
@@ -537,6 +729,7 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, const std::string
     const yaml::Node ds = m.required("safety_distance");
     d.collision_interaction_distance = di.asPositiveDouble();
     d.collision_safety_distance = ds.asNonNegativeDouble();
+    if (d.collision_interaction_distance > ranges::kMaxLength_m) di.fail("expected at most " + fmt(ranges::kMaxLength_m) + " m");
     if (!(d.collision_safety_distance < d.collision_interaction_distance)) {
       ds.fail("safety_distance must be smaller than interaction_distance");
     }
@@ -579,8 +772,9 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, const std::string
         if (j < 0) vn.fail("unknown joint '" + jname + "'");
         const double v = vn.asDouble();
         const JointDescription& jd = d.joints[static_cast<size_t>(j)];
-        if (v < jd.lower || v > jd.upper) {
-          vn.fail("value " + fmt(v) + " is outside the joint limits [" + fmt(jd.lower) + ", " + fmt(jd.upper) + "]");
+        if (v < jd.lower || v > jd.upper || std::abs(v) > ranges::kMaxJointLimit) {
+          vn.fail("value " + fmt(v) + " is outside the joint limits [" + fmt(std::max(jd.lower, -ranges::kMaxJointLimit)) + ", " +
+                  fmt(std::min(jd.upper, ranges::kMaxJointLimit)) + "]");
         }
         q[j] = v;
       }
@@ -603,6 +797,7 @@ RobotDescription parseRobotDescription(const std::string& urdf_text, const std::
   d.urdf_path = urdf_name;
   d.data_path = data_name;
 
+  requireText(urdf_text, urdf_name, "URDF");
   const XmlIndex idx = indexUrdf(urdf_text, urdf_name);
   const yaml::Node data_root = yaml::loadString(data_text, data_name);
 

@@ -659,6 +659,7 @@ void HlsFactorization::factorize(double rankTol) {
     std::fill(rawHave_.begin(), rawHave_.end(), 0);
     fullLayout_ = true;
     if (updateElimination() || tryEliminate()) {
+      ++stages_;
       nrElim_ = nf_ - m0_;
       firstStage_ = 1;
       nr_ = nf_ - m0_;
@@ -687,6 +688,7 @@ void HlsFactorization::factorize(double rankTol) {
         saveSnapshot(k);
       }
       factorLevel(k, rankTol);
+      ++stages_;
     }
   }
   fullLayout_ = false;

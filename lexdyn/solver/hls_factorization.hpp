@@ -76,6 +76,9 @@ class HlsFactorization {
   void factorize(double rankTol);
   /// The level the last factorize() restarted from (levelCount() when nothing was redone).
   int lastRestartLevel() const { return lastRestart_; }
+  /// Level stages factorised since setup (the elimination of the first level counts as one):
+  /// a deterministic measure of the factorisation work (Result::factorizations).
+  long stagesFactorized() const { return stages_; }
 
   /// Solves the equality hierarchy of the active rows with targets b(gid) (fixed-variable
   /// contributions already removed): writes the free variables' entries of x (variable space;
@@ -182,6 +185,7 @@ class HlsFactorization {
   bool fullLayout_ = false;  // the next relayout follows a full reset
   int dirtyFrom_ = 0;
   int lastRestart_ = 0;
+  long stages_ = 0;
 };
 
 }  // namespace lexdyn::solver

@@ -5,8 +5,10 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <unordered_set>
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/input_text.hpp"
 
 namespace lexdyn::solver {
 
@@ -31,11 +33,17 @@ class PathTrackingSax {
   bool binary(json::binary_t& v) { return value() && dom_.binary(v); }
   bool start_object(std::size_t n) {
     value();
-    stack_.push_back({false, -1, {}});
+    stack_.push_back({false, -1, {}, {}});
     return dom_.start_object(n);
   }
   bool key(std::string& k) {
     stack_.back().key = k;
+    // JSON leaves duplicate keys undefined and the DOM would keep the last one silently.
+    if (!stack_.back().keys.insert(k).second) {
+      errorPath_ = path();
+      errorMessage_ = "duplicate key \"" + k + "\"";
+      return false;
+    }
     return dom_.key(k);
   }
   bool end_object() {
@@ -44,7 +52,7 @@ class PathTrackingSax {
   }
   bool start_array(std::size_t n) {
     value();
-    stack_.push_back({true, -1, {}});
+    stack_.push_back({true, -1, {}, {}});
     return dom_.start_array(n);
   }
   bool end_array() {
@@ -70,6 +78,7 @@ class PathTrackingSax {
     bool array;
     int index;
     std::string key;
+    std::unordered_set<std::string> keys;  ///< objects: the keys seen so far
   };
   bool value() {
     if (!stack_.empty() && stack_.back().array) ++stack_.back().index;
@@ -91,13 +100,26 @@ class PathTrackingSax {
   std::string errorPath_, errorMessage_;
 };
 
+std::string fmt(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+// A number (null: nullValue, when allowed) of magnitude at most kMaxProblemMagnitude.
 double readNumber(const json& j, const std::string& where, bool allowNull, double nullValue) {
   if (j.is_null()) {
     if (allowNull) return nullValue;
     throw InputError(where, "expected a number, found null");
   }
   if (!j.is_number()) throw InputError(where, std::string("expected a number, found ") + typeName(j));
-  return j.get<double>();
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) throw InputError(where, "expected a finite number, found " + fmt(v));
+  if (std::abs(v) > kMaxProblemMagnitude) {
+    throw InputError(where, "expected a magnitude of at most " + fmt(kMaxProblemMagnitude) + " (beyond, the solver's arithmetic "
+                            "overflows), found " + fmt(v));
+  }
+  return v;
 }
 
 }  // namespace
@@ -107,7 +129,7 @@ Problem parseProblemJson(const std::string& text, const std::string& source) {
   PathTrackingSax sax(doc);
   if (!json::sax_parse(text, &sax)) {
     const std::string where = sax.errorPath().empty() ? source : source + ": " + sax.errorPath();
-    throw InputError(where, "malformed JSON: " + sax.errorMessage());
+    throw InputError(where, (sax.errorMessage().rfind("duplicate key", 0) == 0 ? "" : "malformed JSON: ") + sax.errorMessage());
   }
   if (!doc.is_object()) throw InputError(source, "expected a JSON object at the top level, found " + typeName(doc));
   for (auto it = doc.begin(); it != doc.end(); ++it) {
@@ -118,12 +140,23 @@ Problem parseProblemJson(const std::string& text, const std::string& source) {
   if (!doc.contains("variables")) throw InputError(source, "missing key \"variables\"");
   if (!doc.contains("levels")) throw InputError(source, "missing key \"levels\"");
   const json& jn = doc["variables"];
-  if (!jn.is_number_integer() || jn.get<long long>() <= 0) {
+  if (!jn.is_number_integer() || (jn.is_number_unsigned() ? jn.get<unsigned long long>() == 0 : jn.get<long long>() <= 0)) {
     throw InputError(source + ": variables", "expected a positive integer, found " + jn.dump());
+  }
+  if (jn.is_number_unsigned() ? jn.get<unsigned long long>() > static_cast<unsigned long long>(kMaxProblemVariables)
+                              : jn.get<long long>() > kMaxProblemVariables) {
+    throw InputError(source + ": variables", "expected at most " + std::to_string(kMaxProblemVariables) +
+                                                 " variables (size guard), found " + jn.dump());
   }
   const int n = static_cast<int>(jn.get<long long>());
   const json& jl = doc["levels"];
   if (!jl.is_array()) throw InputError(source + ": levels", "expected an array, found " + typeName(jl));
+  if (jl.size() > static_cast<size_t>(kMaxProblemLevels)) {
+    throw InputError(source + ": levels", "expected at most " + std::to_string(kMaxProblemLevels) +
+                                              " levels (size guard: the solver's work grows with the cube of the level count), found " +
+                                              std::to_string(jl.size()));
+  }
+  long total_rows = 0;
 
   Problem problem(n);
   for (size_t l = 0; l < jl.size(); ++l) {
@@ -148,6 +181,13 @@ Problem parseProblemJson(const std::string& text, const std::string& source) {
     const json& jA = lv["A"];
     const json& jlo = lv["lower"];
     const json& jup = lv["upper"];
+    total_rows += static_cast<long>(jA.size());
+    if (total_rows > kMaxProblemRows || total_rows * n > kMaxProblemEntries) {
+      throw InputError(lw + ".A", "the problem has more than " +
+                                      (total_rows > kMaxProblemRows ? std::to_string(kMaxProblemRows) + " rows"
+                                                                    : std::to_string(kMaxProblemEntries) + " matrix entries (rows x variables)") +
+                                      " up to this level (size guard)");
+    }
     const int m = static_cast<int>(jA.size());
     if (static_cast<int>(jlo.size()) != m) {
       throw InputError(lw + ".lower", "has " + std::to_string(jlo.size()) + " entries but A has " + std::to_string(m) + " rows");
@@ -166,9 +206,7 @@ Problem parseProblemJson(const std::string& text, const std::string& source) {
       }
       for (int c = 0; c < n; ++c) {
         const std::string cw = rw + "[" + std::to_string(c) + "]";
-        const double a = readNumber(row[static_cast<size_t>(c)], cw, false, 0.0);
-        if (!std::isfinite(a)) throw InputError(cw, "expected a finite number, found " + std::to_string(a));
-        A(r, c) = a;
+        A(r, c) = readNumber(row[static_cast<size_t>(c)], cw, false, 0.0);
       }
       lo(r) = readNumber(jlo[static_cast<size_t>(r)], lw + ".lower[" + std::to_string(r) + "]", true, -kInf);
       up(r) = readNumber(jup[static_cast<size_t>(r)], lw + ".upper[" + std::to_string(r) + "]", true, kInf);
@@ -185,13 +223,7 @@ Problem parseProblemJson(const std::string& text, const std::string& source) {
   return problem;
 }
 
-Problem readProblemJson(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parseProblemJson(ss.str(), path);
-}
+Problem readProblemJson(const std::string& path) { return parseProblemJson(readTextFile(path, "problem"), path); }
 
 namespace {
 
@@ -266,6 +298,7 @@ std::string resultToJson(const Problem& problem, const Result& result, bool with
   doc["iterations"] = result.iterations;
   if (withDetails) {
     doc["optimality_iterations"] = result.optimality_iterations;
+    doc["factorizations"] = result.factorizations;
     json act = json::array();
     json rank = json::array();
     for (int l = 0; l < problem.levelCount(); ++l) {

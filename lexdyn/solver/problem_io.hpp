@@ -2,8 +2,8 @@
 //   {"variables": n,
 //    "levels": [{"name": "...", "A": [[...], ...], "lower": [...], "upper": [...]}, ...]}
 // with null for an unbounded side. Parsing is strict: unknown keys, wrong types, wrong sizes,
-// lower > upper and non-finite entries of A are errors (lexdyn::InputError) naming the file, the
-// level and the row.
+// lower > upper, non-finite entries of A, magnitudes beyond kMaxProblemMagnitude and sizes beyond
+// the guards below are errors (lexdyn::InputError) naming the file, the level and the row.
 #pragma once
 
 #include <string>
@@ -12,6 +12,20 @@
 #include "lexdyn/solver/solver.hpp"
 
 namespace lexdyn::solver {
+
+/// Size guards of problem files (checked before anything is allocated; docs/file-formats.md).
+/// The solver's work grows with the cube of the level count and its restart copies with
+/// levels x rows x variables: beyond these a file is refused with a clear error instead of
+/// running for minutes or exhausting memory (a file of 20000 one-row levels ran past 120 s at
+/// 11 GB). At the guards one cold solve takes about 3 s and 0.45 GB (docs/file-formats.md); the
+/// paper-shaped problems are far below (about 100 variables, 10 levels).
+inline constexpr long kMaxProblemVariables = 2000;
+inline constexpr long kMaxProblemLevels = 100;
+inline constexpr long kMaxProblemRows = 10000;           ///< all levels together
+inline constexpr long kMaxProblemEntries = 1000000;      ///< rows x variables (8 MB of A)
+/// |A_ij| and every finite bound are at most this: squares and products of two such numbers stay
+/// well inside the double range (beyond, the arithmetic overflows to inf).
+inline constexpr double kMaxProblemMagnitude = 1e100;
 
 /// Parses problem JSON text; `source` names it in error messages.
 Problem parseProblemJson(const std::string& text, const std::string& source);

@@ -18,6 +18,7 @@ const char* toString(Status s) {
     case Status::StoppedEarly: return "stopped_early";
     case Status::IterationLimit: return "iteration_limit";
     case Status::NonFiniteInput: return "non_finite_input";
+    case Status::NonFiniteResult: return "non_finite_result";
   }
   return "unknown";
 }
@@ -30,6 +31,7 @@ const char* toString(StopReason r) {
     case StopReason::TotalIterationLimit: return "total_iteration_limit";
     case StopReason::HardIterationCap: return "hard_iteration_cap";
     case StopReason::NonFiniteInput: return "non_finite_input";
+    case StopReason::NonFiniteResult: return "non_finite_result";
   }
   return "unknown";
 }
@@ -130,6 +132,7 @@ struct Solver::Impl {
   double correctSign(int kind, int idx, double value) const;
   void run();
   void finish();
+  void checkFiniteResult();
   double rowScale(int gid, double xnorm) const { return std::abs(target(gid)) + rowNorm(gid) * xnorm; }
   const Eigen::MatrixXd& A(int kf) const { return prob->level(kf + first).A; }
 };
@@ -555,6 +558,7 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx, int& level) {
 
 void Solver::Impl::run() {
   out.iterations = out.optimality_iterations = out.activations = out.deactivations = 0;
+  const long stages0 = fact.stagesFactorized();
   out.held_after_reblock = 0;
   out.optimal_through = -1;
   bool optPhase = false;
@@ -749,6 +753,19 @@ void Solver::Impl::run() {
     solveEquality();
   }
   (void)pending;
+  out.factorizations = static_cast<int>(fact.stagesFactorized() - stages0);
+}
+
+// Arithmetic that left the double range (coefficients near 1e300, a near-singular level scaled
+// beyond it) must never pass for a solution: x, the violations and the multipliers must be finite.
+void Solver::Impl::checkFiniteResult() {
+  const bool finite = out.x.allFinite() && out.violation_norm.allFinite() &&
+                      (!opt.compute_multipliers || out.lambda.allFinite());
+  if (!finite) {
+    out.status = Status::NonFiniteResult;
+    out.reason = StopReason::NonFiniteResult;
+    out.optimal_through = -1;
+  }
 }
 
 void Solver::Impl::finish() {
@@ -868,6 +885,7 @@ const Result& Solver::solve(const Problem& problem) {
   s.startFromStates();
   s.run();
   s.finish();
+  s.checkFiniteResult();
   return s.out;
 }
 
@@ -884,6 +902,7 @@ const Result& Solver::solve(const Problem& problem, const ActiveSet& warm, const
   s.startFromStates();
   s.run();
   s.finish();
+  s.checkFiniteResult();
   return s.out;
 }
 

@@ -29,6 +29,9 @@ enum class Status {
   StoppedEarly,    ///< a paper termination rule stopped the search: earlier levels optimal, later sub-optimal
   IterationLimit,  ///< hard cap reached: x is the best feasible iterate (monotone primal iterates)
   NonFiniteInput,  ///< NaN in A or bounds, or infinite A: nothing solved (see Result::bad_level/bad_row)
+  /// The arithmetic left the double range (x, a violation or a multiplier is inf or NaN, e.g.
+  /// coefficients near 1e300): the result is not a solution and is never reported as optimal.
+  NonFiniteResult,
 };
 
 enum class StopReason {
@@ -38,6 +41,7 @@ enum class StopReason {
   TotalIterationLimit,
   HardIterationCap,
   NonFiniteInput,
+  NonFiniteResult,
 };
 
 const char* toString(Status s);
@@ -117,6 +121,10 @@ struct Result {
   ActiveSet active;
   std::vector<int> rank;  ///< rank of each level's active rows after projection (bounds level: fixed vars)
   int iterations = 0;             ///< active-set iterations (equality sub-problems solved)
+  /// Level stages factorised in this solve, over all its iterations (a restart at level c of L
+  /// factorises L - c stages; the elimination of the first level counts as one): a deterministic
+  /// measure of the solve's work, machine-independent unlike its wall time.
+  int factorizations = 0;
   int optimality_iterations = 0;  ///< iterations since the first deactivation
   int activations = 0, deactivations = 0;
   /// Times a released constraint blocked again at once and was kept (anti-cycling safety net).

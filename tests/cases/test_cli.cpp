@@ -1,5 +1,6 @@
-// lexdyn-harness exit codes: 0 all checks passed, 1 a check failed, 2 bad input (with a message
-// naming the file and the key path).
+// lexdyn-harness exit codes (docs/architecture.md, "Errors and exit codes"): 0 all checks passed,
+// 1 a check failed, 2 bad input (with a message naming the file and the key path), 3 a run
+// failure, 130 / 143 interrupted; traces carry their end mark.
 #include "case_test_utils.hpp"
 #include "harness/checks/trace.hpp"
 
@@ -99,16 +100,23 @@ TEST(HarnessCli, SigintStopsTheRunAndKeepsTraceAndSummary) {
   std::ifstream code_in(dir + "/code");
   int code = -1;
   code_in >> code;
-  EXPECT_EQ(code, 1);
+  EXPECT_EQ(code, 130);
   ASSERT_TRUE(std::filesystem::exists(out + "/summary.json"));
   ASSERT_TRUE(std::filesystem::exists(out + "/trace.csv"));
   EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv.partial"));
   std::ifstream sj(out + "/summary.json");
   const std::string summary((std::istreambuf_iterator<char>(sj)), std::istreambuf_iterator<char>());
   EXPECT_NE(summary.find("\"status\": \"interrupted\""), std::string::npos) << summary;
-  // The trace holds every tick up to the interruption and its checks can be run again.
+  // The trace is marked as interrupted by itself: separated from its summary it is not taken for
+  // a complete run. Its checks can be run again (on the rows it holds) but do not pass.
+  const checks::TraceTable t = checks::readTrace(out + "/trace.csv");
+  EXPECT_EQ(t.end_status, "interrupted");
+  EXPECT_NE(t.end_message.find("interrupted by SIGINT at t = "), std::string::npos) << t.end_message;
   const Result r = harness("check " + c + " " + out + "/trace.csv", dir);
+  EXPECT_EQ(r.code, 1) << r.stderr_text;
   EXPECT_NE(r.stderr_text.find(" rows, t = 0 .. "), std::string::npos) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("is not the trace of a complete run (the run did not complete: interrupted"), std::string::npos)
+      << r.stderr_text;
 }
 
 TEST(HarnessCli, AKilledRunLeavesItsPartialTraceAndNoOldOutputs) {
@@ -131,8 +139,9 @@ TEST(HarnessCli, AKilledRunLeavesItsPartialTraceAndNoOldOutputs) {
   EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv"));
   ASSERT_TRUE(std::filesystem::exists(out + "/trace.csv.partial"));
   const Result r = harness("check " + c + " " + out + "/trace.csv.partial", dir);
-  EXPECT_EQ(r.code, 0) << r.stderr_text;
+  EXPECT_EQ(r.code, 1) << r.stderr_text;  // the checks run on its rows, but a cut trace never passes
   EXPECT_NE(r.stderr_text.find("partial trace"), std::string::npos) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("no end mark: the run was killed"), std::string::npos) << r.stderr_text;
 }
 
 TEST(HarnessCli, CheckWarnsWhenTheTraceIsOfAnotherCase) {
@@ -267,6 +276,71 @@ TEST(HarnessCli, GoldenUpdateThenCheckAndAMismatchNamesTimeAndChannel) {
   r = harness("golden check --manifest " + dir + "/golden/bad.yaml", dir);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.stderr_text.find("bad.yaml:2: entries[0]: missing required key 'methods'"), std::string::npos) << r.stderr_text;
+}
+
+}  // namespace
+}  // namespace lexdyn::cases
+
+namespace lexdyn::cases {
+namespace {
+
+using testing::minimalCase;
+using testing::outputDir;
+using testing::writeCase;
+
+// A run failure (here the integrator's step limit) exits 3; its trace says so by itself, and
+// `check` on it does not pass.
+TEST(HarnessCliExitCodes, RunFailureIsThreeAndTheTraceSaysWhy) {
+  const std::string dir = outputDir("cli_run_failure");
+  auto s = minimalCase(0.2);
+  s["f_sim"] += "  integrator: {max_steps_per_tick: 2}\n";
+  const std::string c = writeCase(dir, s);
+  Result r = harness("run " + c + " --out " + dir + "/out --quiet", dir);
+  EXPECT_EQ(r.code, 3) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("integrator_failure"), std::string::npos) << r.stderr_text;
+  r = harness("check " + dir + "/out/trace.csv --case " + c, dir);
+  EXPECT_EQ(r.code, 1) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("(the run did not complete: integrator_failure"), std::string::npos) << r.stderr_text;
+}
+
+TEST(HarnessCliExitCodes, SigtermIs143) {
+  const std::string dir = outputDir("cli_sigterm");
+  const std::string c = writeCase(dir, minimalCase(100.0));
+  const std::string out = dir + "/out";
+  const std::string script = "(" + std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-harness run " + c + " --out " + out +
+                             " --quiet 2> " + dir + "/stderr.txt & pid=$!; "
+                             "while [ ! -s " + out + "/trace.csv.partial ] && kill -0 $pid 2>/dev/null; do sleep 0.01; done; sleep 0.05; "
+                             "kill -TERM $pid; wait $pid; echo $? > " + dir + "/code)";
+  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
+  int code = -1;
+  std::ifstream(dir + "/code") >> code;
+  EXPECT_EQ(code, 143);
+  const checks::TraceTable t = checks::readTrace(out + "/trace.csv");
+  EXPECT_EQ(t.end_status, "interrupted");
+  EXPECT_NE(t.end_message.find("interrupted by SIGTERM"), std::string::npos) << t.end_message;
+}
+
+// tick_time is a wall-clock measurement: reported and labelled, a verdict only when asked for.
+TEST(HarnessCliExitCodes, WallClockChecksDecideOnlyWhenAskedFor) {
+  const std::string dir = outputDir("cli_wall_clock");
+  auto s = testing::minimalLexdynCase(0.05);
+  s["h_checks"] += "  - {name: impossible_budget, type: tick_time, timer: tick, percentile: 50, limit_us: 0.001}\n";
+  const std::string c = writeCase(dir, s);
+  Result r = harness("run " + c + " --out " + dir + "/out --quiet", dir);
+  EXPECT_EQ(r.code, 0) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("info impossible_budget"), std::string::npos) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("machine-dependent, reported only"), std::string::npos) << r.stderr_text;
+  std::ifstream sj(dir + "/out/summary.json");
+  const std::string summary((std::istreambuf_iterator<char>(sj)), std::istreambuf_iterator<char>());
+  EXPECT_NE(summary.find("\"machine_dependent\": true"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"decides\": false"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"all_checks_passed\": true"), std::string::npos) << summary;
+  r = harness("run " + c + " --out " + dir + "/out2 --quiet --wall-clock-checks", dir);
+  EXPECT_EQ(r.code, 1) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("FAIL impossible_budget"), std::string::npos) << r.stderr_text;
+  // The same on the stored trace.
+  EXPECT_EQ(harness("check " + dir + "/out/trace.csv --case " + c, dir).code, 0);
+  EXPECT_EQ(harness("check " + dir + "/out/trace.csv --case " + c + " --wall-clock-checks", dir).code, 1);
 }
 
 }  // namespace

@@ -284,13 +284,14 @@ TEST(ControllerCli, SigintKeepsTheTraceAndWritesTheControllerSummary) {
   std::ifstream code_in(dir + "/code");
   int code = -1;
   code_in >> code;
-  EXPECT_EQ(code, 1);
+  EXPECT_EQ(code, 130);
   ASSERT_TRUE(std::filesystem::exists(out + "/summary.json"));
   ASSERT_TRUE(std::filesystem::exists(out + "/trace.csv"));
   EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv.partial"));
   const nlohmann::json j = nlohmann::json::parse(slurp(out + "/summary.json"));
   EXPECT_EQ(j["status"], "interrupted");
-  EXPECT_NE(j["message"].get<std::string>().find("interrupted at t = "), std::string::npos);
+  EXPECT_EQ(j["exit_code"], 130);
+  EXPECT_NE(j["message"].get<std::string>().find("interrupted by SIGINT at t = "), std::string::npos);
   EXPECT_LT(j["simulated_s"].get<double>(), 2000.0);
   // The controller's statistics cover the ticks run; the trace holds every tick up to there.
   const long ticks = j["controller"]["ticks"].get<long>();

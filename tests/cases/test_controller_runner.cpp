@@ -188,9 +188,11 @@ TEST(ControllerRunner, ControllerFailureStopsTheRunKeepingTheTrace) {
   const RunSummary s = run(spec, dir + "/out");
   EXPECT_EQ(s.status, "controller_failure");
   EXPECT_NE(s.message.find("controller_failure: infeasible at t = 0 s"), std::string::npos) << s.message;
-  EXPECT_EQ(exitCode(s), 1);
+  EXPECT_EQ(exitCode(s), kExitRunFailure);
   const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
   ASSERT_EQ(t.rows.size(), 1u);
+  EXPECT_EQ(t.end_status, "controller_failure");
+  EXPECT_NE(t.end_message.find("infeasible at t = 0 s"), std::string::npos) << t.end_message;
   EXPECT_EQ(at(t, 0, "ctrl.status"), 3.0);  // infeasible (ctrl_status_codes)
   const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/out/summary.json"));
   EXPECT_EQ(j["status"], "controller_failure");

@@ -146,10 +146,14 @@ TEST(Runner, IntegratorFailureKeepsTheTraceAndReportsTheStatus) {
   const RunSummary s = run(spec, dir + "/out");
   EXPECT_EQ(s.status, "integrator_failure");
   EXPECT_NE(s.message.find("too_much_work"), std::string::npos) << s.message;
-  EXPECT_EQ(exitCode(s), 1);
+  EXPECT_EQ(exitCode(s), kExitRunFailure);
   EXPECT_LT(s.simulated_s, 0.005);
   const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
   EXPECT_GE(t.rows.size(), 1u);
+  // The trace says by itself that the run failed, and why.
+  EXPECT_FALSE(t.complete());
+  EXPECT_EQ(t.end_status, "integrator_failure");
+  EXPECT_NE(t.end_message.find("too_much_work"), std::string::npos) << t.end_message;
   const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/out/summary.json"));
   EXPECT_EQ(j["status"], "integrator_failure");
 }
@@ -160,8 +164,11 @@ TEST(Runner, InterruptionStopsAfterATickAndKeepsTheTrace) {
   std::atomic<bool> stop{true};
   const RunSummary s = run(spec, dir + "/out", &stop);
   EXPECT_EQ(s.status, "interrupted");
-  EXPECT_EQ(exitCode(s), 1);
-  EXPECT_EQ(checks::readTrace(dir + "/out/trace.csv").rows.size(), 1u);
+  EXPECT_EQ(exitCode(s), 130);  // the signal unknown: SIGINT's code
+  const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
+  EXPECT_EQ(t.rows.size(), 1u);
+  EXPECT_EQ(t.end_status, "interrupted");
+  EXPECT_NE(t.end_message.find("interrupted at t = 0 s"), std::string::npos) << t.end_message;
 }
 
 TEST(Runner, ProgressLinesGoToStderrOnly) {

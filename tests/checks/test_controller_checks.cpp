@@ -767,6 +767,21 @@ TEST(ActiveSetPeakCheck, LargestIterationCountAndItsTime) {
   EXPECT_TRUE(contains(r.detail, "at t = 0.2 s")) << r.detail;
 }
 
+TEST(FactorizationPeakCheck, LargestStageCountAndItsTime) {
+  const TraceTable t =
+      makeTrace({{kSolverFactorizationsChannel, [](double t) { return at(t, 0.4) ? 194.0 : 9.0; }}}, 0.1, 11);
+  CheckSpec s = spec("factorization_peak", 450.0);
+  CheckResult r = runOne(s, t);
+  EXPECT_EQ(r.value, 194.0);
+  EXPECT_TRUE(r.passed);
+  EXPECT_FALSE(r.machine_dependent);
+  EXPECT_TRUE(contains(r.detail, "at t = 0.4 s")) << r.detail;
+  s.limit = 100.0;
+  EXPECT_FALSE(runOne(s, t).passed);
+  s.to_s = 0.3;
+  EXPECT_EQ(runOne(s, t).value, 9.0);
+}
+
 TEST(AugmentedFractionCheck, FractionOfRowsAndTheMethodsFilter) {
   // Level "hands" augmented from t = 0.6 s: 5 of 11 rows (0.6 .. 1.0).
   const TraceTable t = makeTrace({{levelChannel("hands", "augmented"), [](double t) { return t > 0.55 ? 1.0 : 0.0; }}}, 0.1,
@@ -812,8 +827,14 @@ TEST(TickTimeCheck, NearestRankPercentiles) {
   EXPECT_EQ(r.value, 99.0);
   EXPECT_TRUE(r.passed);
   EXPECT_TRUE(contains(r.detail, "p99 of tick time over 100 ticks (max 100 us")) << r.detail;
+  // A wall-clock measurement: labelled, and a verdict only when asked for.
+  EXPECT_TRUE(r.machine_dependent);
+  EXPECT_FALSE(r.decides);
   s.limit = 98.5;
   EXPECT_FALSE(runOne(s, t).passed);
+  EXPECT_TRUE(allPassed(runChecks({s}, t)));
+  EXPECT_FALSE(allPassed(runChecks({s}, t, true)));
+  EXPECT_TRUE(runChecks({s}, t, true)[0].decides);
   s.percentile = 50.0;
   EXPECT_EQ(runOne(s, t).value, 50.0);
   s.percentile = 100.0;

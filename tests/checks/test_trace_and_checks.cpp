@@ -98,6 +98,73 @@ TEST(Trace, ACutLastRowIsDroppedFromAPartialTraceOnly) {
   EXPECT_EQ(readTrace(dir + "/whole.csv.partial").rows.size(), 3u);
 }
 
+// A trace says by itself whether its run completed: the writer's end mark, read back; a trace
+// without it (a cut .partial file, or not written by a finished run) is not complete.
+TEST(Trace, TheEndMarkSaysWhetherTheRunCompleted) {
+  const std::string dir = tempDir("trace_end_mark");
+  TraceSchema schema;
+  schema.add("t");
+  const double r0 = 0.0, r1 = 0.005;
+  {
+    TraceWriter w(dir + "/done.csv", schema, {}, 1);
+    w.write(&r0);
+    w.finish();
+  }
+  TraceTable t = readTrace(dir + "/done.csv");
+  EXPECT_TRUE(t.complete());
+  EXPECT_EQ(t.end_status, "completed");
+  {
+    TraceWriter w(dir + "/stopped.csv", schema, {}, 1);
+    w.write(&r0);
+    w.write(&r1);
+    w.finish("integrator_failure", "CVODE stopped\nat t = 0.005 s");
+  }
+  t = readTrace(dir + "/stopped.csv");
+  EXPECT_FALSE(t.complete());
+  EXPECT_EQ(t.end_status, "integrator_failure");
+  EXPECT_EQ(t.end_message, "CVODE stopped at t = 0.005 s");  // newlines become spaces
+  EXPECT_NE(t.completeness().find("the run did not complete: integrator_failure (CVODE stopped"), std::string::npos);
+  std::ofstream(dir + "/cut.csv.partial") << "t\n0\n0.005\n";
+  t = readTrace(dir + "/cut.csv.partial");
+  EXPECT_FALSE(t.complete());
+  EXPECT_NE(t.completeness().find("no end mark"), std::string::npos);
+  // Nothing may follow the mark, and no header line may follow the channel names.
+  std::ofstream(dir + "/after.csv") << "t\n0\n# end: completed\n0.005\n";
+  EXPECT_THROW(readTrace(dir + "/after.csv"), InputError);
+  std::ofstream(dir + "/header.csv") << "t\n0\n# case: x\n";
+  EXPECT_THROW(readTrace(dir + "/header.csv"), InputError);
+}
+
+// The time channel orders every row a check sees: it must be finite, >= 0, strictly increasing,
+// on the header's tick grid (but for a failed run's last state) and within its duration.
+TEST(Trace, TheTimeChannelIsValidated) {
+  const std::string dir = tempDir("trace_time");
+  const std::string head = "# control_period_s: 0.005\n# duration_s: 0.02\nt,x\n";
+  auto error = [&](const std::string& rows) {
+    std::ofstream(dir + "/t.csv") << head << rows;
+    try {
+      readTrace(dir + "/t.csv");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error("0,1\n0.005,2\n0.01,3\n# end: completed\n"), "");
+  EXPECT_NE(error("0,1\nnan,2\n").find("t.csv:5: time 't': expected a finite time >= 0 s, found nan"), std::string::npos);
+  EXPECT_NE(error("0,1\n0.01,2\n0.005,3\n").find("t.csv:6: time 't': rows must be in strictly increasing time"), std::string::npos);
+  EXPECT_NE(error("0,1\n0.005,2\n0.005,3\n").find("strictly increasing"), std::string::npos);
+  EXPECT_NE(error("0,1\n1e9,2\n").find("1e9 s is beyond the header's duration"), std::string::npos);
+  EXPECT_NE(error("0,1\n0.0051,2\n0.01,3\n").find("t.csv:5: time 't': not a tick of the header's control period"), std::string::npos);
+  // The last state of a failed run may fall between ticks; of a completed run it may not.
+  EXPECT_EQ(error("0,1\n0.005,2\n0.0061,3\n# end: integrator_failure: CVODE stopped\n"), "");
+  EXPECT_NE(error("0,1\n0.005,2\n0.0061,3\n# end: completed\n").find("the last row is not a tick"), std::string::npos);
+  // Values as the writer writes them: no hexadecimal, no spaces, nothing out of range.
+  EXPECT_NE(error("0,0x10\n").find("not a number: '0x10'"), std::string::npos);
+  EXPECT_NE(error("0, 1\n").find("not a number: ' 1'"), std::string::npos);
+  EXPECT_NE(error("0,1e999\n").find("not a number: '1e999'"), std::string::npos);
+  EXPECT_EQ(error("0,nan\n0.005,-inf\n"), "");
+}
+
 TEST(Trace, MalformedFilesAreErrorsWithLineNumbers) {
   const std::string dir = tempDir("trace_bad");
   const std::string path = dir + "/bad.csv";

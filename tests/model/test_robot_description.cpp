@@ -125,6 +125,20 @@ TEST(RobotDescription, BadLimitsAreErrors) {
   EXPECT_NE(errorOf(p.text(), kData).find("effort limit must be > 0"), std::string::npos);
 }
 
+// A cycle of joints detached from the tree (found by fuzzing: tests/fuzz/corpus/urdf) leaves one
+// root, so the root count did not see it; urdfdom then built a cycle of shared pointers (a leak
+// under AddressSanitizer). It is refused before urdfdom, naming the joint.
+TEST(RobotDescription, ADetachedCycleOfJointsIsAnError) {
+  UrdfParts p;
+  p.extra = "  <link name=\"a\"><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.01\"/></inertial></link>\n"
+            "  <link name=\"b\"><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.01\"/></inertial></link>\n"
+            "  <joint name=\"ja\" type=\"fixed\"><parent link=\"b\"/><child link=\"a\"/></joint>\n"
+            "  <joint name=\"jb\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint>\n";
+  const std::string msg = errorOf(p.text(), kData);
+  EXPECT_NE(msg.find("chain.urdf:13: link 'a' is not connected to the root link 'base'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("joints form a cycle"), std::string::npos) << msg;
+}
+
 TEST(RobotDescription, TwoRootsIsAnError) {
   UrdfParts p;
   p.extra = "  <link name=\"orphan\"/>\n";

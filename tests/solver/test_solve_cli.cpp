@@ -1,6 +1,7 @@
 // lexdyn-solve: output format, exit codes and bad-input messages.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -144,3 +145,83 @@ TEST(SolveCli, BenchReportsColdAndWarmStatistics) {
 }
 
 }  // namespace
+
+// Exit codes (docs/architecture.md, "Errors and exit codes"): every code lexdyn-solve and
+// lexdyn-solver-sweep give, from a real run of each.
+namespace exit_codes {
+
+// Runs `cmd` in the background and sends `sig` once `started` holds (a shell test), then waits.
+int runAndSignal(const std::string& cmd, const std::string& started, const char* sig) {
+  const std::string code = tempDir() + "/code";
+  const std::string script = "(" + cmd + " > " + tempDir() + "/sig.out 2> " + tempDir() + "/sig.err & pid=$!; " +
+                             "while ! (" + started + ") && kill -0 $pid 2>/dev/null; do sleep 0.01; done; kill -" + sig +
+                             " $pid; wait $pid; echo $? > " + code + ")";
+  if (std::system(("bash -c '" + script + "'").c_str()) != 0) return -1;
+  int c = -1;
+  std::ifstream(code) >> c;
+  return c;
+}
+
+const std::string kSweep = std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-solver-sweep";
+
+TEST(SolveCliExitCodes, SolverFailuresAreThree) {
+  // The hard iteration cap leaves an iterate, not a solution.
+  CliRun r = run("--max-iterations 1 " + std::string(LEXDYN_SOURCE_DIR) + "/tests/data/solver/example.json");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("status iteration_limit"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("\"status\":\"iteration_limit\""), std::string::npos) << r.out;  // the result is still printed
+  // A coefficient of 1e-300 asks for x = 1e300: the violations overflow. Not optimal.
+  r = run(writeFile("overflow.json", R"({"variables": 2, "levels": [{"A": [[1e-300, 0]], "lower": [1], "upper": [1]},
+    {"A": [[1, 0], [0, 1]], "lower": [0, 0], "upper": [0, 0]}]})"));
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.out.find("\"status\":\"non_finite_result\""), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("optimal"), std::string::npos) << r.out;
+}
+
+TEST(SolveCliExitCodes, InterruptedBenchIs130Or143) {
+  // A thousand copies of a controller tick: loading them takes seconds, the signal comes first.
+  const std::string link = tempDir() + "/t.json";
+  std::remove(link.c_str());
+  ASSERT_EQ(symlink((std::string(LEXDYN_SOURCE_DIR) + "/tests/data/solver/controller_tick_degenerate.json").c_str(), link.c_str()), 0);
+  std::string files;
+  for (int i = 0; i < 1000; ++i) files += " " + link;
+  const std::string started = "grep -q loaded " + tempDir() + "/sig.err";
+  EXPECT_EQ(runAndSignal(kBin + " --bench" + files, started, "INT"), 130);
+  EXPECT_NE(slurp(tempDir() + "/sig.err").find("interrupted by SIGINT"), std::string::npos) << slurp(tempDir() + "/sig.err");
+  EXPECT_EQ(runAndSignal(kBin + " --bench" + files, started, "TERM"), 143);
+  EXPECT_NE(slurp(tempDir() + "/sig.err").find("interrupted by SIGTERM"), std::string::npos) << slurp(tempDir() + "/sig.err");
+}
+
+TEST(SolverSweepExitCodes, ZeroOneTwoAndInterruption) {
+  const std::string out = tempDir() + "/sweep.out", err = tempDir() + "/sweep.err";
+  auto sweep = [&](const std::string& args) {
+    const int st = std::system((kSweep + " " + args + " > " + out + " 2> " + err).c_str());
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  };
+  EXPECT_EQ(sweep("--cases 200 --seed 3"), 0) << slurp(err);
+  EXPECT_NE(slurp(out).find("\"failures\": 0"), std::string::npos) << slurp(out);
+  // A cap of one iteration: results that are not optimal are failures, each with its rerun line.
+  EXPECT_EQ(sweep("--cases 50 --seed 3 --max-iterations 1 --write-failures " + tempDir() + "/failures"), 1);
+  const std::string o = slurp(out);
+  EXPECT_NE(o.find("hard iteration cap hit"), std::string::npos) << o;
+  const size_t at = o.find("rerun: lexdyn-solver-sweep --seed ");
+  ASSERT_NE(at, std::string::npos) << o;
+  // The printed command reruns that problem alone, with the same outcome.
+  const std::string rerun = o.substr(at + 7, o.find('\n', at) - at - 7);
+  EXPECT_EQ(sweep(rerun.substr(std::string("lexdyn-solver-sweep").size())), 1) << rerun;
+  EXPECT_NE(slurp(out).find("\"problems\": 1, \"solved\": 1, \"failures\": 1"), std::string::npos) << slurp(out);
+  EXPECT_NE(o.find("lexdyn-solve --details " + tempDir() + "/failures/problem-"), std::string::npos) << o;
+  // Bad options: 2 (--max-variables 0 divided by zero: SIGFPE).
+  EXPECT_EQ(sweep("--max-variables 0"), 2);
+  EXPECT_NE(slurp(err).find("--max-variables"), std::string::npos) << slurp(err);
+  EXPECT_EQ(sweep("--write-failures /proc/forbidden/dir --cases 1"), 2);
+  // Interrupted: the summary of the problems done so far, 130 / 143.
+  // (The handler's summary line tells its exit from a kill by the signal, which the shell also
+  // reports as 128 + the signal.)
+  EXPECT_EQ(runAndSignal(kSweep + " --cases 100000000", "sleep 0.3", "INT"), 130);
+  EXPECT_NE(slurp(tempDir() + "/sig.out").find("\"interrupted\": true"), std::string::npos) << slurp(tempDir() + "/sig.out");
+  EXPECT_EQ(runAndSignal(kSweep + " --cases 100000000", "sleep 0.3", "TERM"), 143);
+  EXPECT_NE(slurp(tempDir() + "/sig.out").find("\"interrupted\": true"), std::string::npos) << slurp(tempDir() + "/sig.out");
+}
+
+}  // namespace exit_codes

@@ -54,6 +54,38 @@ TEST(Solver, SingleEqualityLevelIsLeastSquares) {
   EXPECT_EQ(checkKkt(p, r), "");
 }
 
+// Result::factorizations counts the level stages factorised: deterministic, and a warm start
+// that keeps the active set factorises once.
+TEST(Solver, FactorizationsCountTheStagesFactorised) {
+  GenOptions g;
+  g.n = 8;
+  g.levels = 4;
+  g.maxRows = 4;
+  g.inequalities = false;  // equalities only: one iteration, every level once
+  g.boundsLevel = false;
+  const Problem p = randomProblem(7, g);
+  Solver s;
+  s.setup(p);
+  const Result& r = s.solve(p);
+  ASSERT_EQ(r.status, Status::Solved);
+  EXPECT_EQ(r.iterations, 1);
+  // Each level once (the first may be eliminated, which counts as one stage), plus the
+  // multipliers' solve when the working set changed: at least the levels, at most twice.
+  EXPECT_GE(r.factorizations, p.levelCount());
+  EXPECT_LE(r.factorizations, 2 * p.levelCount());
+  const int cold = r.factorizations;
+  Solver s2;
+  s2.setup(p);
+  EXPECT_EQ(s2.solve(p).factorizations, cold);  // deterministic
+  g.inequalities = true;
+  g.boundsLevel = true;
+  const Problem q = randomProblem(11, g);
+  Solver sq;
+  sq.setup(q);
+  const Result& rq = sq.solve(q);
+  EXPECT_GE(rq.factorizations, rq.iterations);
+}
+
 TEST(Solver, LowerLevelCannotDegradeHigherLevel) {
   // Level 0: x0 + x1 = 1. Level 1: x0 = 5, x1 = 5 (conflicting with level 0 in sum).
   Problem p(2);

@@ -145,6 +145,9 @@ TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
   const long done_before = std::distance(fs::directory_iterator(b + "/points"), fs::directory_iterator());
   EXPECT_LT(done_before, 12) << "the driver finished before it was killed";
   EXPECT_FALSE(fs::exists(b + "/results.jsonl"));
+  // Merging what is there: the summary of the points done, exit code 3 (incomplete).
+  EXPECT_EQ(run("sweep merge " + kSweep + " --out " + b + " --no-shrink --no-db", dir + "/b-merge.log"), 3) << readText(dir + "/b-merge.log");
+  EXPECT_NE(readText(dir + "/b-merge.log").find("points have no result yet"), std::string::npos) << readText(dir + "/b-merge.log");
   ASSERT_EQ(run("sweep run " + kSweep + " --out " + b + " -j 2 --no-db", dir + "/b.log"), 1) << readText(dir + "/b.log");
   EXPECT_NE(readText(dir + "/b.log").find("runs done"), std::string::npos);
   EXPECT_EQ(withoutWallTimes(a + "/results.jsonl"), withoutWallTimes(b + "/results.jsonl"));

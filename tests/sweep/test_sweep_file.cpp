@@ -124,7 +124,7 @@ TEST(SweepFile, BadSweepsAreRejectedBeforeAnyRunNamingFileAndField) {
   // A value the case refuses (a negative damping) at one end of the range.
   e = errorOf("sampling: {points: 2}\nparameters:\n  - {path: controller.params.damping, range: [-1, 1]}\n");
   EXPECT_NE(e.find("parameter 'controller.params.damping' = -1"), std::string::npos) << e;
-  EXPECT_NE(e.find("expected a number >= 0"), std::string::npos) << e;
+  EXPECT_NE(e.find("expected a number in [0, 1e+06], found -1"), std::string::npos) << e;
   // A property that names no check, a comparison with a method the sweep does not run.
   e = errorOf(std::string(kParams) + "properties:\n  checks: [no_such_check]\n");
   EXPECT_NE(e.find("properties.checks[0]: the base case has no check 'no_such_check' (checks: no_overshoot"), std::string::npos) << e;
@@ -149,6 +149,25 @@ TEST(SweepFile, BadSweepsAreRejectedBeforeAnyRunNamingFileAndField) {
   EXPECT_NE(e.find("a grid needs steps for a range"), std::string::npos) << e;
   e = errorOf(std::string(kParams), "description: x\nmethods: [bfgs]\n");
   EXPECT_NE(e.find("duplicate key 'methods'"), std::string::npos) << e;
+}
+
+TEST(SweepFile, WallClockChecksAreNeverASweepsVerdict) {
+  // Left out when the sweep takes all of the case's checks; refused when named.
+  const std::string dir = dirFor("sweep_file_wall_clock");
+  const std::string head = std::string("name: t\nbase: ") + LEXDYN_SOURCE_DIR + "/cases/exp1-gn.yaml\nmethods: [gn]\nseed: 1\n" +
+                           "sampling: {points: 1}\nparameters:\n  - {path: 'controller.params.nu_dt2', range: [1.0e-16, 1.0e-8]}\n";
+  std::ofstream(dir + "/all.yaml") << head;
+  const SweepSpec all = loadSweep(dir + "/all.yaml");
+  ASSERT_FALSE(all.checks.empty());
+  for (const auto& name : all.checks) EXPECT_NE(name, "tick_time_p99");
+  std::ofstream(dir + "/named.yaml") << head << "properties:\n  checks: [tick_time_p99]\n";
+  try {
+    loadSweep(dir + "/named.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& err) {
+    const std::string m = err.what();
+    EXPECT_NE(m.find("named.yaml:9: properties.checks[0]: check 'tick_time_p99' is a wall-clock check (machine-dependent)"), std::string::npos) << m;
+  }
 }
 
 }  // namespace

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The exit-code convention of the wrapper scripts (harness/scripts/exit-codes.sh) and the usage
+# errors of the scripts: every code in its order of precedence.
+set -u
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$ROOT/harness/scripts/exit-codes.sh"
+fail=0
+expect() {  # expect WHAT EXPECTED ACTUAL
+  if [ "$2" != "$3" ]; then echo "FAIL: $1: expected $2, found $3"; fail=1; else echo "ok: $1 = $3"; fi
+}
+expect "pass and pass" 0 "$(lexdyn_worse 0 0)"
+expect "a failed check" 1 "$(lexdyn_worse 0 1)"
+expect "a run failure over a failed check" 3 "$(lexdyn_worse 1 3)"
+expect "bad input over a run failure" 2 "$(lexdyn_worse 3 2)"
+expect "SIGINT over bad input" 130 "$(lexdyn_worse 2 130)"
+expect "SIGTERM over a failed check" 143 "$(lexdyn_worse 143 1)"
+expect "a crash (128 + SIGSEGV) is a run failure" 3 "$(lexdyn_worse 0 139)"
+expect "an abort (134) is a run failure" 3 "$(lexdyn_code 134)"
+# Usage errors of the scripts are 2.
+"$ROOT/harness/scripts/fuzz.sh" -m abc > /dev/null 2>&1
+expect "fuzz.sh -m abc" 2 "$?"
+"$ROOT/harness/scripts/fuzz.sh" -e nosuchengine > /dev/null 2>&1
+expect "fuzz.sh -e nosuchengine" 2 "$?"
+"$ROOT/harness/scripts/full-runs.sh" -x > /dev/null 2>&1
+expect "full-runs.sh -x" 2 "$?"
+"$ROOT/harness/scripts/golden-update.sh" -x > /dev/null 2>&1
+expect "golden-update.sh -x" 2 "$?"
+exit $fail
