@@ -17,7 +17,7 @@ const std::string& scratchDir() {
     const fs::path d = fs::path(tmp && *tmp ? tmp : "/tmp") / ("lexdyn-fuzz-" + std::to_string(::getpid()));
     std::error_code ec;
     fs::remove_all(d, ec);
-    fs::create_directories(d / "cases");
+    fs::create_directories(d / "cases" / "sweeps");
     fs::create_directories(d / "golden");
     const fs::path src(LEXDYN_SOURCE_DIR);
     fs::create_directory_symlink(src / "models", d / "models");

@@ -14,7 +14,8 @@ namespace lexdyn::fuzz {
 
 /// A scratch directory of this process where relative paths of the repository's case files and
 /// manifests resolve: models/ and the case files (cases/*.yaml, cases/trajectories) are linked
-/// from the source tree; the targets write their input into it (cases/fuzz.yaml, golden/...).
+/// from the source tree; the targets write their input into it (cases/fuzz.yaml,
+/// cases/sweeps/fuzz.yaml, golden/...).
 const std::string& scratchDir();
 
 /// Writes `size` bytes to `path` (a file of the scratch directory) and returns the path.
