@@ -63,6 +63,7 @@ fi
 for t in "${TARGETS[@]}"; do
   grep -qx "$t" "$BUILD/fuzz-targets.txt" || { echo "fuzz: unknown target '$t' (targets: $(tr '\n' ' ' < "$BUILD/fuzz-targets.txt"))" >&2; exit 2; }
 done
+mkdir -p "$(dirname "$OUT")" || exit 2
 echo "fuzz: building ${TARGETS[*]} in $BUILD" >&2
 nice -n 19 cmake --build "$BUILD" -j "${LEXDYN_JOBS:-2}" --target "${TARGETS[@]/#/lexdyn-fuzz-}" > "$OUT.build.log" 2>&1 \
   || { mkdir -p "$(dirname "$OUT")"; tail -30 "$OUT.build.log" >&2; exit 2; }
