@@ -1,4 +1,4 @@
-#include "lexdyn/solver/hls_factorization.hpp"
+#include "lexdyn/solver/detail/hls_factorization.hpp"
 
 #include <Eigen/Householder>
 #include <Eigen/LU>

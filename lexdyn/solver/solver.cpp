@@ -8,7 +8,8 @@
 #include <string>
 
 #include "lexdyn/common/error.hpp"
-#include "lexdyn/solver/hls_factorization.hpp"
+#include "lexdyn/common/input_ranges.hpp"
+#include "lexdyn/solver/detail/hls_factorization.hpp"
 
 namespace lexdyn::solver {
 
@@ -52,6 +53,41 @@ Options Options::paper(double dt) {
   o.stop_optimality_iterations = 10;
   o.stop_total_iterations = 30;
   return o;
+}
+
+void Options::validate() const {
+  namespace R = lexdyn::ranges;
+  auto fail = [](const char* field, const std::string& expected, double found) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "%.17g", found);
+    throw InputError("solver options", std::string(field) + ": expected " + expected + ", found " + buf);
+  };
+  auto tolerance = [&](const char* field, double v, bool positive) {
+    if (!(std::isfinite(v) && (positive ? v > 0.0 : v >= 0.0) && v <= R::kMaxSolverTolerance)) {
+      fail(field, std::string(positive ? "a number in (0, " : "a number in [0, ") + "0.01]", v);
+    }
+  };
+  auto count = [&](const char* field, int v, int lo) {
+    if (v < lo || v > R::kMaxSolverIterations) fail(field, "an integer in [" + std::to_string(lo) + ", 1000000]", v);
+  };
+  tolerance("rank_tolerance", rank_tolerance, true);
+  tolerance("feasibility_tolerance", feasibility_tolerance, false);
+  tolerance("zero_tolerance", zero_tolerance, false);
+  tolerance("dual_tolerance", dual_tolerance, false);
+  if (!(elimination_tolerance > 0.0 && elimination_tolerance <= 1.0)) fail("elimination_tolerance", "a number in (0, 1]", elimination_tolerance);
+  count("max_iterations", max_iterations, 1);
+  count("bland_after_degenerate_steps", bland_after_degenerate_steps, 1);
+  if (!(std::isfinite(cycle_tolerance_factor) && cycle_tolerance_factor >= 1.0)) {
+    fail("cycle_tolerance_factor", "a finite number >= 1", cycle_tolerance_factor);
+  }
+  if (!std::isfinite(stop_slack_norm)) fail("stop_slack_norm", "a finite number (<= 0: the rule is off)", stop_slack_norm);
+  count("stop_optimality_iterations", stop_optimality_iterations, 0);
+  count("stop_total_iterations", stop_total_iterations, 0);
+  if (stop_after_level < -1) fail("stop_after_level", "-1 (any level) or a level index >= 0", stop_after_level);
+  if (last_level_projection != LastLevel::Auto && last_level_projection != LastLevel::Never &&
+      last_level_projection != LastLevel::Always) {
+    fail("last_level_projection", "Auto, Never or Always", static_cast<int>(last_level_projection));
+  }
 }
 
 int ActiveSet::activeCount() const {
@@ -139,6 +175,7 @@ struct Solver::Impl {
 
 void Solver::Impl::setup(const Problem& problem, const Options& o) {
   problem.validate("problem");
+  o.validate();
   opt = o;
   n = problem.variables();
   p = problem.levelCount();
@@ -869,7 +906,10 @@ Solver& Solver::operator=(Solver&&) noexcept = default;
 
 void Solver::setup(const Problem& problem, const Options& options) { impl_->setup(problem, options); }
 const Options& Solver::options() const { return impl_->opt; }
-void Solver::setOptions(const Options& options) { impl_->opt = options; }
+void Solver::setOptions(const Options& options) {
+  options.validate();
+  impl_->opt = options;
+}
 const Result& Solver::result() const { return impl_->out; }
 
 const Result& Solver::solve(const Problem& problem) {

@@ -99,6 +99,14 @@ struct Options {
   /// The paper's settings for a control period dt: slack 1e-12 dt^2, 10 optimality-phase
   /// iterations, 30 in total.
   static Options paper(double dt);
+
+  /// Throws lexdyn::InputError ("solver options: FIELD: expected ..., found ...") unless every
+  /// field is within its range: tolerances finite in [0, 1e-2] (rank_tolerance > 0),
+  /// elimination_tolerance in (0, 1], max_iterations and bland_after_degenerate_steps in
+  /// [1, 1e6], cycle_tolerance_factor finite >= 1, stop_slack_norm finite, stop_* iteration
+  /// counts >= 0, stop_after_level >= -1, a known last_level_projection. Solver::setup and
+  /// Solver::setOptions call it.
+  void validate() const;
 };
 
 struct ActiveSet {

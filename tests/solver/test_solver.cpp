@@ -426,5 +426,49 @@ TEST(Solver, SameInputsGiveBitIdenticalResults) {
   EXPECT_EQ(ra.iterations, rb.iterations);
 }
 
+TEST(SolverOptions, FieldsOutOfRangeAreRefusedNamingTheField) {
+  Problem p(2);
+  p.addLevel("a", mat(1, 2, {1, 1}), vec({1}), vec({1}));
+  auto refused = [&](const Options& o) -> std::string {
+    Solver s;
+    try {
+      s.setup(p, o);
+    } catch (const InputError& e) {
+      // setOptions refuses the same options with the same message.
+      Solver t;
+      t.setup(p);
+      EXPECT_THROW(t.setOptions(o), InputError);
+      return e.what();
+    }
+    return "<accepted>";
+  };
+  Options o;
+  EXPECT_EQ(refused(o), "<accepted>");
+  EXPECT_EQ(refused(Options::paper(0.005)), "<accepted>");
+  o.rank_tolerance = 0.0;
+  EXPECT_EQ(refused(o), "solver options: rank_tolerance: expected a number in (0, 0.01], found 0");
+  o = Options{};
+  o.zero_tolerance = std::nan("");
+  EXPECT_EQ(refused(o), "solver options: zero_tolerance: expected a number in [0, 0.01], found nan");
+  o = Options{};
+  o.dual_tolerance = 0.5;
+  EXPECT_EQ(refused(o), "solver options: dual_tolerance: expected a number in [0, 0.01], found 0.5");
+  o = Options{};
+  o.max_iterations = 0;
+  EXPECT_EQ(refused(o), "solver options: max_iterations: expected an integer in [1, 1000000], found 0");
+  o = Options{};
+  o.cycle_tolerance_factor = 0.5;
+  EXPECT_EQ(refused(o), "solver options: cycle_tolerance_factor: expected a finite number >= 1, found 0.5");
+  o = Options{};
+  o.stop_slack_norm = INFINITY;
+  EXPECT_EQ(refused(o), "solver options: stop_slack_norm: expected a finite number (<= 0: the rule is off), found inf");
+  o = Options{};
+  o.stop_after_level = -2;
+  EXPECT_EQ(refused(o), "solver options: stop_after_level: expected -1 (any level) or a level index >= 0, found -2");
+  o = Options{};
+  o.elimination_tolerance = 0.0;
+  EXPECT_EQ(refused(o), "solver options: elimination_tolerance: expected a number in (0, 1], found 0");
+}
+
 }  // namespace
 }  // namespace lexdyn::solver
