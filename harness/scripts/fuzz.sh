@@ -15,6 +15,8 @@
 #   TARGET   case, urdf, problem, trace, manifest, ... (default: every target of the build)
 # A finding is kept as OUT_DIR/<target>/findings/*; once the bug is fixed, copy it into
 # tests/fuzz/corpus/<target>/ (ctest `fuzz.<target>` replays that directory).
+# A libFuzzer timeout that does not reproduce when replayed alone (a stall of a loaded machine)
+# is kept as findings/stall-* and not counted; the fuzzing goes on after every finding.
 # Exit codes: 0 no finding; 1 findings (listed); 2 usage or build failure; 130 / 143 interrupted.
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -22,6 +24,7 @@ MINUTES=10
 ENGINE=""
 OUT="$ROOT/out/fuzz"
 SEED=1
+TIMEOUT=10   # seconds per input before libFuzzer calls it a hang
 usage() { echo "usage: $0 [-m MINUTES] [-e libfuzzer|mutate] [-o OUT_DIR] [-s SEED] [TARGET ...]" >&2; exit 2; }
 while getopts "m:e:o:s:" opt; do
   case "$opt" in
@@ -79,8 +82,30 @@ for t in "${TARGETS[@]}"; do
   seeds="$ROOT/tests/fuzz/corpus/$t"
   start=$(date +%s)
   if [ "$ENGINE" = libfuzzer ]; then
-    nice -n 19 "$bin" -seed="$SEED" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
-      -print_final_stats=1 -artifact_prefix="$dir/findings/" "$dir/corpus" "$seeds" > "$dir/log.txt" 2>&1
+    # libFuzzer stops at its first finding: keep it and go on (next seed) until the time is up.
+    # A timeout is replayed once on its own: when the replay finishes well within the limit, it
+    # was a stall of a loaded machine (e.g. the sanitizer returning memory to the system), not
+    # a hang of the parser: it is kept as findings/stall-* and not counted.
+    run_seed=$SEED
+    : > "$dir/log.txt"
+    while [ "$interrupted" -eq 0 ]; do
+      left=$(( SECONDS_EACH - ($(date +%s) - start) ))
+      [ "$left" -le 0 ] && break
+      nice -n 19 "$bin" -seed="$run_seed" -max_total_time="$left" -timeout="$TIMEOUT" -rss_limit_mb=2048 -max_len=65536 \
+        -print_final_stats=1 -artifact_prefix="$dir/findings/" "$dir/corpus" "$seeds" >> "$dir/log.txt" 2>&1
+      status=$?
+      [ "$status" -eq 0 ] && break
+      for f in "$dir"/findings/timeout-*; do
+        [ -f "$f" ] || continue
+        t0=$(date +%s.%N)
+        if timeout "$TIMEOUT" "$bin" "$f" > /dev/null 2>&1; then
+          t1=$(date +%s.%N)
+          mv "$f" "$dir/findings/stall-${f##*/timeout-}"
+          echo "  timeout not reproduced: the replay took $(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.2f", b - a }') s (limit $TIMEOUT s); kept as stall-*" >> "$dir/log.txt"
+        fi
+      done
+      run_seed=$((run_seed + 1))
+    done
   else
     # The runner stops at a crash or a hang (the input is in findings/current.bin): keep it and
     # go on with the next seed until the time is up.
