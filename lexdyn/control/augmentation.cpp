@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/control/switching.hpp"
 #include "lexdyn/hessian/bfgs.hpp"
 #include "lexdyn/hessian/higham.hpp"
 #include "lexdyn/hessian/kinematic_hessian.hpp"
@@ -28,7 +29,6 @@ struct AugLevel {
   std::vector<char> occupied, prevOccupied;
   bool initialized = false;
   bool augmented = false;
-  double omega = 0.0;            // 1/2 ||dt w_ctrl||^2 at the previous tick
 };
 
 struct Augmentation::Impl {
@@ -119,7 +119,6 @@ void Augmentation::reset() {
   for (AugLevel& a : I.lv) {
     a.initialized = false;
     a.augmented = false;
-    a.omega = 0.0;
     std::fill(a.occupied.begin(), a.occupied.end(), 0);
     std::fill(a.prevOccupied.begin(), a.prevOccupied.end(), 0);
   }
@@ -245,17 +244,15 @@ void Augmentation::apply(const tasks::TickContext& ctx, const std::vector<std::u
     }
 
     // Switching (eq. 95) on the previous tick's task-row violation of this level.
-    a.omega = 0.0;
     bool augment = false;
     if (haveLast) {
-      const double wn = last.violation[z(L.problem_level)].head(L.task_rows).norm();
-      a.omega = 0.5 * dt2 * wn * wn;
-      augment = a.omega >= p.nu_dt2 * dt2;
+      LevelOutcome o;
+      o.violation_norm = last.violation[z(L.problem_level)].head(L.task_rows).norm();
       if (p.rank_switching) {
-        int held = 0;
-        for (int r = 0; r < L.task_rows; ++r) held += last.active.level[z(L.problem_level)][z(r)] != solver::RowState::Inactive;
-        augment = augment || last.rank[z(L.problem_level)] < held;
+        for (int r = 0; r < L.task_rows; ++r) o.held_rows += last.active.level[z(L.problem_level)][z(r)] != solver::RowState::Inactive;
+        o.rank = last.rank[z(L.problem_level)];
       }
+      augment = switchToNewton(o, dt, p.nu_dt2, p.rank_switching);
     }
     a.augmented = augment;
     if (!augment) continue;
