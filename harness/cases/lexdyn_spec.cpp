@@ -290,7 +290,11 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
   }
   auto levels = m.optional("levels");
   auto wls = m.optional("wls_levels");
-  if (!levels && !wls) m.node().fail("expected a hierarchy: levels (bfgs, ah, gn) and/or wls_levels (wls)");
+  if (!levels && !wls) {
+    std::vector<std::string> strict, weighted;  // the registry's methods reading each hierarchy
+    for (const std::string& n : names) (control::findMethod(n, "").weighted_hierarchy ? weighted : strict).push_back(n);
+    m.node().fail("expected a hierarchy: levels (" + joinNames(strict) + ") and/or wls_levels (" + joinNames(weighted) + ")");
+  }
   if (levels) {
     s.levels = readLevels(*levels, s, false);
     s.levels_where = levels->where();
