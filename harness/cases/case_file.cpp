@@ -6,6 +6,7 @@
 #include "lexdyn/common/input_ranges.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
 #include "lexdyn/control/controller.hpp"
+#include "lexdyn/control/method.hpp"
 #include "lexdyn/model/robot_description.hpp"
 #include "lexdyn/model/robot_model.hpp"
 #include "lexdyn/tasks/orientation.hpp"
@@ -304,13 +305,11 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
 
 bool isLexdyn(const CaseSpec& c) { return c.controller.type == "lexdyn"; }
 
-const char* const kMethods[] = {"bfgs", "ah", "gn", "wls"};
-
 /// Methods a check or comparison may concern: those the case has a hierarchy for.
 std::vector<std::string> caseMethods(const CaseSpec& c) {
   std::vector<std::string> out;
-  for (const char* m : kMethods) {
-    if (c.controller.lexdyn.hasHierarchy(control::parseMethod(m, ""))) out.emplace_back(m);
+  for (const std::string& m : control::methodNames()) {
+    if (c.controller.lexdyn.hasHierarchy(m)) out.push_back(m);
   }
   return out;
 }
@@ -319,7 +318,7 @@ std::vector<std::string> caseMethods(const CaseSpec& c) {
 void requireTasksInHierarchies(const CaseSpec& c, const yaml::Node& at, const std::vector<std::string>& tasks,
                                const std::vector<std::string>& methods) {
   for (const std::string& m : methods) {
-    const std::vector<std::string> used = usedTasks(c.controller.lexdyn, control::parseMethod(m, ""));
+    const std::vector<std::string> used = usedTasks(c.controller.lexdyn, m);
     for (const std::string& t : tasks) {
       if (std::find(used.begin(), used.end(), t) == used.end()) {
         at.fail("task '" + t + "' is not in the hierarchy of method " + m +
@@ -408,8 +407,8 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
   if (auto v = m.optional("methods")) {
     if (!isLexdyn(cs)) v->fail("methods: applies to the lexdyn controller only");
     for (const yaml::Node& mn : v->elements()) {
-      const std::string method = mn.asEnum({"bfgs", "ah", "gn", "wls"});
-      if (!cs.controller.lexdyn.hasHierarchy(control::parseMethod(method, ""))) mn.fail("the case has no hierarchy for method " + method);
+      const std::string method = mn.asEnum(control::methodNames());
+      if (!cs.controller.lexdyn.hasHierarchy(method)) mn.fail("the case has no hierarchy for method " + method);
       c.methods.push_back(method);
     }
   }
@@ -563,7 +562,7 @@ checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescriptio
     c.level = ln.asString();
     for (const std::string& method : methods) {
       bool found = false;
-      for (const auto& l : lx.hierarchy(control::parseMethod(method, ""))) found = found || l.name == c.level;
+      for (const auto& l : lx.hierarchy(method)) found = found || l.name == c.level;
       if (!found) ln.fail("level '" + c.level + "' is not in the hierarchy of method " + method + "; restrict the check with methods: [...]");
     }
     c.limit = m.required("max_fraction").asNonNegativeDouble();
@@ -693,11 +692,11 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
     }
   }
   std::unique_ptr<control::Controller> first;
-  const control::Method chosen = lx.method;
-  for (const char* name : kMethods) {
-    const control::Method m = control::parseMethod(name, "");
+  const std::string chosen = lx.method;
+  for (const std::string& name : control::methodNames()) {
+    const std::string& m = name;
     if (!lx.hasHierarchy(m)) continue;
-    const std::string& where = m == control::Method::WLS ? lx.wls_levels_where : lx.levels_where;
+    const std::string where = lx.hierarchyWhere(m);
     const std::string chosen_where = lx.method_where;
     try {
       setMethod(lx, m, where);
@@ -755,12 +754,12 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
 }  // namespace
 
 std::string methodName(const CaseSpec& spec) {
-  return spec.controller.type == "lexdyn" ? control::toString(spec.controller.lexdyn.method) : "";
+  return spec.controller.type == "lexdyn" ? spec.controller.lexdyn.method : "";
 }
 
 void overrideMethod(CaseSpec& spec, const std::string& method, const std::string& where) {
   if (spec.controller.type != "lexdyn") throw InputError(where, "--method needs a case with controller type lexdyn");
-  setMethod(spec.controller.lexdyn, control::parseMethod(method, where), where);
+  setMethod(spec.controller.lexdyn, control::findMethod(method, where).name, where);
   // The effective case holds it too.
   if (!spec.document.empty()) {
     YAML::Node root = YAML::Load(spec.document);
@@ -1031,8 +1030,8 @@ checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& cs
   c.statistic = m.required("statistic").asEnum({"final", "mean", "max"});
   for (auto [key, field] : {std::pair<const char*, std::string*>{"better", &c.better}, {"worse", &c.worse}}) {
     const yaml::Node mn = m.required(key);
-    *field = mn.asEnum({"bfgs", "ah", "gn", "wls"});
-    if (!cs.controller.lexdyn.hasHierarchy(control::parseMethod(*field, ""))) mn.fail("the case has no hierarchy for method " + *field);
+    *field = mn.asEnum(control::methodNames());
+    if (!cs.controller.lexdyn.hasHierarchy(*field)) mn.fail("the case has no hierarchy for method " + *field);
   }
   requireTasksInHierarchies(cs, tn, c.tasks, {c.better, c.worse});
   if (auto v = m.optional("margin")) c.margin = v->asDouble();

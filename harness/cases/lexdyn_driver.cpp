@@ -179,7 +179,7 @@ void LexdynDriver::addChannels(checks::TraceSchema& schema) const {
 void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
   const Impl& I = *impl_;
   const control::ControllerParams& p = I.lx.params;
-  md.emplace_back(checks::kMethodMetadata, control::toString(I.lx.method));
+  md.emplace_back(checks::kMethodMetadata, I.lx.method);
   md.emplace_back("controller_params",
                   "nu_dt2 " + num(p.nu_dt2) + ", xi_dt2 " + num(p.xi_dt2) + ", zeta_dt2 " + num(p.zeta_dt2) +
                       ", new_dof_diagonal_dt2 " + num(p.new_dof_diagonal_dt2) + ", rho_dt2 " + num(p.rho_dt2) + ", eps_dt2 " +
@@ -404,7 +404,7 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
 ControllerStats LexdynDriver::stats() const {
   const Impl& I = *impl_;
   ControllerStats s;
-  s.method = control::toString(I.lx.method);
+  s.method = I.lx.method;
   s.ticks = I.ticks;
   for (size_t k = 0; k < I.tasks.size(); ++k) {
     s.tasks.push_back({I.tasks[k].name, I.error_last[k], I.ticks > 0 ? I.error_sum[k] / static_cast<double>(I.ticks) : 0.0});

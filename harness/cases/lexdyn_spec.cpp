@@ -2,6 +2,7 @@
 
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/input_ranges.hpp"
+#include "lexdyn/control/method.hpp"
 #include "lexdyn/model/robot_model.hpp"
 
 #include <cmath>
@@ -199,6 +200,18 @@ std::vector<LevelEntry> readLevels(const yaml::Node& node, const LexdynSpec& spe
 
 }  // namespace
 
+const std::vector<LevelEntry>& LexdynSpec::hierarchy(const std::string& m) const {
+  return control::findMethod(m, "method").weighted_hierarchy ? wls_levels : levels;
+}
+
+const char* LexdynSpec::hierarchyKey(const std::string& m) const {
+  return control::findMethod(m, "method").weighted_hierarchy ? "wls_levels" : "levels";
+}
+
+const std::string& LexdynSpec::hierarchyWhere(const std::string& m) const {
+  return control::findMethod(m, "method").weighted_hierarchy ? wls_levels_where : levels_where;
+}
+
 int LexdynSpec::findTask(const std::string& name) const {
   for (size_t i = 0; i < tasks.size(); ++i) {
     if (tasks[i].name == name) return static_cast<int>(i);
@@ -216,7 +229,7 @@ int LexdynSpec::findContact(const std::string& name) const {
 LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, double dt) {
   LexdynSpec s;
   const yaml::Node method = m.required("method");
-  s.method = control::parseMethod(method.asEnum({"bfgs", "ah", "gn", "wls"}), method.where());
+  s.method = method.asEnum(control::methodNames());
   s.method_where = method.where();
   if (auto v = m.optional("feedforward_torque")) s.feedforward_torque = v->asBool();
   if (auto v = m.optional("state_feedback")) s.state_feedback = v->asEnum({"measured", "integrated", "measured_position"});
@@ -234,25 +247,22 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
   s.params.method = s.method;
   // Per-method overrides of `params` (e.g. the sec. V-A point mass: the damping each domain is
   // run with). Keys as in `params`, on top of them.
-  const char* const kMethodNames[] = {"bfgs", "ah", "gn", "wls"};
-  for (const char* name : kMethodNames) {
-    const control::Method mm = control::parseMethod(name, "");
-    const size_t k = static_cast<size_t>(mm);
-    if (s.params_by_method.size() <= k) s.params_by_method.resize(k + 1, s.params);
-    s.params_by_method[k] = s.params;
-    s.params_by_method[k].method = mm;
+  const std::vector<std::string> names = control::methodNames();
+  for (const std::string& name : names) {
+    control::ControllerParams& mp = s.params_by_method[name];
+    mp = s.params;
+    mp.method = name;
   }
   if (auto mp = m.optional("method_params")) {
     for (const auto& [name, node] : mp->entries()) {
-      bool known = false;
-      for (const char* n : kMethodNames) known = known || name == n;
-      if (!known) node.fail("unknown method '" + name + "' (bfgs, ah, gn, wls)");
+      const auto it = s.params_by_method.find(name);
+      if (it == s.params_by_method.end()) node.fail("unknown method '" + name + "' (" + joinNames(names) + ")");
       yaml::StrictMap pm(node);
-      readParams(pm, s.params_by_method[static_cast<size_t>(control::parseMethod(name, ""))]);
+      readParams(pm, it->second);
       pm.finish();
     }
   }
-  s.params = s.params_by_method[static_cast<size_t>(s.method)];
+  s.params = s.params_by_method.at(s.method);
   if (auto cn = m.optional("contacts")) {
     for (const yaml::Node& c : cn->elements()) {
       ContactEntry e = readContact(c, d);
@@ -280,7 +290,11 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
   }
   auto levels = m.optional("levels");
   auto wls = m.optional("wls_levels");
-  if (!levels && !wls) m.node().fail("expected a hierarchy: levels (bfgs, ah, gn) and/or wls_levels (wls)");
+  if (!levels && !wls) {
+    std::vector<std::string> strict, weighted;  // the registry's methods reading each hierarchy
+    for (const std::string& n : names) (control::findMethod(n, "").weighted_hierarchy ? weighted : strict).push_back(n);
+    m.node().fail("expected a hierarchy: levels (" + joinNames(strict) + ") and/or wls_levels (" + joinNames(weighted) + ")");
+  }
   if (levels) {
     s.levels = readLevels(*levels, s, false);
     s.levels_where = levels->where();
@@ -291,8 +305,7 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
   }
   m.finish();  // unknown keys first (e.g. a misspelt `levels`)
   if (!s.hasHierarchy(s.method)) {
-    method.fail(std::string("method ") + control::toString(s.method) + " needs " +
-                (s.method == control::Method::WLS ? "wls_levels" : "levels") + ", which the case does not define");
+    method.fail("method " + s.method + " needs " + s.hierarchyKey(s.method) + ", which the case does not define");
   }
   return s;
 }
@@ -324,19 +337,18 @@ control::ControllerConfig buildControllerConfig(const LexdynSpec& spec, const mo
   return cfg;
 }
 
-void setMethod(LexdynSpec& spec, control::Method method, const std::string& where) {
+void setMethod(LexdynSpec& spec, const std::string& method, const std::string& where) {
   if (!spec.hasHierarchy(method)) {
-    throw InputError(where, std::string("method ") + control::toString(method) + " needs " +
-                                (method == control::Method::WLS ? "controller.wls_levels" : "controller.levels") +
-                                ", which the case does not define");
+    throw InputError(where, "method " + method + " needs controller." + spec.hierarchyKey(method) + ", which the case does not define");
   }
   spec.method = method;
-  if (static_cast<size_t>(method) < spec.params_by_method.size()) spec.params = spec.params_by_method[static_cast<size_t>(method)];
+  const auto it = spec.params_by_method.find(method);
+  if (it != spec.params_by_method.end()) spec.params = it->second;
   spec.params.method = method;
   spec.method_where = where;
 }
 
-std::vector<std::string> usedTasks(const LexdynSpec& spec, control::Method m) {
+std::vector<std::string> usedTasks(const LexdynSpec& spec, const std::string& m) {
   std::vector<char> used(spec.tasks.size(), 0);
   for (const LevelEntry& l : spec.hierarchy(m)) {
     for (const std::string& t : l.tasks) used[static_cast<size_t>(spec.findTask(t))] = 1;

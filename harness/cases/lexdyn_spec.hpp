@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -37,12 +38,12 @@ struct LevelEntry {
 };
 
 struct LexdynSpec {
-  control::Method method = control::Method::LexDynBFGS;
+  std::string method = "bfgs";         ///< a registered method (control::findMethod)
   std::string method_where;            ///< where the method comes from (file key or --method)
   control::ControllerParams params;    ///< of the current method: method, dt and solver filled in as well
-  /// `params` for every method (with its method_params override applied), indexed by
-  /// control::Method; setMethod() copies the method's entry into `params`.
-  std::vector<control::ControllerParams> params_by_method;
+  /// `params` for every registered method (with its method_params override applied), by name;
+  /// setMethod() copies the method's entry into `params`.
+  std::map<std::string, control::ControllerParams> params_by_method;
   bool feedforward_torque = true;      ///< Command::tau sent as the servo's feed-forward torque
   /// The state the controller reads each tick: the simulator's measured (q, u) (`measured`), or
   /// its own previous command (`integrated`: q(k+1), u(k+1) of the last tick, the simulator
@@ -51,17 +52,17 @@ struct LexdynSpec {
   std::vector<ContactEntry> contacts;
   std::vector<std::string> initial_contacts;
   std::vector<TaskSpec> tasks;
-  std::vector<LevelEntry> levels;      ///< bfgs, ah, gn
-  std::vector<LevelEntry> wls_levels;  ///< wls: exactly two (hard, objective)
+  std::vector<LevelEntry> levels;      ///< methods with the strict hierarchy: bfgs, ah, gn
+  std::vector<LevelEntry> wls_levels;  ///< methods with the weighted hierarchy: wls, exactly two (hard, objective)
   std::string levels_where, wls_levels_where;
 
-  bool hasHierarchy(control::Method m) const {
-    return m == control::Method::WLS ? !wls_levels.empty() : !levels.empty();
-  }
-  /// The hierarchy used by method m.
-  const std::vector<LevelEntry>& hierarchy(control::Method m) const {
-    return m == control::Method::WLS ? wls_levels : levels;
-  }
+  /// Whether the case defines the hierarchy of method m (control::MethodInfo::weighted_hierarchy:
+  /// `wls_levels`, otherwise `levels`).
+  bool hasHierarchy(const std::string& m) const { return !hierarchy(m).empty(); }
+  /// The hierarchy used by method m, its key (`levels` or `wls_levels`) and where it was read.
+  const std::vector<LevelEntry>& hierarchy(const std::string& m) const;
+  const char* hierarchyKey(const std::string& m) const;
+  const std::string& hierarchyWhere(const std::string& m) const;
   int findTask(const std::string& name) const;     ///< -1 when absent
   int findContact(const std::string& name) const;  ///< -1 when absent
 };
@@ -75,9 +76,9 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& rob
 control::ControllerConfig buildControllerConfig(const LexdynSpec& spec, const model::RobotModel& model);
 
 /// Sets the method (e.g. from --method), checking that the case has its hierarchy.
-void setMethod(LexdynSpec& spec, control::Method method, const std::string& where);
+void setMethod(LexdynSpec& spec, const std::string& method, const std::string& where);
 
 /// Names of the tasks the hierarchy of method m uses, in task order.
-std::vector<std::string> usedTasks(const LexdynSpec& spec, control::Method m);
+std::vector<std::string> usedTasks(const LexdynSpec& spec, const std::string& m);
 
 }  // namespace lexdyn::cases

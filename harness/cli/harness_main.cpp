@@ -28,6 +28,7 @@
 #include "harness/cli/sweep_cmd.hpp"
 #include "harness/golden/golden.hpp"
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/control/method.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -280,17 +281,20 @@ int main(int argc, char** argv) {
   std::vector<std::string> positional, traces, sets;
   std::string case_out;
 
+  std::string method_names;  // the registry's, "bfgs | ah | gn | wls"
+  for (const std::string& m : lexdyn::control::methodNames()) method_names += (method_names.empty() ? "" : " | ") + m;
+
   CLI::App* run = app.add_subcommand("run", "run a case file");
   run->add_option("case", case_path, "case file (YAML)")->required();
   run->add_option("--out", out_dir, "output directory (trace.csv, summary.json)")->required();
-  run->add_option("--method", method, "lexdyn method, overrides the case's: bfgs | ah | gn | wls");
+  run->add_option("--method", method, "lexdyn method, overrides the case's: " + method_names);
   run->add_option("--duration", duration, "simulate at most this long (s)");
   run->add_flag("--quiet", quiet, "no progress lines");
   run->add_option("--set", sets, "override a value of the case: PATH=VALUE (docs/cases.md, \"Overrides\"); repeatable");
 
   CLI::App* casecmd = app.add_subcommand("case", "print the effective case (the file with --method, --duration and --set applied)");
   casecmd->add_option("case", case_path, "case file (YAML)")->required();
-  casecmd->add_option("--method", method, "lexdyn method: bfgs | ah | gn | wls");
+  casecmd->add_option("--method", method, "lexdyn method: " + method_names);
   casecmd->add_option("--duration", duration, "simulate at most this long (s): stop_at_s");
   casecmd->add_option("--set", sets, "override a value of the case: PATH=VALUE; repeatable");
   casecmd->add_option("--out", case_out, "write it to this file (paths relative to it) instead of stdout (absolute paths)");

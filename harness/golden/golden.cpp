@@ -3,6 +3,7 @@
 #include "harness/cases/runner.hpp"
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
+#include "lexdyn/control/method.hpp"
 
 #include <algorithm>
 #include <array>
@@ -122,7 +123,7 @@ Manifest loadManifest(const std::string& path) {
     if (auto methods = em.optional("methods")) {
       if (spec.controller.type != "lexdyn") methods->fail("the case's controller (" + spec.controller.type + ") has no methods");
       for (const yaml::Node& mn : methods->elements()) {
-        const std::string method = mn.asEnum({"bfgs", "ah", "gn", "wls"});
+        const std::string method = mn.asEnum(control::methodNames());
         if (std::find(e.methods.begin(), e.methods.end(), method) != e.methods.end()) mn.fail("method " + method + " listed twice");
         try {
           cases::overrideMethod(spec, method, mn.where());

@@ -4,6 +4,7 @@
 #include "harness/cases/task_registry.hpp"
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
+#include "lexdyn/control/method.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -335,7 +336,7 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
   const yaml::Node methods = top.required("methods");
   if (methods.size() < 1) methods.fail("expected at least one method");
   for (const yaml::Node& mn : methods.elements()) {
-    const std::string m = mn.asEnum({"bfgs", "ah", "gn", "wls"});
+    const std::string m = mn.asEnum(control::methodNames());
     if (std::find(s.methods.begin(), s.methods.end(), m) != s.methods.end()) mn.fail("method " + m + " listed twice");
     try {
       cases::CaseSpec c = s.base;

@@ -10,16 +10,6 @@
 
 namespace lexdyn::control {
 
-enum class Method {
-  LexDynBFGS,   ///< velocity domain, Newton augmentation with per-level BFGS (sec. VI-A)
-  LexDynAH,     ///< velocity domain, Newton augmentation with the analytic Hessian (sec. VI-B)
-  GaussNewton,  ///< velocity domain, no augmentation (the paper's pure GN, Fig. 14)
-  WLS,          ///< acceleration domain, two-level weighted QP (the paper's LSSOL baseline)
-};
-const char* toString(Method m);
-/// "bfgs" | "ah" | "gn" | "wls" (throws lexdyn::InputError naming `where`).
-Method parseMethod(const std::string& s, const std::string& where);
-
 /// Target of the Newton rows R u(k+1) = target: 0 (eq. 35 and the Taylor model eq. 26: the step
 /// dq = dt u(k+1) itself is penalised, as in the paper's damping analysis eq. 81), or R u(k) as
 /// eq. 62 is printed (only the change of velocity is penalised). The default is Zero: with
@@ -28,7 +18,10 @@ Method parseMethod(const std::string& s, const std::string& where);
 enum class NewtonTarget { Zero, PreviousVelocity };
 
 struct ControllerParams {
-  Method method = Method::LexDynBFGS;
+  /// Name of a registered method (lexdyn/control/method.hpp, findMethod): "bfgs" (LexDynBFGS,
+  /// sec. VI-A), "ah" (LexDynAH, sec. VI-B), "gn" (pure Gauss-Newton, Fig. 14), "wls" (the
+  /// acceleration-domain LSSOL baseline), or one an application registered.
+  std::string method = "bfgs";
   double dt = 0.005;                 ///< control period, s
   // Thresholds the paper gives as multiples of dt^2 are stored as those multiples.
   // Switching (eq. 95): a level is augmented while omega = 1/2 ||w_optim||^2 >= nu_dt2 * dt^2,

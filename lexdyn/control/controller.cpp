@@ -1,13 +1,13 @@
 #include "lexdyn/control/controller.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <set>
 #include <sstream>
 
 #include "lexdyn/common/error.hpp"
-#include "lexdyn/control/augmentation.hpp"
-#include "lexdyn/control/detail/levels.hpp"
+#include "lexdyn/control/method.hpp"
 #include "lexdyn/hessian/kinematic_hessian.hpp"
 
 namespace lexdyn::control {
@@ -19,24 +19,6 @@ inline double us(Clock::time_point a, Clock::time_point b) { return std::chrono:
 inline size_t z(int i) { return static_cast<size_t>(i); }
 
 }  // namespace
-
-const char* toString(Method m) {
-  switch (m) {
-    case Method::LexDynBFGS: return "bfgs";
-    case Method::LexDynAH: return "ah";
-    case Method::GaussNewton: return "gn";
-    case Method::WLS: return "wls";
-  }
-  return "unknown";
-}
-
-Method parseMethod(const std::string& s, const std::string& where) {
-  if (s == "bfgs") return Method::LexDynBFGS;
-  if (s == "ah") return Method::LexDynAH;
-  if (s == "gn") return Method::GaussNewton;
-  if (s == "wls") return Method::WLS;
-  throw InputError(where, "expected one of bfgs, ah, gn, wls, found \"" + s + "\"");
-}
 
 const char* toString(TickStatus s) {
   switch (s) {
@@ -57,7 +39,7 @@ struct Controller::Impl {
   std::vector<std::unique_ptr<tasks::TaskData>> td;
   tasks::TaskModel* taskPtr(int i) const { return cfg.tasks[z(i)].get(); }
 
-  bool velocity = true;  // domain
+  std::unique_ptr<ControlMethod> method;    // lexdyn/control/methods (registry)
   int nv = 0, nx = 0, nj = 0, ng = 0;
   std::vector<char> contactActive;
   std::vector<char> used;  // per task: referenced by a level
@@ -70,7 +52,6 @@ struct Controller::Impl {
   std::vector<int> boundsTasks;             // tasks in the bounds level, with their first row
   std::vector<int> boundsFirstRow;
   bool warm = false;
-  int wlsHardLevel = -1;                    // solver level index of the WLS hard level
 
   // Per-tick buffers.
   Eigen::MatrixXd M;
@@ -82,8 +63,7 @@ struct Controller::Impl {
   Command cmd;
   TickRecord rec;
 
-  std::unique_ptr<Augmentation> aug;
-  std::unique_ptr<hessian::KinematicHessianWorkspace> hws;  // analytic Hessians (LexDynAH)
+  std::unique_ptr<hessian::KinematicHessianWorkspace> hws;  // analytic Hessians (needsKinematicHessians)
 
   Impl(const model::RobotModel& m, ControllerConfig c);
   void buildLevels();
@@ -94,7 +74,7 @@ struct Controller::Impl {
 Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&m), cfg(std::move(c)), data(m.createData()) {
   const ControllerParams& p = cfg.params;
   if (!(p.dt > 0.0)) throw InputError("controller.dt", "expected a positive control period");
-  velocity = p.method != Method::WLS;
+  method = makeMethod(p, "controller.method");
   nv = m.nv();
   nj = m.numJoints();
   layout = tasks::ContactLayout(nv, cfg.contacts);
@@ -106,7 +86,7 @@ Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&
     if (c < 0) throw InputError("controller.initial_contacts", "unknown contact \"" + name + "\"");
     contactActive[z(c)] = 1;
   }
-  const tasks::Domain dom = velocity ? tasks::Domain::Velocity : tasks::Domain::Acceleration;
+  const tasks::Domain dom = method->domain();
   // Tasks not used by any level are allowed (a case may define tasks for some methods only):
   // they are neither checked nor computed.
   used.assign(cfg.tasks.size(), 0);
@@ -117,8 +97,8 @@ Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&
     const tasks::TaskModel& t = *cfg.tasks[i];
     if (used[i] && !t.supports(dom)) {
       throw InputError("task \"" + t.name() + "\"", std::string("does not support the ") +
-                                                        (velocity ? "velocity" : "acceleration") + " domain of method " +
-                                                        toString(p.method));
+                                                        (dom == tasks::Domain::Velocity ? "velocity" : "acceleration") +
+                                                        " domain of method " + p.method);
     }
     td.push_back(t.createData(layout));
   }
@@ -135,7 +115,7 @@ Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&
   ctx.domain = dom;
   ctx.M = &M;
   ctx.N = &N;
-  if (p.method == Method::LexDynAH) {
+  if (method->needsKinematicHessians()) {
     hws = std::make_unique<hessian::KinematicHessianWorkspace>(m);
     ctx.hessian = hws.get();
   }
@@ -156,6 +136,7 @@ Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&
 
 void Controller::Impl::buildLevels() {
   const ControllerParams& p = cfg.params;
+  const ControlMethod& meth = *method;
   const int nt = static_cast<int>(cfg.tasks.size());
   std::vector<int> seen(z(nt), 0);
   for (size_t l = 0; l < cfg.levels.size(); ++l) {
@@ -167,9 +148,7 @@ void Controller::Impl::buildLevels() {
     if (!ls.weights.empty() && ls.weights.size() != ls.tasks.size())
       throw InputError("level \"" + ls.name + "\"", "weights must match the tasks one to one");
   }
-  if (!velocity && cfg.levels.size() != 2) {
-    throw InputError("controller.levels", "the WLS baseline needs exactly two levels (hard constraints, weighted objective)");
-  }
+  meth.checkLevels(cfg);
 
   // Bounds level: every bounds task, each variable at most once.
   std::vector<int> varOwner(z(nx), -1);
@@ -222,16 +201,12 @@ void Controller::Impl::buildLevels() {
       const int t = ls.tasks[k];
       const tasks::TaskModel& tm = *taskPtr(t);
       if (tm.kind() == tasks::TaskKind::Bounds || tm.rows() == 0) continue;
-      const bool alone = velocity && tm.separateLevel() && ls.tasks.size() > 1;
+      const bool alone = meth.separatesLevels() && tm.separateLevel() && ls.tasks.size() > 1;
       SolverLevel& target = alone ? sep : rest;
       TaskSlot slot;
       slot.task = t;
       slot.row = target.task_rows;
-      if (!velocity && l == 1) {
-        const double w = ls.weights.empty() ? 1.0 : ls.weights[k];
-        if (!(w > 0.0)) throw InputError("level \"" + ls.name + "\"", "weights must be positive");
-        slot.scale = std::sqrt(w);
-      }
+      slot.scale = meth.rowScale(ls, l, k);
       target.slots.push_back(slot);
       target.task_rows += tm.rows();
       if (tm.geometric()) target.augmentable = true;
@@ -240,14 +215,9 @@ void Controller::Impl::buildLevels() {
       sep.augmentable = false;
       addLevel(std::move(sep), ls.name + "/separate");
     }
-    // Newton rows (velocity, BFGS/AH), or constant damping rows (any method with damping > 0).
-    const bool newton = velocity && (p.method == Method::LexDynBFGS || p.method == Method::LexDynAH);
-    const bool damping = p.damping > 0.0 && (velocity ? rest.augmentable : l == 1);
-    rest.augmentable = (newton && rest.augmentable) || damping;
-    if (!rest.slots.empty() || rest.augmentable) {
-      if (!velocity && l == 0) wlsHardLevel = static_cast<int>(levels.size());
-      addLevel(std::move(rest), ls.name);
-    }
+    // Rows for the method's second-order terms (Newton, damping).
+    rest.augmentable = meth.reservesRows(l, rest.augmentable);
+    if (!rest.slots.empty() || rest.augmentable) addLevel(std::move(rest), ls.name);
   }
   solver::Options so = p.solver;
   if (!p.stop_after_level.empty()) {
@@ -266,7 +236,7 @@ void Controller::Impl::buildLevels() {
     so.stop_after_level = pl;
   }
   solver.setup(problem, so);
-  aug = std::make_unique<Augmentation>(*model, cfg, layout, problem, levels);
+  method->setup(MethodSetup{*model, cfg, layout, problem, levels});
 }
 
 void Controller::Impl::fillRows() {
@@ -299,27 +269,8 @@ void Controller::Impl::fillRows() {
 }
 
 void Controller::Impl::finishTick(const RobotState& s) {
-  const ControllerParams& p = cfg.params;
   const solver::Result& r = solver.result();
-  const double dt = p.dt;
-  if (velocity) {
-    cmd.u = r.x.head(nv);
-    cmd.udot = (cmd.u - s.u) / dt;
-    cmd.gamma = r.x.tail(ng) / dt;
-    if (p.use_qmod) {
-      // eq. 73-76: q_mod = q + dt (u(k+1) + u) / 2.
-      genForce = 0.5 * (cmd.u + s.u);
-      model->integrate(s.q, genForce, dt, cmd.q);
-    } else {
-      model->integrate(s.q, cmd.u, dt, cmd.q);  // eq. 32
-    }
-  } else {
-    cmd.udot = r.x.head(nv);
-    cmd.gamma = r.x.tail(ng);
-    cmd.u = s.u + dt * cmd.udot;
-    genForce = s.u + 0.5 * dt * cmd.udot;  // eq. 57: q + dt u + dt^2/2 udot
-    model->integrate(s.q, genForce, dt, cmd.q);
-  }
+  method->command(s, r.x, cmd);
   // Generalized forces M udot + N - Jc^T gamma: the actuated rows are the joint torques; contact
   // wrenches from the generators.
   genForce.noalias() = M * cmd.udot;
@@ -353,7 +304,7 @@ void Controller::reset(const RobotState& s) {
   Impl& I = *impl_;
   I.warm = false;
   for (size_t i = 0; i < I.td.size(); ++i) I.cfg.tasks[i]->reset(*I.td[i]);
-  I.aug->reset();
+  I.method->reset();
   I.cmd.q = s.q;
   I.cmd.u = s.u;
   I.cmd.udot.setZero();
@@ -361,7 +312,6 @@ void Controller::reset(const RobotState& s) {
 
 const Command& Controller::tick(const RobotState& s) {
   Impl& I = *impl_;
-  const ControllerParams& p = I.cfg.params;
   const auto t0 = Clock::now();
   // 1. Model.
   I.model->update(I.data, s.q, s.u);
@@ -377,8 +327,11 @@ const Command& Controller::tick(const RobotState& s) {
     if (I.used[i]) I.cfg.tasks[i]->compute(I.ctx, *I.td[i]);
   I.fillRows();
   const auto t2 = Clock::now();
-  // 3. Newton / damping rows of the augmentable levels.
-  I.aug->apply(I.ctx, I.td, I.levels, I.problem, I.solver.result(), I.warm, s, I.rec);
+  // 3. The method's rows (Newton, damping) in the reserved rows of the levels.
+  const MethodTick mt{I.ctx, I.td, I.levels, s, I.solver.result(), I.warm};
+  std::fill(I.rec.level_augmented.begin(), I.rec.level_augmented.end(), 0);
+  std::fill(I.rec.level_hessian_updated.begin(), I.rec.level_hessian_updated.end(), 0);
+  I.method->addRows(mt, I.problem, I.rec);
   const auto t3 = Clock::now();
   // 4. Solve, warm-started from the previous tick.
   const solver::Result& r = I.warm ? I.solver.solve(I.problem, I.solver.result().active, I.solver.result().x)
@@ -396,23 +349,11 @@ const Command& Controller::tick(const RobotState& s) {
   }
   if (st != TickStatus::NonFinite) {
     I.finishTick(s);
-    if (!I.velocity && I.wlsHardLevel >= 0) {
-      // The WLS hard level must be feasible (the paper's LSSOL has no relaxation).
-      const SolverLevel& hl = I.levels[z(I.wlsHardLevel)];
-      const double viol = r.violation_norm(hl.problem_level);
-      // Relative to the size of the level's finite bounds.
-      const solver::Level& pl = I.problem.level(hl.problem_level);
-      double scale = 1.0;
-      for (int k = 0; k < pl.rows(); ++k) {
-        if (std::isfinite(pl.lower(k))) scale = std::max(scale, std::abs(pl.lower(k)));
-        if (std::isfinite(pl.upper(k))) scale = std::max(scale, std::abs(pl.upper(k)));
-      }
-      if (viol > p.wls_infeasibility_tolerance * scale) st = TickStatus::Infeasible;
-    }
+    st = I.method->checkSolution(I.problem, r, st);
     if (!I.cmd.u.allFinite() || !I.cmd.tau.allFinite()) st = TickStatus::NonFinite;
   }
   I.cmd.status = st;
-  I.aug->afterSolve(I.td, s);
+  I.method->afterSolve(mt);
 
   TickRecord& rec = I.rec;
   rec.time = s.time;

@@ -2,10 +2,12 @@
 // WLS baseline, one 5 ms tick at a time.
 //
 // Each tick: read the measured state, update the model (M, N, kinematics), let every task fill
-// its rows, add the Newton rows [J; R] of the augmented levels (eq. 35, 62; switching eq. 95;
-// R from BFGS eq. 87-89 or the analytic Hessian eq. 21, 91), solve the hierarchy warm-started
-// from the previous tick, integrate the solution to the commanded configuration (eq. 32 or the
-// q_mod variant eq. 73-76; WLS: eq. 57) and report q, u, tau, gamma and a record of the tick.
+// its rows, let the method (ControllerParams::method, a ControlMethod of the registry in
+// lexdyn/control/method.hpp) add its rows to the levels (Newton rows eq. 35, 62 with switching
+// eq. 95, R from BFGS eq. 87-89 or the analytic Hessian eq. 21, 91; damping eq. 50, 81), solve the
+// hierarchy warm-started from the previous tick, let the method integrate the solution to the
+// commanded configuration (eq. 32 or the q_mod variant eq. 73-76; WLS: eq. 57) and report q, u,
+// tau, gamma and a record of the tick.
 //
 // Model / Data split: the configuration (tasks, levels, parameters) is const after
 // construction; all per-tick memory is allocated in the constructor and tick() allocates

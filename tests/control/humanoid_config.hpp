@@ -39,7 +39,7 @@ inline RobotState halfSitting(const model::RobotModel& m) {
   return s;
 }
 
-inline ControllerConfig exp1Config(const model::RobotModel& m, Method method, double handKp = 0.3) {
+inline ControllerConfig exp1Config(const model::RobotModel& m, const std::string& method, double handKp = 0.3) {
   ControllerConfig cfg;
   cfg.params.method = method;
   for (const auto& cs : m.description().contact_surfaces) {
@@ -85,7 +85,7 @@ inline ControllerConfig exp1Config(const model::RobotModel& m, Method method, do
   tasks::PostureParams pp;
   pp.posture = "half_sitting";
   const int post = add(std::make_unique<tasks::PostureTask>("posture", m, pp));
-  if (method == Method::WLS) {
+  if (method == "wls") {
     cfg.levels = {{"hard", {jl, fb, eom, tl, sc, crf, clf, com}, {}},
                   {"objective", {rhi, lhi, post, wm}, {1.0, 1.0, 1e-3, 1e-5}}};
   } else {

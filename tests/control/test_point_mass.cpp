@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "lexdyn/control/controller.hpp"
+#include "lexdyn/control/method.hpp"
 #include "lexdyn/tasks/position.hpp"
 
 namespace lexdyn::control {
@@ -19,7 +20,7 @@ struct Trajectory {
 };
 
 // x0 = 1, v0 = 0, target x_d = 0.
-Trajectory runController(Method method, double kp, double kv, double mu, double dt, int ticks, bool qmod = false) {
+Trajectory runController(const std::string& method, double kp, double kv, double mu, double dt, int ticks, bool qmod = false) {
   const model::RobotModel m = model::RobotModel::fromFiles(kDir + "point_mass.urdf", kDir + "point_mass.yaml");
   ControllerConfig cfg;
   cfg.params.method = method;
@@ -32,7 +33,7 @@ Trajectory runController(Method method, double kp, double kv, double mu, double 
   pp.gains.kp = kp;
   pp.gains.kv = kv;
   cfg.tasks.push_back(std::make_unique<tasks::PositionTask>("position", m, pp));
-  if (method == Method::WLS) {
+  if (method == "wls") {
     cfg.levels = {{"hard", {}, {}}, {"objective", {0}, {1.0}}};
   } else {
     cfg.levels = {{"position", {0}, {}}};
@@ -116,7 +117,7 @@ constexpr int kTicks = 4000;  // 20 s
 
 TEST(PointMass, VelocityDomainReproducesEq82And83) {
   for (double mu : {0.0, 0.1, 0.5, 1.0, 3.0}) {
-    const Trajectory c = runController(Method::GaussNewton, kKp, kKv, mu, kDt, kTicks);
+    const Trajectory c = runController("gn", kKp, kKv, mu, kDt, kTicks);
     const Trajectory r = velocityRecursion(kKp, kKv, mu, kDt, kTicks);
     EXPECT_LE(maxDiff(c, r), 1e-12) << "mu " << mu;
   }
@@ -124,7 +125,7 @@ TEST(PointMass, VelocityDomainReproducesEq82And83) {
 
 TEST(PointMass, QmodIntegrationFollowsEq73To76) {
   // q_mod = q + dt (u(k+1) + u) / 2 (eq. 73-76); the velocity update is eq. 79 unchanged.
-  const Trajectory c = runController(Method::GaussNewton, kKp, kKv, 0.0, kDt, kTicks, true);
+  const Trajectory c = runController("gn", kKp, kKv, 0.0, kDt, kTicks, true);
   Trajectory r;
   double x = 1.0, v = 0.0;
   for (int k = 0; k <= kTicks; ++k) {
@@ -136,13 +137,13 @@ TEST(PointMass, QmodIntegrationFollowsEq73To76) {
   }
   EXPECT_LE(maxDiff(c, r), 1e-12);
   // It matches the acceleration-domain positions (eq. 75 = eq. 58) for the same velocities.
-  EXPECT_GT(maxDiff(c, runController(Method::GaussNewton, kKp, kKv, 0.0, kDt, kTicks)), 1e-4);
+  EXPECT_GT(maxDiff(c, runController("gn", kKp, kKv, 0.0, kDt, kTicks)), 1e-4);
 }
 
 TEST(PointMass, VelocityDomainDampingDoesNotSpoilTheCriticallyDampedBehaviour) {
   // No overshoot for any damping: the emulated PD keeps converging monotonically (Fig. 1).
   for (double mu : {0.0, 0.1, 0.5, 1.0, 3.0}) {
-    const Trajectory c = runController(Method::GaussNewton, kKp, kKv, mu, kDt, kTicks);
+    const Trajectory c = runController("gn", kKp, kKv, mu, kDt, kTicks);
     EXPECT_GE(minX(c), -1e-12) << "mu " << mu;
     for (size_t k = 1; k < c.x.size(); ++k) ASSERT_LE(c.x[k], c.x[k - 1] + 1e-15) << "mu " << mu << " tick " << k;
   }
@@ -150,7 +151,7 @@ TEST(PointMass, VelocityDomainDampingDoesNotSpoilTheCriticallyDampedBehaviour) {
 
 TEST(PointMass, AccelerationDomainReproducesEq51And52) {
   for (double mu : {0.0, 0.5, 1.0, 3.0}) {
-    const Trajectory c = runController(Method::WLS, kKp, kKv, mu, kDt, kTicks);
+    const Trajectory c = runController("wls", kKp, kKv, mu, kDt, kTicks);
     const Trajectory r = accelerationRecursion(kKp, kKv, mu, kDt, kTicks);
     EXPECT_LE(maxDiff(c, r), 1e-12) << "mu " << mu;
   }
@@ -158,23 +159,23 @@ TEST(PointMass, AccelerationDomainReproducesEq51And52) {
 
 TEST(PointMass, AccelerationDomainDampingOvershootsWithKvOfKp) {
   // With kv = kv(kp) the damping makes the system under-damped: overshoot (Fig. 1, dashed).
-  const Trajectory c = runController(Method::WLS, kKp, kKv, 1.0, kDt, kTicks);
+  const Trajectory c = runController("wls", kKp, kKv, 1.0, kDt, kTicks);
   EXPECT_LT(minX(c), -0.01);
   // Re-tuned kv = 2 sqrt(m (1 + mu^2) kp) restores critical damping: no overshoot.
-  const Trajectory d = runController(Method::WLS, kKp, 2.0 * std::sqrt(2.0 * kKp), 1.0, kDt, kTicks);
+  const Trajectory d = runController("wls", kKp, 2.0 * std::sqrt(2.0 * kKp), 1.0, kDt, kTicks);
   EXPECT_GE(minX(d), -1e-9);
   // Without damping no overshoot either.
-  EXPECT_GE(minX(runController(Method::WLS, kKp, kKv, 0.0, kDt, kTicks)), -1e-9);
+  EXPECT_GE(minX(runController("wls", kKp, kKv, 0.0, kDt, kTicks)), -1e-9);
 }
 
 TEST(PointMass, BothDomainsConvergeToTheClosedFormEq49) {
   // Without damping both schemes are first-order discretisations of eq. 48: the error to the
   // closed form eq. 49 halves with dt. The acceleration domain with damping converges to eq. 51.
   struct Case {
-    Method method;
+    std::string method;
     double mu;
   };
-  for (const Case cs : {Case{Method::GaussNewton, 0.0}, Case{Method::WLS, 0.0}, Case{Method::WLS, 1.0}}) {
+  for (const Case& cs : {Case{"gn", 0.0}, Case{"wls", 0.0}, Case{"wls", 1.0}}) {
     const double a = kKv / (1.0 + cs.mu * cs.mu), b = kKp / (1.0 + cs.mu * cs.mu);
     double err[2];
     for (int i = 0; i < 2; ++i) {
@@ -184,11 +185,72 @@ TEST(PointMass, BothDomainsConvergeToTheClosedFormEq49) {
       err[i] = 0.0;
       for (int k = 0; k <= ticks; ++k) err[i] = std::max(err[i], std::abs(c.x[static_cast<size_t>(k)] - closedForm(a, b, k * dt)));
     }
-    EXPECT_LT(err[1], 0.01) << toString(cs.method) << " mu " << cs.mu;
+    EXPECT_LT(err[1], 0.01) << cs.method << " mu " << cs.mu;
     const double ratio = err[1] / err[0];
-    EXPECT_GT(ratio, 0.4) << toString(cs.method);
-    EXPECT_LT(ratio, 0.6) << toString(cs.method);
+    EXPECT_GT(ratio, 0.4) << cs.method;
+    EXPECT_LT(ratio, 0.6) << cs.method;
   }
+}
+
+// A fifth method, registered here and written against the public interface
+// (lexdyn/control/method.hpp) only: velocity domain; every geometric level reserves nv rows and
+// carries mu u(k+1) = 0 on every dof (eq. 81, mu = ControllerParams::damping). On the point mass
+// (one dof, occupied by the position task) this is pure Gauss-Newton with the same damping.
+class ToyDamped final : public ControlMethod {
+ public:
+  explicit ToyDamped(const ControllerParams& p) : p_(p) {}
+  tasks::Domain domain() const override { return tasks::Domain::Velocity; }
+  bool separatesLevels() const override { return true; }
+  bool reservesRows(size_t, bool geometric) const override { return geometric; }
+  void setup(const MethodSetup& s) override {
+    model_ = &s.model;
+    nv_ = s.model.nv();
+    ng_ = s.layout.ng();
+  }
+  void reset() override { ++resets; }
+  void addRows(const MethodTick& t, solver::Problem& problem, TickRecord& rec) override {
+    for (const SolverLevel& L : t.levels) {
+      if (!L.augmentable) continue;
+      solver::Level& pl = problem.level(L.problem_level);
+      pl.A.middleRows(L.spare_row, nv_).setZero();
+      for (int i = 0; i < nv_; ++i) {
+        pl.A(L.spare_row + i, i) = p_.damping;
+        pl.lower(L.spare_row + i) = pl.upper(L.spare_row + i) = 0.0;
+      }
+      rec.level_augmented[static_cast<size_t>(L.config_level)] = 1;
+    }
+  }
+  void command(const RobotState& s, const Eigen::VectorXd& x, Command& cmd) override {
+    cmd.u = x.head(nv_);
+    cmd.udot = (cmd.u - s.u) / p_.dt;
+    cmd.gamma = x.tail(ng_) / p_.dt;
+    model_->integrate(s.q, cmd.u, p_.dt, cmd.q);  // eq. 32
+  }
+  void afterSolve(const MethodTick&) override { ++ticks; }
+
+  static int resets, ticks;
+
+ private:
+  ControllerParams p_;
+  const model::RobotModel* model_ = nullptr;
+  int nv_ = 0, ng_ = 0;
+};
+int ToyDamped::resets = 0;
+int ToyDamped::ticks = 0;
+
+TEST(PointMass, AFifthMethodRegisteredByTheTestRunsIt) {
+  registerMethod({"toy", "constant damping on every dof of the geometric levels (test)", false, &makeMethodOf<ToyDamped>});
+  EXPECT_EQ(methodNames().back(), "toy");
+  const Trajectory toy = runController("toy", kKp, kKv, 0.5, kDt, 400);
+  EXPECT_EQ(ToyDamped::resets, 1);
+  EXPECT_EQ(ToyDamped::ticks, 400);
+  // Pure Gauss-Newton with the same damping gives the same trajectory, bit for bit, and both
+  // follow eq. 82-83.
+  const Trajectory gn = runController("gn", kKp, kKv, 0.5, kDt, 400);
+  EXPECT_EQ(toy.x, gn.x);
+  EXPECT_EQ(toy.v, gn.v);
+  EXPECT_LE(maxDiff(toy, velocityRecursion(kKp, kKv, 0.5, kDt, 400)), 1e-12);
+  EXPECT_LT(toy.x.back(), 1.0);
 }
 
 }  // namespace

@@ -1,0 +1,108 @@
+// Internal to lexdyn/control/methods: what the velocity-domain methods (LexDynBFGS, LexDynAH,
+// pure Gauss-Newton) share, and the reserved rows every method with second-order rows writes
+// (docs/controller.md, "Newton augmentation").
+//
+// Every solver level holding a geometric task reserves nv rows when the method adds Newton or
+// damping rows. VelocityDomainMethod fills them at each tick:
+//  - with ControllerParams::damping = mu > 0: the constant Levenberg-Marquardt rows
+//    mu u(k+1) = 0 on the occupied dofs (eq. 81);
+//  - otherwise, for a method with Newton rows (newtonRows()), while the level is switched to
+//    Newton (switchToNewton, eq. 95 on the previous tick's violation): R u(k+1) = 0 (eq. 35) or
+//    R u(k) (eq. 62), R from factorLevel() of the subclass, which keeps its second-order term
+//    up to date in prepareLevel() (BFGS eq. 87-89; analytic Hessian eq. 21, 91);
+//  - otherwise the rows are free (never active: they cost nothing in the solver).
+// The command is u(k+1), gamma = x_gamma / dt and q(k+1) by eq. 32 or eq. 73-76 (q_mod).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "lexdyn/control/method.hpp"
+
+namespace lexdyn::control::methods {
+
+/// A vector index from an int index.
+inline size_t z(int i) { return static_cast<size_t>(i); }
+
+/// The nv rows a level reserves, as views into the solver problem.
+struct ReservedRows {
+  Eigen::MatrixXd::RowsBlockXpr A;
+  Eigen::VectorXd::SegmentReturnType lower, upper;
+};
+/// Views the level's reserved rows and frees them (0 x in [-inf, inf]).
+ReservedRows clearReservedRows(solver::Problem& problem, const SolverLevel& level, int nv);
+/// Levenberg-Marquardt rows mu v = 0 (eq. 50, 81) on the dofs in `mask` (every dof when null),
+/// in order, from the first reserved row.
+void writeDampingRows(ReservedRows& rows, double mu, const std::vector<char>* mask);
+
+/// One geometric task contributing to a level's hierarchical Hessian (eq. 21).
+struct GeomTerm {
+  int task = -1;
+  int lambda_row = -1;  ///< first row of the task in the stacked rows of Result::lambda
+  int rows = 0;
+  bool equality = true;
+};
+
+/// A level with reserved rows.
+struct NewtonLevel {
+  int level = -1;               ///< index into the controller's solver levels
+  std::vector<GeomTerm> terms;  ///< geometric tasks of this level and of every earlier level
+  std::vector<char> occupied;   ///< the I* of eq. 89, sec. VII (this tick)
+};
+
+class VelocityDomainMethod : public ControlMethod {
+ public:
+  explicit VelocityDomainMethod(const ControllerParams& params) : params_(params) {}
+
+  tasks::Domain domain() const override { return tasks::Domain::Velocity; }
+  bool separatesLevels() const override { return true; }
+  bool reservesRows(size_t level, bool geometric) const override;
+  void setup(const MethodSetup& setup) override;
+  void reset() override;
+  void addRows(const MethodTick& tick, solver::Problem& problem, TickRecord& rec) override;
+  void command(const RobotState& state, const Eigen::VectorXd& x, Command& cmd) override;
+  void afterSolve(const MethodTick& tick) override;
+
+ protected:
+  /// Whether the method adds Newton rows (pure Gauss-Newton does not).
+  virtual bool newtonRows() const { return false; }
+  /// Per level at setup (e.g. its quasi-Newton matrix); `k` indexes levels().
+  virtual void setupLevel(size_t k, NewtonLevel& level) { (void)k, (void)level; }
+  virtual void resetLevels() {}
+  /// Once per tick before the levels.
+  virtual void beginTick(const MethodTick& tick) { (void)tick; }
+  /// Per level with Newton rows, before switching: brings its second-order term up to date.
+  /// `have_lambda`: the previous tick's multipliers are there (multipliers()).
+  virtual void prepareLevel(size_t k, NewtonLevel& level, const SolverLevel& sl, const MethodTick& tick, bool have_lambda,
+                            TickRecord& rec) {
+    (void)k, (void)level, (void)sl, (void)tick, (void)have_lambda, (void)rec;
+  }
+  /// Per augmented level: R (rows x nv, R^T R the level's Hessian on its occupied dofs); returns rows.
+  virtual int factorLevel(size_t k, NewtonLevel& level, Eigen::MatrixXd& R) {
+    (void)k, (void)level, (void)R;
+    return 0;
+  }
+  virtual void storePrevious(const MethodTick& tick) { (void)tick; }
+
+  /// Whether a term constrains the solution (equalities always, inequalities while engaged).
+  static bool engaged(const GeomTerm& g, const tasks::TaskData& d);
+  /// Multipliers of level `sl`'s term `g` at the previous solve in optimisation units (eq. 37:
+  /// lambda_optim = dt lambda_ctrl); zero without them.
+  Eigen::VectorXd::SegmentReturnType multipliers(const GeomTerm& g, const SolverLevel& sl, const MethodTick& tick,
+                                                 bool have_lambda);
+
+  ControllerParams params_;
+  const model::RobotModel* model_ = nullptr;
+  const ControllerConfig* config_ = nullptr;
+  int nv_ = 0, ng_ = 0;
+  bool have_prev_ = false;  ///< a previous tick exists (afterSolve ran since reset)
+
+ private:
+  std::vector<NewtonLevel> lv_;
+  std::vector<int> stack_off_;  ///< problem level -> first stacked row (Result::lambda rows)
+  Eigen::VectorXd w_;           ///< multipliers of one term
+  Eigen::VectorXd qmod_;        ///< eq. 73-76
+  Eigen::MatrixXd R_;
+};
+
+}  // namespace lexdyn::control::methods

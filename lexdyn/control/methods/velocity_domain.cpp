@@ -1,0 +1,160 @@
+#include "lexdyn/control/methods/detail/velocity_domain.hpp"
+
+#include <algorithm>
+
+#include "lexdyn/control/switching.hpp"
+
+namespace lexdyn::control::methods {
+
+ReservedRows clearReservedRows(solver::Problem& problem, const SolverLevel& level, int nv) {
+  solver::Level& pl = problem.level(level.problem_level);
+  ReservedRows r{pl.A.middleRows(level.spare_row, nv), pl.lower.segment(level.spare_row, nv), pl.upper.segment(level.spare_row, nv)};
+  r.A.setZero();
+  r.lower.setConstant(-solver::kInf);
+  r.upper.setConstant(solver::kInf);
+  return r;
+}
+
+void writeDampingRows(ReservedRows& rows, double mu, const std::vector<char>* mask) {
+  const int nv = static_cast<int>(rows.lower.size());
+  int k = 0;
+  for (int i = 0; i < nv; ++i) {
+    if (mask && !(*mask)[z(i)]) continue;
+    rows.A(k, i) = mu;
+    rows.lower(k) = rows.upper(k) = 0.0;
+    ++k;
+  }
+}
+
+bool VelocityDomainMethod::reservesRows(size_t level, bool geometric) const {
+  (void)level;
+  // Newton rows, or constant damping rows.
+  return geometric && (newtonRows() || params_.damping > 0.0);
+}
+
+void VelocityDomainMethod::setup(const MethodSetup& s) {
+  model_ = &s.model;
+  config_ = &s.config;
+  nv_ = s.model.nv();
+  ng_ = s.layout.ng();
+  int off = 0;
+  for (int l = 0; l < s.problem.levelCount(); ++l) {
+    stack_off_.push_back(off);
+    off += s.problem.level(l).rows();
+  }
+  std::vector<GeomTerm> acc;  // geometric tasks seen so far (levels in order)
+  for (size_t k = 0; k < s.levels.size(); ++k) {
+    const SolverLevel& L = s.levels[k];
+    for (const TaskSlot& sl : L.slots) {
+      const tasks::TaskModel& tm = *s.config.tasks[z(sl.task)];
+      if (!tm.geometric()) continue;
+      GeomTerm g;
+      g.task = sl.task;
+      g.lambda_row = stack_off_[z(L.problem_level)] + sl.row;
+      g.rows = tm.rows();
+      g.equality = tm.kind() == tasks::TaskKind::Equality;
+      acc.push_back(g);
+    }
+    if (!L.augmentable) continue;
+    NewtonLevel a;
+    a.level = static_cast<int>(k);
+    a.terms = acc;
+    a.occupied.assign(z(nv_), 0);
+    setupLevel(lv_.size(), a);
+    lv_.push_back(std::move(a));
+  }
+  w_.setZero(64);
+  for (const auto& t : s.config.tasks) w_.conservativeResize(std::max<Eigen::Index>(w_.size(), t->rows()));
+  qmod_.setZero(nv_);
+  R_.setZero(nv_, nv_);
+}
+
+void VelocityDomainMethod::reset() {
+  have_prev_ = false;
+  for (NewtonLevel& a : lv_) std::fill(a.occupied.begin(), a.occupied.end(), 0);
+  resetLevels();
+}
+
+bool VelocityDomainMethod::engaged(const GeomTerm& g, const tasks::TaskData& d) {
+  bool engaged = g.equality;
+  for (char e : d.engaged) engaged = engaged || (e != 0);
+  return engaged;
+}
+
+Eigen::VectorXd::SegmentReturnType VelocityDomainMethod::multipliers(const GeomTerm& g, const SolverLevel& sl, const MethodTick& tick,
+                                                                     bool have_lambda) {
+  auto wv = w_.head(g.rows);
+  if (have_lambda) wv = params_.dt * tick.last.lambda.col(sl.problem_level).segment(g.lambda_row, g.rows);
+  else wv.setZero();
+  return wv;
+}
+
+void VelocityDomainMethod::addRows(const MethodTick& tick, solver::Problem& problem, TickRecord& rec) {
+  const ControllerParams& p = params_;
+  const int nv = nv_;
+  beginTick(tick);
+  for (size_t k = 0; k < lv_.size(); ++k) {
+    NewtonLevel& a = lv_[k];
+    const SolverLevel& L = tick.levels[z(a.level)];
+    ReservedRows spare = clearReservedRows(problem, L, nv);
+
+    // Occupied dofs (the I* of eq. 89, sec. VII): the chains of the geometric tasks of this level
+    // and earlier ones that constrain the solution (equalities always, inequalities while engaged).
+    std::fill(a.occupied.begin(), a.occupied.end(), 0);
+    for (const GeomTerm& g : a.terms) {
+      if (engaged(g, *tick.td[z(g.task)])) config_->tasks[z(g.task)]->chainDofs(*model_, a.occupied);
+    }
+
+    // Constant Levenberg-Marquardt damping (eq. 81).
+    if (p.damping > 0.0) {
+      writeDampingRows(spare, p.damping, &a.occupied);
+      rec.level_augmented[z(L.config_level)] = 1;
+      continue;
+    }
+    if (!newtonRows()) continue;
+
+    // The second-order term of the level, with the multipliers of the previous solve.
+    prepareLevel(k, a, L, tick, tick.have_last && have_prev_, rec);
+
+    // Switching (eq. 95) on the previous tick's task-row violation of this level.
+    bool augment = false;
+    if (tick.have_last) {
+      LevelOutcome o;
+      o.violation_norm = tick.last.violation[z(L.problem_level)].head(L.task_rows).norm();
+      if (p.rank_switching) {
+        for (int r = 0; r < L.task_rows; ++r) o.held_rows += tick.last.active.level[z(L.problem_level)][z(r)] != solver::RowState::Inactive;
+        o.rank = tick.last.rank[z(L.problem_level)];
+      }
+      augment = switchToNewton(o, p.dt, p.nu_dt2, p.rank_switching);
+    }
+    if (!augment) continue;
+    const int rows = factorLevel(k, a, R_);
+    for (int r = 0; r < rows; ++r) {
+      spare.A.row(r).head(nv) = R_.row(r);
+      const double target = (p.newton_target == NewtonTarget::PreviousVelocity) ? R_.row(r).dot(tick.state.u) : 0.0;  // eq. 62 / 35
+      spare.lower(r) = spare.upper(r) = target;
+    }
+    rec.level_augmented[z(L.config_level)] = rows > 0 ? 1 : 0;
+  }
+}
+
+void VelocityDomainMethod::command(const RobotState& s, const Eigen::VectorXd& x, Command& cmd) {
+  const double dt = params_.dt;
+  cmd.u = x.head(nv_);
+  cmd.udot = (cmd.u - s.u) / dt;
+  cmd.gamma = x.tail(ng_) / dt;
+  if (params_.use_qmod) {
+    // eq. 73-76: q_mod = q + dt (u(k+1) + u) / 2.
+    qmod_ = 0.5 * (cmd.u + s.u);
+    model_->integrate(s.q, qmod_, dt, cmd.q);
+  } else {
+    model_->integrate(s.q, cmd.u, dt, cmd.q);  // eq. 32
+  }
+}
+
+void VelocityDomainMethod::afterSolve(const MethodTick& tick) {
+  storePrevious(tick);
+  have_prev_ = true;
+}
+
+}  // namespace lexdyn::control::methods
