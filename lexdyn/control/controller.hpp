@@ -109,9 +109,8 @@ class Controller {
   const tasks::TaskData& taskData(int i) const;
   int levelCount() const;  ///< configured levels
 
-  struct Impl;
-
  private:
+  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
