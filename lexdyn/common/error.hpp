@@ -26,6 +26,15 @@ class InputError : public std::runtime_error {
 
 [[noreturn]] void abortWithMessage(const char* file, int line, const char* cond, const std::string& msg);
 
+/// Throws std::out_of_range ("FUNCTION: index I out of range [0, N)") unless 0 <= i < n: public
+/// functions that take an index check it with this (one comparison, no allocation unless it
+/// throws).
+inline void checkIndex(const char* function, long i, long n) {
+  if (i < 0 || i >= n) {
+    throw std::out_of_range(std::string(function) + ": index " + std::to_string(i) + " out of range [0, " + std::to_string(n) + ")");
+  }
+}
+
 }  // namespace lexdyn
 
 #define LEXDYN_ALWAYS_ASSERT(cond, msg)                                   \

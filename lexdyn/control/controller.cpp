@@ -408,8 +408,14 @@ const tasks::ContactLayout& Controller::contacts() const { return impl_->layout;
 const model::RobotModel& Controller::model() const { return *impl_->model; }
 const model::ModelData& Controller::modelData() const { return impl_->data; }
 int Controller::taskCount() const { return static_cast<int>(impl_->cfg.tasks.size()); }
-const tasks::TaskModel& Controller::task(int i) const { return *impl_->cfg.tasks[z(i)]; }
-const tasks::TaskData& Controller::taskData(int i) const { return *impl_->td[z(i)]; }
+const tasks::TaskModel& Controller::task(int i) const {
+  checkIndex("Controller::task", i, static_cast<long>(impl_->cfg.tasks.size()));
+  return *impl_->cfg.tasks[z(i)];
+}
+const tasks::TaskData& Controller::taskData(int i) const {
+  checkIndex("Controller::taskData", i, static_cast<long>(impl_->td.size()));
+  return *impl_->td[z(i)];
+}
 int Controller::levelCount() const { return static_cast<int>(impl_->cfg.levels.size()); }
 
 int Controller::taskIndex(const std::string& name) const {
@@ -436,7 +442,13 @@ int Controller::contactIndex(const std::string& name) const {
   return c;
 }
 
-void Controller::setContactActive(int contact, bool active) { impl_->contactActive[z(contact)] = active ? 1 : 0; }
-bool Controller::contactActive(int contact) const { return impl_->contactActive[z(contact)] != 0; }
+void Controller::setContactActive(int contact, bool active) {
+  checkIndex("Controller::setContactActive", contact, static_cast<long>(impl_->contactActive.size()));
+  impl_->contactActive[z(contact)] = active ? 1 : 0;
+}
+bool Controller::contactActive(int contact) const {
+  checkIndex("Controller::contactActive", contact, static_cast<long>(impl_->contactActive.size()));
+  return impl_->contactActive[z(contact)] != 0;
+}
 
 }  // namespace lexdyn::control

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "lexdyn/common/error.hpp"
+
 namespace lexdyn::solver {
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -47,9 +49,15 @@ class Problem {
   int addBoundsLevel(std::string name, std::vector<int> variable, Eigen::VectorXd coefficient,
                      Eigen::VectorXd lower, Eigen::VectorXd upper);
 
-  const Level& level(int i) const { return levels_[static_cast<size_t>(i)]; }
+  const Level& level(int i) const {
+    checkIndex("Problem::level", i, static_cast<long>(levels_.size()));
+    return levels_[static_cast<size_t>(i)];
+  }
   /// Mutable access for per-tick updates of values (sizes must stay as set up).
-  Level& level(int i) { return levels_[static_cast<size_t>(i)]; }
+  Level& level(int i) {
+    checkIndex("Problem::level", i, static_cast<long>(levels_.size()));
+    return levels_[static_cast<size_t>(i)];
+  }
 
   /// Checks sizes, bounds order (lower <= upper), finite A and finite-or-infinite bounds
   /// (no NaN), and the bounds-level rules. Throws lexdyn::InputError naming `source`, the level

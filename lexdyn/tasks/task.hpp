@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "lexdyn/common/error.hpp"
 #include "lexdyn/model/robot_model.hpp"
 
 namespace lexdyn::hessian {
@@ -55,8 +56,14 @@ class ContactLayout {
   int ng() const { return ng_; }                 ///< number of generator variables
   int nx() const { return nv_ + ng_; }           ///< total number of decision variables
   int count() const { return static_cast<int>(contacts_.size()); }
-  const ContactSpec& contact(int c) const { return contacts_[static_cast<size_t>(c)]; }
-  int offset(int c) const { return offset_[static_cast<size_t>(c)]; }  ///< first generator of contact c (relative to nv)
+  const ContactSpec& contact(int c) const {
+    checkIndex("ContactLayout::contact", c, static_cast<long>(contacts_.size()));
+    return contacts_[static_cast<size_t>(c)];
+  }
+  int offset(int c) const {  ///< first generator of contact c (relative to nv)
+    checkIndex("ContactLayout::offset", c, static_cast<long>(offset_.size()));
+    return offset_[static_cast<size_t>(c)];
+  }  ///< first generator of contact c (relative to nv)
   int find(const std::string& name) const;       ///< -1 when absent
   /// 3 x 4 matrix of unit generator directions of a point in world coordinates, given the
   /// contact frame's world rotation: normalized (n + mu t_k) for t_k = +t1, -t1, +t2, -t2.

@@ -253,5 +253,27 @@ TEST(PointMass, AFifthMethodRegisteredByTheTestRunsIt) {
   EXPECT_LT(toy.x.back(), 1.0);
 }
 
+TEST(PointMass, IndicesOfTheControllersAccessorsAreChecked) {
+  const model::RobotModel m = model::RobotModel::fromFiles(kDir + "point_mass.urdf", kDir + "point_mass.yaml");
+  ControllerConfig cfg;
+  tasks::PositionParams pp;
+  pp.frame = "mass";
+  pp.target = Eigen::Vector3d::Zero();
+  pp.gains.kp = 1.0;
+  cfg.tasks.push_back(std::make_unique<tasks::PositionTask>("position", m, pp));
+  cfg.levels = {{"position", {0}, {}}};
+  Controller c(m, std::move(cfg));
+  EXPECT_EQ(c.task(0).name(), "position");
+  try {
+    (void)c.task(1);
+    ADD_FAILURE() << "no error";
+  } catch (const std::out_of_range& e) {
+    EXPECT_STREQ(e.what(), "Controller::task: index 1 out of range [0, 1)");
+  }
+  EXPECT_THROW((void)c.taskData(-1), std::out_of_range);
+  EXPECT_THROW(c.setContactActive(0, true), std::out_of_range);  // no contacts
+  EXPECT_THROW((void)c.contactActive(0), std::out_of_range);
+}
+
 }  // namespace
 }  // namespace lexdyn::control

@@ -470,5 +470,18 @@ TEST(SolverOptions, FieldsOutOfRangeAreRefusedNamingTheField) {
   EXPECT_EQ(refused(o), "solver options: elimination_tolerance: expected a number in (0, 1], found 0");
 }
 
+TEST(SolverOptions, LevelIndicesAreChecked) {
+  Problem p(2);
+  p.addLevel("a", mat(1, 2, {1, 1}), vec({1}), vec({1}));
+  EXPECT_EQ(p.level(0).name, "a");
+  try {
+    (void)p.level(1);
+    ADD_FAILURE() << "no error";
+  } catch (const std::out_of_range& e) {
+    EXPECT_STREQ(e.what(), "Problem::level: index 1 out of range [0, 1)");
+  }
+  EXPECT_THROW((void)p.level(-1), std::out_of_range);
+}
+
 }  // namespace
 }  // namespace lexdyn::solver
