@@ -361,34 +361,6 @@ void RobotModel::update(ModelData& data, const Configuration& q, const Eigen::Re
 
 namespace detail {
 
-void updateEuler(const RobotModel& model, ModelData& data, const double* q, const double* u) {
-  const RobotModel::Impl& m = model.impl();
-  ModelData::Impl& d = data.impl();
-  {
-    SimTK::Vector& Q = d.state.updQ();
-    int i = 0;
-    if (m.free_flyer) {
-      for (int k = 0; k < 6; ++k) Q[m.base_q_index + k] = q[i++];
-    }
-    for (int j = 0; j < m.nj; ++j) Q[m.joint_q_index[static_cast<size_t>(j)]] = q[i++];
-  }
-  {
-    SimTK::Vector& U = d.state.updU();
-    for (int k = 0; k < m.nv; ++k) U[m.dof_u_index[static_cast<size_t>(k)]] = u[k];
-  }
-  realizeAndCache(m, d);
-}
-
-void eulerCoordinateRates(const RobotModel& model, const ModelData& data, double* qdot) {
-  const RobotModel::Impl& m = model.impl();
-  const SimTK::Vector& QD = data.impl().state.getQDot();
-  int i = 0;
-  if (m.free_flyer) {
-    for (int k = 0; k < 6; ++k) qdot[i++] = QD[m.base_q_index + k];
-  }
-  for (int j = 0; j < m.nj; ++j) qdot[i++] = QD[m.joint_q_index[static_cast<size_t>(j)]];
-}
-
 void realizeAndCache(const RobotModel::Impl& m, ModelData::Impl& d) {
   m.system.realize(d.state, SimTK::Stage::Velocity);
 

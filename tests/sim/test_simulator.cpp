@@ -79,7 +79,7 @@ TEST(Simulator, FreeFallOfASpinningBodyMatchesClosedForm) {
   // the CoM follows a parabola and the body turns at a constant angular velocity in the world.
   Simulator sim(src("tests/data/model/free_body.urdf"), src("tests/data/model/free_body.yaml"), tightSettings(0, 0.005));
   const auto& model = sim.model();
-  const Eigen::Vector3d c_local = model.tree().bodies[0].com;
+  const Eigen::Vector3d c_local = model.description().links[0].com;
   model::Configuration q = model.neutralConfiguration();
   const Eigen::Matrix3d R0 = model::rotationFromEulerXYZ(Eigen::Vector3d(0.2, -0.3, 0.5));
   q.base_rotation = R0;
