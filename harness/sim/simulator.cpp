@@ -47,6 +47,17 @@ std::string fmt(double v) {
   return buf;
 }
 
+// Adds the integrator counters of `b` to `a` (last_step and last_order stay a's).
+void addCounters(CvodeStats& a, const CvodeStats& b) {
+  a.steps += b.steps;
+  a.rhs_evals += b.rhs_evals;
+  a.jac_evals += b.jac_evals;
+  a.jac_rhs_evals += b.jac_rhs_evals;
+  a.nonlin_iters += b.nonlin_iters;
+  a.nonlin_conv_fails += b.nonlin_conv_fails;
+  a.err_test_fails += b.err_test_fails;
+}
+
 // Rotation vector of R (angle * axis), |angle| <= pi.
 Eigen::Vector3d rotationVector(const Eigen::Matrix3d& R) {
   const Eigen::AngleAxisd aa(R);
@@ -93,15 +104,7 @@ struct Simulator::Impl final : public OdeSystem {
 
   // Counters of the integrator before its last restart.
   CvodeStats before_restart;
-  void accumulate(const CvodeStats& c) {
-    before_restart.steps += c.steps;
-    before_restart.rhs_evals += c.rhs_evals;
-    before_restart.jac_evals += c.jac_evals;
-    before_restart.jac_rhs_evals += c.jac_rhs_evals;
-    before_restart.nonlin_iters += c.nonlin_iters;
-    before_restart.nonlin_conv_fails += c.nonlin_conv_fails;
-    before_restart.err_test_fails += c.err_test_fails;
-  }
+  void accumulate(const CvodeStats& c) { addCounters(before_restart, c); }
 
   double period() const { return settings.control_period_s; }
 
@@ -677,14 +680,7 @@ const Eigen::VectorXd& Simulator::commandedPosition() const { return impl_->q1; 
 Wrench Simulator::graspWrenchWorld(int grasp) const { return impl_->grasp_world.at(static_cast<size_t>(grasp)); }
 CvodeStats Simulator::integratorStats() const {
   CvodeStats s = impl_->cvode->stats();
-  const CvodeStats& b = impl_->before_restart;
-  s.steps += b.steps;
-  s.rhs_evals += b.rhs_evals;
-  s.jac_evals += b.jac_evals;
-  s.jac_rhs_evals += b.jac_rhs_evals;
-  s.nonlin_iters += b.nonlin_iters;
-  s.nonlin_conv_fails += b.nonlin_conv_fails;
-  s.err_test_fails += b.err_test_fails;
+  addCounters(s, impl_->before_restart);
   return s;
 }
 int Simulator::stateSize() const { return impl_->ny; }
