@@ -3,6 +3,7 @@
 // and failure handling.
 #include "harness/sim/simulator.hpp"
 #include "lexdyn/common/error.hpp"
+#include "../common/closed_form.hpp"
 
 #include <gtest/gtest.h>
 
@@ -28,14 +29,7 @@ JointCommand hold(const Eigen::VectorXd& q) {
   return JointCommand{q, Eigen::VectorXd::Zero(q.size()), Eigen::VectorXd::Zero(q.size())};
 }
 
-double agm(double a, double b) {
-  for (int i = 0; i < 60 && std::abs(a - b) > 1e-16 * a; ++i) {
-    const double an = 0.5 * (a + b);
-    b = std::sqrt(a * b);
-    a = an;
-  }
-  return a;
-}
+using lexdyn::testing::agm;
 
 TEST(Simulator, FreePendulumHalfPeriodMatchesClosedForm) {
   Simulator sim(src("tests/data/model/pendulum.urdf"), src("tests/data/model/pendulum.yaml"), tightSettings(1, 0.001));
