@@ -13,10 +13,9 @@
 // Joints are in RobotDescription order. Simbody's own q and u numbering is mapped explicitly.
 //
 // Model / State split as in lexdyn::model: a Multibody is immutable after construction; every
-// per-state result and the applied-force workspace live in a MultibodyState created once by
-// createState(). setState() and the force and dynamics calls allocate nothing after the first
-// use; the "Simbody operator" queries (massMatrix, biasForces, frameJacobian,
-// systemCenterOfMass) allocate and serve verification.
+// per-state result and the applied-force workspace live in a MultibodyState created (and
+// sized) once by createState(). The "Simbody operator" queries (massMatrix, biasForces,
+// frameJacobian, systemCenterOfMass) allocate temporaries and serve verification.
 //
 // This header includes no Simbody header.
 #pragma once
