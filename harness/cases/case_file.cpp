@@ -1003,9 +1003,9 @@ std::uint64_t mix64(std::uint64_t x) {
 }
 }  // namespace
 
-Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotModel& model) {
+Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotDescription& robot) {
   const InitialStateSpec& is = spec.initial_state;
-  Eigen::VectorXd q = model.posture(is.posture);
+  Eigen::VectorXd q = robot.posture(is.posture);
   for (const auto& [j, v] : is.joints) q[j] = v;
   const PosturePerturbation& p = is.perturbation;
   if (p.amplitude_rad > 0.0) {
@@ -1013,7 +1013,8 @@ Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotMo
       // u in [-1, 1] from the top 53 bits of mix64(seed, joint index).
       const std::uint64_t h = mix64(mix64(p.seed) ^ static_cast<std::uint64_t>(j));
       const double u = 2.0 * (static_cast<double>(h >> 11) * 0x1.0p-53) - 1.0;
-      q[j] = std::clamp(q[j] + p.amplitude_rad * u, model.jointLowerLimits()[j], model.jointUpperLimits()[j]);
+      const model::JointDescription& J = robot.joints[static_cast<size_t>(j)];
+      q[j] = std::clamp(q[j] + p.amplitude_rad * u, J.lower, J.upper);
     }
   }
   return q;

@@ -158,8 +158,9 @@ checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& sp
 /// The simulated robot's description: the case's robot files with sim.model applied.
 model::RobotDescription simulatedRobot(const CaseSpec& spec);
 
-/// The initial joint positions: the posture, the case's joint values, the perturbation.
-Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotModel& model);
+/// The initial joint positions: the posture, the case's joint values, the perturbation (within
+/// the joints' limits of `robot`).
+Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotDescription& robot);
 
 /// The method of a lexdyn case as a string ("" for other controllers).
 std::string methodName(const CaseSpec& spec);

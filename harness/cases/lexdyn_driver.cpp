@@ -109,7 +109,7 @@ struct LexdynDriver::Impl {
       r.target_values = static_cast<int>(r.target_names.size());
       tasks.push_back(r);
     }
-    const model::RobotModel& sm = simu.model();
+    const sim::Multibody& sm = simu.model();
     const model::RobotDescription& d = sm.description();
     for (const ContactEntry& ce : lx.contacts) {
       ContactRec c;
@@ -371,7 +371,7 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
   for (int j = 0; j < I.nj; ++j) out[i++] = c.q.joints[j];
   for (int j = 0; j < I.nj; ++j) out[i++] = c.u[c.u.size() - I.nj + j];
   for (int j = 0; j < I.nj; ++j) out[i++] = c.tau[j];
-  const model::RobotModel& sm = simu.model();
+  const sim::Multibody& sm = simu.model();
   for (const auto& cr : I.contacts) {
     out[i++] = I.ctl->contactActive(cr.index) ? 1.0 : 0.0;
     // The planned wrench in the contact frame the controller saw (with `integrated` feedback its

@@ -62,7 +62,7 @@ class PostureServo {
 class Recorder {
  public:
   Recorder(const CaseSpec& spec, const sim::Simulator& simu, const LexdynDriver* driver) : simu_(simu), driver_(driver) {
-    const model::RobotModel& m = simu.model();
+    const sim::Multibody& m = simu.model();
     const model::RobotDescription& d = m.description();
     schema_.add(checks::kTimeChannel);
     for (const char* n : {"base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz", "com.x", "com.y", "com.z"}) schema_.add(n);
@@ -109,7 +109,7 @@ class Recorder {
 
   /// The simulator's channels at its current time.
   void fillSim() {
-    const model::RobotModel& m = simu_.model();
+    const sim::Multibody& m = simu_.model();
     const model::RobotDescription& d = m.description();
     const model::Configuration& q = simu_.configuration();
     const sim::SensorReadings& s = simu_.sensors();
@@ -168,7 +168,7 @@ class Recorder {
 
 checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu, const sim::RestingState& rest,
                                const LexdynDriver* driver) {
-  const model::RobotModel& m = simu.model();
+  const sim::Multibody& m = simu.model();
   const sim::SimulatorSettings& s = spec.sim;
   checks::TraceMetadata md;
   md.emplace_back("lexdyn_trace", "1");
@@ -327,11 +327,11 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   if (ec || !fs::is_directory(options.out_dir)) throw InputError(options.out_dir, "cannot create the output directory");
 
   sim::Simulator simu(simulatedRobot(spec), spec.sim);
-  const model::RobotModel& m = simu.model();
+  const sim::Multibody& m = simu.model();
   // The initial state: at rest, the servos holding the initial posture (docs/simulator.md,
   // "Initial state"). No equilibrium is bad input: nothing is simulated.
   const InitialStateSpec& is = spec.initial_state;
-  const Eigen::VectorXd q_init = initialJointPositions(spec, m);
+  const Eigen::VectorXd q_init = initialJointPositions(spec, m.description());
   const sim::RestingState rest =
       simu.restingState(q_init, is.settle, is.base_yaw_rad, Eigen::Vector2d(is.base_x, is.base_y));
   if (!rest.converged) {

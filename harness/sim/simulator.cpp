@@ -1,11 +1,11 @@
-// Simulator: the robot's Simbody matter subsystem (shared with lexdyn::model's construction),
-// external forces computed here (gravity, compliant ground contact, grasp bushings, joint
+// Simulator: the robot's Simbody matter subsystem (the simulator's own, multibody.hpp; built
+// from the robot description independently of lexdyn::model), external forces computed here (gravity, compliant ground contact, grasp bushings, joint
 // servos), Simbody's articulated-body forward dynamics for udot, CVODE for time integration.
 // Conventions and parameters: docs/simulator.md.
 #include "harness/sim/simulator.hpp"
 
 #include "lexdyn/common/error.hpp"
-#include "lexdyn/model/detail/model_impl.hpp"
+#include "harness/sim/multibody.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -47,6 +47,17 @@ std::string fmt(double v) {
   return buf;
 }
 
+// Adds the integrator counters of `b` to `a` (last_step and last_order stay a's).
+void addCounters(CvodeStats& a, const CvodeStats& b) {
+  a.steps += b.steps;
+  a.rhs_evals += b.rhs_evals;
+  a.jac_evals += b.jac_evals;
+  a.jac_rhs_evals += b.jac_rhs_evals;
+  a.nonlin_iters += b.nonlin_iters;
+  a.nonlin_conv_fails += b.nonlin_conv_fails;
+  a.err_test_fails += b.err_test_fails;
+}
+
 // Rotation vector of R (angle * axis), |angle| <= pi.
 Eigen::Vector3d rotationVector(const Eigen::Matrix3d& R) {
   const Eigen::AngleAxisd aa(R);
@@ -56,13 +67,13 @@ Eigen::Vector3d rotationVector(const Eigen::Matrix3d& R) {
 }  // namespace
 
 struct Simulator::Impl final : public OdeSystem {
-  Impl(model::RobotModel m, SimulatorSettings s)
-      : model(std::move(m)), settings(std::move(s)), data(model.createData()), observed(model.createData()) {}
+  Impl(Multibody m, SimulatorSettings s)
+      : model(std::move(m)), settings(std::move(s)), data(model.createState()), observed(model.createState()) {}
 
-  model::RobotModel model;
+  Multibody model;
   SimulatorSettings settings;
-  model::ModelData data;      // used by the right-hand side
-  model::ModelData observed;  // state at the last tick
+  MultibodyState data;      // used by the right-hand side
+  MultibodyState observed;  // state at the last tick
   int nj = 0, nv = 0, nqc = 0, ny = 0, off = 0;
   double mu = 0.0;
   std::vector<PointInfo> points;
@@ -72,10 +83,6 @@ struct Simulator::Impl final : public OdeSystem {
   // Servo commands: the profile goes from (q0, qd0, tau0) at t0 to (q1, qd1, tau1) at t0 + T.
   Eigen::VectorXd q0, qd0, tau0, q1, qd1, tau1;
   double t0 = 0.0;
-
-  // Simbody workspaces.
-  SimTK::Vector mob_forces, udot;
-  SimTK::Vector_<SimTK::SpatialVec> body_forces, A_GB;
 
   std::vector<double> y;
   std::unique_ptr<CvodeIntegrator> cvode;
@@ -97,15 +104,7 @@ struct Simulator::Impl final : public OdeSystem {
 
   // Counters of the integrator before its last restart.
   CvodeStats before_restart;
-  void accumulate(const CvodeStats& c) {
-    before_restart.steps += c.steps;
-    before_restart.rhs_evals += c.rhs_evals;
-    before_restart.jac_evals += c.jac_evals;
-    before_restart.jac_rhs_evals += c.jac_rhs_evals;
-    before_restart.nonlin_iters += c.nonlin_iters;
-    before_restart.nonlin_conv_fails += c.nonlin_conv_fails;
-    before_restart.err_test_fails += c.err_test_fails;
-  }
+  void accumulate(const CvodeStats& c) { addCounters(before_restart, c); }
 
   double period() const { return settings.control_period_s; }
 
@@ -137,22 +136,16 @@ struct Simulator::Impl final : public OdeSystem {
     }
   }
 
-  void addBodyForce(int body, const Eigen::Vector3d& torque_about_origin, const Eigen::Vector3d& force) {
-    SimTK::SpatialVec& F = body_forces[model.impl().mobod[static_cast<size_t>(body)]];
-    F[0] += model::toSimTK(torque_about_origin);
-    F[1] += model::toSimTK(force);
-  }
-
   // All applied forces at (t, q, u) with `d` updated at that state. With `record`, the contact
   // point states, grasp wrenches and servo torques are stored as observations.
-  void evaluateForces(const model::ModelData& md, double t, const double* q, const double* uu, bool record) {
-    const model::RobotModel::Impl& m = model.impl();
-    const model::ModelData::Impl& d = md.impl();
-    body_forces.setToZero();
+  void evaluateForces(MultibodyState& md, double t, const double* q, const double* uu, bool record) {
+    const model::RobotDescription& desc = model.description();
+    const BodyKinematics& d = md.bodies();
+    model.clearForces(md);
     // Gravity at each body's CoM.
-    for (int b = 0; b < m.nb; ++b) {
-      const Eigen::Vector3d f = m.tree.bodies[static_cast<size_t>(b)].mass * m.desc.gravity;
-      addBodyForce(b, (d.com.col(b) - d.p.col(b)).cross(f), f);
+    for (int b = 0; b < model.numBodies(); ++b) {
+      const Eigen::Vector3d f = desc.links[static_cast<size_t>(b)].mass * desc.gravity;
+      model.addBodyForce(md, b, (d.com.col(b) - d.p.col(b)).cross(f), f);
     }
     // Ground contact.
     const ContactSettings& c = settings.contact;
@@ -171,7 +164,7 @@ struct Simulator::Impl final : public OdeSystem {
         const double vx = v.x(), vy = v.y();
         const double scale = -mu * fn / std::sqrt(vx * vx + vy * vy + c.slip_velocity_m_per_s * c.slip_velocity_m_per_s);
         F = Eigen::Vector3d(scale * vx, scale * vy, fn);
-        addBodyForce(P.body, r.cross(F), F);
+        model.addBodyForce(md, P.body, r.cross(F), F);
       }
       if (record) {
         ContactPoint& cp = contact_points[i];
@@ -196,14 +189,13 @@ struct Simulator::Impl final : public OdeSystem {
         const Eigen::Vector3d F = -s.stiffness_N_per_m * (pG - G.p_anchor) - s.damping_Ns_per_m * vG;
         const Eigen::Vector3d rot_err = G.R_anchor * rotationVector(G.R_anchor.transpose() * RG);
         const Eigen::Vector3d T = -s.rot_stiffness_Nm_per_rad * rot_err - s.rot_damping_Nms_per_rad * w_body;
-        addBodyForce(G.body, T + r.cross(F), F);
+        model.addBodyForce(md, G.body, T + r.cross(F), F);
         w.force = F;
         w.torque = T;
       }
       if (record) grasp_world[g] = w;
     }
     // Joint servos.
-    mob_forces.setToZero();
     const Eigen::VectorXd& tau_max = model.jointTorqueLimits();
     for (int j = 0; j < nj; ++j) {
       double q_ref = 0.0, qd_ref = 0.0, tau_ff = 0.0;
@@ -212,7 +204,7 @@ struct Simulator::Impl final : public OdeSystem {
       const double qdj = uu[off + j];
       double tau = settings.servo.kp[j] * (q_ref - qj) + settings.servo.kd[j] * (qd_ref - qdj) + tau_ff;
       tau = std::clamp(tau, -tau_max[j], tau_max[j]);
-      mob_forces[m.dof_u_index[static_cast<size_t>(off + j)]] = tau;
+      model.setJointForce(md, j, tau);
       if (record) tau_work[j] = tau;
     }
   }
@@ -228,50 +220,37 @@ struct Simulator::Impl final : public OdeSystem {
                                fmt(q[1] * 180.0 / M_PI) + " deg, base height " + fmt(q[5]) +
                                " m): the base is tilted by 90 degrees (fallen over, or bent that far)");
     }
-    model::detail::updateEuler(model, data, q, uu);
+    model.setState(data, q, uu);
     evaluateForces(data, t, q, uu, false);
-    const model::RobotModel::Impl& m = model.impl();
-    SimTK::State& state = data.impl().state;
-    m.system.realize(state, SimTK::Stage::Dynamics);
-    m.matter.calcAccelerationIgnoringConstraints(state, mob_forces, body_forces, udot, A_GB);
-    model::detail::eulerCoordinateRates(model, data, ydot);
-    for (int i = 0; i < nv; ++i) ydot[nqc + i] = udot[m.dof_u_index[static_cast<size_t>(i)]];
+    model.accelerations(data, ydot + nqc);
+    model.coordinateRates(data, ydot);
   }
 
   // Net generalized force on the robot at rest (u = 0, t = t0) at the integration coordinates
   // `coords` (Euler angles, base position, joints): gravity, contact and servo forces minus the
   // (zero) inertial terms, in model u order. Zero exactly at a static equilibrium.
   void restForce(const Eigen::VectorXd& coords, Eigen::VectorXd& f) {
-    const model::RobotModel::Impl& m = model.impl();
     const Eigen::VectorXd zero_u = Eigen::VectorXd::Zero(nv);
-    model::detail::updateEuler(model, data, coords.data(), zero_u.data());
+    model.setState(data, coords.data(), zero_u.data());
     evaluateForces(data, t0, coords.data(), zero_u.data(), false);
-    SimTK::Vector residual(m.simbody_nu, 0.0);
-    const SimTK::Vector zero_udot(m.simbody_nu, 0.0);
-    // residual = M udot + C(q, u) - applied forces, here = -applied forces.
-    m.matter.calcResidualForceIgnoringConstraints(data.impl().state, mob_forces, body_forces, zero_udot, residual);
     f.resize(nv);
-    for (int i = 0; i < nv; ++i) f[i] = -residual[m.dof_u_index[static_cast<size_t>(i)]];
+    model.netForce(data, f.data());  // at u = 0: the applied forces
   }
 
   // Observations at the current y and tick time.
   void observe(double t) {
     const double* q = y.data();
     const double* uu = y.data() + nqc;
-    model::detail::updateEuler(model, observed, q, uu);
+    model.setState(observed, q, uu);
     evaluateForces(observed, t, q, uu, true);
-    if (model.hasFreeFlyer()) {
-      config.base_rotation = model::rotationFromEulerXYZ(Eigen::Vector3d(q[0], q[1], q[2]));
-      config.base_position = Eigen::Vector3d(q[3], q[4], q[5]);
-    }
-    for (int j = 0; j < nj; ++j) config.joints[j] = q[off + j];
+    model.configuration(q, config);
     for (int i = 0; i < nv; ++i) u[i] = uu[i];
     sensors.time_s = t;
     sensors.q = config.joints;
     sensors.qdot = u.tail(nj);
     sensors.tau = tau_work;
     // Force/torque sensors: external contact wrenches on the sensor's body.
-    const model::ModelData::Impl& d = observed.impl();
+    const BodyKinematics& d = observed.bodies();
     for (size_t s = 0; s < sensor_info.size(); ++s) {
       const SensorInfo& S = sensor_info[s];
       const Eigen::Matrix3d Rs = d.R[static_cast<size_t>(S.body)] * S.X_body_frame.linear();
@@ -298,15 +277,14 @@ Simulator::Simulator(const std::string& urdf_path, const std::string& data_path,
     : Simulator(model::loadRobotDescription(urdf_path, data_path), std::move(settings)) {}
 
 Simulator::Simulator(model::RobotDescription description, SimulatorSettings settings) {
-  model::RobotModel m(std::move(description));
-  impl_ = std::make_unique<Impl>(std::move(m), std::move(settings));
+  impl_ = std::make_unique<Impl>(Multibody(std::move(description)), std::move(settings));
   Impl& s = *impl_;
-  const model::RobotModel& model = s.model;
+  const Multibody& model = s.model;
   const std::string where = "simulator settings";
   s.nj = model.numJoints();
   s.nv = model.nv();
-  s.off = model.jointVelocityOffset();
-  s.nqc = s.off + s.nj;  // Euler angles + position + joints, or joints
+  s.off = model.hasFreeFlyer() ? 6 : 0;
+  s.nqc = model.nq();  // Euler angles + position + joints, or joints
   s.ny = s.nqc + s.nv;
 
   const SimulatorSettings& st = s.settings;
@@ -340,8 +318,8 @@ Simulator::Simulator(model::RobotDescription description, SimulatorSettings sett
     GraspState G;
     G.settings = g;
     const model::FrameId f = model.frameId(g.frame);
-    G.body = model.frameBody(f);
-    G.X_body_frame = model.frameInBody(f);
+    G.body = desc.frames[static_cast<size_t>(f)].link;
+    G.X_body_frame = desc.frames[static_cast<size_t>(f)].placement;
     for (const auto& o : s.grasps) {
       if (o.settings.name == g.name) throw InputError(where, "duplicate grasp name '" + g.name + "'");
     }
@@ -354,11 +332,6 @@ Simulator::Simulator(model::RobotDescription description, SimulatorSettings sett
     s.sensor_info.push_back(S);
   }
 
-  const model::RobotModel::Impl& mi = model.impl();
-  s.mob_forces.resize(mi.simbody_nu);
-  s.udot.resize(mi.simbody_nu);
-  s.body_forces.resize(mi.matter.getNumBodies());
-  s.A_GB.resize(mi.matter.getNumBodies());
   s.y.assign(static_cast<size_t>(s.ny), 0.0);
   s.q0 = s.q1 = Eigen::VectorXd::Zero(s.nj);
   s.qd0 = s.qd1 = s.tau0 = s.tau1 = Eigen::VectorXd::Zero(s.nj);
@@ -386,7 +359,7 @@ Simulator::Simulator(model::RobotDescription description, SimulatorSettings sett
 
 Simulator::~Simulator() = default;
 
-const model::RobotModel& Simulator::model() const { return impl_->model; }
+const Multibody& Simulator::model() const { return impl_->model; }
 const SimulatorSettings& Simulator::settings() const { return impl_->settings; }
 
 model::Configuration Simulator::placeOnGround(const Eigen::VectorXd& joints, const Eigen::Matrix3d& base_rotation,
@@ -397,11 +370,15 @@ model::Configuration Simulator::placeOnGround(const Eigen::VectorXd& joints, con
   q.base_rotation = base_rotation;
   q.base_position = Eigen::Vector3d(base_xy.x(), base_xy.y(), 0.0);
   if (s.points.empty() || !s.model.hasFreeFlyer()) return q;
-  model::ModelData d = s.model.createData();
-  s.model.update(d, q, Eigen::VectorXd::Zero(s.nv));
+  MultibodyState state = s.model.createState();
+  std::vector<double> coords(static_cast<size_t>(s.nqc));
+  s.model.coordinates(q, coords.data());
+  const Eigen::VectorXd zero_u = Eigen::VectorXd::Zero(s.nv);
+  s.model.setState(state, coords.data(), zero_u.data());
+  const BodyKinematics& d = state.bodies();
   double zmin = std::numeric_limits<double>::infinity();
   for (const PointInfo& P : s.points) {
-    zmin = std::min(zmin, (d.impl().p.col(P.body) + d.impl().R[static_cast<size_t>(P.body)] * P.r_body).z());
+    zmin = std::min(zmin, (d.p.col(P.body) + d.R[static_cast<size_t>(P.body)] * P.r_body).z());
   }
   const ContactSettings& c = s.settings.contact;
   const double weight = s.model.totalMass() * s.model.gravity().norm();
@@ -473,13 +450,7 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
   };
   Eigen::VectorXd coords(s.nqc), f(s.nv);
   auto force = [&](const model::Configuration& q, Eigen::VectorXd& ff_out) {
-    int i = 0;
-    if (ff) {
-      const Eigen::Vector3d e = model::eulerXYZFromRotation(q.base_rotation);
-      for (int k = 0; k < 3; ++k) coords[i++] = e[k];
-      for (int k = 0; k < 3; ++k) coords[i++] = q.base_position[k];
-    }
-    for (int j = 0; j < s.nj; ++j) coords[i++] = q.joints[j];
+    s.model.coordinates(q, coords.data());
     s.restForce(coords, ff_out);
   };
   auto residual = [&](const Eigen::VectorXd& xx, Eigen::VectorXd& r) {
@@ -606,14 +577,8 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
 void Simulator::reset(const model::Configuration& q, const Eigen::VectorXd& u, const JointCommand* initial_command) {
   Impl& s = *impl_;
   if (q.joints.size() != s.nj || u.size() != s.nv) throw InputError("simulator reset", "state has the wrong size");
-  int i = 0;
-  if (s.model.hasFreeFlyer()) {
-    const Eigen::Vector3d e = model::eulerXYZFromRotation(q.base_rotation);
-    for (int k = 0; k < 3; ++k) s.y[static_cast<size_t>(i++)] = e[k];
-    for (int k = 0; k < 3; ++k) s.y[static_cast<size_t>(i++)] = q.base_position[k];
-  }
-  for (int j = 0; j < s.nj; ++j) s.y[static_cast<size_t>(i++)] = q.joints[j];
-  for (int k = 0; k < s.nv; ++k) s.y[static_cast<size_t>(i++)] = u[k];
+  s.model.coordinates(q, s.y.data());
+  for (int k = 0; k < s.nv; ++k) s.y[static_cast<size_t>(s.nqc + k)] = u[k];
   if (initial_command) {
     if (initial_command->q.size() != s.nj || initial_command->qdot.size() != s.nj || initial_command->tau_ff.size() != s.nj) {
       throw InputError("simulator reset", "initial command vectors must have one entry per joint");
@@ -710,19 +675,12 @@ const SensorReadings& Simulator::sensors() const { return impl_->sensors; }
 const model::Configuration& Simulator::configuration() const { return impl_->config; }
 const Eigen::VectorXd& Simulator::velocity() const { return impl_->u; }
 const std::vector<ContactPoint>& Simulator::contactPoints() const { return impl_->contact_points; }
-const model::ModelData& Simulator::data() const { return impl_->observed; }
+const MultibodyState& Simulator::data() const { return impl_->observed; }
 const Eigen::VectorXd& Simulator::commandedPosition() const { return impl_->q1; }
 Wrench Simulator::graspWrenchWorld(int grasp) const { return impl_->grasp_world.at(static_cast<size_t>(grasp)); }
 CvodeStats Simulator::integratorStats() const {
   CvodeStats s = impl_->cvode->stats();
-  const CvodeStats& b = impl_->before_restart;
-  s.steps += b.steps;
-  s.rhs_evals += b.rhs_evals;
-  s.jac_evals += b.jac_evals;
-  s.jac_rhs_evals += b.jac_rhs_evals;
-  s.nonlin_iters += b.nonlin_iters;
-  s.nonlin_conv_fails += b.nonlin_conv_fails;
-  s.err_test_fails += b.err_test_fails;
+  addCounters(s, impl_->before_restart);
   return s;
 }
 int Simulator::stateSize() const { return impl_->ny; }

@@ -1,5 +1,6 @@
 // The true dynamics: a Simbody multibody system built from the same URDF + data file as the
-// controller's model, integrated by SUNDIALS CVODE between control ticks. See docs/simulator.md
+// controller's model but by the simulator's own code (multibody.hpp: only the reading of the
+// files, model::RobotDescription, is shared), integrated by SUNDIALS CVODE between control ticks. See docs/simulator.md
 // for the contact model, the joint servo and its set-point profile, the sensors, the
 // integrator settings and the failure handling.
 //
@@ -12,6 +13,7 @@
 #pragma once
 
 #include "harness/sim/cvode_integrator.hpp"
+#include "harness/sim/multibody.hpp"
 #include "lexdyn/model/robot_model.hpp"
 
 #include <Eigen/Core>
@@ -156,7 +158,9 @@ class Simulator {
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;
 
-  const model::RobotModel& model() const;
+  /// The simulated robot: its description, names, sizes and the ground-truth queries
+  /// (framePlacement, centerOfMass) on data(). Not the controller's model::RobotModel.
+  const Multibody& model() const;
   const SimulatorSettings& settings() const;
 
   /// Base pose that puts the lowest contact point at the static penetration below the ground
@@ -201,8 +205,8 @@ class Simulator {
   const model::Configuration& configuration() const;
   const Eigen::VectorXd& velocity() const;
   const std::vector<ContactPoint>& contactPoints() const;
-  /// Model data updated at the true state at time() (for frame placements, CoM, ...).
-  const model::ModelData& data() const;
+  /// The simulator's state at time() (for model().framePlacement(data(), f), centerOfMass, ...).
+  const MultibodyState& data() const;
   /// Commanded servo set-point at time() (end of the last period).
   const Eigen::VectorXd& commandedPosition() const;
   /// Grasp wrench on the robot (world frame, at the grasp frame origin); zero when inactive.

@@ -447,6 +447,32 @@ int RobotDescription::findCapsule(const std::string& n) const {
   }
   return -1;
 }
+// "a, b, c": the names of `items` (name_of(item) gives one), for messages.
+template <class T, class NameOf>
+static std::string knownNames(const std::vector<T>& items, NameOf name_of) {
+  std::string known;
+  for (const T& item : items) known += (known.empty() ? "" : ", ") + name_of(item);
+  return known;
+}
+int RobotDescription::jointIndex(const std::string& n) const {
+  const int j = findJoint(n);
+  if (j >= 0) return j;
+  const std::string known = knownNames(joints, [](const JointDescription& J) { return J.name; });
+  throw InputError(urdf_path, "unknown joint '" + n + "' (joints: " + known + ")");
+}
+int RobotDescription::frameIndex(const std::string& n) const {
+  const int f = findFrame(n);
+  if (f >= 0) return f;
+  const std::string known = knownNames(frames, [](const FrameDescription& F) { return F.name; });
+  throw InputError(data_path, "unknown frame '" + n + "' (frames: " + known + ")");
+}
+const Eigen::VectorXd& RobotDescription::posture(const std::string& n) const {
+  for (const auto& p : postures) {
+    if (p.first == n) return p.second;
+  }
+  const std::string known = knownNames(postures, [](const std::pair<std::string, Eigen::VectorXd>& p) { return p.first; });
+  throw InputError(data_path, "unknown posture '" + n + "' (postures: " + known + ")");
+}
 double RobotDescription::totalMass() const {
   double m = 0.0;
   for (const auto& l : links) m += l.mass;

@@ -108,6 +108,11 @@ struct RobotDescription {
   int findJoint(const std::string& name) const;  ///< -1 when absent
   int findFrame(const std::string& name) const;  ///< -1 when absent
   int findCapsule(const std::string& name) const;
+  /// Like findJoint / findFrame, but throw lexdyn::InputError listing the known names when absent
+  /// (the URDF for joints, the data file for frames and postures).
+  int jointIndex(const std::string& name) const;
+  int frameIndex(const std::string& name) const;
+  const Eigen::VectorXd& posture(const std::string& name) const;
   double totalMass() const;
 };
 

@@ -259,25 +259,8 @@ const Eigen::VectorXd& RobotModel::jointTorqueLimits() const { return impl_->tor
 const KinematicTree& RobotModel::tree() const { return impl_->tree; }
 int RobotModel::numCollisionPairs() const { return static_cast<int>(impl_->desc.collision_pairs.size()); }
 
-int RobotModel::jointIndex(const std::string& n) const {
-  const int j = impl_->desc.findJoint(n);
-  if (j < 0) {
-    std::string known;
-    for (const auto& s : impl_->joint_names) known += (known.empty() ? "" : ", ") + s;
-    throw InputError(impl_->desc.urdf_path, "unknown joint '" + n + "' (joints: " + known + ")");
-  }
-  return j;
-}
-
-FrameId RobotModel::frameId(const std::string& n) const {
-  const int f = impl_->desc.findFrame(n);
-  if (f < 0) {
-    std::string known;
-    for (const auto& fr : impl_->desc.frames) known += (known.empty() ? "" : ", ") + fr.name;
-    throw InputError(impl_->desc.data_path, "unknown frame '" + n + "' (frames: " + known + ")");
-  }
-  return f;
-}
+int RobotModel::jointIndex(const std::string& n) const { return impl_->desc.jointIndex(n); }
+FrameId RobotModel::frameId(const std::string& n) const { return impl_->desc.frameIndex(n); }
 
 const std::string& RobotModel::frameName(FrameId f) const { return impl_->desc.frames.at(static_cast<size_t>(f)).name; }
 int RobotModel::frameBody(FrameId f) const { return impl_->desc.frames.at(static_cast<size_t>(f)).link; }
@@ -285,14 +268,7 @@ const Eigen::Isometry3d& RobotModel::frameInBody(FrameId f) const {
   return impl_->desc.frames.at(static_cast<size_t>(f)).placement;
 }
 
-const Eigen::VectorXd& RobotModel::posture(const std::string& n) const {
-  for (const auto& p : impl_->desc.postures) {
-    if (p.first == n) return p.second;
-  }
-  std::string known;
-  for (const auto& p : impl_->desc.postures) known += (known.empty() ? "" : ", ") + p.first;
-  throw InputError(impl_->desc.data_path, "unknown posture '" + n + "' (postures: " + known + ")");
-}
+const Eigen::VectorXd& RobotModel::posture(const std::string& n) const { return impl_->desc.posture(n); }
 
 // =============================================================================================
 // Configuration helpers
@@ -384,34 +360,6 @@ void RobotModel::update(ModelData& data, const Configuration& q, const Eigen::Re
 }
 
 namespace detail {
-
-void updateEuler(const RobotModel& model, ModelData& data, const double* q, const double* u) {
-  const RobotModel::Impl& m = model.impl();
-  ModelData::Impl& d = data.impl();
-  {
-    SimTK::Vector& Q = d.state.updQ();
-    int i = 0;
-    if (m.free_flyer) {
-      for (int k = 0; k < 6; ++k) Q[m.base_q_index + k] = q[i++];
-    }
-    for (int j = 0; j < m.nj; ++j) Q[m.joint_q_index[static_cast<size_t>(j)]] = q[i++];
-  }
-  {
-    SimTK::Vector& U = d.state.updU();
-    for (int k = 0; k < m.nv; ++k) U[m.dof_u_index[static_cast<size_t>(k)]] = u[k];
-  }
-  realizeAndCache(m, d);
-}
-
-void eulerCoordinateRates(const RobotModel& model, const ModelData& data, double* qdot) {
-  const RobotModel::Impl& m = model.impl();
-  const SimTK::Vector& QD = data.impl().state.getQDot();
-  int i = 0;
-  if (m.free_flyer) {
-    for (int k = 0; k < 6; ++k) qdot[i++] = QD[m.base_q_index + k];
-  }
-  for (int j = 0; j < m.nj; ++j) qdot[i++] = QD[m.joint_q_index[static_cast<size_t>(j)]];
-}
 
 void realizeAndCache(const RobotModel::Impl& m, ModelData::Impl& d) {
   m.system.realize(d.state, SimTK::Stage::Velocity);

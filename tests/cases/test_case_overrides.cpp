@@ -173,7 +173,7 @@ TEST(CaseOverrides, PosturePerturbationIsSeededSmallAndWithinLimits) {
   auto q0 = [](const std::vector<std::string>& sets) {
     const CaseSpec c = withSets("cases/exp1.yaml", sets);
     const model::RobotModel m = model::RobotModel::fromFiles(c.urdf_path, c.data_path);
-    return std::make_pair(initialJointPositions(c, m), m.posture("half_sitting"));
+    return std::make_pair(initialJointPositions(c, m.description()), m.posture("half_sitting"));
   };
   const auto [nominal, posture] = q0({});
   EXPECT_TRUE(nominal == posture);

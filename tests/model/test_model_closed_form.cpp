@@ -2,6 +2,7 @@
 // spinning body (parabola + constant rotation), and a large-amplitude compound pendulum whose
 // half period is 2 K(k) sqrt(I / (m g d)) with K from the arithmetic-geometric mean.
 #include "model_test_utils.hpp"
+#include "../common/closed_form.hpp"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>
@@ -99,14 +100,7 @@ TEST(ClosedForm, FreeFallOfASpinningBody) {
   EXPECT_LT((model.centerOfMassVelocity(data) - (vc0 + g * t)).norm(), 1e-9);
 }
 
-double agm(double a, double b) {
-  for (int i = 0; i < 60 && std::abs(a - b) > 1e-16 * a; ++i) {
-    const double an = 0.5 * (a + b);
-    b = std::sqrt(a * b);
-    a = an;
-  }
-  return a;
-}
+using lexdyn::testing::agm;
 
 TEST(ClosedForm, CompoundPendulumMassMatrixGravityAndPeriod) {
   RobotModel model = loadModel("tests/data/model", "pendulum");

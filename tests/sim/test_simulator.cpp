@@ -3,6 +3,7 @@
 // and failure handling.
 #include "harness/sim/simulator.hpp"
 #include "lexdyn/common/error.hpp"
+#include "../common/closed_form.hpp"
 
 #include <gtest/gtest.h>
 
@@ -28,14 +29,7 @@ JointCommand hold(const Eigen::VectorXd& q) {
   return JointCommand{q, Eigen::VectorXd::Zero(q.size()), Eigen::VectorXd::Zero(q.size())};
 }
 
-double agm(double a, double b) {
-  for (int i = 0; i < 60 && std::abs(a - b) > 1e-16 * a; ++i) {
-    const double an = 0.5 * (a + b);
-    b = std::sqrt(a * b);
-    a = an;
-  }
-  return a;
-}
+using lexdyn::testing::agm;
 
 TEST(Simulator, FreePendulumHalfPeriodMatchesClosedForm) {
   Simulator sim(src("tests/data/model/pendulum.urdf"), src("tests/data/model/pendulum.yaml"), tightSettings(1, 0.001));
@@ -79,7 +73,7 @@ TEST(Simulator, FreeFallOfASpinningBodyMatchesClosedForm) {
   // the CoM follows a parabola and the body turns at a constant angular velocity in the world.
   Simulator sim(src("tests/data/model/free_body.urdf"), src("tests/data/model/free_body.yaml"), tightSettings(0, 0.005));
   const auto& model = sim.model();
-  const Eigen::Vector3d c_local = model.tree().bodies[0].com;
+  const Eigen::Vector3d c_local = model.description().links[0].com;
   model::Configuration q = model.neutralConfiguration();
   const Eigen::Matrix3d R0 = model::rotationFromEulerXYZ(Eigen::Vector3d(0.2, -0.3, 0.5));
   q.base_rotation = R0;

@@ -1,6 +1,6 @@
-// Internal: the Simbody side of RobotModel / ModelData. Included only by lexdyn/model and
-// harness/sim source files (which are compiled with -UNDEBUG, see docs/architecture.md). Not a
-// public header: it includes Simbody.
+// Internal: the Simbody side of RobotModel / ModelData. Included only by lexdyn/model source
+// files (which are compiled with -UNDEBUG, see docs/architecture.md); the simulator builds its
+// own Simbody system (harness/sim/multibody.hpp). Not a public header: it includes Simbody.
 #pragma once
 
 #include "lexdyn/model/robot_model.hpp"
@@ -79,13 +79,6 @@ struct ModelData::Impl {
 
 namespace lexdyn::model::detail {
 
-/// Simulator access: sets the state from the Simbody integration coordinates
-/// q = [body-fixed XYZ Euler angles (3); base position (3); joints] (free-flyer) or q = joints,
-/// and u in model order; realizes Velocity and computes the same caches as update().
-void updateEuler(const RobotModel& model, ModelData& data, const double* q, const double* u);
-/// Time derivative of those coordinates (Euler-angle rates, base velocity, joint rates) at the
-/// state of the last update (Simbody's qdot = N(q) u).
-void eulerCoordinateRates(const RobotModel& model, const ModelData& data, double* qdot);
 /// Realizes Velocity and fills the kinematic caches of `d`.
 void realizeAndCache(const RobotModel::Impl& m, ModelData::Impl& d);
 

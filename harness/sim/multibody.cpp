@@ -1,0 +1,402 @@
+// The simulator's Simbody system, built from a RobotDescription by this file alone (see
+// multibody.hpp). Nothing here calls lexdyn::model's Simbody code; the cross-check
+// tests/sim/test_model_vs_simulator.cpp compares the two constructions.
+//
+// The construction is written to give the same Simbody system as the controller's model does
+// for the same description, down to the last bit (the same mobilizers in the same order, the
+// same mobilizer frames, the same mass-property arithmetic), so that the simulation is
+// unchanged by the separation (docs/simulator.md, "The simulator's multibody system").
+#include "harness/sim/multibody.hpp"
+
+#include "lexdyn/common/error.hpp"
+
+#include <Simbody.h>
+
+#include <cmath>
+
+namespace lexdyn::sim {
+
+namespace {
+
+SimTK::Vec3 vec3(const Eigen::Vector3d& v) { return SimTK::Vec3(v.x(), v.y(), v.z()); }
+
+SimTK::Transform transform(const Eigen::Matrix3d& R, const Eigen::Vector3d& p) {
+  SimTK::Mat33 m;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m(r, c) = R(r, c);
+  }
+  // R is orthonormal to rounding already: taken as it is, not re-orthogonalized.
+  return SimTK::Transform(SimTK::Rotation(m, true), vec3(p));
+}
+
+// Simbody's body mass properties: mass, centre of mass in the body frame, and the inertia about
+// the body frame's origin, from the link's inertia about its centre of mass by the parallel-axis
+// theorem, I_O = I_C + m (|c|^2 1 - c c^T). A massless link (a fixed-base root) has none.
+SimTK::MassProperties linkMassProperties(const model::LinkDescription& link) {
+  if (link.mass == 0.0) return SimTK::MassProperties(0.0, SimTK::Vec3(0), SimTK::Inertia(0.0));
+  const Eigen::Vector3d& c = link.com;
+  const Eigen::Matrix3d shift = c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose();
+  const Eigen::Matrix3d I = link.inertia + link.mass * shift;
+  return SimTK::MassProperties(link.mass, vec3(c),
+                               SimTK::Inertia(SimTK::Vec3(I(0, 0), I(1, 1), I(2, 2)), SimTK::Vec3(I(0, 1), I(0, 2), I(1, 2))));
+}
+
+// Mobilizer frame of a one-dof joint: Simbody's Pin turns about the z axis of its F and M frames
+// and its Slider moves along their x axis, so the joint's unit axis becomes that column
+// (`along`: 2 for z, 0 for x) of an orthonormal frame completed by two perpendiculars.
+Eigen::Matrix3d mobilizerFrame(const Eigen::Vector3d& axis, int along) {
+  const Eigen::Vector3d a = axis.normalized();
+  const Eigen::Vector3d other = std::abs(a.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d first = a.cross(other).normalized();
+  const Eigen::Vector3d second = a.cross(first);
+  Eigen::Matrix3d F;
+  if (along == 2) {
+    F << first, second, a;
+  } else {
+    F << a, first, second;
+  }
+  return F;
+}
+
+}  // namespace
+
+// =============================================================================================
+// The system
+// =============================================================================================
+struct Multibody::Impl {
+  explicit Impl(model::RobotDescription d);
+
+  model::RobotDescription desc;
+  bool free_flyer = true;
+  int nb = 0, nj = 0, nq = 0, nv = 0;
+  double total_mass = 0.0;
+  std::vector<double> subtree_mass;  // per body, the body and its descendants
+  std::vector<std::string> joint_names;
+  Eigen::VectorXd torque_limit;
+
+  SimTK::MultibodySystem system;
+  SimTK::SimbodyMatterSubsystem matter;
+  SimTK::State default_state;                     // Euler angles on, realized to Model
+  std::vector<SimTK::MobilizedBodyIndex> mobod;  // per body
+  // Simbody's numbering: q[k] of ours is Simbody's q[q_index[k]], u[k] is u[u_index[k]].
+  std::vector<int> q_index, u_index;
+};
+
+Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(system) {
+  free_flyer = desc.base == model::BaseType::FreeFlyer;
+  nb = static_cast<int>(desc.links.size());
+  nj = static_cast<int>(desc.joints.size());
+  const int base_dofs = free_flyer ? 6 : 0;
+  nq = base_dofs + nj;
+  nv = base_dofs + nj;
+  total_mass = desc.totalMass();
+  LEXDYN_ALWAYS_ASSERT(nb == nj + 1, "robot description: one body per joint plus the root");
+
+  // Bodies in description order (parents before children): the root on a Free (free-flyer) or
+  // Weld (fixed base) mobilizer to Ground, every other link on its joint's Pin or Slider.
+  matter.setShowDefaultGeometry(false);
+  mobod.resize(static_cast<size_t>(nb));
+  const SimTK::Body::Rigid root(linkMassProperties(desc.links[0]));
+  if (free_flyer) {
+    mobod[0] = SimTK::MobilizedBody::Free(matter.Ground(), SimTK::Transform(), root, SimTK::Transform()).getMobilizedBodyIndex();
+  } else {
+    mobod[0] = SimTK::MobilizedBody::Weld(matter.Ground(), SimTK::Transform(), root, SimTK::Transform()).getMobilizedBodyIndex();
+  }
+  for (int j = 0; j < nj; ++j) {
+    const model::JointDescription& J = desc.joints[static_cast<size_t>(j)];
+    LEXDYN_ALWAYS_ASSERT(J.child_link == j + 1 && J.parent_link >= 0 && J.parent_link <= j,
+                         "robot description: joint j moves link j + 1, whose parent comes before it");
+    const SimTK::Body::Rigid body(linkMassProperties(desc.links[static_cast<size_t>(J.child_link)]));
+    SimTK::MobilizedBody& parent = matter.updMobilizedBody(mobod[static_cast<size_t>(J.parent_link)]);
+    // F on the parent: the joint origin, axis along the mobilizer's; M on the child: the child
+    // link frame (which coincides with the joint frame at q = 0), axis along the mobilizer's.
+    const bool revolute = J.type == model::JointType::Revolute;
+    const Eigen::Matrix3d R_axis = mobilizerFrame(J.axis, revolute ? 2 : 0);
+    const SimTK::Transform X_PF = transform(J.origin.linear() * R_axis, J.origin.translation());
+    const SimTK::Transform X_BM = transform(R_axis, Eigen::Vector3d::Zero());
+    SimTK::MobilizedBodyIndex index;
+    if (revolute) {
+      index = SimTK::MobilizedBody::Pin(parent, X_PF, body, X_BM).getMobilizedBodyIndex();
+    } else {
+      index = SimTK::MobilizedBody::Slider(parent, X_PF, body, X_BM).getMobilizedBodyIndex();
+    }
+    mobod[static_cast<size_t>(J.child_link)] = index;
+  }
+  system.realizeTopology();
+  default_state = system.getDefaultState();
+  matter.setUseEulerAngles(default_state, true);  // Free: q = body-fixed X-Y-Z angles, then position
+  system.realizeModel(default_state);
+  // (Simbody may keep room for a quaternion's fourth q; only the u count must match.)
+  LEXDYN_ALWAYS_ASSERT(default_state.getNQ() >= nq && default_state.getNU() == nv,
+                       "Simbody's coordinate counts differ from the simulator's");
+
+  // Index maps, asked from Simbody rather than assumed.
+  q_index.resize(static_cast<size_t>(nq));
+  u_index.resize(static_cast<size_t>(nv));
+  if (free_flyer) {
+    const SimTK::MobilizedBody& base = matter.getMobilizedBody(mobod[0]);
+    for (int k = 0; k < 6; ++k) {
+      q_index[static_cast<size_t>(k)] = base.getFirstQIndex(default_state) + k;
+      u_index[static_cast<size_t>(k)] = base.getFirstUIndex(default_state) + k;
+    }
+  }
+  for (int j = 0; j < nj; ++j) {
+    const SimTK::MobilizedBody& mb = matter.getMobilizedBody(mobod[static_cast<size_t>(j + 1)]);
+    q_index[static_cast<size_t>(base_dofs + j)] = mb.getFirstQIndex(default_state);
+    u_index[static_cast<size_t>(base_dofs + j)] = mb.getFirstUIndex(default_state);
+  }
+
+  // Subtree masses, accumulated from the leaves to the root (children come after parents).
+  subtree_mass.assign(static_cast<size_t>(nb), 0.0);
+  for (int b = nb - 1; b >= 0; --b) {
+    subtree_mass[static_cast<size_t>(b)] += desc.links[static_cast<size_t>(b)].mass;
+    if (b > 0) {
+      const int parent = desc.joints[static_cast<size_t>(desc.links[static_cast<size_t>(b)].parent_joint)].parent_link;
+      subtree_mass[static_cast<size_t>(parent)] += subtree_mass[static_cast<size_t>(b)];
+    }
+  }
+  torque_limit.resize(nj);
+  for (int j = 0; j < nj; ++j) {
+    joint_names.push_back(desc.joints[static_cast<size_t>(j)].name);
+    torque_limit[j] = desc.joints[static_cast<size_t>(j)].effort_limit;
+  }
+}
+
+struct MultibodyState::Impl {
+  SimTK::State state;
+  BodyKinematics bodies;
+  Eigen::Matrix3Xd weighted_com;  // workspace of centerOfMass
+  // Applied forces (Simbody's numbering) and the forward-dynamics outputs.
+  SimTK::Vector mobility_forces, udot;
+  SimTK::Vector_<SimTK::SpatialVec> body_forces, body_accelerations;
+};
+
+Multibody::Multibody(model::RobotDescription description) : impl_(std::make_unique<Impl>(std::move(description))) {}
+Multibody::Multibody(Multibody&&) noexcept = default;
+Multibody& Multibody::operator=(Multibody&&) noexcept = default;
+Multibody::~Multibody() = default;
+
+MultibodyState::MultibodyState(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+MultibodyState::MultibodyState(MultibodyState&&) noexcept = default;
+MultibodyState& MultibodyState::operator=(MultibodyState&&) noexcept = default;
+MultibodyState::~MultibodyState() = default;
+const BodyKinematics& MultibodyState::bodies() const { return impl_->bodies; }
+
+// =============================================================================================
+// The robot
+// =============================================================================================
+const model::RobotDescription& Multibody::description() const { return impl_->desc; }
+const std::string& Multibody::name() const { return impl_->desc.name; }
+bool Multibody::hasFreeFlyer() const { return impl_->free_flyer; }
+int Multibody::numBodies() const { return impl_->nb; }
+int Multibody::numJoints() const { return impl_->nj; }
+int Multibody::nq() const { return impl_->nq; }
+int Multibody::nv() const { return impl_->nv; }
+double Multibody::totalMass() const { return impl_->total_mass; }
+const Eigen::Vector3d& Multibody::gravity() const { return impl_->desc.gravity; }
+const std::vector<std::string>& Multibody::jointNames() const { return impl_->joint_names; }
+const Eigen::VectorXd& Multibody::jointTorqueLimits() const { return impl_->torque_limit; }
+int Multibody::jointIndex(const std::string& n) const { return impl_->desc.jointIndex(n); }
+model::FrameId Multibody::frameId(const std::string& n) const { return impl_->desc.frameIndex(n); }
+const Eigen::VectorXd& Multibody::posture(const std::string& n) const { return impl_->desc.posture(n); }
+
+model::Configuration Multibody::neutralConfiguration() const {
+  model::Configuration c;
+  c.joints = Eigen::VectorXd::Zero(impl_->nj);
+  return c;
+}
+
+void Multibody::coordinates(const model::Configuration& c, double* q) const {
+  const Impl& m = *impl_;
+  LEXDYN_ALWAYS_ASSERT(c.joints.size() == m.nj, "coordinates: configuration has the wrong number of joints");
+  int i = 0;
+  if (m.free_flyer) {
+    const Eigen::Vector3d e = model::eulerXYZFromRotation(c.base_rotation);
+    for (int k = 0; k < 3; ++k) q[i++] = e[k];
+    for (int k = 0; k < 3; ++k) q[i++] = c.base_position[k];
+  }
+  for (int j = 0; j < m.nj; ++j) q[i++] = c.joints[j];
+}
+
+void Multibody::configuration(const double* q, model::Configuration& c) const {
+  const Impl& m = *impl_;
+  LEXDYN_ALWAYS_ASSERT(c.joints.size() == m.nj, "configuration: c.joints has the wrong size");
+  int i = 0;
+  if (m.free_flyer) {
+    c.base_rotation = model::rotationFromEulerXYZ(Eigen::Vector3d(q[0], q[1], q[2]));
+    c.base_position = Eigen::Vector3d(q[3], q[4], q[5]);
+    i = 6;
+  }
+  for (int j = 0; j < m.nj; ++j) c.joints[j] = q[i + j];
+}
+
+// =============================================================================================
+// Per state
+// =============================================================================================
+MultibodyState Multibody::createState() const {
+  const Impl& m = *impl_;
+  auto s = std::make_unique<MultibodyState::Impl>();
+  s->state = m.default_state;
+  s->bodies.R.assign(static_cast<size_t>(m.nb), Eigen::Matrix3d::Identity());
+  s->bodies.p.setZero(3, m.nb);
+  s->bodies.com.setZero(3, m.nb);
+  s->bodies.omega.setZero(3, m.nb);
+  s->bodies.v.setZero(3, m.nb);
+  s->weighted_com.setZero(3, m.nb);
+  s->mobility_forces.resize(m.nv);
+  s->udot.resize(m.nv);
+  s->body_forces.resize(m.matter.getNumBodies());
+  s->body_accelerations.resize(m.matter.getNumBodies());
+  MultibodyState out(std::move(s));
+  // One realization at the neutral state, so that Simbody's lazily allocated caches exist.
+  const std::vector<double> zero(static_cast<size_t>(m.nq + m.nv), 0.0);
+  setState(out, zero.data(), zero.data() + m.nq);
+  return out;
+}
+
+void Multibody::setState(MultibodyState& st, const double* q, const double* u) const {
+  const Impl& m = *impl_;
+  MultibodyState::Impl& s = *st.impl_;
+  {
+    SimTK::Vector& Q = s.state.updQ();
+    for (int k = 0; k < m.nq; ++k) Q[m.q_index[static_cast<size_t>(k)]] = q[k];
+    SimTK::Vector& U = s.state.updU();
+    for (int k = 0; k < m.nv; ++k) U[m.u_index[static_cast<size_t>(k)]] = u[k];
+  }
+  m.system.realize(s.state, SimTK::Stage::Velocity);
+  BodyKinematics& K = s.bodies;
+  for (int b = 0; b < m.nb; ++b) {
+    const SimTK::MobilizedBody& mb = m.matter.getMobilizedBody(m.mobod[static_cast<size_t>(b)]);
+    const SimTK::Transform& X = mb.getBodyTransform(s.state);
+    const SimTK::SpatialVec& V = mb.getBodyVelocity(s.state);  // [omega; v of the origin], Ground
+    Eigen::Matrix3d& R = K.R[static_cast<size_t>(b)];
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) R(r, c) = X.R().asMat33()(r, c);
+      K.p(r, b) = X.p()[r];
+      K.omega(r, b) = V[0][r];
+      K.v(r, b) = V[1][r];
+    }
+    K.com.col(b) = K.p.col(b) + R * m.desc.links[static_cast<size_t>(b)].com;
+  }
+}
+
+void Multibody::coordinateRates(const MultibodyState& st, double* qdot) const {
+  const Impl& m = *impl_;
+  const SimTK::Vector& QD = st.impl_->state.getQDot();
+  for (int k = 0; k < m.nq; ++k) qdot[k] = QD[m.q_index[static_cast<size_t>(k)]];
+}
+
+Eigen::Isometry3d Multibody::bodyPlacement(const MultibodyState& st, int body) const {
+  const BodyKinematics& K = st.impl_->bodies;
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = K.R[static_cast<size_t>(body)];
+  X.translation() = K.p.col(body);
+  return X;
+}
+
+Eigen::Isometry3d Multibody::framePlacement(const MultibodyState& st, model::FrameId f) const {
+  const model::FrameDescription& F = impl_->desc.frames.at(static_cast<size_t>(f));
+  return bodyPlacement(st, F.link) * F.placement;
+}
+
+Eigen::Vector3d Multibody::centerOfMass(const MultibodyState& st) const {
+  const Impl& m = *impl_;
+  Eigen::Matrix3Xd& W = st.impl_->weighted_com;
+  for (int b = 0; b < m.nb; ++b) W.col(b) = m.desc.links[static_cast<size_t>(b)].mass * st.impl_->bodies.com.col(b);
+  for (int b = m.nb - 1; b > 0; --b) {
+    W.col(m.desc.joints[static_cast<size_t>(m.desc.links[static_cast<size_t>(b)].parent_joint)].parent_link) += W.col(b);
+  }
+  return W.col(0) / m.subtree_mass[0];
+}
+
+// =============================================================================================
+// Forces and dynamics
+// =============================================================================================
+void Multibody::clearForces(MultibodyState& st) const {
+  st.impl_->body_forces.setToZero();
+  st.impl_->mobility_forces.setToZero();
+}
+
+void Multibody::addBodyForce(MultibodyState& st, int body, const Eigen::Vector3d& torque_about_origin,
+                             const Eigen::Vector3d& force) const {
+  SimTK::SpatialVec& F = st.impl_->body_forces[impl_->mobod[static_cast<size_t>(body)]];
+  F[0] += vec3(torque_about_origin);
+  F[1] += vec3(force);
+}
+
+void Multibody::setJointForce(MultibodyState& st, int joint, double tau) const {
+  const Impl& m = *impl_;
+  st.impl_->mobility_forces[m.u_index[static_cast<size_t>((m.free_flyer ? 6 : 0) + joint)]] = tau;
+}
+
+void Multibody::accelerations(MultibodyState& st, double* udot) const {
+  const Impl& m = *impl_;
+  MultibodyState::Impl& s = *st.impl_;
+  m.system.realize(s.state, SimTK::Stage::Dynamics);
+  m.matter.calcAccelerationIgnoringConstraints(s.state, s.mobility_forces, s.body_forces, s.udot, s.body_accelerations);
+  for (int k = 0; k < m.nv; ++k) udot[k] = s.udot[m.u_index[static_cast<size_t>(k)]];
+}
+
+void Multibody::netForce(MultibodyState& st, double* f) const {
+  const Impl& m = *impl_;
+  MultibodyState::Impl& s = *st.impl_;
+  SimTK::Vector residual(m.nv, 0.0);
+  const SimTK::Vector zero_udot(m.nv, 0.0);
+  // residual = M udot + C(q, u) - applied forces.
+  m.matter.calcResidualForceIgnoringConstraints(s.state, s.mobility_forces, s.body_forces, zero_udot, residual);
+  for (int k = 0; k < m.nv; ++k) f[k] = -residual[m.u_index[static_cast<size_t>(k)]];
+}
+
+// =============================================================================================
+// Simbody's operators
+// =============================================================================================
+void Multibody::massMatrix(const MultibodyState& st, Eigen::Ref<Eigen::MatrixXd> M) const {
+  const Impl& m = *impl_;
+  LEXDYN_ALWAYS_ASSERT(M.rows() == m.nv && M.cols() == m.nv, "massMatrix: M must be nv x nv");
+  SimTK::Matrix Ms;
+  m.matter.calcM(st.impl_->state, Ms);
+  for (int i = 0; i < m.nv; ++i) {
+    for (int j = 0; j < m.nv; ++j) M(i, j) = Ms(m.u_index[static_cast<size_t>(i)], m.u_index[static_cast<size_t>(j)]);
+  }
+}
+
+void Multibody::biasForces(const MultibodyState& st, Eigen::Ref<Eigen::VectorXd> N) const {
+  const Impl& m = *impl_;
+  LEXDYN_ALWAYS_ASSERT(N.size() == m.nv, "biasForces: N must have nv entries");
+  const SimTK::State& state = st.impl_->state;
+  SimTK::Vector_<SimTK::SpatialVec> gravity(m.matter.getNumBodies(), SimTK::SpatialVec(SimTK::Vec3(0), SimTK::Vec3(0)));
+  for (int b = 0; b < m.nb; ++b) {
+    const model::LinkDescription& L = m.desc.links[static_cast<size_t>(b)];
+    const SimTK::MobilizedBody& mb = m.matter.getMobilizedBody(m.mobod[static_cast<size_t>(b)]);
+    // m g at the centre of mass: Simbody's station of the CoM, re-expressed in Ground.
+    const SimTK::Vec3 r = mb.expressVectorInGroundFrame(state, vec3(L.com));
+    const SimTK::Vec3 f = L.mass * vec3(m.desc.gravity);
+    gravity[m.mobod[static_cast<size_t>(b)]] = SimTK::SpatialVec(r % f, f);
+  }
+  const SimTK::Vector no_mobility_forces(m.nv, 0.0), zero_udot(m.nv, 0.0);
+  SimTK::Vector residual;
+  m.matter.calcResidualForceIgnoringConstraints(state, no_mobility_forces, gravity, zero_udot, residual);
+  for (int k = 0; k < m.nv; ++k) N[k] = residual[m.u_index[static_cast<size_t>(k)]];
+}
+
+void Multibody::frameJacobian(const MultibodyState& st, model::FrameId f, Eigen::Ref<Eigen::MatrixXd> J) const {
+  const Impl& m = *impl_;
+  LEXDYN_ALWAYS_ASSERT(J.rows() == 6 && J.cols() == m.nv, "frameJacobian: J must be 6 x nv");
+  const model::FrameDescription& F = m.desc.frames.at(static_cast<size_t>(f));
+  SimTK::Matrix Js;  // 6 x nu, rows [angular; linear]
+  m.matter.calcFrameJacobian(st.impl_->state, m.mobod[static_cast<size_t>(F.link)], vec3(F.placement.translation()), Js);
+  for (int k = 0; k < m.nv; ++k) {
+    const int c = m.u_index[static_cast<size_t>(k)];
+    for (int i = 0; i < 3; ++i) {
+      J(i, k) = Js(3 + i, c);
+      J(3 + i, k) = Js(i, c);
+    }
+  }
+}
+
+Eigen::Vector3d Multibody::systemCenterOfMass(const MultibodyState& st) const {
+  const SimTK::Vec3 c = impl_->matter.calcSystemMassCenterLocationInGround(st.impl_->state);
+  return Eigen::Vector3d(c[0], c[1], c[2]);
+}
+
+}  // namespace lexdyn::sim
