@@ -1,9 +1,11 @@
-// Internal: the common part of the check implementations (checks.cpp, controller_checks.cpp).
+// Internal: the common part of the check evaluators (sim_checks.cpp, task_checks.cpp, ...).
 #pragma once
 
+#include "harness/checks/check_registry.hpp"
 #include "harness/checks/checks.hpp"
 #include "lexdyn/common/error.hpp"
 
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <string>
@@ -12,6 +14,15 @@
 namespace lexdyn::checks::detail {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// "%.6g" (the checks' details).
+std::string fmt(double v);
+
+/// The schema of a stored trace's channels.
+TraceSchema schemaOf(const TraceTable& trace);
+/// A check of a built-in type evaluated on a stored trace (every row).
+CheckResult evaluate(const CheckSpec& spec, const TraceSchema& schema, const TraceTable& trace);
 
 inline int require(const TraceSchema& schema, const std::string& channel, const CheckSpec& spec) {
   const int c = schema.find(channel);
@@ -19,32 +30,49 @@ inline int require(const TraceSchema& schema, const std::string& channel, const 
   return c;
 }
 
+/// A check over the rows of its window: the value is worst_ (the largest, or the smallest for a
+/// type that bounds from below), compared with the limit; result() as the type says (unit,
+/// direction, machine dependence).
 class CheckBase : public Check {
  public:
-  explicit CheckBase(CheckSpec spec, std::string unit) : spec_(std::move(spec)), unit_(std::move(unit)) {}
+  CheckBase(const CheckSpec& spec, const CheckType& type)
+      : spec_(spec), unit_(type.unit), bounds_below_(type.boundsBelow()), machine_dependent_(type.machineDependent()) {
+    if (bounds_below_) worst_ = kInf;
+  }
   CheckResult result() const override {
     CheckResult r;
     r.name = spec_.name;
     r.type = spec_.type;
     r.limit = spec_.limit;
     r.unit = unit_;
+    r.bounds_below = bounds_below_;
+    r.machine_dependent = machine_dependent_;
     if (!seen_) {
       r.value = kNaN;
       r.passed = false;
       r.detail = "no trace row at t >= " + std::to_string(spec_.from_s) + " s" +
-                 (spec_.to_s < std::numeric_limits<double>::infinity() ? " and <= " + std::to_string(spec_.to_s) + " s" : "");
+                 (spec_.to_s < kInf ? " and <= " + std::to_string(spec_.to_s) + " s" : "");
       return r;
     }
     r.value = worst_;
-    r.passed = worst_ <= spec_.limit + tolerance_;
+    r.passed = bounds_below_ ? worst_ >= spec_.limit - tolerance_ : worst_ <= spec_.limit + tolerance_;
     r.detail = detail_;
     return r;
   }
 
  protected:
   bool active(const double* row) const { return row[t_] >= spec_.from_s - 1e-9 && row[t_] <= spec_.to_s + 1e-9; }
-  CheckSpec spec_;
+  /// Binds the time channel (every check's first).
+  void bindTime(const TraceSchema& schema) { t_ = require(schema, kTimeChannel, spec_); }
+  /// Keeps the row's value as the worst so far when it is worse (or NaN); true when it was.
+  bool worse(double v) {
+    const bool w = (bounds_below_ ? v < worst_ : v > worst_) || std::isnan(v);
+    if (w) worst_ = v;
+    return w;
+  }
+  const CheckSpec spec_;
   std::string unit_;
+  const bool bounds_below_, machine_dependent_;
   int t_ = 0;
   bool seen_ = false;
   double worst_ = 0.0;
@@ -59,9 +87,26 @@ class CheckBase : public Check {
 /// limits, friction cone, support polygon, unilateral contact): docs/cases.md, "Checks".
 constexpr double kBoundaryRelTolerance = 1e-9;
 
-/// Builds a controller check (controller_checks.cpp); nullptr for an unknown type.
-std::unique_ptr<Check> makeControllerCheck(const CheckSpec& spec);
-/// The controller check types.
-const std::vector<std::string>& controllerCheckTypes();
+/// Counts sign changes of a rate computed from successive rows; |rate| <= dead_band carries no
+/// sign (the last sign is kept).
+struct SignChangeCounter {
+  bool have_prev = false;
+  double prev = 0.0, t_prev = 0.0;
+  int last_sign = 0;
+  long changes = 0;
+  void add(double t, double value, double dead_band) {
+    if (have_prev && t > t_prev) {
+      const double rate = (value - prev) / (t - t_prev);
+      const int sign = rate > dead_band ? 1 : (rate < -dead_band ? -1 : 0);
+      if (sign != 0) {
+        if (last_sign != 0 && sign != last_sign) ++changes;
+        last_sign = sign;
+      }
+    }
+    have_prev = true;
+    prev = value;
+    t_prev = t;
+  }
+};
 
 }  // namespace lexdyn::checks::detail
