@@ -275,17 +275,6 @@ bool isLexdyn(const CaseSpec& c) { return c.controller.type == "lexdyn"; }
 
 const char* const kMethods[] = {"bfgs", "ah", "gn", "wls"};
 
-/// The PD gains of a task, nullptr for a type without them.
-const tasks::PdGains* taskGains(const TaskSpec& t) {
-  if (t.type == "position") return &t.position.gains;
-  if (t.type == "orientation") return &t.orientation.gains;
-  if (t.type == "com") return &t.com.gains;
-  if (t.type == "joint_position") return &t.joint_position.gains;
-  if (t.type == "posture") return &t.posture.gains;
-  if (t.type == "contact") return &t.contact.gains;
-  return nullptr;
-}
-
 /// What the check parsers may ask about the robot (harness/checks/check_registry.hpp).
 checks::CheckContext robotContext(const model::RobotDescription& d) {
   checks::CheckContext x;
@@ -471,15 +460,14 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
       }
       // The documented ranges (docs/simulator.md, "Ranges"): positions within 1e3 m, joint
       // targets within the joints' limits.
-      const TaskSpec& ts = lx.tasks[static_cast<size_t>(lx.findTask(e.task))];
       const model::RobotDescription& d = model.description();
+      const TaskTargetLayout target = taskTarget(lx.tasks[static_cast<size_t>(lx.findTask(e.task))], d);
       for (int k = 0; k < e.value.size(); ++k) {
         const double v = e.value[k];
-        if ((ts.type == "position" || ts.type == "com" || ts.type == "com_box") && std::isfinite(v) && std::abs(v) > R::kMaxPosition_m) {
+        if (target.positions && std::isfinite(v) && std::abs(v) > R::kMaxPosition_m) {
           throw InputError(e.where + ".value[" + std::to_string(k) + "]", "expected a position in [-1000, 1000] m, found " + std::to_string(v));
         }
-        const int j = ts.type == "joint_position" ? d.findJoint(ts.joint_position.joints[static_cast<size_t>(k)])
-                                                  : (ts.type == "posture" ? k : -1);
+        const int j = static_cast<size_t>(k) < target.joints.size() ? d.findJoint(target.joints[static_cast<size_t>(k)]) : -1;
         if (j >= 0) {
           const model::JointDescription& jd = d.joints[static_cast<size_t>(j)];
           if (!(v >= std::max(jd.lower, -R::kMaxJointLimit) && v <= std::min(jd.upper, R::kMaxJointLimit))) {
