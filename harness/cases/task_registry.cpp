@@ -316,24 +316,21 @@ const TaskType* findType(const std::string& name) {
 
 }  // namespace
 
+namespace {
+template <class T>
+std::vector<std::string> namesOf(const std::vector<T>& v) {
+  std::vector<std::string> out;
+  for (const T& x : v) out.push_back(x.name);
+  return out;
+}
+}  // namespace
+
 std::string frameName(const yaml::Node& n, const model::RobotDescription& d) {
-  const std::string name = n.asString();
-  if (d.findFrame(name) < 0) {
-    std::vector<std::string> names;
-    for (const auto& f : d.frames) names.push_back(f.name);
-    n.fail("unknown frame '" + name + "' (frames: " + joinNames(names) + ")");
-  }
-  return name;
+  return checks::knownName(n, namesOf(d.frames), "frame", "frames");
 }
 
 std::string jointName(const yaml::Node& n, const model::RobotDescription& d) {
-  const std::string name = n.asString();
-  if (d.findJoint(name) < 0) {
-    std::vector<std::string> names;
-    for (const auto& j : d.joints) names.push_back(j.name);
-    n.fail("unknown joint '" + name + "' (joints: " + joinNames(names) + ")");
-  }
-  return name;
+  return checks::knownName(n, namesOf(d.joints), "joint", "joints");
 }
 
 Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy) {

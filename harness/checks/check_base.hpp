@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace lexdyn::checks::detail {
+namespace lexdyn::checks {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -30,14 +30,25 @@ inline int require(const TraceSchema& schema, const std::string& channel, const 
   return c;
 }
 
-/// A check over the rows of its window: the value is worst_ (the largest, or the smallest for a
-/// type that bounds from below), compared with the limit; result() as the type says (unit,
-/// direction, machine dependence).
+/// A check over the rows of its window: bind() binds the time channel then the type's
+/// (bindChannels), consume() passes each row of the window to sample(); the value is worst_ (the
+/// largest, or the smallest for a type that bounds from below), compared with the limit; result()
+/// as the type says (unit, direction, machine dependence).
 class CheckBase : public Check {
  public:
   CheckBase(const CheckSpec& spec, const CheckType& type)
       : spec_(spec), unit_(type.unit), bounds_below_(type.boundsBelow()), machine_dependent_(type.machineDependent()) {
     if (bounds_below_) worst_ = kInf;
+  }
+  void bind(const TraceSchema& schema, const TraceMetadata& metadata) final {
+    t_ = require(schema, kTimeChannel, spec_);
+    bindChannels(schema, metadata);
+  }
+  void consume(const double* row) override {
+    if (!active(row)) return;
+    const bool first = !seen_;
+    seen_ = true;
+    sample(row, first);
   }
   CheckResult result() const override {
     CheckResult r;
@@ -50,20 +61,34 @@ class CheckBase : public Check {
     if (!seen_) {
       r.value = kNaN;
       r.passed = false;
-      r.detail = "no trace row at t >= " + std::to_string(spec_.from_s) + " s" +
-                 (spec_.to_s < kInf ? " and <= " + std::to_string(spec_.to_s) + " s" : "");
+      r.detail = noRowDetail();
       return r;
     }
     r.value = worst_;
     r.passed = bounds_below_ ? worst_ >= spec_.limit - tolerance_ : worst_ <= spec_.limit + tolerance_;
     r.detail = detail_;
+    finish(r);
     return r;
   }
 
  protected:
+  /// Resolves the type's channels (the time channel is bound).
+  virtual void bindChannels(const TraceSchema& schema, const TraceMetadata& metadata) = 0;
+  /// One row of the window; `first`: the window's first row.
+  virtual void sample(const double* row, bool first) {
+    (void)row;
+    (void)first;
+  }
+  /// Completes the result of a check that saw rows (value, passed and detail: from worst_).
+  virtual void finish(CheckResult& r) const { (void)r; }
+  /// The detail of a check that saw no row.
+  virtual std::string noRowDetail() const {
+    return "no trace row at t >= " + std::to_string(spec_.from_s) + " s" +
+           (spec_.to_s < kInf ? " and <= " + std::to_string(spec_.to_s) + " s" : "");
+  }
   bool active(const double* row) const { return row[t_] >= spec_.from_s - 1e-9 && row[t_] <= spec_.to_s + 1e-9; }
-  /// Binds the time channel (every check's first).
-  void bindTime(const TraceSchema& schema) { t_ = require(schema, kTimeChannel, spec_); }
+  /// The column of a channel the check needs (InputError naming the check when not recorded).
+  int channel(const TraceSchema& schema, const std::string& name) const { return require(schema, name, spec_); }
   /// Keeps the row's value as the worst so far when it is worse (or NaN); true when it was.
   bool worse(double v) {
     const bool w = (bounds_below_ ? v < worst_ : v > worst_) || std::isnan(v);
@@ -81,6 +106,16 @@ class CheckBase : public Check {
   /// still pass, so that a quantity sitting exactly on a physical bound (a torque at its limit,
   /// a force on the friction cone) is not failed by round-off. 0 for limits chosen by the user.
   double tolerance_ = 0.0;
+};
+
+/// A check with the params struct P of its type (p_).
+template <class P>
+class CheckOf : public CheckBase {
+ public:
+  CheckOf(const CheckSpec& spec, const CheckType& type) : CheckBase(spec, type), p_(spec_.paramsAs<P>()) {}
+
+ protected:
+  const P& p_;
 };
 
 /// Relative round-off allowance of the checks whose limits are physical bounds (torque
@@ -109,4 +144,4 @@ struct SignChangeCounter {
   }
 };
 
-}  // namespace lexdyn::checks::detail
+}  // namespace lexdyn::checks

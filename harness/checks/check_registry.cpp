@@ -175,22 +175,23 @@ std::vector<std::string> CheckContext::jointNames() const {
   return out;
 }
 
-std::string CheckContext::frame(const yaml::Node& n) const {
+std::string knownName(const yaml::Node& n, const std::vector<std::string>& names, const std::string& kind, const std::string& list) {
   const std::string name = n.asString();
-  if (!contains(frames, name)) n.fail("unknown frame '" + name + "' (frames: " + joinNames(frames) + ")");
+  if (!contains(names, name)) n.fail("unknown " + kind + " '" + name + "' (" + list + ": " + joinNames(names) + ")");
   return name;
 }
 
-std::string CheckContext::surface(const yaml::Node& n) const {
-  const std::string name = n.asString();
-  if (!contains(surfaces, name)) n.fail("unknown contact surface '" + name + "' (surfaces: " + joinNames(surfaces) + ")");
-  return name;
+std::vector<yaml::Node> atLeastOne(const yaml::Node& n, const std::string& what) {
+  if (n.size() < 1) n.fail("expected at least one " + what);
+  return n.elements();
 }
+
+std::string CheckContext::frame(const yaml::Node& n) const { return knownName(n, frames, "frame", "frames"); }
+std::string CheckContext::surface(const yaml::Node& n) const { return knownName(n, surfaces, "contact surface", "surfaces"); }
 
 std::vector<std::string> CheckContext::jointPatterns(const yaml::Node& n) const {
   std::vector<std::string> out;
-  if (n.size() < 1) n.fail("expected at least one joint pattern");
-  for (const yaml::Node& pn : n.elements()) {
+  for (const yaml::Node& pn : atLeastOne(n, "joint pattern")) {
     const std::string pattern = pn.asString();
     int matched = 0;
     for (const Joint& j : joints) {
@@ -205,11 +206,9 @@ std::vector<std::string> CheckContext::jointPatterns(const yaml::Node& n) const 
 
 std::vector<std::string> CheckContext::taskNames(const yaml::Node& n) const {
   std::vector<std::string> out;
-  if (n.size() < 1) n.fail("expected at least one task");
-  for (const yaml::Node& tn : n.elements()) {
-    const std::string t = tn.asString();
-    if (!findTask(t)) tn.fail("unknown task '" + t + "'");
-    out.push_back(t);
+  for (const yaml::Node& tn : atLeastOne(n, "task")) {
+    out.push_back(tn.asString());
+    if (!findTask(out.back())) tn.fail("unknown task '" + out.back() + "'");
   }
   return out;
 }
@@ -246,6 +245,11 @@ std::vector<std::string> CheckReader::tasks(const std::string& key) {
   std::vector<std::string> out = context.taskNames(tn);
   context.requireTasksInHierarchies(tn, out, methods);
   return out;
+}
+
+double CheckReader::number(const std::string& key, double fallback, double (yaml::Node::*read)() const) {
+  if (auto v = map.optional(key)) return ((*v).*read)();
+  return fallback;
 }
 
 std::vector<std::string> CheckReader::joints() {

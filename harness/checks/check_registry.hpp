@@ -86,6 +86,10 @@ struct CheckContext {
 bool globMatch(const std::string& pattern, const std::string& text);
 /// "a, b, c" (for messages listing the valid names).
 std::string joinNames(const std::vector<std::string>& v);
+/// The name `n` holds, one of `names`; otherwise fails at n: "unknown KIND 'X' (LIST: a, b)".
+std::string knownName(const yaml::Node& n, const std::vector<std::string>& names, const std::string& kind, const std::string& list);
+/// The elements of a sequence of at least one; otherwise fails at n: "expected at least one WHAT".
+std::vector<yaml::Node> atLeastOne(const yaml::Node& n, const std::string& what);
 
 /// What a parser gets: the entry (common keys already read), the case, and the spec to fill
 /// (limit, params).
@@ -100,6 +104,9 @@ struct CheckReader {
   std::string task(const std::string& key);
   /// A `KEY: [tasks]` entry, the same for each.
   std::vector<std::string> tasks(const std::string& key);
+  /// An optional number: `key` read by `read` (e.g. &yaml::Node::asNonNegativeDouble), or
+  /// `fallback` when absent.
+  double number(const std::string& key, double fallback, double (yaml::Node::*read)() const);
   /// Optional `joints` patterns (default: every joint).
   std::vector<std::string> joints();
   /// The `contact` key: a controller contact. With `source` (then read as the optional key

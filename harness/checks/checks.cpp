@@ -9,15 +9,11 @@
 
 namespace lexdyn::checks {
 
-namespace detail {
-
 std::string fmt(double v) {
   char buf[64];
   std::snprintf(buf, sizeof(buf), "%.6g", v);
   return buf;
 }
-
-}  // namespace detail
 
 void CheckSpec::paramsMismatch() const {
   const std::string msg = "check '" + name + "' of type " + type + " holds the params of another type (or none)";
@@ -68,8 +64,6 @@ bool allPassed(const std::vector<CheckResult>& results) {
   return true;
 }
 
-namespace detail {
-
 TraceSchema schemaOf(const TraceTable& trace) {
   TraceSchema schema;
   for (const auto& n : trace.names) schema.add(n);
@@ -83,15 +77,13 @@ CheckResult evaluate(const CheckSpec& spec, const TraceSchema& schema, const Tra
   return c->result();
 }
 
-}  // namespace detail
-
 std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace, bool wall_clock_checks) {
-  const TraceSchema schema = detail::schemaOf(trace);
+  const TraceSchema schema = schemaOf(trace);
   const std::string* method = findMetadata(trace.metadata, kMethodMetadata);
   std::vector<CheckResult> out;
   for (const auto& s : specs) {
     if (!appliesTo(s, method ? *method : std::string())) continue;
-    out.push_back(detail::evaluate(s, schema, trace));
+    out.push_back(evaluate(s, schema, trace));
     applyWallClockPolicy(out.back(), wall_clock_checks);
   }
   return out;

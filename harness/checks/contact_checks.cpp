@@ -11,10 +11,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-using detail::CheckBase;
-using detail::fmt;
-using detail::kInf;
-using detail::require;
 
 using Polygon = std::vector<std::pair<double, double>>;
 
@@ -50,10 +46,7 @@ const CheckContext::Contact& readContact(CheckReader& r, ContactParams& p) {
   return c;
 }
 
-double minNormal(CheckReader& r) {
-  if (auto v = r.map.optional("min_normal_N")) return v->asNonNegativeDouble();
-  return 1.0;
-}
+double minNormal(CheckReader& r) { return r.number("min_normal_N", 1.0, &yaml::Node::asNonNegativeDouble); }
 
 void readUnilateral(CheckReader& r) {
   ContactParams p;
@@ -64,12 +57,11 @@ void readUnilateral(CheckReader& r) {
 
 void readFriction(CheckReader& r) {
   ContactFrictionParams p;
-  p.friction = readContact(r, p).friction;
-  if (auto v = r.map.optional("friction")) p.friction = v->asPositiveDouble();
+  const double mu = readContact(r, p).friction;  // the contact's, unless given
+  p.friction = r.number("friction", mu, &yaml::Node::asPositiveDouble);
   p.min_normal_N = minNormal(r);
   r.spec.params = std::move(p);
-  r.spec.limit = 1.0;
-  if (auto v = r.map.optional("limit_ratio")) r.spec.limit = v->asPositiveDouble();
+  r.spec.limit = r.number("limit_ratio", 1.0, &yaml::Node::asPositiveDouble);
 }
 
 void readCop(CheckReader& r) {
@@ -84,8 +76,7 @@ void readCop(CheckReader& r) {
   if (p.polygon.size() < 3) r.map.required("contact").fail("contact_cop needs a contact with a support polygon (3 points or more, not aligned)");
   p.min_normal_N = minNormal(r);
   r.spec.params = std::move(p);
-  r.spec.limit = 0.0;
-  if (auto v = r.map.optional("limit_m")) r.spec.limit = v->asDouble();
+  r.spec.limit = r.number("limit_m", 0.0, &yaml::Node::asDouble);
 }
 
 void readWrenchMatch(CheckReader& r) {
@@ -113,14 +104,13 @@ const ContactParams& contactParamsOf(const CheckSpec& s) {
 class ContactCheck : public CheckBase {
  public:
   ContactCheck(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), c_(contactParamsOf(spec_)) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    active_ = require(schema, contactActiveChannel(c_.contact), spec_);
-    const bool sensed = c_.source == "sensed";
-    for (int k = 0; k < 6; ++k) w_[k] = require(schema, wrenchChannel(c_.contact, sensed, kWrenchComponents[k]), spec_);
-  }
 
  protected:
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
+    active_ = channel(schema, contactActiveChannel(c_.contact));
+    const bool sensed = c_.source == "sensed";
+    for (int k = 0; k < 6; ++k) w_[k] = channel(schema, wrenchChannel(c_.contact, sensed, kWrenchComponents[k]));
+  }
   bool contactActive(const double* row) const { return active(row) && row[active_] != 0.0; }
   double normalForce(const double* row) const {
     return row[w_[0]] * c_.normal[0] + row[w_[1]] * c_.normal[1] + row[w_[2]] * c_.normal[2];
@@ -135,11 +125,7 @@ class ContactCheck : public CheckBase {
     return std::sqrt(s);
   }
   const char* sourceName() const { return c_.source == "sensed" ? "sensed" : "computed"; }
-  /// The detail of a check without a row: the contact never active (with f_n >= min_normal_N).
-  std::string noRowDetail(const double* min_normal_N) const {
-    return "no row with contact '" + c_.contact + "' active" +
-           (min_normal_N ? " and f_n >= " + fmt(*min_normal_N) + " N" : std::string(" in the window"));
-  }
+  std::string noRowDetail() const override { return "no row with contact '" + c_.contact + "' active in the window"; }
   const ContactParams& c_;
   int active_ = 0;
   int w_[6] = {0, 0, 0, 0, 0, 0};
@@ -155,21 +141,15 @@ class ContactUnilateral final : public ContactCheck {
     seen_ = true;
     const double fn = normalForce(row);
     const double fnorm = std::sqrt(row[w_[0]] * row[w_[0]] + row[w_[1]] * row[w_[1]] + row[w_[2]] * row[w_[2]]);
-    if (!(fn >= spec_.limit - detail::kBoundaryRelTolerance * fnorm)) {
+    if (!(fn >= spec_.limit - kBoundaryRelTolerance * fnorm)) {
       if (!below_) first_below_ = row[t_];
       below_ = true;
     }
     if (worse(fn)) detail_ = std::string("lowest ") + sourceName() + " normal force at t = " + fmt(row[t_]) + " s";
   }
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (seen_) {
-      r.passed = !below_;
-      if (below_) r.detail += "; first below " + fmt(spec_.limit) + " N at t = " + fmt(first_below_) + " s";
-    } else {
-      r.detail = noRowDetail(nullptr);
-    }
-    return r;
+  void finish(CheckResult& r) const override {
+    r.passed = !below_;
+    if (below_) r.detail += "; first below " + fmt(spec_.limit) + " N at t = " + fmt(first_below_) + " s";
   }
 
  private:
@@ -181,11 +161,11 @@ class ContactUnilateral final : public ContactCheck {
 class ContactLoadedCheck : public ContactCheck {
  public:
   ContactLoadedCheck(const CheckSpec& s, const CheckType& t, double min_normal_N) : ContactCheck(s, t), min_normal_N_(min_normal_N) {}
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) r.detail = noRowDetail(&min_normal_N_);
-    else if (skipped_ > 0) r.detail += "; " + std::to_string(skipped_) + " rows with f_n below " + fmt(min_normal_N_) + " N skipped";
-    return r;
+  std::string noRowDetail() const override {
+    return "no row with contact '" + c_.contact + "' active and f_n >= " + fmt(min_normal_N_) + " N";
+  }
+  void finish(CheckResult& r) const override {
+    if (skipped_ > 0) r.detail += "; " + std::to_string(skipped_) + " rows with f_n below " + fmt(min_normal_N_) + " N skipped";
   }
 
  protected:
@@ -212,7 +192,7 @@ class ContactFriction final : public ContactLoadedCheck {
   ContactFriction(const CheckSpec& s, const CheckType& t)
       : ContactLoadedCheck(s, t, s.paramsAs<ContactFrictionParams>().min_normal_N),
         p_(spec_.paramsAs<ContactFrictionParams>()) {
-    tolerance_ = detail::kBoundaryRelTolerance;
+    tolerance_ = kBoundaryRelTolerance;
   }
   void consume(const double* row) override {
     if (!contactActive(row)) return;
@@ -260,7 +240,7 @@ class ContactCop final : public ContactLoadedCheck {
     for (const auto& a : p_.polygon) {
       for (const auto& b : p_.polygon) diameter = std::max(diameter, std::hypot(a.first - b.first, a.second - b.second));
     }
-    tolerance_ = detail::kBoundaryRelTolerance * diameter;
+    tolerance_ = kBoundaryRelTolerance * diameter;
   }
   void consume(const double* row) override {
     if (!contactActive(row)) return;
@@ -279,18 +259,17 @@ class ContactCop final : public ContactLoadedCheck {
 
 // Computed (from gamma) against sensed wrench, force or torque part: rms or max of the norm of
 // the difference over the rows with the contact active.
-class ContactWrenchMatch final : public CheckBase {
+class ContactWrenchMatch final : public CheckOf<WrenchMatchParams> {
  public:
-  ContactWrenchMatch(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<WrenchMatchParams>()) {
+  ContactWrenchMatch(const CheckSpec& s, const CheckType& t) : CheckOf(s, t) {
     if (p_.component == "torque") unit_ = "N m";
   }
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    active_ = require(schema, contactActiveChannel(p_.contact), spec_);
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
+    active_ = channel(schema, contactActiveChannel(p_.contact));
     const int k0 = p_.component == "torque" ? 3 : 0;
     for (int k = 0; k < 3; ++k) {
-      c_[k] = require(schema, wrenchChannel(p_.contact, false, kWrenchComponents[k0 + k]), spec_);
-      s_[k] = require(schema, wrenchChannel(p_.contact, true, kWrenchComponents[k0 + k]), spec_);
+      c_[k] = channel(schema, wrenchChannel(p_.contact, false, kWrenchComponents[k0 + k]));
+      s_[k] = channel(schema, wrenchChannel(p_.contact, true, kWrenchComponents[k0 + k]));
     }
   }
   void consume(const double* row) override {
@@ -306,21 +285,15 @@ class ContactWrenchMatch final : public CheckBase {
       t_max_ = row[t_];
     }
   }
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) {
-      r.detail = "no row with contact '" + p_.contact + "' active in the window";
-      return r;
-    }
+  std::string noRowDetail() const override { return "no row with contact '" + p_.contact + "' active in the window"; }
+  void finish(CheckResult& r) const override {
     r.value = p_.statistic == "max" ? max_ : std::sqrt(sum2_ / static_cast<double>(n_));
     r.passed = r.value <= spec_.limit;
     r.detail = p_.statistic + " of |computed - sensed| " + p_.component + " over " + std::to_string(n_) + " rows; largest " +
                fmt(max_) + " at t = " + fmt(t_max_) + " s";
-    return r;
   }
 
  private:
-  const WrenchMatchParams& p_;
   int active_ = 0, c_[3] = {0, 0, 0}, s_[3] = {0, 0, 0};
   double sum2_ = 0.0, max_ = 0.0, t_max_ = 0.0;
   long n_ = 0;
@@ -328,17 +301,9 @@ class ContactWrenchMatch final : public CheckBase {
 
 }  // namespace
 
-CheckType contactUnilateralCheck() {
-  return {"contact_unilateral", "N", kControllerChannels | kBoundsBelow, readUnilateral, makeEvaluator<ContactUnilateral>};
-}
-CheckType contactFrictionCheck() {
-  return {"contact_friction", "|f_t| / (mu f_n)", kControllerChannels, readFriction, makeEvaluator<ContactFriction>};
-}
-CheckType contactCopCheck() {
-  return {"contact_cop", "m (signed distance to the sole's edge, < 0 inside)", kControllerChannels, readCop, makeEvaluator<ContactCop>};
-}
-CheckType contactWrenchMatchCheck() {
-  return {"contact_wrench_match", "N", kControllerChannels, readWrenchMatch, makeEvaluator<ContactWrenchMatch>};
-}
+CheckType contactUnilateralCheck() { return {"contact_unilateral", "N", kControllerChannels | kBoundsBelow, readUnilateral, makeEvaluator<ContactUnilateral>}; }
+CheckType contactFrictionCheck() { return {"contact_friction", "|f_t| / (mu f_n)", kControllerChannels, readFriction, makeEvaluator<ContactFriction>}; }
+CheckType contactCopCheck() { return {"contact_cop", "m (signed distance to the sole's edge, < 0 inside)", kControllerChannels, readCop, makeEvaluator<ContactCop>}; }
+CheckType contactWrenchMatchCheck() { return {"contact_wrench_match", "N", kControllerChannels, readWrenchMatch, makeEvaluator<ContactWrenchMatch>}; }
 
 }  // namespace lexdyn::checks

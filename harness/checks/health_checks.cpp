@@ -12,9 +12,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-using detail::CheckBase;
-using detail::fmt;
-using detail::require;
 
 // ---------------------------------------------------------------------------------------------
 // Parsers.
@@ -26,8 +23,7 @@ void readControllerStatus(CheckReader& r) {
     for (const yaml::Node& a : v->elements()) p.allowed.push_back(a.asEnum(controllerStatusNames()));
   }
   r.spec.params = std::move(p);
-  r.spec.limit = 0.0;
-  if (auto v = r.map.optional("limit_count")) r.spec.limit = v->asNonNegativeDouble();
+  r.spec.limit = r.number("limit_count", 0.0, &yaml::Node::asNonNegativeDouble);
 }
 
 void readActiveSetPeak(CheckReader& r) { r.spec.limit = r.map.required("limit_iterations").asPositiveDouble(); }
@@ -62,12 +58,18 @@ void readTickTime(CheckReader& r) {
 // Evaluators.
 
 // Number of rows whose controller status is not among the allowed ones.
-class ControllerStatus final : public CheckBase {
+class ControllerStatus final : public CheckOf<ControllerStatusParams> {
  public:
-  ControllerStatus(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<ControllerStatusParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    col_ = require(schema, kControllerStatusChannel, spec_);
+  using CheckOf::CheckOf;
+  void finish(CheckResult& r) const override {
+    std::string d;
+    for (const auto& [name, n] : counts_) d += (d.empty() ? "" : ", ") + name + " " + std::to_string(n);
+    r.detail = d + (first_bad_.empty() ? "" : "; " + first_bad_);
+  }
+
+ private:
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
+    col_ = channel(schema, kControllerStatusChannel);
     const auto& names = controllerStatusNames();
     allowed_.assign(names.size(), 0);
     for (const auto& a : p_.allowed) {
@@ -76,9 +78,7 @@ class ControllerStatus final : public CheckBase {
       allowed_[static_cast<size_t>(it - names.begin())] = 1;
     }
   }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    seen_ = true;
+  void sample(const double* row, bool) override {
     const double v = row[col_];
     const auto& names = controllerStatusNames();
     const int code = (v >= 0.0 && v < static_cast<double>(names.size()) && v == std::floor(v)) ? static_cast<int>(v) : -1;
@@ -89,17 +89,6 @@ class ControllerStatus final : public CheckBase {
       worst_ += 1.0;
     }
   }
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) return r;
-    std::string d;
-    for (const auto& [name, n] : counts_) d += (d.empty() ? "" : ", ") + name + " " + std::to_string(n);
-    r.detail = d + (first_bad_.empty() ? "" : "; " + first_bad_);
-    return r;
-  }
-
- private:
-  const ControllerStatusParams& p_;
   int col_ = 0;
   std::vector<char> allowed_;
   std::map<std::string, long> counts_;
@@ -111,21 +100,16 @@ class ControllerStatus final : public CheckBase {
 class PeakCount : public CheckBase {
  public:
   PeakCount(const CheckSpec& s, const CheckType& t, const char* channel) : CheckBase(s, t), channel_(channel) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    col_ = require(schema, channel_, spec_);
-  }
-  void consume(const double* row) override {
-    if (!active(row)) return;
+
+ private:
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override { col_ = channel(schema, channel_); }
+  void sample(const double* row, bool first) override {
     const double v = row[col_];
-    if (!seen_ || v > worst_ || std::isnan(v)) {
+    if (first || v > worst_ || std::isnan(v)) {
       worst_ = v;
       detail_ = "at t = " + fmt(row[t_]) + " s";
     }
-    seen_ = true;
   }
-
- private:
   const char* channel_;
   int col_ = 0;
 };
@@ -144,16 +128,13 @@ class FactorizationPeak final : public PeakCount {
 };
 
 // Fraction of rows at which a level was augmented with Newton rows.
-class AugmentedFraction final : public CheckBase {
+class AugmentedFraction final : public CheckOf<AugmentedFractionParams> {
  public:
-  AugmentedFraction(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<AugmentedFractionParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    col_ = require(schema, levelChannel(p_.level, "augmented"), spec_);
-  }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    seen_ = true;
+  using CheckOf::CheckOf;
+
+ private:
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override { col_ = channel(schema, levelChannel(p_.level, "augmented")); }
+  void sample(const double* row, bool) override {
     ++n_;
     if (row[col_] != 0.0) {
       if (augmented_ == 0) first_ = row[t_];
@@ -163,30 +144,16 @@ class AugmentedFraction final : public CheckBase {
     detail_ = std::to_string(augmented_) + " of " + std::to_string(n_) + " rows" +
               (augmented_ > 0 ? ", first at t = " + fmt(first_) + " s" : "");
   }
-
- private:
-  const AugmentedFractionParams& p_;
   int col_ = 0;
   long n_ = 0, augmented_ = 0;
   double first_ = 0.0;
 };
 
 // A percentile (nearest rank) of a per-tick wall time, microseconds. Machine-dependent.
-class TickTime final : public CheckBase {
+class TickTime final : public CheckOf<TickTimeParams> {
  public:
-  TickTime(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<TickTimeParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    col_ = require(schema, timerChannel(p_.timer), spec_);
-  }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    seen_ = true;
-    values_.push_back(row[col_]);
-  }
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) return r;
+  using CheckOf::CheckOf;
+  void finish(CheckResult& r) const override {
     std::vector<double> v = values_;
     std::sort(v.begin(), v.end());
     const double p = std::clamp(p_.percentile, 0.0, 100.0);
@@ -196,31 +163,21 @@ class TickTime final : public CheckBase {
     r.passed = r.value <= spec_.limit;
     r.detail = "p" + fmt(p) + " of " + p_.timer + " time over " + std::to_string(v.size()) + " ticks (max " + fmt(v.back()) +
                " us; wall-clock measurement, machine-dependent)";
-    return r;
   }
 
  private:
-  const TickTimeParams& p_;
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override { col_ = channel(schema, timerChannel(p_.timer)); }
+  void sample(const double* row, bool) override { values_.push_back(row[col_]); }
   int col_ = 0;
   std::vector<double> values_;
 };
 
 }  // namespace
 
-CheckType controllerStatusCheck() {
-  return {"controller_status", "ticks", kControllerChannels, readControllerStatus, makeEvaluator<ControllerStatus>};
-}
-CheckType activeSetPeakCheck() {
-  return {"active_set_peak", "iterations", kControllerChannels, readActiveSetPeak, makeEvaluator<ActiveSetPeak>};
-}
-CheckType factorizationPeakCheck() {
-  return {"factorization_peak", "level factorisations", kControllerChannels, readFactorizationPeak, makeEvaluator<FactorizationPeak>};
-}
-CheckType augmentedFractionCheck() {
-  return {"augmented_fraction", "fraction of ticks", kControllerChannels, readAugmentedFraction, makeEvaluator<AugmentedFraction>};
-}
-CheckType tickTimeCheck() {
-  return {"tick_time", "us", kControllerChannels | kMachineDependent, readTickTime, makeEvaluator<TickTime>};
-}
+CheckType controllerStatusCheck() { return {"controller_status", "ticks", kControllerChannels, readControllerStatus, makeEvaluator<ControllerStatus>}; }
+CheckType activeSetPeakCheck() { return {"active_set_peak", "iterations", kControllerChannels, readActiveSetPeak, makeEvaluator<ActiveSetPeak>}; }
+CheckType factorizationPeakCheck() { return {"factorization_peak", "level factorisations", kControllerChannels, readFactorizationPeak, makeEvaluator<FactorizationPeak>}; }
+CheckType augmentedFractionCheck() { return {"augmented_fraction", "fraction of ticks", kControllerChannels, readAugmentedFraction, makeEvaluator<AugmentedFraction>}; }
+CheckType tickTimeCheck() { return {"tick_time", "us", kControllerChannels | kMachineDependent, readTickTime, makeEvaluator<TickTime>}; }
 
 }  // namespace lexdyn::checks

@@ -9,10 +9,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-using detail::CheckBase;
-using detail::fmt;
-using detail::kNaN;
-using detail::require;
 
 // ---------------------------------------------------------------------------------------------
 // Parsers.
@@ -44,7 +40,7 @@ P oscillationParams(CheckReader& r) {
 
 void readJointSignChanges(CheckReader& r) {
   JointSignChangesParams p = oscillationParams<JointSignChangesParams>(r);
-  if (auto v = r.map.optional("dead_band_rad_per_s2")) p.dead_band = v->asNonNegativeDouble();
+  p.dead_band = r.number("dead_band_rad_per_s2", 0.0, &yaml::Node::asNonNegativeDouble);
   r.spec.params = std::move(p);
   r.spec.limit = r.map.required("limit_per_s").asNonNegativeDouble();
 }
@@ -66,24 +62,21 @@ void readJointHfEnergy(CheckReader& r) {
 // A torque exactly at its limit passes (the controller's torque-limit rows are active there, and
 // the simulator saturates at the limit): the value may exceed limit_fraction by 1e-9 (round-off
 // of the solver's torques, relative to the effort limit).
-class TorqueLimits final : public CheckBase {
+class TorqueLimits final : public CheckOf<TorqueLimitsParams> {
  public:
-  TorqueLimits(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<TorqueLimitsParams>()) {
-    tolerance_ = detail::kBoundaryRelTolerance;
-  }
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
+  TorqueLimits(const CheckSpec& s, const CheckType& t) : CheckOf(s, t) { tolerance_ = kBoundaryRelTolerance; }
+
+ private:
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
     if (p_.joints.size() != p_.joint_limits.size()) {
       throw InputError(spec_.where, "check '" + spec_.name + "': joints and joint limits differ in number");
     }
     for (size_t j = 0; j < p_.joints.size(); ++j) {
-      if (p_.source == "applied" || p_.source == "both") cols_.push_back({require(schema, "tau." + p_.joints[j], spec_), j, "applied"});
-      if (p_.source == "commanded" || p_.source == "both") cols_.push_back({require(schema, "cmd.tau." + p_.joints[j], spec_), j, "commanded"});
+      if (p_.source == "applied" || p_.source == "both") cols_.push_back({channel(schema, "tau." + p_.joints[j]), j, "applied"});
+      if (p_.source == "commanded" || p_.source == "both") cols_.push_back({channel(schema, "cmd.tau." + p_.joints[j]), j, "commanded"});
     }
   }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    seen_ = true;
+  void sample(const double* row, bool) override {
     for (const Col& c : cols_) {
       const double tau = row[c.col];
       const double ratio = std::abs(tau) / p_.joint_limits[c.joint];
@@ -95,13 +88,11 @@ class TorqueLimits final : public CheckBase {
     }
   }
 
- private:
   struct Col {
     int col;
     size_t joint;
     const char* what;
   };
-  const TorqueLimitsParams& p_;
   std::vector<Col> cols_;
 };
 
@@ -121,25 +112,10 @@ const char* sourceName(const std::string& source) { return source == "commanded"
 
 // Sign changes per second of each joint's acceleration (the rate of its velocity between
 // successive rows); value = the largest over the joints.
-class JointAccelerationSignChanges final : public CheckBase {
+class JointAccelerationSignChanges final : public CheckOf<JointSignChangesParams> {
  public:
-  JointAccelerationSignChanges(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<JointSignChangesParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    cols_ = velocityColumns(schema, spec_, p_.source, p_.joints);
-    counters_.assign(cols_.size(), detail::SignChangeCounter{});
-  }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    const double t = row[t_];
-    if (!seen_) t0_ = t;
-    seen_ = true;
-    t1_ = t;
-    for (size_t j = 0; j < cols_.size(); ++j) counters_[j].add(t, row[cols_[j]], p_.dead_band);
-  }
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) return r;
+  using CheckOf::CheckOf;
+  void finish(CheckResult& r) const override {
     const double span = t1_ - t0_;
     long best = -1;
     size_t best_j = 0;
@@ -155,13 +131,21 @@ class JointAccelerationSignChanges final : public CheckBase {
     r.detail = (cols_.empty() ? std::string("no joints") : p_.joints[best_j] + ": " + std::to_string(best)) +
                " sign changes of the " + sourceName(p_.source) + " acceleration over " + fmt(span) + " s (dead band " +
                fmt(p_.dead_band) + " rad/s^2)";
-    return r;
   }
 
  private:
-  const JointSignChangesParams& p_;
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
+    cols_ = velocityColumns(schema, spec_, p_.source, p_.joints);
+    counters_.assign(cols_.size(), SignChangeCounter{});
+  }
+  void sample(const double* row, bool first) override {
+    const double t = row[t_];
+    if (first) t0_ = t;
+    t1_ = t;
+    for (size_t j = 0; j < cols_.size(); ++j) counters_[j].add(t, row[cols_[j]], p_.dead_band);
+  }
   std::vector<int> cols_;
-  std::vector<detail::SignChangeCounter> counters_;
+  std::vector<SignChangeCounter> counters_;
   double t0_ = 0.0, t1_ = 0.0;
 };
 
@@ -169,15 +153,10 @@ class JointAccelerationSignChanges final : public CheckBase {
 // transform) at cutoff_hz; the sample period is the first row spacing, rows at another spacing
 // (e.g. the last state of a run) are left out. The filters start at the first row of the trace
 // at rest on its value (a constant gives 0).
-class JointVelocityHfEnergy final : public CheckBase {
+class JointVelocityHfEnergy final : public CheckOf<JointHfEnergyParams> {
  public:
-  JointVelocityHfEnergy(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<JointHfEnergyParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    cols_ = velocityColumns(schema, spec_, p_.source, p_.joints);
-    state_.assign(cols_.size(), Biquad{});
-    energy_.assign(cols_.size(), 0.0);
-  }
+  using CheckOf::CheckOf;
+  // Every row goes through the filters; the window's rows count.
   void consume(const double* row) override {
     const double t = row[t_];
     if (rows_ == 0) {
@@ -256,7 +235,11 @@ class JointVelocityHfEnergy final : public CheckBase {
       return y;
     }
   };
-  const JointHfEnergyParams& p_;
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
+    cols_ = velocityColumns(schema, spec_, p_.source, p_.joints);
+    state_.assign(cols_.size(), Biquad{});
+    energy_.assign(cols_.size(), 0.0);
+  }
   std::vector<int> cols_;
   std::vector<Biquad> state_;
   std::vector<double> energy_;
@@ -267,15 +250,8 @@ class JointVelocityHfEnergy final : public CheckBase {
 
 }  // namespace
 
-CheckType torqueLimitsCheck() {
-  return {"torque_limits", "fraction of the effort limit", kControllerChannels, readTorqueLimits, makeEvaluator<TorqueLimits>};
-}
-CheckType jointAccelerationSignChangesCheck() {
-  return {"joint_acceleration_sign_changes", "sign changes per second", kControllerChannels, readJointSignChanges,
-          makeEvaluator<JointAccelerationSignChanges>};
-}
-CheckType jointVelocityHfEnergyCheck() {
-  return {"joint_velocity_hf_energy", "(rad/s)^2", kControllerChannels, readJointHfEnergy, makeEvaluator<JointVelocityHfEnergy>};
-}
+CheckType torqueLimitsCheck() { return {"torque_limits", "fraction of the effort limit", kControllerChannels, readTorqueLimits, makeEvaluator<TorqueLimits>}; }
+CheckType jointAccelerationSignChangesCheck() { return {"joint_acceleration_sign_changes", "sign changes per second", kControllerChannels, readJointSignChanges, makeEvaluator<JointAccelerationSignChanges>}; }
+CheckType jointVelocityHfEnergyCheck() { return {"joint_velocity_hf_energy", "(rad/s)^2", kControllerChannels, readJointHfEnergy, makeEvaluator<JointVelocityHfEnergy>}; }
 
 }  // namespace lexdyn::checks

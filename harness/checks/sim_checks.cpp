@@ -12,8 +12,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-using detail::CheckBase;
-using detail::require;
 
 // ---------------------------------------------------------------------------------------------
 // Parsers.
@@ -21,10 +19,8 @@ using detail::require;
 void readFrame(CheckReader& r) { r.spec.params = FrameParams{r.context.frame(r.map.required("frame"))}; }
 
 void readSurfaces(CheckReader& r) {
-  const yaml::Node s = r.map.required("surfaces");
-  if (s.size() < 1) s.fail("expected at least one contact surface");
   SurfacesParams p;
-  for (const yaml::Node& sn : s.elements()) p.surfaces.push_back(r.context.surface(sn));
+  for (const yaml::Node& sn : atLeastOne(r.map.required("surfaces"), "contact surface")) p.surfaces.push_back(r.context.surface(sn));
   r.spec.params = std::move(p);
 }
 
@@ -51,44 +47,39 @@ void readFrameHeight(CheckReader& r) {
 // ---------------------------------------------------------------------------------------------
 // Evaluators.
 
-class FrameDrift final : public CheckBase {
+class FrameDrift final : public CheckOf<FrameParams> {
  public:
-  FrameDrift(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<FrameParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    for (int k = 0; k < 3; ++k) c_[k] = require(schema, frameChannel(p_.frame, "xyz"[k]), spec_);
+  using CheckOf::CheckOf;
+
+ private:
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
+    for (int k = 0; k < 3; ++k) c_[k] = channel(schema, frameChannel(p_.frame, "xyz"[k]));
   }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    if (!seen_) {
+  void sample(const double* row, bool first) override {
+    if (first) {
       for (int k = 0; k < 3; ++k) ref_[k] = row[c_[k]];
-      seen_ = true;
     }
     double d2 = 0.0;
     for (int k = 0; k < 3; ++k) d2 += (row[c_[k]] - ref_[k]) * (row[c_[k]] - ref_[k]);
     if (worse(std::sqrt(d2))) detail_ = "largest at t = " + std::to_string(row[t_]) + " s";
   }
-
- private:
-  const FrameParams& p_;
   int c_[3] = {0, 0, 0};
   double ref_[3] = {0, 0, 0};
 };
 
-class ForceBalance final : public CheckBase {
+class ForceBalance final : public CheckOf<SurfacesParams> {
  public:
-  ForceBalance(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<SurfacesParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata& metadata) override {
-    bindTime(schema);
-    for (const auto& s : p_.surfaces) cols_.push_back(require(schema, contactForceChannel(s), spec_));
+  using CheckOf::CheckOf;
+
+ private:
+  void bindChannels(const TraceSchema& schema, const TraceMetadata& metadata) override {
+    for (const auto& s : p_.surfaces) cols_.push_back(channel(schema, contactForceChannel(s)));
     const std::string* w = findMetadata(metadata, kWeightMetadata);
     if (!w) throw InputError(spec_.where, std::string("check '") + spec_.name + "' needs the trace metadata '" + kWeightMetadata + "'");
     weight_ = std::strtod(w->c_str(), nullptr);
     if (!(weight_ > 0.0)) throw InputError(spec_.where, "robot weight in the trace metadata must be > 0");
   }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    seen_ = true;
+  void sample(const double* row, bool) override {
     double sum = 0.0;
     for (int c : cols_) sum += row[c];
     if (worse(std::abs(sum - weight_) / weight_)) {
@@ -96,37 +87,29 @@ class ForceBalance final : public CheckBase {
                 std::to_string(weight_) + " N";
     }
   }
-
- private:
-  const SurfacesParams& p_;
   std::vector<int> cols_;
   double weight_ = 0.0;
 };
 
 // Lowest height of a frame's origin; passes when it stays at or above the limit.
-class FrameHeight final : public CheckBase {
+class FrameHeight final : public CheckOf<FrameParams> {
  public:
-  FrameHeight(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<FrameParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    z_ = require(schema, frameChannel(p_.frame, 'z'), spec_);
-  }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    seen_ = true;
-    if (worse(row[z_])) detail_ = "lowest at t = " + std::to_string(row[t_]) + " s";
-  }
+  using CheckOf::CheckOf;
 
  private:
-  const FrameParams& p_;
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override { z_ = channel(schema, frameChannel(p_.frame, 'z')); }
+  void sample(const double* row, bool) override {
+    if (worse(row[z_])) detail_ = "lowest at t = " + std::to_string(row[t_]) + " s";
+  }
   int z_ = 0;
 };
 
-class ContactSlip final : public CheckBase {
+class ContactSlip final : public CheckOf<SurfacesParams> {
  public:
-  ContactSlip(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<SurfacesParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
+  using CheckOf::CheckOf;
+
+ private:
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
     for (const auto& s : p_.surfaces) {
       int found = 0;
       for (int i = 0;; ++i) {
@@ -137,24 +120,19 @@ class ContactSlip final : public CheckBase {
         names_.push_back(s + ".p" + std::to_string(i));
         ++found;
       }
-      if (found == 0) require(schema, contactPointChannel(s, 0, 'x'), spec_);
+      if (found == 0) channel(schema, contactPointChannel(s, 0, 'x'));
     }
     ref_.assign(cols_.size(), {0.0, 0.0});
   }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    if (!seen_) {
+  void sample(const double* row, bool first) override {
+    if (first) {
       for (size_t i = 0; i < cols_.size(); ++i) ref_[i] = {row[cols_[i].first], row[cols_[i].second]};
-      seen_ = true;
     }
     for (size_t i = 0; i < cols_.size(); ++i) {
       const double dx = row[cols_[i].first] - ref_[i].first, dy = row[cols_[i].second] - ref_[i].second;
       if (worse(std::sqrt(dx * dx + dy * dy))) detail_ = "largest for " + names_[i] + " at t = " + std::to_string(row[t_]) + " s";
     }
   }
-
- private:
-  const SurfacesParams& p_;
   std::vector<std::pair<int, int>> cols_;
   std::vector<std::string> names_;
   std::vector<std::pair<double, double>> ref_;

@@ -13,11 +13,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-using detail::CheckBase;
-using detail::fmt;
-using detail::kInf;
-using detail::kNaN;
-using detail::require;
 
 // ---------------------------------------------------------------------------------------------
 // Parsers.
@@ -33,7 +28,7 @@ void readTaskError(CheckReader& r) {
 void readTaskErrorRate(CheckReader& r) {
   TaskErrorRateParams p;
   p.task = r.task("task");
-  if (auto v = r.map.optional("dead_band_per_s")) p.dead_band = v->asNonNegativeDouble();
+  p.dead_band = r.number("dead_band_per_s", 0.0, &yaml::Node::asNonNegativeDouble);
   r.spec.params = std::move(p);
   r.spec.limit = r.map.required("limit_per_s").asNonNegativeDouble();
 }
@@ -111,64 +106,44 @@ class TaskErrorStat {
   double min_ = 0.0, t_min_ = 0.0;
 };
 
-class TaskError final : public CheckBase {
+class TaskError final : public CheckOf<TaskErrorParams> {
  public:
-  TaskError(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<TaskErrorParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    stat_.bind(schema, spec_, p_.tasks);
-  }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    seen_ = true;
-    stat_.consume(row[t_], row);
-  }
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) return r;
+  using CheckOf::CheckOf;
+  void finish(CheckResult& r) const override {
     r.value = stat_.value(p_.statistic);
     r.passed = r.value <= spec_.limit;
     std::string names;
     for (const auto& t : p_.tasks) names += (names.empty() ? "" : " + ") + t;
     r.detail = p_.statistic + " of " + names + ", " + stat_.describe(p_.statistic);
-    return r;
   }
 
  private:
-  const TaskErrorParams& p_;
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override { stat_.bind(schema, spec_, p_.tasks); }
+  void sample(const double* row, bool) override { stat_.consume(row[t_], row); }
   TaskErrorStat stat_;
 };
 
 // Sign changes per second of the rate of a task's error norm.
-class TaskErrorRateSignChanges final : public CheckBase {
+class TaskErrorRateSignChanges final : public CheckOf<TaskErrorRateParams> {
  public:
-  TaskErrorRateSignChanges(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<TaskErrorRateParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    col_ = require(schema, taskChannel(p_.task, "error"), spec_);
-  }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    if (!seen_) t0_ = row[t_];
-    seen_ = true;
-    t1_ = row[t_];
-    counter_.add(row[t_], row[col_], p_.dead_band);
-  }
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) return r;
+  using CheckOf::CheckOf;
+  void finish(CheckResult& r) const override {
     const double span = t1_ - t0_;
     r.value = span > 0.0 ? static_cast<double>(counter_.changes) / span : 0.0;
     r.passed = r.value <= spec_.limit;
     r.detail = std::to_string(counter_.changes) + " sign changes of d/dt |e| of " + p_.task + " over " + fmt(span) +
                " s (dead band " + fmt(p_.dead_band) + ")";
-    return r;
   }
 
  private:
-  const TaskErrorRateParams& p_;
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override { col_ = channel(schema, taskChannel(p_.task, "error")); }
+  void sample(const double* row, bool first) override {
+    if (first) t0_ = row[t_];
+    t1_ = row[t_];
+    counter_.add(row[t_], row[col_], p_.dead_band);
+  }
   int col_ = 0;
-  detail::SignChangeCounter counter_;
+  SignChangeCounter counter_;
   double t0_ = 0.0, t1_ = 0.0;
 };
 
@@ -196,31 +171,16 @@ double pdClosedForm(double kp, double kv, double t) {
 class TaskResponseCheck : public CheckBase {
  public:
   TaskResponseCheck(const CheckSpec& s, const CheckType& t, const std::string& task) : CheckBase(s, t), task_(task) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    col_ = require(schema, taskChannel(task_, "error"), spec_);
-  }
-  void consume(const double* row) final {
-    if (!active(row)) return;
-    const double t = row[t_], e = row[col_];
-    if (!seen_) {
-      t0_ = t;
-      e0_ = e;
-      seen_ = true;
-    }
-    if (validStart()) sample(t, e);
-  }
 
  protected:
   /// One row of the window (only while e0 is usable).
-  virtual void sample(double t, double e) = 0;
+  virtual void respond(double t, double e) = 0;
   bool validStart() const { return e0_ > 0.0 && std::isfinite(e0_); }
   /// The failed result of an unusable e0; `why` is appended to the detail.
-  CheckResult invalidStart(CheckResult r, const std::string& why) const {
+  void invalidStart(CheckResult& r, const std::string& why) const {
     r.value = kNaN;
     r.passed = false;
     r.detail = "the error of " + task_ + " at the window's start (t = " + fmt(t0_) + " s) is " + fmt(e0_) + why;
-    return r;
   }
   /// " (e0 ... at t = ... s" shared by the details.
   std::string startDetail() const { return " (e0 " + fmt(e0_) + " at t = " + fmt(t0_) + " s"; }
@@ -228,6 +188,15 @@ class TaskResponseCheck : public CheckBase {
   double t0_ = 0.0, e0_ = 0.0;
 
  private:
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override { col_ = channel(schema, taskChannel(task_, "error")); }
+  void sample(const double* row, bool first) final {
+    const double t = row[t_], e = row[col_];
+    if (first) {
+      t0_ = t;
+      e0_ = e;
+    }
+    if (validStart()) respond(t, e);
+  }
   std::string task_;
   int col_ = 0;
 };
@@ -239,17 +208,14 @@ class TaskErrorClosedForm final : public TaskResponseCheck {
  public:
   TaskErrorClosedForm(const CheckSpec& s, const CheckType& t)
       : TaskResponseCheck(s, t, s.paramsAs<TaskClosedFormParams>().task), p_(spec_.paramsAs<TaskClosedFormParams>()) {}
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) return r;
+  void finish(CheckResult& r) const override {
     if (!validStart()) return invalidStart(r, ": no response to compare");
     const double zeta = p_.kp > 0.0 ? p_.kv / (2.0 * std::sqrt(p_.kp)) : kInf;
     r.detail = detail_ + startDetail() + "; kp " + fmt(p_.kp) + ", kv " + fmt(p_.kv) + ", damping ratio " + fmt(zeta) + ")";
-    return r;
   }
 
  private:
-  void sample(double t, double e) override {
+  void respond(double t, double e) override {
     const double ref = e0_ * std::abs(pdClosedForm(p_.kp, p_.kv, t - t0_));
     if (worse(std::abs(e - ref) / e0_)) detail_ = "largest at t = " + fmt(t) + " s: |e| " + fmt(e) + ", closed form " + fmt(ref);
   }
@@ -263,18 +229,15 @@ class TaskErrorClosedForm final : public TaskResponseCheck {
 class TaskOvershoot final : public TaskResponseCheck {
  public:
   TaskOvershoot(const CheckSpec& s, const CheckType& t) : TaskResponseCheck(s, t, s.paramsAs<TaskOvershootParams>().task) {}
-  CheckResult result() const override {
-    CheckResult r = CheckBase::result();
-    if (!seen_) return r;
+  void finish(CheckResult& r) const override {
     if (!validStart()) return invalidStart(r, "");
     r.value = rise_ / e0_;
     r.passed = r.value <= spec_.limit;
     r.detail = (detail_.empty() ? std::string("the error never rises") : detail_) + startDetail() + ")";
-    return r;
   }
 
  private:
-  void sample(double t, double e) override {
+  void respond(double t, double e) override {
     if (!have_min_ || e < min_) {
       min_ = e;
       t_min_ = t;
@@ -293,20 +256,10 @@ class TaskOvershoot final : public TaskResponseCheck {
 
 }  // namespace
 
-CheckType taskErrorCheck() {
-  return {"task_error", "task error norm (m, rad)", kControllerChannels, readTaskError, makeEvaluator<TaskError>};
-}
-CheckType taskErrorRateSignChangesCheck() {
-  return {"task_error_rate_sign_changes", "sign changes per second", kControllerChannels, readTaskErrorRate,
-          makeEvaluator<TaskErrorRateSignChanges>};
-}
-CheckType taskErrorClosedFormCheck() {
-  return {"task_error_closed_form", "fraction of the initial error", kControllerChannels, readTaskClosedForm,
-          makeEvaluator<TaskErrorClosedForm>};
-}
-CheckType taskOvershootCheck() {
-  return {"task_overshoot", "fraction of the initial error", kControllerChannels, readTaskOvershoot, makeEvaluator<TaskOvershoot>};
-}
+CheckType taskErrorCheck() { return {"task_error", "task error norm (m, rad)", kControllerChannels, readTaskError, makeEvaluator<TaskError>}; }
+CheckType taskErrorRateSignChangesCheck() { return {"task_error_rate_sign_changes", "sign changes per second", kControllerChannels, readTaskErrorRate, makeEvaluator<TaskErrorRateSignChanges>}; }
+CheckType taskErrorClosedFormCheck() { return {"task_error_closed_form", "fraction of the initial error", kControllerChannels, readTaskClosedForm, makeEvaluator<TaskErrorClosedForm>}; }
+CheckType taskOvershootCheck() { return {"task_overshoot", "fraction of the initial error", kControllerChannels, readTaskOvershoot, makeEvaluator<TaskOvershoot>}; }
 
 // ---------------------------------------------------------------------------------------------
 // Method comparisons.
@@ -344,15 +297,15 @@ CheckSpec comparisonStatistic(const ComparisonSpec& spec) {
 
 CheckResult compareMethods(const ComparisonSpec& spec, const TraceTable& better, const TraceTable& worse) {
   const CheckSpec cs = comparisonStatistic(spec);
-  auto evaluate = [&](const TraceTable& t, const std::string& method) {
+  auto statistic = [&](const TraceTable& t, const std::string& method) {
     const std::string* m = findMetadata(t.metadata, kMethodMetadata);
     if (!m || *m != method) {
       throw InputError(spec.where, "comparison '" + spec.name + "' needs a trace of method " + method + ", found " +
                                        (m ? *m : std::string("a trace without a method")));
     }
-    return detail::evaluate(cs, detail::schemaOf(t), t);
+    return evaluate(cs, schemaOf(t), t);
   };
-  const CheckResult b = evaluate(better, spec.better), w = evaluate(worse, spec.worse);
+  const CheckResult b = statistic(better, spec.better), w = statistic(worse, spec.worse);
   CheckResult r;
   r.name = spec.name;
   r.type = spec.type;

@@ -171,21 +171,15 @@ struct ChannelMaxParams {
   std::string channel;
 };
 
-class ChannelMax final : public detail::CheckBase {
+class ChannelMax final : public CheckOf<ChannelMaxParams> {
  public:
-  ChannelMax(const CheckSpec& s, const CheckType& t) : CheckBase(s, t), p_(spec_.paramsAs<ChannelMaxParams>()) {}
-  void bind(const TraceSchema& schema, const TraceMetadata&) override {
-    bindTime(schema);
-    col_ = detail::require(schema, p_.channel, spec_);
-  }
-  void consume(const double* row) override {
-    if (!active(row)) return;
-    seen_ = true;
-    if (worse(row[col_])) detail_ = "at t = " + detail::fmt(row[t_]) + " s";
-  }
+  using CheckOf::CheckOf;
 
  private:
-  const ChannelMaxParams& p_;
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override { col_ = channel(schema, p_.channel); }
+  void sample(const double* row, bool) override {
+    if (worse(row[col_])) detail_ = "at t = " + fmt(row[t_]) + " s";
+  }
   int col_ = 0;
 };
 
