@@ -264,6 +264,8 @@ class ContactWrenchMatch final : public CheckOf<WrenchMatchParams> {
   ContactWrenchMatch(const CheckSpec& s, const CheckType& t) : CheckOf(s, t) {
     if (p_.component == "torque") unit_ = "N m";
   }
+
+ private:
   void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
     active_ = channel(schema, contactActiveChannel(p_.contact));
     const int k0 = p_.component == "torque" ? 3 : 0;
@@ -293,7 +295,6 @@ class ContactWrenchMatch final : public CheckOf<WrenchMatchParams> {
                fmt(max_) + " at t = " + fmt(t_max_) + " s";
   }
 
- private:
   int active_ = 0, c_[3] = {0, 0, 0}, s_[3] = {0, 0, 0};
   double sum2_ = 0.0, max_ = 0.0, t_max_ = 0.0;
   long n_ = 0;

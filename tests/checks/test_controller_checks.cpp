@@ -1,4 +1,4 @@
-// The checks on the lexdyn controller's channels (harness/checks/controller_checks.cpp) on
+// The checks on the lexdyn controller's channels (harness/checks/*_checks.cpp) on
 // synthetic traces whose answers are computed by hand: every check type passes and fails where
 // it should, and its detail names the time (and the joint, contact or status) of its value.
 #include "harness/checks/checks.hpp"

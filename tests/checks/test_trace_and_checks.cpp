@@ -258,7 +258,7 @@ TEST(Checks, MissingChannelsAndMetadataAreInputErrors) {
 }  // namespace
 }  // namespace lexdyn::checks
 
-// --- Controller checks (harness/checks/controller_checks.cpp) on a synthetic trace ---------
+// --- Controller checks (harness/checks/*_checks.cpp) on a synthetic trace ---------
 
 namespace lexdyn::checks {
 namespace {
