@@ -23,27 +23,6 @@ namespace lexdyn::cases {
 
 namespace fs = std::filesystem;
 
-bool globMatch(const std::string& pattern, const std::string& text) {
-  // Iterative matcher with backtracking to the last '*'.
-  size_t p = 0, t = 0, star = std::string::npos, mark = 0;
-  while (t < text.size()) {
-    if (p < pattern.size() && pattern[p] == '*') {
-      star = p++;
-      mark = t;
-    } else if (p < pattern.size() && pattern[p] == text[t]) {
-      ++p;
-      ++t;
-    } else if (star != std::string::npos) {
-      p = star + 1;
-      t = ++mark;
-    } else {
-      return false;
-    }
-  }
-  while (p < pattern.size() && pattern[p] == '*') ++p;
-  return p == pattern.size();
-}
-
 const char* toString(sim::SetpointProfile p) {
   switch (p) {
     case sim::SetpointProfile::Step: return "step";
@@ -78,16 +57,6 @@ std::string resolvePath(const yaml::Node& n, CaseSpec& c) {
   if (!fs::is_regular_file(norm, ec)) n.fail("file not found: " + norm.string());
   c.file_fields.emplace_back(n.path(), norm.string());
   return norm.string();
-}
-
-std::string surfaceByName(const model::RobotDescription& d, const yaml::Node& n) {
-  const std::string name = n.asString();
-  std::vector<std::string> names;
-  for (const auto& s : d.contact_surfaces) {
-    if (s.name == name) return name;
-    names.push_back(s.name);
-  }
-  n.fail("unknown contact surface '" + name + "' (surfaces: " + joinNames(names) + ")");
 }
 
 std::string postureByName(const model::RobotDescription& d, const yaml::Node& n) {
@@ -305,279 +274,40 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
 
 bool isLexdyn(const CaseSpec& c) { return c.controller.type == "lexdyn"; }
 
-/// Methods a check or comparison may concern: those the case has a hierarchy for.
-std::vector<std::string> caseMethods(const CaseSpec& c) {
-  std::vector<std::string> out;
-  for (const std::string& m : control::methodNames()) {
-    if (c.controller.lexdyn.hasHierarchy(m)) out.push_back(m);
-  }
-  return out;
+/// What the check parsers may ask about the robot (harness/checks/check_registry.hpp).
+checks::CheckContext robotContext(const model::RobotDescription& d) {
+  checks::CheckContext x;
+  for (const auto& f : d.frames) x.frames.push_back(f.name);
+  for (const auto& s : d.contact_surfaces) x.surfaces.push_back(s.name);
+  for (const auto& j : d.joints) x.joints.push_back({j.name, j.effort_limit});
+  return x;
 }
 
-/// Every task must be in the hierarchy of every method in `methods`.
-void requireTasksInHierarchies(const CaseSpec& c, const yaml::Node& at, const std::vector<std::string>& tasks,
-                               const std::vector<std::string>& methods) {
-  for (const std::string& m : methods) {
-    const std::vector<std::string> used = usedTasks(c.controller.lexdyn, m);
-    for (const std::string& t : tasks) {
-      if (std::find(used.begin(), used.end(), t) == used.end()) {
-        at.fail("task '" + t + "' is not in the hierarchy of method " + m +
-                " (its channels are not recorded then); restrict the check with methods: [...]");
-      }
+/// ... and about the case: its controller, with a lexdyn controller its contacts, tasks and
+/// the hierarchy of each method. `d` may be null (comparisons need no robot).
+checks::CheckContext checkContext(const CaseSpec& c, const model::RobotDescription* d) {
+  checks::CheckContext x = d ? robotContext(*d) : checks::CheckContext{};
+  x.controller = c.controller.type;
+  x.control_period_s = c.control_period_s;
+  if (!isLexdyn(c)) return x;
+  const LexdynSpec& lx = c.controller.lexdyn;
+  for (const ContactEntry& e : lx.contacts) x.contacts.push_back({e.name, e.normal, e.friction, !e.sensor.empty(), e.points});
+  for (const TaskSpec& t : lx.tasks) {
+    checks::CheckContext::Task task{t.name, t.type, false, 0.0, std::nullopt};
+    if (const tasks::PdGains* g = taskGains(t)) {
+      task.has_gains = true;
+      task.kp = g->kp;
+      task.kv = g->kv;
     }
+    x.tasks.push_back(task);
   }
+  for (const std::string& name : control::methodNames()) {
+    checks::CheckContext::Method method{name, lx.hasHierarchy(name), usedTasks(lx, name), {}};
+    for (const LevelEntry& l : lx.hierarchy(name)) method.levels.push_back(l.name);
+    x.methods.push_back(method);
+  }
+  return x;
 }
-
-std::vector<std::string> readTaskNames(const CaseSpec& c, const yaml::Node& n) {
-  std::vector<std::string> out;
-  if (n.size() < 1) n.fail("expected at least one task");
-  for (const yaml::Node& tn : n.elements()) {
-    const std::string t = tn.asString();
-    if (c.controller.lexdyn.findTask(t) < 0) tn.fail("unknown task '" + t + "'");
-    out.push_back(t);
-  }
-  return out;
-}
-
-std::vector<std::string> readJointPatterns(const yaml::Node& n, const model::RobotDescription& d) {
-  std::vector<std::string> out;
-  if (n.size() < 1) n.fail("expected at least one joint pattern");
-  for (const yaml::Node& pn : n.elements()) {
-    const std::string pattern = pn.asString();
-    int matched = 0;
-    for (const auto& j : d.joints) {
-      if (!globMatch(pattern, j.name)) continue;
-      ++matched;
-      if (std::find(out.begin(), out.end(), j.name) == out.end()) out.push_back(j.name);
-    }
-    if (matched == 0) pn.fail("pattern '" + pattern + "' matches no joint");
-  }
-  return out;
-}
-
-std::vector<std::string> allJoints(const model::RobotDescription& d) {
-  std::vector<std::string> out;
-  for (const auto& j : d.joints) out.push_back(j.name);
-  return out;
-}
-
-/// Convex hull (counter-clockwise, Andrew's monotone chain) of the points' (x, y).
-std::vector<std::pair<double, double>> convexHull(std::vector<std::pair<double, double>> p) {
-  std::sort(p.begin(), p.end());
-  p.erase(std::unique(p.begin(), p.end()), p.end());
-  if (p.size() < 3) return p;
-  auto cross = [](const std::pair<double, double>& o, const std::pair<double, double>& a, const std::pair<double, double>& b) {
-    return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
-  };
-  std::vector<std::pair<double, double>> h(2 * p.size());
-  size_t k = 0;
-  for (size_t i = 0; i < p.size(); ++i) {
-    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
-    h[k++] = p[i];
-  }
-  for (size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && cross(h[k - 2], h[k - 1], p[i - 1]) <= 0) --k;
-    h[k++] = p[i - 1];
-  }
-  h.resize(k - 1);
-  return h;
-}
-
-/// The PD gains of a task, nullptr for a type without them.
-const tasks::PdGains* taskGains(const TaskSpec& t) {
-  if (t.type == "position") return &t.position.gains;
-  if (t.type == "orientation") return &t.orientation.gains;
-  if (t.type == "com") return &t.com.gains;
-  if (t.type == "joint_position") return &t.joint_position.gains;
-  if (t.type == "posture") return &t.posture.gains;
-  if (t.type == "contact") return &t.contact.gains;
-  return nullptr;
-}
-
-checks::CheckSpec readCheck(const yaml::Node& node, const model::RobotDescription& d, const CaseSpec& cs) {
-  yaml::StrictMap m(node);
-  checks::CheckSpec c;
-  c.where = node.where();
-  const yaml::Node typeNode = m.required("type");
-  c.type = typeNode.asEnum(checks::checkTypes());
-  c.name = c.type;
-  if (auto n = m.optional("name")) c.name = n->asString();
-  if (auto f = m.optional("from_s")) c.from_s = f->asDoubleIn(0.0, R::kMaxTime_s, "s");
-  const bool legacy = c.type == "frame_drift" || c.type == "force_balance" || c.type == "contact_slip" || c.type == "frame_height";
-  if (auto v = m.optional("methods")) {
-    if (!isLexdyn(cs)) v->fail("methods: applies to the lexdyn controller only");
-    for (const yaml::Node& mn : v->elements()) {
-      const std::string method = mn.asEnum(control::methodNames());
-      if (!cs.controller.lexdyn.hasHierarchy(method)) mn.fail("the case has no hierarchy for method " + method);
-      c.methods.push_back(method);
-    }
-  }
-  if (!legacy) {
-    if (!isLexdyn(cs)) typeNode.fail("check type " + c.type + " reads the lexdyn controller's channels; the controller is " + cs.controller.type);
-    if (auto t = m.optional("to_s")) {
-      c.to_s = t->asNonNegativeDouble();
-      if (c.to_s < c.from_s) t->fail("to_s must not be before from_s");
-    }
-  }
-  const std::vector<std::string> methods = c.methods.empty() && isLexdyn(cs) ? caseMethods(cs) : c.methods;
-  const LexdynSpec& lx = cs.controller.lexdyn;
-  auto surfaces = [&]() {
-    const yaml::Node s = m.required("surfaces");
-    if (s.size() < 1) s.fail("expected at least one contact surface");
-    for (const yaml::Node& sn : s.elements()) c.surfaces.push_back(surfaceByName(d, sn));
-  };
-  auto contact = [&](bool needs_sensor) -> const ContactEntry& {
-    const yaml::Node cn = m.required("contact");
-    c.contact = cn.asString();
-    const int k = lx.findContact(c.contact);
-    if (k < 0) cn.fail("unknown controller contact '" + c.contact + "'");
-    const ContactEntry& e = lx.contacts[static_cast<size_t>(k)];
-    for (int i = 0; i < 3; ++i) c.normal[i] = e.normal[i];
-    if (c.type != "contact_wrench_match") {
-      c.source = "computed";
-      if (auto src = m.optional("source")) c.source = src->asEnum({"computed", "sensed"});
-      needs_sensor = needs_sensor || c.source == "sensed";
-    }
-    if (needs_sensor && e.sensor.empty()) cn.fail("contact '" + c.contact + "' has no linked sensor (controller.contacts[].sensor)");
-    return e;
-  };
-  auto oscillationSource = [&]() {
-    c.source = "measured";
-    if (auto src = m.optional("source")) c.source = src->asEnum({"measured", "commanded"});
-    c.joints = allJoints(d);
-    if (auto j = m.optional("joints")) c.joints = readJointPatterns(*j, d);
-  };
-  if (c.type == "frame_drift") {
-    c.frame = frameName(m.required("frame"), d);
-    c.limit = m.required("limit_m").asPositiveDouble();
-  } else if (c.type == "force_balance") {
-    surfaces();
-    c.limit = m.required("limit_rel").asPositiveDouble();
-  } else if (c.type == "contact_slip") {
-    surfaces();
-    c.limit = m.required("limit_m").asPositiveDouble();
-  } else if (c.type == "frame_height") {
-    c.frame = frameName(m.required("frame"), d);
-    c.limit = m.required("min_m").asDoubleIn(-R::kMaxPosition_m, R::kMaxPosition_m, "m");
-  } else if (c.type == "task_error") {
-    const yaml::Node tn = m.required("tasks");
-    c.tasks = readTaskNames(cs, tn);
-    requireTasksInHierarchies(cs, tn, c.tasks, methods);
-    c.statistic = m.required("statistic").asEnum({"final", "mean", "max", "range"});
-    c.limit = m.required("limit").asNonNegativeDouble();
-  } else if (c.type == "torque_limits") {
-    c.source = "both";
-    if (auto src = m.optional("source")) c.source = src->asEnum({"applied", "commanded", "both"});
-    c.joints = allJoints(d);
-    if (auto j = m.optional("joints")) c.joints = readJointPatterns(*j, d);
-    for (const auto& j : c.joints) {
-      const double lim = d.joints[static_cast<size_t>(d.findJoint(j))].effort_limit;
-      if (!(lim > 0.0)) m.node().fail("joint " + j + " has no effort limit in the URDF");
-      c.joint_limits.push_back(lim);
-    }
-    c.limit = m.required("limit_fraction").asPositiveDouble();
-  } else if (c.type == "contact_unilateral") {
-    contact(false);
-    c.limit = m.required("min_N").asDouble();
-  } else if (c.type == "contact_friction") {
-    const ContactEntry& e = contact(false);
-    c.friction = e.friction;
-    if (auto v = m.optional("friction")) c.friction = v->asPositiveDouble();
-    c.min_normal_N = 1.0;
-    if (auto v = m.optional("min_normal_N")) c.min_normal_N = v->asNonNegativeDouble();
-    c.limit = 1.0;
-    if (auto v = m.optional("limit_ratio")) c.limit = v->asPositiveDouble();
-  } else if (c.type == "contact_cop") {
-    const ContactEntry& e = contact(false);
-    if ((e.normal - Eigen::Vector3d::UnitZ()).norm() > 1e-12) {
-      m.required("contact").fail("contact_cop needs a contact whose normal is the frame's z axis");
-    }
-    std::vector<std::pair<double, double>> pts;
-    for (const auto& p : e.points) pts.emplace_back(p.x(), p.y());
-    c.polygon = convexHull(pts);
-    if (c.polygon.size() < 3) m.required("contact").fail("contact_cop needs a contact with a support polygon (3 points or more, not aligned)");
-    c.min_normal_N = 1.0;
-    if (auto v = m.optional("min_normal_N")) c.min_normal_N = v->asNonNegativeDouble();
-    c.limit = 0.0;
-    if (auto v = m.optional("limit_m")) c.limit = v->asDouble();
-  } else if (c.type == "contact_wrench_match") {
-    contact(true);
-    c.component = "force";
-    if (auto v = m.optional("component")) c.component = v->asEnum({"force", "torque"});
-    c.statistic = "rms";
-    if (auto v = m.optional("statistic")) c.statistic = v->asEnum({"rms", "max"});
-    c.limit = m.required(c.component == "force" ? "limit_N" : "limit_Nm").asPositiveDouble();
-  } else if (c.type == "joint_acceleration_sign_changes") {
-    oscillationSource();
-    if (auto v = m.optional("dead_band_rad_per_s2")) c.dead_band = v->asNonNegativeDouble();
-    c.limit = m.required("limit_per_s").asNonNegativeDouble();
-  } else if (c.type == "joint_velocity_hf_energy") {
-    oscillationSource();
-    c.cutoff_hz = m.required("cutoff_hz").asPositiveDouble();
-    if (c.cutoff_hz >= 0.5 / cs.control_period_s) {
-      m.required("cutoff_hz").fail("must be below the Nyquist frequency of the control rate (" + std::to_string(0.5 / cs.control_period_s) + " Hz)");
-    }
-    c.limit = m.required("limit_rad2_per_s2").asNonNegativeDouble();
-  } else if (c.type == "task_error_rate_sign_changes") {
-    const yaml::Node tn = m.required("task");
-    const std::string t = tn.asString();
-    if (lx.findTask(t) < 0) tn.fail("unknown task '" + t + "'");
-    c.tasks = {t};
-    requireTasksInHierarchies(cs, tn, c.tasks, methods);
-    if (auto v = m.optional("dead_band_per_s")) c.dead_band = v->asNonNegativeDouble();
-    c.limit = m.required("limit_per_s").asNonNegativeDouble();
-  } else if (c.type == "task_error_closed_form" || c.type == "task_overshoot") {
-    const yaml::Node tn = m.required("task");
-    const std::string t = tn.asString();
-    const int ti = lx.findTask(t);
-    if (ti < 0) tn.fail("unknown task '" + t + "'");
-    c.tasks = {t};
-    requireTasksInHierarchies(cs, tn, c.tasks, methods);
-    if (c.type == "task_error_closed_form") {
-      // The gains default to the task's own (kv absent: 2 sqrt(kp), critical damping).
-      const tasks::PdGains* g = taskGains(lx.tasks[static_cast<size_t>(ti)]);
-      auto kp = m.optional("kp");
-      auto kv = m.optional("kv");
-      if (!g && !kp) tn.fail("task '" + t + "' (" + lx.tasks[static_cast<size_t>(ti)].type + ") has no PD gains; give kp (and kv)");
-      c.kp = kp ? kp->asNonNegativeDouble() : g->kp;
-      if (kv) c.kv = kv->asNonNegativeDouble();
-      else if (!kp && g->kv) c.kv = *g->kv;
-      else c.kv = 2.0 * std::sqrt(c.kp);
-    }
-    c.limit = m.required("limit_rel").asNonNegativeDouble();
-  } else if (c.type == "controller_status") {
-    c.allowed = {"ok", "solver_stopped_early"};
-    if (auto v = m.optional("allowed")) {
-      c.allowed.clear();
-      for (const yaml::Node& a : v->elements()) c.allowed.push_back(a.asEnum(checks::controllerStatusNames()));
-    }
-    c.limit = 0.0;
-    if (auto v = m.optional("limit_count")) c.limit = v->asNonNegativeDouble();
-  } else if (c.type == "active_set_peak") {
-    c.limit = m.required("limit_iterations").asPositiveDouble();
-  } else if (c.type == "factorization_peak") {
-    c.limit = m.required("limit_factorizations").asPositiveDouble();
-  } else if (c.type == "augmented_fraction") {
-    const yaml::Node ln = m.required("level");
-    c.level = ln.asString();
-    for (const std::string& method : methods) {
-      bool found = false;
-      for (const auto& l : lx.hierarchy(method)) found = found || l.name == c.level;
-      if (!found) ln.fail("level '" + c.level + "' is not in the hierarchy of method " + method + "; restrict the check with methods: [...]");
-    }
-    c.limit = m.required("max_fraction").asNonNegativeDouble();
-  } else if (c.type == "tick_time") {
-    c.timer = m.required("timer").asEnum({"model", "tasks", "hessian", "solver", "tick"});
-    if (auto v = m.optional("percentile")) {
-      c.percentile = v->asDouble();
-      if (!(c.percentile > 0.0 && c.percentile <= 100.0)) v->fail("expected a percentile in (0, 100]");
-    }
-    c.limit = m.required("limit_us").asPositiveDouble();
-  }
-  m.finish();
-  return c;
-}
-
 
 EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
   yaml::StrictMap em(en);
@@ -728,15 +458,14 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
       }
       // The documented ranges (docs/simulator.md, "Ranges"): positions within 1e3 m, joint
       // targets within the joints' limits.
-      const TaskSpec& ts = lx.tasks[static_cast<size_t>(lx.findTask(e.task))];
       const model::RobotDescription& d = model.description();
+      const TaskTargetLayout target = taskTarget(lx.tasks[static_cast<size_t>(lx.findTask(e.task))], d);
       for (int k = 0; k < e.value.size(); ++k) {
         const double v = e.value[k];
-        if ((ts.type == "position" || ts.type == "com" || ts.type == "com_box") && std::isfinite(v) && std::abs(v) > R::kMaxPosition_m) {
+        if (target.positions && std::isfinite(v) && std::abs(v) > R::kMaxPosition_m) {
           throw InputError(e.where + ".value[" + std::to_string(k) + "]", "expected a position in [-1000, 1000] m, found " + std::to_string(v));
         }
-        const int j = ts.type == "joint_position" ? d.findJoint(ts.joint_position.joints[static_cast<size_t>(k)])
-                                                  : (ts.type == "posture" ? k : -1);
+        const int j = static_cast<size_t>(k) < target.joints.size() ? d.findJoint(target.joints[static_cast<size_t>(k)]) : -1;
         if (j >= 0) {
           const model::JointDescription& jd = d.joints[static_cast<size_t>(j)];
           if (!(v >= std::max(jd.lower, -R::kMaxJointLimit) && v <= std::min(jd.upper, R::kMaxJointLimit))) {
@@ -834,8 +563,8 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
       const yaml::Node amp = pm.required("amplitude_rad");
       p.amplitude_rad = amp.asNonNegativeDouble();
       if (p.amplitude_rad > 0.5) amp.fail("expected an amplitude <= 0.5 rad (a small perturbation), found " + amp.raw().Scalar());
-      std::vector<std::string> names = allJoints(d);
-      if (auto j = pm.optional("joints")) names = readJointPatterns(*j, d);
+      std::vector<std::string> names = robotContext(d).jointNames();
+      if (auto j = pm.optional("joints")) names = robotContext(d).jointPatterns(*j);
       for (const auto& n : names) p.joints.push_back(d.findJoint(n));
       pm.finish();
     }
@@ -883,8 +612,9 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
     tm.finish();
   }
   const yaml::Node checks = top.required("checks");
+  const checks::CheckContext check_context = checkContext(c, &d);
   for (const yaml::Node& cn : checks.elements()) {
-    checks::CheckSpec cs = readCheck(cn, d, c);
+    checks::CheckSpec cs = checks::readCheck(cn, check_context);
     for (const auto& o : c.checks) {
       if (o.name == cs.name) cn.fail("duplicate check name '" + cs.name + "'");
     }
@@ -1021,25 +751,7 @@ Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotDe
 }
 
 checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& cs) {
-  yaml::StrictMap m(node);
-  checks::ComparisonSpec c;
-  c.where = node.where();
-  c.name = m.required("name").asString();
-  c.type = m.required("type").asEnum({"method_comparison"});
-  const yaml::Node tn = m.required("tasks");
-  c.tasks = readTaskNames(cs, tn);
-  c.statistic = m.required("statistic").asEnum({"final", "mean", "max"});
-  for (auto [key, field] : {std::pair<const char*, std::string*>{"better", &c.better}, {"worse", &c.worse}}) {
-    const yaml::Node mn = m.required(key);
-    *field = mn.asEnum(control::methodNames());
-    if (!cs.controller.lexdyn.hasHierarchy(*field)) mn.fail("the case has no hierarchy for method " + *field);
-  }
-  requireTasksInHierarchies(cs, tn, c.tasks, {c.better, c.worse});
-  if (auto v = m.optional("margin")) c.margin = v->asDouble();
-  if (auto f = m.optional("from_s")) c.from_s = f->asDoubleIn(0.0, R::kMaxTime_s, "s");
-  if (auto t = m.optional("to_s")) c.to_s = t->asNonNegativeDouble();
-  m.finish();
-  return c;
+  return checks::readComparison(node, checkContext(cs, nullptr));
 }
 
 }  // namespace lexdyn::cases

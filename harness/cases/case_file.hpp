@@ -14,6 +14,7 @@
 #include "harness/cases/case_overrides.hpp"
 #include "harness/cases/lexdyn_spec.hpp"
 #include "harness/cases/target_path.hpp"
+#include "harness/checks/check_registry.hpp"
 #include "harness/checks/checks.hpp"
 #include "harness/sim/simulator.hpp"
 
@@ -170,7 +171,7 @@ std::string methodName(const CaseSpec& spec);
 void overrideMethod(CaseSpec& spec, const std::string& method, const std::string& where);
 
 /// Glob match with '*' only.
-bool globMatch(const std::string& pattern, const std::string& text);
+using checks::globMatch;
 
 const char* toString(sim::SetpointProfile p);
 

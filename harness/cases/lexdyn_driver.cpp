@@ -48,7 +48,7 @@ struct LexdynDriver::Impl {
 
   struct TaskRec {
     int index = -1;          // controller task index
-    std::string name, type;
+    std::string name;
     int target_values = 0;   // recorded target values
     std::vector<std::string> target_names;
   };
@@ -98,14 +98,7 @@ struct LexdynDriver::Impl {
       TaskRec r;
       r.name = name;
       r.index = ctl->taskIndex(name);
-      r.type = lx.tasks[static_cast<size_t>(lx.findTask(name))].type;
-      if (r.type == "position" || r.type == "com") {
-        r.target_names = {"x", "y", "z"};
-      } else if (r.type == "com_box") {
-        r.target_names = {"lower_x", "lower_y", "lower_z", "upper_x", "upper_y", "upper_z"};
-      } else if (r.type == "joint_position") {
-        r.target_names = lx.tasks[static_cast<size_t>(lx.findTask(name))].joint_position.joints;
-      }
+      r.target_names = taskTarget(lx.tasks[static_cast<size_t>(lx.findTask(name))], model.description()).channels;
       r.target_values = static_cast<int>(r.target_names.size());
       tasks.push_back(r);
     }

@@ -84,7 +84,7 @@ class Recorder {
     }
     std::vector<std::string> frames = spec.trace.frames;
     for (const auto& c : spec.checks) {
-      if (!c.frame.empty()) frames.push_back(c.frame);
+      for (const auto& f : checks::framesRead(c)) frames.push_back(f);
     }
     for (const auto& f : frames) {
       if (schema_.find(checks::frameChannel(f, 'x')) >= 0) continue;

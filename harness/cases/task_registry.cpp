@@ -70,17 +70,23 @@ Eigen::Matrix3d readRotation(const yaml::Node& n) {
 
 using Reader = void (*)(TaskSpec&, yaml::StrictMap&, const model::RobotDescription&, const std::vector<std::string>&, double dt);
 using Maker = std::unique_ptr<tasks::TaskModel> (*)(const TaskSpec&, const model::RobotModel&, const tasks::ContactLayout&);
+using Gains = const tasks::PdGains* (*)(const TaskSpec&);
+using Target = TaskTargetLayout (*)(const TaskSpec&, const model::RobotDescription&);
 
+/// A task type: its reader (the type's keys into TaskSpec::params), its builder, and, where the
+/// type has them, its PD gains and the meaning of its target's values.
 struct TaskType {
   const char* name;
   Reader read;
   Maker make;
+  Gains gains = nullptr;
+  Target target = nullptr;
 };
 
 void readNothing(TaskSpec&, yaml::StrictMap&, const model::RobotDescription&, const std::vector<std::string>&, double) {}
 
 void readJointLimits(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double) {
-  tasks::JointLimitsParams& p = s.joint_limits;
+  tasks::JointLimitsParams& p = s.params.emplace<tasks::JointLimitsParams>();
   if (auto v = m.optional("interaction_fraction")) p.interaction_fraction = v->asNonNegativeDouble();
   if (auto v = m.optional("safety_fraction")) p.safety_fraction = v->asNonNegativeDouble();
   if (auto v = m.optional("xi")) p.xi = v->asPositiveDouble();
@@ -89,21 +95,23 @@ void readJointLimits(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescript
 }
 
 void readTorqueLimits(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double) {
+  tasks::TorqueLimitsParams& p = s.params.emplace<tasks::TorqueLimitsParams>();
   if (auto v = m.optional("scale")) {
-    s.torque_limits.scale = v->asPositiveDouble();
-    if (s.torque_limits.scale > 1.0) v->fail("expected a fraction of the URDF effort limit in (0, 1]");
+    p.scale = v->asPositiveDouble();
+    if (p.scale > 1.0) v->fail("expected a fraction of the URDF effort limit in (0, 1]");
   }
 }
 
 void readTrustRegion(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double) {
+  tasks::TrustRegionParams& p = s.params.emplace<tasks::TrustRegionParams>();
   if (auto v = m.optional("delta")) {
-    s.trust_region.delta = v->asPositiveDouble();
-    if (s.trust_region.delta > R::kMaxDimensionless) v->asDoubleIn(0.0, R::kMaxDimensionless);
+    p.delta = v->asPositiveDouble();
+    if (p.delta > R::kMaxDimensionless) v->asDoubleIn(0.0, R::kMaxDimensionless);
   }
 }
 
 void readSelfCollision(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double) {
-  tasks::SelfCollisionParams& p = s.self_collision;
+  tasks::SelfCollisionParams& p = s.params.emplace<tasks::SelfCollisionParams>();
   if (auto pairs = m.optional("pairs")) {
     for (const yaml::Node& pn : pairs->elements()) {
       if (!pn.isSequence() || pn.size() != 2) pn.fail("expected a pair of capsule names [a, b]");
@@ -128,16 +136,17 @@ void readSelfCollision(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescri
 }
 
 void readContact(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>& contacts, double dt) {
+  tasks::ContactTaskParams& p = s.params.emplace<tasks::ContactTaskParams>();
   const yaml::Node c = m.required("contact");
-  s.contact.contact = c.asString();
+  p.contact = c.asString();
   bool known = false;
-  for (const auto& n : contacts) known = known || n == s.contact.contact;
-  if (!known) c.fail("unknown contact '" + s.contact.contact + "' (controller.contacts: " + joinNames(contacts) + ")");
-  readGains(m, s.contact.gains, dt);
+  for (const auto& n : contacts) known = known || n == p.contact;
+  if (!known) c.fail("unknown contact '" + p.contact + "' (controller.contacts: " + joinNames(contacts) + ")");
+  readGains(m, p.gains, dt);
 }
 
 void readPosition(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double dt) {
-  tasks::PositionParams& p = s.position;
+  tasks::PositionParams& p = s.params.emplace<tasks::PositionParams>();
   p.frame = frameName(m.required("frame"), d);
   if (auto v = m.optional("point")) p.point = position3(*v);
   if (auto v = m.optional("target")) p.target = position3(*v);
@@ -145,7 +154,7 @@ void readPosition(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription
 }
 
 void readOrientation(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double dt) {
-  tasks::OrientationParams& p = s.orientation;
+  tasks::OrientationParams& p = s.params.emplace<tasks::OrientationParams>();
   p.frame = frameName(m.required("frame"), d);
   auto target = m.optional("target");
   auto rpy = m.optional("target_rpy_rad");
@@ -156,12 +165,13 @@ void readOrientation(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescript
 }
 
 void readCom(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double dt) {
-  if (auto v = m.optional("target")) s.com.target = position3(*v);
-  readGains(m, s.com.gains, dt);
+  tasks::ComParams& p = s.params.emplace<tasks::ComParams>();
+  if (auto v = m.optional("target")) p.target = position3(*v);
+  readGains(m, p.gains, dt);
 }
 
 void readComBox(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&, const std::vector<std::string>&, double) {
-  tasks::ComBoxParams& p = s.com_box;
+  tasks::ComBoxParams& p = s.params.emplace<tasks::ComBoxParams>();
   if (auto v = m.optional("lower")) p.lower = asBound3(*v);
   if (auto v = m.optional("upper")) p.upper = asBound3(*v);
   if (auto dn = m.optional("damper")) {
@@ -178,7 +188,7 @@ void readComBox(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription&,
 }
 
 void readJointPosition(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double dt) {
-  tasks::JointPositionParams& p = s.joint_position;
+  tasks::JointPositionParams& p = s.params.emplace<tasks::JointPositionParams>();
   const yaml::Node joints = m.required("joints");
   if (joints.size() < 1) joints.fail("expected at least one joint");
   for (const yaml::Node& jn : joints.elements()) p.joints.push_back(jointName(jn, d));
@@ -190,7 +200,7 @@ void readJointPosition(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescri
 }
 
 void readPosture(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescription& d, const std::vector<std::string>&, double dt) {
-  tasks::PostureParams& p = s.posture;
+  tasks::PostureParams& p = s.params.emplace<tasks::PostureParams>();
   const int nj = static_cast<int>(d.joints.size());
   auto target = m.optional("target");
   auto posture = m.optional("posture");
@@ -232,60 +242,59 @@ std::unique_ptr<tasks::TaskModel> own(std::unique_ptr<T> t) {
   return std::unique_ptr<tasks::TaskModel>(std::move(t));
 }
 
+/// The builder of a task type whose constructor takes (name, model, params).
+template <class Task, class Params>
+std::unique_ptr<tasks::TaskModel> build(const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
+  return own(std::make_unique<Task>(s.name, m, s.paramsAs<Params>()));
+}
+
+/// The PD gains of a params struct with a `gains` member.
+template <class Params>
+const tasks::PdGains* gainsOf(const TaskSpec& s) {
+  return &s.paramsAs<Params>().gains;
+}
+
+TaskTargetLayout pointTarget(const TaskSpec&, const model::RobotDescription&) { return {{"x", "y", "z"}, true, {}}; }
+TaskTargetLayout boxTarget(const TaskSpec&, const model::RobotDescription&) {
+  return {{"lower_x", "lower_y", "lower_z", "upper_x", "upper_y", "upper_z"}, true, {}};
+}
+TaskTargetLayout jointsTarget(const TaskSpec& s, const model::RobotDescription&) {
+  const std::vector<std::string>& joints = s.paramsAs<tasks::JointPositionParams>().joints;
+  return {joints, false, joints};
+}
+TaskTargetLayout postureTarget(const TaskSpec&, const model::RobotDescription& d) {
+  TaskTargetLayout t;
+  for (const auto& j : d.joints) t.joints.push_back(j.name);
+  return t;
+}
+
+// One entry per type, in the order of docs/controller.md.
 const std::vector<TaskType>& registry() {
   static const std::vector<TaskType> types = {
       {"contact_force_bounds", readNothing,
        [](const TaskSpec& s, const model::RobotModel&, const tasks::ContactLayout& l) {
          return own(std::make_unique<tasks::ContactForceBoundsTask>(s.name, l));
        }},
-      {"joint_limits", readJointLimits,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::JointLimitsTask>(s.name, m, s.joint_limits));
-       }},
+      {"joint_limits", readJointLimits, build<tasks::JointLimitsTask, tasks::JointLimitsParams>},
       {"equation_of_motion", readNothing,
        [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
          return own(std::make_unique<tasks::EquationOfMotionTask>(s.name, m));
        }},
-      {"torque_limits", readTorqueLimits,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::TorqueLimitsTask>(s.name, m, s.torque_limits));
-       }},
-      {"trust_region", readTrustRegion,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::TrustRegionTask>(s.name, m, s.trust_region));
-       }},
-      {"self_collision", readSelfCollision,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::SelfCollisionTask>(s.name, m, s.self_collision));
-       }},
+      {"torque_limits", readTorqueLimits, build<tasks::TorqueLimitsTask, tasks::TorqueLimitsParams>},
+      {"trust_region", readTrustRegion, build<tasks::TrustRegionTask, tasks::TrustRegionParams>},
+      {"self_collision", readSelfCollision, build<tasks::SelfCollisionTask, tasks::SelfCollisionParams>},
       {"contact", readContact,
        [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout& l) {
-         return own(std::make_unique<tasks::ContactTask>(s.name, m, l, s.contact));
-       }},
-      {"position", readPosition,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::PositionTask>(s.name, m, s.position));
-       }},
-      {"orientation", readOrientation,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::OrientationTask>(s.name, m, s.orientation));
-       }},
-      {"com", readCom,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::ComTask>(s.name, m, s.com));
-       }},
-      {"com_box", readComBox,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::ComBoxTask>(s.name, m, s.com_box));
-       }},
-      {"joint_position", readJointPosition,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::JointPositionTask>(s.name, m, s.joint_position));
-       }},
-      {"posture", readPosture,
-       [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
-         return own(std::make_unique<tasks::PostureTask>(s.name, m, s.posture));
-       }},
+         return own(std::make_unique<tasks::ContactTask>(s.name, m, l, s.paramsAs<tasks::ContactTaskParams>()));
+       },
+       gainsOf<tasks::ContactTaskParams>},
+      {"position", readPosition, build<tasks::PositionTask, tasks::PositionParams>, gainsOf<tasks::PositionParams>, pointTarget},
+      {"orientation", readOrientation, build<tasks::OrientationTask, tasks::OrientationParams>, gainsOf<tasks::OrientationParams>},
+      {"com", readCom, build<tasks::ComTask, tasks::ComParams>, gainsOf<tasks::ComParams>, pointTarget},
+      {"com_box", readComBox, build<tasks::ComBoxTask, tasks::ComBoxParams>, nullptr, boxTarget},
+      {"joint_position", readJointPosition, build<tasks::JointPositionTask, tasks::JointPositionParams>,
+       gainsOf<tasks::JointPositionParams>, jointsTarget},
+      {"posture", readPosture, build<tasks::PostureTask, tasks::PostureParams>, gainsOf<tasks::PostureParams>, postureTarget},
       {"velocity_min", readNothing,
        [](const TaskSpec& s, const model::RobotModel& m, const tasks::ContactLayout&) {
          return own(std::make_unique<tasks::VelocityMinTask>(s.name, m));
@@ -307,30 +316,21 @@ const TaskType* findType(const std::string& name) {
 
 }  // namespace
 
-std::string joinNames(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-  return s;
+namespace {
+template <class T>
+std::vector<std::string> namesOf(const std::vector<T>& v) {
+  std::vector<std::string> out;
+  for (const T& x : v) out.push_back(x.name);
+  return out;
 }
+}  // namespace
 
 std::string frameName(const yaml::Node& n, const model::RobotDescription& d) {
-  const std::string name = n.asString();
-  if (d.findFrame(name) < 0) {
-    std::vector<std::string> names;
-    for (const auto& f : d.frames) names.push_back(f.name);
-    n.fail("unknown frame '" + name + "' (frames: " + joinNames(names) + ")");
-  }
-  return name;
+  return checks::knownName(n, namesOf(d.frames), "frame", "frames");
 }
 
 std::string jointName(const yaml::Node& n, const model::RobotDescription& d) {
-  const std::string name = n.asString();
-  if (d.findJoint(name) < 0) {
-    std::vector<std::string> names;
-    for (const auto& j : d.joints) names.push_back(j.name);
-    n.fail("unknown joint '" + name + "' (joints: " + joinNames(names) + ")");
-  }
-  return name;
+  return checks::knownName(n, namesOf(d.joints), "joint", "joints");
 }
 
 Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy) {
@@ -383,6 +383,16 @@ TaskSpec readTaskSpec(const yaml::Node& node, const model::RobotDescription& rob
   t->read(s, m, robot, contacts, control_period_s);
   m.finish();
   return s;
+}
+
+const tasks::PdGains* taskGains(const TaskSpec& spec) {
+  const TaskType* t = findType(spec.type);
+  return t && t->gains ? t->gains(spec) : nullptr;
+}
+
+TaskTargetLayout taskTarget(const TaskSpec& spec, const model::RobotDescription& robot) {
+  const TaskType* t = findType(spec.type);
+  return t && t->target ? t->target(spec, robot) : TaskTargetLayout{};
 }
 
 std::unique_ptr<tasks::TaskModel> makeTask(const TaskSpec& spec, const model::RobotModel& model,

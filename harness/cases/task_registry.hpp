@@ -1,5 +1,8 @@
-// The task types a case file can name (docs/cases.md, "Tasks"): one registry that reads a task's
-// YAML entry into the params struct of its lexdyn/tasks header and builds the TaskModel from it.
+// The task types a case file can name (docs/cases.md, "Tasks"): one registry entry per type
+// (task_registry.cpp) with its reader, which reads a task's YAML entry into the params struct of
+// its lexdyn/tasks header, its builder (the TaskModel from those params), and what the harness
+// asks of the type (its PD gains, the meaning of its target's values). Nothing else compares
+// task type names.
 //
 // Every params field of the task headers has a key of the same name (`gains: {kp, kv}`,
 // `damper: {interaction, safety, xi, adaptive}`), plus two conveniences that only produce those
@@ -8,6 +11,8 @@
 // and a contact layout, so one case file is turned into a controller for any method.
 #pragma once
 
+#include "harness/checks/check_registry.hpp"
+#include "lexdyn/common/error.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
 #include "lexdyn/model/robot_description.hpp"
 #include "lexdyn/tasks/com.hpp"
@@ -22,28 +27,28 @@
 #include "lexdyn/tasks/torque_limits.hpp"
 #include "lexdyn/tasks/trust_region.hpp"
 
+#include <any>
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace lexdyn::cases {
 
-/// One task of a case file. Only the params member of its type is meaningful.
+/// One task of a case file: its name and type, and the params struct of its type (from the type's
+/// lexdyn/tasks header: tasks::PositionParams for position, ...; empty for a type without).
 struct TaskSpec {
   std::string name;
   std::string type;   ///< one of taskTypes()
   std::string where;  ///< "file:line: controller.tasks[i]" for messages
-  tasks::JointLimitsParams joint_limits;
-  tasks::TorqueLimitsParams torque_limits;
-  tasks::TrustRegionParams trust_region;
-  tasks::SelfCollisionParams self_collision;
-  tasks::ContactTaskParams contact;
-  tasks::PositionParams position;
-  tasks::OrientationParams orientation;
-  tasks::ComParams com;
-  tasks::ComBoxParams com_box;
-  tasks::JointPositionParams joint_position;
-  tasks::PostureParams posture;
+  std::any params;
+
+  /// The params struct of the task's type; aborts when the spec holds another (internal error).
+  template <class P>
+  const P& paramsAs() const {
+    const P* p = std::any_cast<P>(&params);
+    LEXDYN_ALWAYS_ASSERT(p, "task '" + name + "' of type " + type + " holds the params of another type (or none)");
+    return *p;
+  }
 };
 
 /// The 15 task types, in the order of docs/controller.md.
@@ -62,13 +67,25 @@ TaskSpec readTaskSpec(const yaml::Node& node, const model::RobotDescription& rob
 std::unique_ptr<tasks::TaskModel> makeTask(const TaskSpec& spec, const model::RobotModel& model,
                                            const tasks::ContactLayout& layout);
 
+/// The PD gains of a task (position, orientation, com, joint_position, posture, contact);
+/// nullptr for a type without.
+const tasks::PdGains* taskGains(const TaskSpec& spec);
+
+/// What the values of a task's target are (set_target events, the trace's target channels).
+struct TaskTargetLayout {
+  std::vector<std::string> channels;  ///< traced as target.<task>.<name>; empty: not traced
+  bool positions = false;             ///< every value is a position (m)
+  std::vector<std::string> joints;    ///< value k is the position of joints[k]
+};
+TaskTargetLayout taskTarget(const TaskSpec& spec, const model::RobotDescription& robot);
+
 /// A scalar that may also be `.inf`, `+.inf`, `-.inf` (YAML's infinities; also `inf`, `-inf`).
 double asBound(const yaml::Node& n);
 /// A sequence of 3 such scalars.
 Eigen::Vector3d asBound3(const yaml::Node& n);
 
 /// "a, b, c" (for error messages listing the valid names).
-std::string joinNames(const std::vector<std::string>& v);
+using checks::joinNames;
 /// The frame named by n; an unknown one fails at n, listing the robot's frames.
 std::string frameName(const yaml::Node& n, const model::RobotDescription& d);
 /// The joint named by n; an unknown one fails at n, listing the robot's joints.

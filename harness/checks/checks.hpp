@@ -1,24 +1,25 @@
 // Checks read traces (channels by name), never live objects, so they run the same on a fresh
 // simulation (row by row as the run goes) and on a stored trace file.
 //
-// Check types (docs/simulator.md, "Checks"; docs/cases.md, "Checks" for the controller's):
-//   frame_drift     max |p(t) - p(from_s)| of a frame's origin over t >= from_s        [m]
-//   force_balance   max |sum of contact normal forces - robot weight| / weight, t >= from_s
-//   contact_slip    max horizontal displacement of any contact point of the given surfaces
-//                   from its position at from_s, over t >= from_s                     [m]
-//   frame_height    lowest height of a frame's origin over t >= from_s (e.g. "has not fallen")
-// and, on the channels of the lexdyn controller (controller_checks.cpp):
-//   task_error, torque_limits, contact_unilateral, contact_friction, contact_cop,
-//   contact_wrench_match, joint_acceleration_sign_changes, joint_velocity_hf_energy,
-//   task_error_rate_sign_changes, task_error_closed_form, task_overshoot, controller_status,
-//   active_set_peak, factorization_peak, augmented_fraction, tick_time (machine-dependent: it
-//   decides only when asked, applyWallClockPolicy).
+// Check types are registered in a CheckRegistry (check_registry.hpp): each type has its own
+// params struct, a parser (its keys of a case file's `checks` entry) and an evaluator (a Check),
+// in one file pair per family:
+//   sim_checks       frame_drift, force_balance, contact_slip, frame_height (docs/simulator.md)
+//   task_checks      task_error, task_error_rate_sign_changes, task_error_closed_form,
+//                    task_overshoot; method comparisons
+//   joint_checks     torque_limits, joint_acceleration_sign_changes, joint_velocity_hf_energy
+//   contact_checks   contact_unilateral, contact_friction, contact_cop, contact_wrench_match
+//   health_checks    controller_status, active_set_peak, factorization_peak, augmented_fraction,
+//                    tick_time (machine-dependent: it decides only when asked,
+//                    applyWallClockPolicy)
+// (docs/cases.md, "Checks"; docs/architecture.md, "Adding a check type").
 // A check passes when it saw at least one row in its window [from_s, to_s] and its value is on
 // the right side of its limit.
 #pragma once
 
 #include "harness/checks/trace.hpp"
 
+#include <any>
 #include <limits>
 #include <memory>
 #include <string>
@@ -27,37 +28,35 @@
 
 namespace lexdyn::checks {
 
+/// A check of a case file: the fields every check type has, and the params struct of its type
+/// (CheckType::parse sets it; e.g. TaskErrorParams for task_error, task_checks.hpp).
 struct CheckSpec {
   std::string name;
-  std::string type;                    ///< one of checkTypes()
-  std::string frame;                   ///< frame_drift, frame_height
-  std::vector<std::string> surfaces;   ///< force_balance, contact_slip
-  double from_s = 0.0;
-  double limit = 0.0;
+  std::string type;                    ///< a registered check type (checkTypes())
   std::string where;                   ///< origin in the case file, for messages
-  // --- controller checks (docs/cases.md, "Checks") ---
+  double from_s = 0.0;                 ///< start of the window
   double to_s = std::numeric_limits<double>::infinity();  ///< end of the window
+  double limit = 0.0;
   std::vector<std::string> methods;    ///< the check applies to these methods only (empty: all)
-  std::vector<std::string> tasks;      ///< task_error (sum of norms), task_error_rate_sign_changes (one)
-  std::string statistic;               ///< task_error: final | mean | max; contact_wrench_match: rms | max
-  std::string source;                  ///< torque_limits: applied | commanded | both; joint_*: measured |
-                                       ///< commanded; contact_*: computed | sensed
-  std::vector<std::string> joints;     ///< joint names (resolved by the case loader)
-  std::vector<double> joint_limits;    ///< torque_limits: effort limit of each joint of `joints`
-  std::string contact;                 ///< contact_* checks: a controller contact
-  double normal[3] = {0.0, 0.0, 1.0};  ///< contact normal in the contact frame
-  double friction = 0.0;               ///< contact_friction: mu
-  std::vector<std::pair<double, double>> polygon;  ///< contact_cop: convex support polygon (x, y) in
-                                                   ///< the contact frame, counter-clockwise
-  double min_normal_N = 0.0;           ///< contact_friction, contact_cop: rows below are skipped
-  std::string component;               ///< contact_wrench_match: force | torque
-  double dead_band = 0.0;              ///< *_sign_changes: |rate| <= dead_band carries no sign
-  double cutoff_hz = 0.0;              ///< joint_velocity_hf_energy
-  double percentile = 100.0;           ///< tick_time
-  std::string level;                   ///< augmented_fraction
-  std::string timer;                   ///< tick_time: model | tasks | hessian | solver | tick
-  std::vector<std::string> allowed;    ///< controller_status: statuses that count as fine
-  double kp = 0.0, kv = 0.0;           ///< task_error_closed_form: the PD gains (1/s^2, 1/s)
+  std::any params;                     ///< the type's params struct (empty for a type without)
+
+  /// The params struct of the check's type; aborts when the spec holds another (an internal
+  /// error: the type's parser or the code that built the spec set the wrong one).
+  template <class P>
+  const P& paramsAs() const {
+    const P* p = std::any_cast<P>(&params);
+    if (!p) paramsMismatch();
+    return *p;
+  }
+  template <class P>
+  P& paramsAs() {
+    P* p = std::any_cast<P>(&params);
+    if (!p) paramsMismatch();
+    return *p;
+  }
+
+ private:
+  [[noreturn]] void paramsMismatch() const;
 };
 
 /// Comparison of two runs of the same case with different methods (e.g. exp1: the final sum of
@@ -88,6 +87,8 @@ struct CheckResult {
   /// Counts towards the verdict (all_checks_passed, exit code). False for a machine-dependent
   /// check unless wall-clock checks were asked to decide (applyWallClockPolicy).
   bool decides = true;
+  /// The check bounds its value from below (passes when value >= limit), e.g. frame_height.
+  bool bounds_below = false;
 };
 
 /// Sets `decides` of a machine-dependent result: it decides only when `wall_clock_checks`.
@@ -106,13 +107,19 @@ class Check {
 
 /// How far a result lies on the passing side of its limit, in the value's unit: limit - value
 /// for the checks that bound a value from above (most, and method comparisons), value - limit
-/// for those that bound it from below (frame_height, contact_unilateral). Negative: failed by
-/// that much; NaN when there is no value.
+/// for those that bound it from below (CheckResult::bounds_below: frame_height,
+/// contact_unilateral). Negative: failed by that much; NaN when there is no value.
 double margin(const CheckResult& result);
 
-/// The known check types.
+/// The built-in check types (builtinChecks(), check_registry.hpp), in registration order.
 const std::vector<std::string>& checkTypes();
+/// The evaluator of a check of a built-in type; InputError naming spec.where for an unknown type.
 std::unique_ptr<Check> makeCheck(const CheckSpec& spec);
+/// Frames whose channels (frame.<F>.x/y/z) the check reads: the runner records them.
+std::vector<std::string> framesRead(const CheckSpec& spec);
+/// True for a check whose value is a wall-clock measurement (tick_time): it decides only when
+/// asked (applyWallClockPolicy). False for an unknown type.
+bool machineDependent(const CheckSpec& spec);
 /// True when the check applies to runs of `method` (an empty method: a trace without one).
 bool appliesTo(const CheckSpec& spec, const std::string& method);
 

@@ -406,7 +406,7 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
           }
           if (!found) cn.fail("the base case has no check '" + name + "' (checks: " + cases::joinNames(names) + ")");
           for (const auto& ck : s.base.checks) {
-            if (ck.name == name && ck.type == "tick_time") {
+            if (ck.name == name && checks::machineDependent(ck)) {
               cn.fail("check '" + name + "' is a wall-clock check (machine-dependent): a sweep's verdicts may not depend on the machine");
             }
           }
@@ -422,7 +422,7 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
     }
     if (!pm.has("checks")) {
       for (const auto& ck : s.base.checks) {
-        if (ck.type != "tick_time") s.checks.push_back(ck.name);  // wall-clock checks are not verdicts here
+        if (!checks::machineDependent(ck)) s.checks.push_back(ck.name);  // wall-clock checks are not verdicts here
       }
     }
     if (auto cs = pm.optional("comparisons")) {
@@ -455,7 +455,7 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
     pm.finish();
   } else {
     for (const auto& ck : s.base.checks) {
-      if (ck.type != "tick_time") s.checks.push_back(ck.name);
+      if (!checks::machineDependent(ck)) s.checks.push_back(ck.name);
     }
   }
   if (auto sh = top.optional("shrink")) {

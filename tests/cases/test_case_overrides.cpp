@@ -50,17 +50,17 @@ TEST(CaseOverrides, ParseSplitsAtTheFirstEqualsSign) {
 
 TEST(CaseOverrides, ElementsByNameOrIndexInAnySpelling) {
   const CaseSpec base = loadCase(src("cases/exp1.yaml"));
-  EXPECT_DOUBLE_EQ(task(base, "right_hand").position.gains.kp, 0.3);
+  EXPECT_DOUBLE_EQ(task(base, "right_hand").paramsAs<tasks::PositionParams>().gains.kp, 0.3);
   for (const char* path : {"controller.tasks.right_hand.gains.kp", "controller.tasks[right_hand].gains.kp",
                            "controller.tasks[9].gains.kp", "controller.tasks.9.gains.kp"}) {
     const CaseSpec c = withSets("cases/exp1.yaml", {std::string(path) + "=0.7"});
-    EXPECT_DOUBLE_EQ(task(c, "right_hand").position.gains.kp, 0.7) << path;
-    EXPECT_DOUBLE_EQ(task(c, "left_hand").position.gains.kp, 0.3) << path;
+    EXPECT_DOUBLE_EQ(task(c, "right_hand").paramsAs<tasks::PositionParams>().gains.kp, 0.7) << path;
+    EXPECT_DOUBLE_EQ(task(c, "left_hand").paramsAs<tasks::PositionParams>().gains.kp, 0.3) << path;
   }
   // One element of a vector, a whole vector, a check's limit, a gain group by its pattern.
   const CaseSpec c = withSets("cases/exp1.yaml", {"controller.tasks[left_hand].target[1]=0.6", "events[0].value=[0.5, -1.5, 1.8]",
                                                   "checks[upright].min_m=0.4", "sim.servo.gains[*ARM_JOINT7].kp=150"});
-  EXPECT_DOUBLE_EQ((*task(c, "left_hand").position.target)[1], 0.6);
+  EXPECT_DOUBLE_EQ((*task(c, "left_hand").paramsAs<tasks::PositionParams>().target)[1], 0.6);
   EXPECT_DOUBLE_EQ(c.events[0].value[1], -1.5);
   EXPECT_DOUBLE_EQ(c.checks[2].limit, 0.4);
   EXPECT_DOUBLE_EQ(c.sim.servo.kp[23], 150.0);  // RARM_JOINT7

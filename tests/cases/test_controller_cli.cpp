@@ -4,6 +4,7 @@
 // traces; SIGINT stops a controller run keeping its trace and writing a summary with the
 // controller's statistics; method_params errors name the file and key.
 #include "harness/cases/case_file.hpp"
+#include "harness/checks/task_checks.hpp"
 #include "case_test_utils.hpp"
 #include "lexdyn/common/error.hpp"
 
@@ -247,14 +248,15 @@ TEST(ControllerCli, ClosedFormAndOvershootChecksInTheCaseFile) {
   };
   // The gains default to the task's: kp 4, kv 2 sqrt(kp) = 4; kv given, or kp alone (kv critical).
   CaseSpec c = load("{name: cf, type: task_error_closed_form, task: position, limit_rel: 0.01}");
-  EXPECT_EQ(c.checks.back().kp, 4.0);
-  EXPECT_EQ(c.checks.back().kv, 4.0);
-  EXPECT_EQ(c.checks.back().tasks, std::vector<std::string>{"position"});
+  auto closedForm = [&]() -> const checks::TaskClosedFormParams& { return c.checks.back().paramsAs<checks::TaskClosedFormParams>(); };
+  EXPECT_EQ(closedForm().kp, 4.0);
+  EXPECT_EQ(closedForm().kv, 4.0);
+  EXPECT_EQ(closedForm().task, "position");
   c = load("{name: cf, type: task_error_closed_form, task: position, kp: 0.5, kv: 1.0, limit_rel: 0.01}");
-  EXPECT_EQ(c.checks.back().kp, 0.5);
-  EXPECT_EQ(c.checks.back().kv, 1.0);
+  EXPECT_EQ(closedForm().kp, 0.5);
+  EXPECT_EQ(closedForm().kv, 1.0);
   c = load("{name: cf, type: task_error_closed_form, task: position, kp: 9, limit_rel: 0.01}");
-  EXPECT_EQ(c.checks.back().kv, 6.0);
+  EXPECT_EQ(closedForm().kv, 6.0);
   c = load("{name: os, type: task_overshoot, task: position, limit_rel: 0.001, from_s: 0.05}");
   EXPECT_EQ(c.checks.back().limit, 0.001);
   EXPECT_EQ(c.checks.back().from_s, 0.05);

@@ -1,7 +1,12 @@
-// The checks on the lexdyn controller's channels (harness/checks/controller_checks.cpp) on
+// The checks on the lexdyn controller's channels (harness/checks/*_checks.cpp) on
 // synthetic traces whose answers are computed by hand: every check type passes and fails where
 // it should, and its detail names the time (and the joint, contact or status) of its value.
 #include "harness/checks/checks.hpp"
+#include "harness/checks/contact_checks.hpp"
+#include "harness/checks/health_checks.hpp"
+#include "harness/checks/joint_checks.hpp"
+#include "harness/checks/sim_checks.hpp"
+#include "harness/checks/task_checks.hpp"
 #include "harness/checks/trace.hpp"
 #include "lexdyn/common/error.hpp"
 
@@ -69,8 +74,9 @@ TraceTable twoTasks() {
 TEST(TaskErrorCheck, FinalMaxAndMeanOfTheSumOfNorms) {
   const TraceTable t = twoTasks();
   CheckSpec s = spec("task_error", 0.1 + 1e-12);
-  s.tasks = {"a", "b"};
-  s.statistic = "final";
+  auto& sp = s.params.emplace<TaskErrorParams>();
+  sp.tasks = {"a", "b"};
+  sp.statistic = "final";
   CheckResult r = runOne(s, t);
   EXPECT_NEAR(r.value, 0.1, 1e-15);  // a(2) = 0, b = 0.1
   EXPECT_TRUE(r.passed);
@@ -78,7 +84,7 @@ TEST(TaskErrorCheck, FinalMaxAndMeanOfTheSumOfNorms) {
   s.limit = 0.09;
   EXPECT_FALSE(runOne(s, t).passed);
 
-  s.statistic = "max";
+  sp.statistic = "max";
   s.limit = 1.5;
   r = runOne(s, t);
   EXPECT_NEAR(r.value, 1.0 - 0.15 + 0.5, 1e-15);  // the spike at 0.3 s beats t = 0 (1.1)
@@ -89,7 +95,7 @@ TEST(TaskErrorCheck, FinalMaxAndMeanOfTheSumOfNorms) {
 
   // Time average (trapezoidal over the rows): a averages 0.5 over [0, 2]; b is 0.1 plus a
   // triangle of height 0.4 and base 0.02 s at the spike: 0.1 + 0.4 * 0.01 / 2.
-  s.statistic = "mean";
+  sp.statistic = "mean";
   s.limit = 1.0;
   r = runOne(s, t);
   EXPECT_NEAR(r.value, 0.5 + 0.1 + 0.004 / 2.0, 1e-12);
@@ -102,18 +108,19 @@ TEST(TaskErrorCheck, FinalMaxAndMeanOfTheSumOfNorms) {
 TEST(TaskErrorCheck, WindowFromAndTo) {
   const TraceTable t = twoTasks();
   CheckSpec s = spec("task_error", 1.0);
-  s.tasks = {"a", "b"};
-  s.statistic = "max";
+  auto& sp = s.params.emplace<TaskErrorParams>();
+  sp.tasks = {"a", "b"};
+  sp.statistic = "max";
   s.from_s = 0.5;  // after the spike: the largest is at 0.5 s, 0.75 + 0.1
   CheckResult r = runOne(s, t);
   EXPECT_NEAR(r.value, 0.85, 1e-15);
   EXPECT_TRUE(contains(r.detail, "largest at t = 0.5 s")) << r.detail;
-  s.statistic = "final";
+  sp.statistic = "final";
   s.to_s = 1.0;  // the last row of the window
   r = runOne(s, t);
   EXPECT_NEAR(r.value, 0.6, 1e-15);
   EXPECT_TRUE(contains(r.detail, "at t = 1 s")) << r.detail;
-  s.statistic = "mean";  // a over [0.5, 1]: 0.625
+  sp.statistic = "mean";  // a over [0.5, 1]: 0.625
   EXPECT_NEAR(runOne(s, t).value, 0.725, 1e-12);
   // A window without rows fails with no value.
   s.from_s = 5.0;
@@ -127,8 +134,9 @@ TEST(TaskErrorCheck, WindowFromAndTo) {
 TEST(TaskErrorCheck, RangeOfTheSumInTheWindow) {
   const TraceTable t = twoTasks();
   CheckSpec s = spec("task_error", 0.26);
-  s.tasks = {"a", "b"};
-  s.statistic = "range";
+  auto& sp = s.params.emplace<TaskErrorParams>();
+  sp.tasks = {"a", "b"};
+  sp.statistic = "range";
   s.from_s = 1.5;  // a + b goes from 0.35 to 0.1 over [1.5, 2]
   CheckResult r = runOne(s, t);
   EXPECT_NEAR(r.value, 0.25, 1e-12);
@@ -145,10 +153,11 @@ TEST(TaskErrorCheck, NonFiniteErrorsFailAndMissingChannelsAreInputErrors) {
   TraceTable t = twoTasks();
   t.rows[100][1] = std::numeric_limits<double>::quiet_NaN();
   CheckSpec s = spec("task_error", 100.0);
-  s.tasks = {"a"};
-  s.statistic = "max";
+  auto& sp = s.params.emplace<TaskErrorParams>();
+  sp.tasks = {"a"};
+  sp.statistic = "max";
   EXPECT_FALSE(runOne(s, t).passed);
-  s.tasks = {"c"};
+  sp.tasks = {"c"};
   try {
     runOne(s, t);
     FAIL() << "expected an InputError";
@@ -166,7 +175,8 @@ TEST(FrameHeightCheck, LowestHeightInTheWindowAndItsTime) {
   const TraceTable t =
       makeTrace({{frameChannel("WAIST", 'z'), [](double t) { return std::abs(t - 0.2) < 1e-9 ? 0.4 : 0.8; }}}, 0.01, 101);
   CheckSpec s = spec("frame_height", 0.5);
-  s.frame = "WAIST";
+  auto& sp = s.params.emplace<FrameParams>();
+  sp.frame = "WAIST";
   CheckResult r = runOne(s, t);
   EXPECT_EQ(r.value, 0.4);
   EXPECT_FALSE(r.passed);
@@ -193,9 +203,10 @@ TraceTable torques(double cmd_j2_at_05, double applied_j1_at_07) {
 
 CheckSpec torqueSpec(const std::string& source, double limit_fraction) {
   CheckSpec s = spec("torque_limits", limit_fraction);
-  s.source = source;
-  s.joints = {"J1", "J2"};
-  s.joint_limits = {10.0, 20.0};
+  auto& sp = s.params.emplace<TorqueLimitsParams>();
+  sp.source = source;
+  sp.joints = {"J1", "J2"};
+  sp.joint_limits = {10.0, 20.0};
   return s;
 }
 
@@ -278,10 +289,16 @@ TraceTable contactTrace(const std::function<WrenchRow(double)>& computed, const 
 
 bool at(double t, double s) { return std::abs(t - s) < 1e-9; }
 
+/// A contact check of contact C (the params struct of its type).
 CheckSpec contactSpec(const std::string& type, double limit, const std::string& source = "computed") {
   CheckSpec s = spec(type, limit);
-  s.contact = "C";
-  s.source = source;
+  ContactParams c;
+  c.contact = "C";
+  c.source = source;
+  if (type == "contact_friction") s.params = ContactFrictionParams{c, 0.0, 1.0};
+  else if (type == "contact_cop") s.params = ContactCopParams{c, {}, 1.0};
+  else if (type == "contact_wrench_match") s.params = WrenchMatchParams{c.contact};
+  else s.params = c;
   return s;
 }
 
@@ -322,8 +339,9 @@ TEST(ContactUnilateralCheck, NormalDirectionAndNoActiveRows) {
   const TraceTable t = contactTrace([](double) { return WrenchRow{{-20.0, 0.0, 7.0}, {0, 0, 0}}; },
                                     [](double) { return WrenchRow{{0, 0, 0}, {0, 0, 0}}; });
   CheckSpec s = contactSpec("contact_unilateral", 15.0);
-  s.normal[0] = -1.0;
-  s.normal[2] = 0.0;
+  auto& sp = s.paramsAs<ContactParams>();
+  sp.normal[0] = -1.0;
+  sp.normal[2] = 0.0;
   CheckResult r = runOne(s, t);
   EXPECT_EQ(r.value, 20.0);
   EXPECT_TRUE(r.passed);
@@ -348,8 +366,9 @@ TEST(ContactFrictionCheck, RatioToTheConeWithRoundOffOnItsSurface) {
       },
       [=](double t) { return WrenchRow{{at(t, 0.5) ? 1.2 * mu * 80.0 : 0.0, 0.0, 80.0}, {0, 0, 0}}; });
   CheckSpec s = contactSpec("contact_friction", 1.0);
-  s.friction = mu;
-  s.min_normal_N = 1.0;
+  auto& sp = s.paramsAs<ContactFrictionParams>();
+  sp.friction = mu;
+  sp.min_normal_N = 1.0;
   CheckResult r = runOne(s, t);
   EXPECT_NEAR(r.value, 1.0, 1e-15);
   EXPECT_TRUE(r.passed) << r.detail;
@@ -359,13 +378,13 @@ TEST(ContactFrictionCheck, RatioToTheConeWithRoundOffOnItsSurface) {
   EXPECT_FALSE(runOne(s, t).passed);
   // With no minimum normal force the 0.5 N row counts: ratio 5 / (0.5 * 0.5) = 20.
   s.limit = 1.0;
-  s.min_normal_N = 0.0;
+  sp.min_normal_N = 0.0;
   r = runOne(s, t);
   EXPECT_NEAR(r.value, 20.0, 1e-12);
   EXPECT_FALSE(r.passed);
   EXPECT_TRUE(contains(r.detail, "at t = 0.6 s")) << r.detail;
   // Sensed: 1.2 at t = 0.5.
-  s.source = "sensed";
+  sp.source = "sensed";
   r = runOne(s, t);
   EXPECT_NEAR(r.value, 1.2, 1e-12);
   EXPECT_FALSE(r.passed);
@@ -389,8 +408,9 @@ TEST(ContactCopCheck, SignedDistanceToTheSupportPolygon) {
         return WrenchRow{{0, 0, fz}, {y * fz, 0.0, 0.0}};
       });
   CheckSpec s = contactSpec("contact_cop", 0.0);
-  s.polygon = {{-0.1, -0.05}, {0.1, -0.05}, {0.1, 0.05}, {-0.1, 0.05}};
-  s.min_normal_N = 10.0;
+  auto& sp = s.paramsAs<ContactCopParams>();
+  sp.polygon = {{-0.1, -0.05}, {0.1, -0.05}, {0.1, 0.05}, {-0.1, 0.05}};
+  sp.min_normal_N = 10.0;
   CheckResult r = runOne(s, t);
   EXPECT_NEAR(r.value, 0.0, 1e-15);  // on the edge
   EXPECT_TRUE(r.passed) << r.detail;  // limit 0: the edge is allowed, round-off included
@@ -406,7 +426,7 @@ TEST(ContactCopCheck, SignedDistanceToTheSupportPolygon) {
   // Sensed: 1 cm outside.
   s.to_s = std::numeric_limits<double>::infinity();
   s.limit = 0.0;
-  s.source = "sensed";
+  sp.source = "sensed";
   r = runOne(s, t);
   EXPECT_NEAR(r.value, 0.01, 1e-15);
   EXPECT_FALSE(r.passed);
@@ -426,8 +446,9 @@ TEST(ContactWrenchMatchCheck, RmsAndMaxOfTheDifferenceWhileActive) {
       },
       [](double) { return WrenchRow{{0.0, 0.0, 50.0}, {0.0, 0, 0}}; });
   CheckSpec s = contactSpec("contact_wrench_match", 5.0);
-  s.component = "force";
-  s.statistic = "max";
+  auto& sp = s.paramsAs<WrenchMatchParams>();
+  sp.component = "force";
+  sp.statistic = "max";
   CheckResult r = runOne(s, t);
   EXPECT_NEAR(r.value, 5.0, 1e-15);
   EXPECT_TRUE(r.passed);  // <= limit
@@ -435,14 +456,14 @@ TEST(ContactWrenchMatchCheck, RmsAndMaxOfTheDifferenceWhileActive) {
   EXPECT_TRUE(contains(r.detail, "largest 5 at t = 0.5 s")) << r.detail;
   s.limit = 4.9;
   EXPECT_FALSE(runOne(s, t).passed);
-  s.statistic = "rms";  // sqrt((70 * 1 + 25) / 71)
+  sp.statistic = "rms";  // sqrt((70 * 1 + 25) / 71)
   s.limit = 1.5;
   r = runOne(s, t);
   EXPECT_NEAR(r.value, std::sqrt(95.0 / 71.0), 1e-14);
   EXPECT_TRUE(r.passed);
   s.limit = 1.1;
   EXPECT_FALSE(runOne(s, t).passed);
-  s.component = "torque";
+  sp.component = "torque";
   s.limit = 0.21;
   r = runOne(s, t);
   EXPECT_NEAR(r.value, 0.2, 1e-15);
@@ -467,8 +488,9 @@ TEST(JointAccelerationSignChangesCheck, CountsPerSecondOfTheWorstJoint) {
                                   {"cmd.qd.J3", constant(0.0)}},
                                  0.005, 401);
   CheckSpec s = spec("joint_acceleration_sign_changes", 10.0);
-  s.source = "measured";
-  s.joints = {"J1", "J2", "J3"};
+  auto& sp = s.params.emplace<JointSignChangesParams>();
+  sp.source = "measured";
+  sp.joints = {"J1", "J2", "J3"};
   CheckResult r = runOne(s, t);
   EXPECT_NEAR(r.value, 20.0 / 2.0, 1e-12);
   EXPECT_TRUE(r.passed);  // 10 <= 10
@@ -476,7 +498,7 @@ TEST(JointAccelerationSignChangesCheck, CountsPerSecondOfTheWorstJoint) {
   s.limit = 9.0;
   EXPECT_FALSE(runOne(s, t).passed);
   // A dead band above J2's amplitude leaves J1's 8 changes.
-  s.dead_band = 0.5;
+  sp.dead_band = 0.5;
   r = runOne(s, t);
   EXPECT_NEAR(r.value, 4.0, 1e-12);
   EXPECT_TRUE(contains(r.detail, "J1: 8 sign changes")) << r.detail;
@@ -486,7 +508,7 @@ TEST(JointAccelerationSignChangesCheck, CountsPerSecondOfTheWorstJoint) {
   EXPECT_NEAR(runOne(s, t).value, 4.0, 1e-12);
   // Commanded velocities: none.
   s.from_s = 0.0;
-  s.source = "commanded";
+  sp.source = "commanded";
   r = runOne(s, t);
   EXPECT_EQ(r.value, 0.0);
   EXPECT_TRUE(contains(r.detail, "commanded acceleration")) << r.detail;
@@ -501,9 +523,10 @@ TEST(JointVelocityHfEnergyCheck, EnergyAboveTheCutoff) {
                                   {"qd.J3", constant(3.0)}},
                                  0.005, 801);
   CheckSpec s = spec("joint_velocity_hf_energy", 0.03);
-  s.source = "measured";
-  s.joints = {"J1", "J2", "J3"};
-  s.cutoff_hz = 5.0;
+  auto& sp = s.params.emplace<JointHfEnergyParams>();
+  sp.source = "measured";
+  sp.joints = {"J1", "J2", "J3"};
+  sp.cutoff_hz = 5.0;
   s.from_s = 1.0;  // after the filter's transient
   CheckResult r = runOne(s, t);
   // Butterworth gain at 40 Hz with fc = 5 Hz (bilinear, prewarped): |H|^2 = r^4 / (1 + r^4),
@@ -516,16 +539,16 @@ TEST(JointVelocityHfEnergyCheck, EnergyAboveTheCutoff) {
   s.limit = 0.015;
   EXPECT_FALSE(runOne(s, t).passed);
   // Without J1: the slow sine and the constant stay below 1e-4.
-  s.joints = {"J2", "J3"};
+  sp.joints = {"J2", "J3"};
   s.limit = 1e-4;
   r = runOne(s, t);
   EXPECT_LT(r.value, 1e-4);
   EXPECT_GT(r.value, 1e-6);
   EXPECT_TRUE(r.passed);
-  s.joints = {"J3"};
+  sp.joints = {"J3"};
   EXPECT_EQ(runOne(s, t).value, 0.0);
   // A cut-off at or above the trace's Nyquist frequency (100 Hz) cannot be evaluated: failed, no value.
-  s.cutoff_hz = 100.0;
+  sp.cutoff_hz = 100.0;
   r = runOne(s, t);
   EXPECT_FALSE(r.passed);
   EXPECT_TRUE(std::isnan(r.value));
@@ -537,9 +560,10 @@ TEST(JointVelocityHfEnergyCheck, ARowAtAnotherSpacingIsLeftOut) {
   TraceTable t = makeTrace({{"qd.J1", constant(1.0)}}, 0.005, 201);
   t.rows.push_back({1.0025, 50.0});  // would be a huge step for the filter
   CheckSpec s = spec("joint_velocity_hf_energy", 1e-12);
-  s.source = "measured";
-  s.joints = {"J1"};
-  s.cutoff_hz = 5.0;
+  auto& sp = s.params.emplace<JointHfEnergyParams>();
+  sp.source = "measured";
+  sp.joints = {"J1"};
+  sp.cutoff_hz = 5.0;
   const CheckResult r = runOne(s, t);
   EXPECT_EQ(r.value, 0.0);
   EXPECT_TRUE(r.passed);
@@ -552,16 +576,17 @@ TEST(TaskErrorRateSignChangesCheck, OscillatingErrorNorm) {
   const TraceTable t = makeTrace(
       {{taskChannel("hand", "error"), [](double t) { return 1.0 + 0.1 * std::sin(2 * M_PI * 1.5 * t + 0.2); }}}, 0.005, 401);
   CheckSpec s = spec("task_error_rate_sign_changes", 3.0);
-  s.tasks = {"hand"};
+  auto& sp = s.params.emplace<TaskErrorRateParams>();
+  sp.task = "hand";
   CheckResult r = runOne(s, t);
   EXPECT_NEAR(r.value, 3.0, 1e-12);
   EXPECT_TRUE(r.passed);
   EXPECT_TRUE(contains(r.detail, "6 sign changes of d/dt |e| of hand over 2 s")) << r.detail;
   s.limit = 2.9;
   EXPECT_FALSE(runOne(s, t).passed);
-  s.dead_band = 1.0;  // above the rate's amplitude: no sign at all
+  sp.dead_band = 1.0;  // above the rate's amplitude: no sign at all
   EXPECT_EQ(runOne(s, t).value, 0.0);
-  s.tasks = {"hand", "foot"};
+  sp.task = "foot";  // not recorded
   EXPECT_THROW(runOne(s, t), InputError);
 }
 
@@ -581,15 +606,16 @@ TEST(TaskErrorClosedFormCheck, MatchesTheCriticallyDampedResponseOfEq49) {
                                   {taskChannel("r", "error"), [](double t) { return critical(t) + (at(t, 3.0) ? 0.04 : 0.0); }}},
                                  0.01, 1001);
   CheckSpec s = spec("task_error_closed_form", 1e-12);
-  s.tasks = {"p"};
-  s.kp = 1.0;
-  s.kv = 2.0;
+  auto& sp = s.params.emplace<TaskClosedFormParams>();
+  sp.task = "p";
+  sp.kp = 1.0;
+  sp.kv = 2.0;
   CheckResult r = runOne(s, t);
   EXPECT_LT(r.value, 1e-14);
   EXPECT_TRUE(r.passed) << r.detail;
   EXPECT_TRUE(contains(r.detail, "e0 2 at t = 0 s; kp 1, kv 2, damping ratio 1")) << r.detail;
   // A bump of 0.04 at t = 3 s: 2 % of the initial error, reported at its time.
-  s.tasks = {"r"};
+  sp.task = "r";
   s.limit = 0.019;
   r = runOne(s, t);
   EXPECT_NEAR(r.value, 0.02, 1e-12);
@@ -597,37 +623,37 @@ TEST(TaskErrorClosedFormCheck, MatchesTheCriticallyDampedResponseOfEq49) {
   EXPECT_TRUE(contains(r.detail, "largest at t = 3 s")) << r.detail;
   // The under-damped response (|x| after its zero crossing) is far from eq. 49 but is the
   // closed form with its own gains (eq. 51 for kp 1, kv 2, mu 1).
-  s.tasks = {"q"};
+  sp.task = "q";
   s.limit = 0.01;
   r = runOne(s, t);
   EXPECT_GT(r.value, 0.05);
   EXPECT_FALSE(r.passed);
-  s.kp = 0.5;
-  s.kv = 1.0;
+  sp.kp = 0.5;
+  sp.kv = 1.0;
   r = runOne(s, t);
   EXPECT_LT(r.value, 1e-13);
   EXPECT_TRUE(r.passed);
   EXPECT_TRUE(contains(r.detail, "damping ratio 0.707107")) << r.detail;
   // Over-damped gains (kv 3): the response is slower than eq. 49.
-  s.tasks = {"p"};
-  s.kp = 1.0;
-  s.kv = 3.0;
+  sp.task = "p";
+  sp.kp = 1.0;
+  sp.kv = 3.0;
   EXPECT_GT(runOne(s, t).value, 0.05);
   // Eq. 49 with w = sqrt(kp) = 3 (kv = 6): (1 + 3 t) e^{-3 t}, and over-damped kp 1, kv 2.5:
   // roots -0.5 and -2, x = (4 e^{-t/2} - e^{-2 t}) / 3.
   const TraceTable u = makeTrace({{taskChannel("w3", "error"), [](double t) { return (1.0 + 3.0 * t) * std::exp(-3.0 * t); }},
                                   {taskChannel("over", "error"), [](double t) { return (4.0 * std::exp(-0.5 * t) - std::exp(-2.0 * t)) / 3.0; }}},
                                  0.01, 501);
-  s.tasks = {"w3"};
-  s.kp = 9.0;
-  s.kv = 6.0;
+  sp.task = "w3";
+  sp.kp = 9.0;
+  sp.kv = 6.0;
   s.limit = 1e-12;
   EXPECT_TRUE(runOne(s, u).passed) << runOne(s, u).detail;
-  s.kv = 5.0;
+  sp.kv = 5.0;
   EXPECT_FALSE(runOne(s, u).passed);
-  s.tasks = {"over"};
-  s.kp = 1.0;
-  s.kv = 2.5;
+  sp.task = "over";
+  sp.kp = 1.0;
+  sp.kv = 2.5;
   EXPECT_TRUE(runOne(s, u).passed) << runOne(s, u).detail;
   // Under-damped kp 1, kv 1 against an independent solution: RK4 on x'' = -kv x' - kp x
   // (step 1e-4 s, error ~1e-16), |x| sampled every 0.01 s.
@@ -646,9 +672,9 @@ TEST(TaskErrorClosedFormCheck, MatchesTheCriticallyDampedResponseOfEq49) {
   }
   const TraceTable rk = makeTrace({{taskChannel("u", "error"), [&](double t) { return xs[static_cast<size_t>(std::lround(t * 100.0))]; }}},
                                   0.01, 1001);
-  s.tasks = {"u"};
-  s.kp = 1.0;
-  s.kv = 1.0;
+  sp.task = "u";
+  sp.kp = 1.0;
+  sp.kv = 1.0;
   s.limit = 1e-10;
   EXPECT_TRUE(runOne(s, rk).passed) << runOne(s, rk).detail;
 }
@@ -658,9 +684,10 @@ TEST(TaskErrorClosedFormCheck, TheWindowStartsTheResponse) {
   const TraceTable t = makeTrace({{taskChannel("p", "error"), [](double t) { return t < 1.0 - 1e-9 ? 2.0 : critical(t - 1.0); }}},
                                  0.01, 601);
   CheckSpec s = spec("task_error_closed_form", 1e-9);
-  s.tasks = {"p"};
-  s.kp = 1.0;
-  s.kv = 2.0;
+  auto& sp = s.params.emplace<TaskClosedFormParams>();
+  sp.task = "p";
+  sp.kp = 1.0;
+  sp.kv = 2.0;
   EXPECT_FALSE(runOne(s, t).passed);  // from t = 0 the held error is not the response
   s.from_s = 1.0;
   CheckResult r = runOne(s, t);
@@ -680,14 +707,15 @@ TEST(TaskOvershootCheck, LargestRiseAboveTheRunningMinimum) {
                                   {taskChannel("over", "error"), [](double t) { return std::abs(underDamped(t)); }}},
                                  0.01, 2001);
   CheckSpec s = spec("task_overshoot", 1e-3);
-  s.tasks = {"mono"};
+  auto& sp = s.params.emplace<TaskOvershootParams>();
+  sp.task = "mono";
   CheckResult r = runOne(s, t);
   EXPECT_EQ(r.value, 0.0);
   EXPECT_TRUE(r.passed);
   EXPECT_TRUE(contains(r.detail, "the error never rises")) << r.detail;
   // Under-damped, damping ratio 1/sqrt(2): x = 2 e^{-t/2} (cos + sin)(t/2) crosses 0 at
   // t = 3 pi / 2 and reaches its most negative value at t = 2 pi: -2 e^{-pi} (4.3 % of x0).
-  s.tasks = {"over"};
+  sp.task = "over";
   r = runOne(s, t);
   const double expected = std::exp(-M_PI);
   EXPECT_NEAR(r.value, expected, 2e-4);  // the sampled minimum is near, not at, the zero crossing
@@ -720,7 +748,8 @@ TEST(ControllerStatusCheck, CountsRowsWithStatusesNotAllowed) {
                                  0.1, 11);
   ASSERT_EQ(controllerStatusNames()[2], "solver_iteration_limit");
   CheckSpec s = spec("controller_status", 0.0);
-  s.allowed = {"ok", "solver_stopped_early"};
+  auto& sp = s.params.emplace<ControllerStatusParams>();
+  sp.allowed = {"ok", "solver_stopped_early"};
   CheckResult r = runOne(s, t);
   EXPECT_EQ(r.value, 3.0);
   EXPECT_FALSE(r.passed);
@@ -730,11 +759,11 @@ TEST(ControllerStatusCheck, CountsRowsWithStatusesNotAllowed) {
   s.limit = 3.0;  // limit_count
   EXPECT_TRUE(runOne(s, t).passed);
   s.limit = 0.0;
-  s.allowed = {"ok", "solver_stopped_early", "solver_iteration_limit", "infeasible"};
+  sp.allowed = {"ok", "solver_stopped_early", "solver_iteration_limit", "infeasible"};
   r = runOne(s, t);
   EXPECT_EQ(r.value, 0.0);
   EXPECT_TRUE(r.passed);
-  s.allowed = {"ok"};
+  sp.allowed = {"ok"};
   s.to_s = 0.2;
   r = runOne(s, t);
   EXPECT_EQ(r.value, 1.0);
@@ -743,11 +772,11 @@ TEST(ControllerStatusCheck, CountsRowsWithStatusesNotAllowed) {
   TraceTable bad = t;
   bad.rows[5][1] = 17.0;
   s.to_s = std::numeric_limits<double>::infinity();
-  s.allowed = {"ok", "solver_stopped_early", "solver_iteration_limit", "infeasible", "non_finite"};
+  sp.allowed = {"ok", "solver_stopped_early", "solver_iteration_limit", "infeasible", "non_finite"};
   r = runOne(s, bad);
   EXPECT_EQ(r.value, 1.0);
   EXPECT_TRUE(contains(r.detail, "invalid(17)")) << r.detail;
-  s.allowed = {"fine"};
+  sp.allowed = {"fine"};
   EXPECT_THROW(runOne(s, t), InputError);
 }
 
@@ -787,7 +816,8 @@ TEST(AugmentedFractionCheck, FractionOfRowsAndTheMethodsFilter) {
   const TraceTable t = makeTrace({{levelChannel("hands", "augmented"), [](double t) { return t > 0.55 ? 1.0 : 0.0; }}}, 0.1,
                                  11, {{kMethodMetadata, "bfgs"}});
   CheckSpec s = spec("augmented_fraction", 0.5);
-  s.level = "hands";
+  auto& sp = s.params.emplace<AugmentedFractionParams>();
+  sp.level = "hands";
   CheckResult r = runOne(s, t);
   EXPECT_NEAR(r.value, 5.0 / 11.0, 1e-15);
   EXPECT_TRUE(r.passed);
@@ -821,8 +851,9 @@ TEST(TickTimeCheck, NearestRankPercentiles) {
                                    }}},
                                  0.01, 100);
   CheckSpec s = spec("tick_time", 99.0);
-  s.timer = "tick";
-  s.percentile = 99.0;
+  auto& sp = s.params.emplace<TickTimeParams>();
+  sp.timer = "tick";
+  sp.percentile = 99.0;
   CheckResult r = runOne(s, t);
   EXPECT_EQ(r.value, 99.0);
   EXPECT_TRUE(r.passed);
@@ -835,13 +866,13 @@ TEST(TickTimeCheck, NearestRankPercentiles) {
   EXPECT_TRUE(allPassed(runChecks({s}, t)));
   EXPECT_FALSE(allPassed(runChecks({s}, t, true)));
   EXPECT_TRUE(runChecks({s}, t, true)[0].decides);
-  s.percentile = 50.0;
+  sp.percentile = 50.0;
   EXPECT_EQ(runOne(s, t).value, 50.0);
-  s.percentile = 100.0;
+  sp.percentile = 100.0;
   EXPECT_EQ(runOne(s, t).value, 100.0);
-  s.percentile = 0.5;  // rank ceil(0.5) = 1
+  sp.percentile = 0.5;  // rank ceil(0.5) = 1
   EXPECT_EQ(runOne(s, t).value, 1.0);
-  s.timer = "solver";
+  sp.timer = "solver";
   EXPECT_THROW(runOne(s, t), InputError);
 }
 

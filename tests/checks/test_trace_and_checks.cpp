@@ -1,6 +1,11 @@
 // Trace files (round trip, partial file on interruption) and the checks on synthetic traces
 // whose answers are known.
 #include "harness/checks/checks.hpp"
+#include "harness/checks/contact_checks.hpp"
+#include "harness/checks/health_checks.hpp"
+#include "harness/checks/joint_checks.hpp"
+#include "harness/checks/sim_checks.hpp"
+#include "harness/checks/task_checks.hpp"
 #include "harness/checks/trace.hpp"
 #include "lexdyn/common/error.hpp"
 
@@ -21,8 +26,8 @@ CheckSpec legacy(const std::string& name, const std::string& type, const std::st
   CheckSpec s;
   s.name = name;
   s.type = type;
-  s.frame = frame;
-  s.surfaces = surfaces;
+  if (frame.empty()) s.params = SurfacesParams{surfaces};
+  else s.params = FrameParams{frame};
   s.from_s = from_s;
   s.limit = limit;
   s.where = where;
@@ -253,7 +258,7 @@ TEST(Checks, MissingChannelsAndMetadataAreInputErrors) {
 }  // namespace
 }  // namespace lexdyn::checks
 
-// --- Controller checks (harness/checks/controller_checks.cpp) on a synthetic trace ---------
+// --- Controller checks (harness/checks/*_checks.cpp) on a synthetic trace ---------
 
 namespace lexdyn::checks {
 namespace {
@@ -310,14 +315,15 @@ CheckResult one(const CheckSpec& s) {
 
 TEST(ControllerChecks, TaskErrorStatistics) {
   CheckSpec s = spec("task_error", 1.2);
-  s.tasks = {"a", "b"};
-  s.statistic = "final";
+  auto& sp = s.params.emplace<TaskErrorParams>();
+  sp.tasks = {"a", "b"};
+  sp.statistic = "final";
   EXPECT_NEAR(one(s).value, 1.1, 1e-12);
   EXPECT_TRUE(one(s).passed);
-  s.statistic = "max";
+  sp.statistic = "max";
   EXPECT_NEAR(one(s).value, 1.5, 1e-12);
   EXPECT_FALSE(one(s).passed);
-  s.statistic = "mean";  // time average of 1.5 - 0.1 t over [0, 4]
+  sp.statistic = "mean";  // time average of 1.5 - 0.1 t over [0, 4]
   EXPECT_NEAR(one(s).value, 1.3, 1e-12);
   s.from_s = 2.0;
   s.to_s = 3.0;  // 1.5 - 0.25
@@ -326,12 +332,13 @@ TEST(ControllerChecks, TaskErrorStatistics) {
 
 TEST(ControllerChecks, TorqueLimits) {
   CheckSpec s = spec("torque_limits", 0.55);
-  s.joints = {"J1"};
-  s.joint_limits = {100.0};
-  s.source = "applied";
+  auto& sp = s.params.emplace<TorqueLimitsParams>();
+  sp.joints = {"J1"};
+  sp.joint_limits = {100.0};
+  sp.source = "applied";
   EXPECT_NEAR(one(s).value, 0.5, 1e-4);  // 50 sin(t) peaks near t = pi / 2
   EXPECT_TRUE(one(s).passed);
-  s.source = "both";
+  sp.source = "both";
   const CheckResult r = one(s);
   EXPECT_NEAR(r.value, 0.6, 1e-12);  // commanded 60 N m at t = 2
   EXPECT_FALSE(r.passed);
@@ -342,97 +349,107 @@ TEST(ControllerChecks, TorqueLimits) {
 
 TEST(ControllerChecks, ContactWrenches) {
   CheckSpec s = spec("contact_unilateral", 95.0);
-  s.contact = "C";
-  s.source = "computed";
+  auto& sp = s.params.emplace<ContactParams>();
+  sp.contact = "C";
+  sp.source = "computed";
   EXPECT_EQ(one(s).value, 100.0);  // inactive rows (-1000) are skipped
   EXPECT_TRUE(one(s).passed);
-  s.source = "sensed";
+  sp.source = "sensed";
   EXPECT_EQ(one(s).value, 90.0);
   EXPECT_FALSE(one(s).passed);
   CheckSpec f = spec("contact_friction", 1.0);
-  f.contact = "C";
-  f.source = "computed";
-  f.friction = 0.7;
-  f.min_normal_N = 1.0;
+  auto& fp = f.params.emplace<ContactFrictionParams>();
+  fp.contact = "C";
+  fp.source = "computed";
+  fp.friction = 0.7;
+  fp.min_normal_N = 1.0;
   EXPECT_NEAR(one(f).value, 50.0 / 70.0, 1e-12);
-  f.friction = 0.4;
+  fp.friction = 0.4;
   EXPECT_NEAR(one(f).value, 50.0 / 40.0, 1e-12);
   EXPECT_FALSE(one(f).passed);
   CheckSpec c = spec("contact_cop", 0.0);
-  c.contact = "C";
-  c.source = "computed";
-  c.min_normal_N = 1.0;
-  c.polygon = {{-0.1, -0.1}, {0.1, -0.1}, {0.1, 0.1}, {-0.1, 0.1}};
+  auto& cp = c.params.emplace<ContactCopParams>();
+  cp.contact = "C";
+  cp.source = "computed";
+  cp.min_normal_N = 1.0;
+  cp.polygon = {{-0.1, -0.1}, {0.1, -0.1}, {0.1, 0.1}, {-0.1, 0.1}};
   EXPECT_NEAR(one(c).value, -0.05, 1e-12);  // CoP (0.02, 0.05): 5 cm inside the y = 0.1 edge
   EXPECT_TRUE(one(c).passed);
-  c.polygon = {{-0.1, -0.1}, {0.1, -0.1}, {0.1, 0.03}, {-0.1, 0.03}};
+  cp.polygon = {{-0.1, -0.1}, {0.1, -0.1}, {0.1, 0.03}, {-0.1, 0.03}};
   EXPECT_NEAR(one(c).value, 0.02, 1e-12);  // 2 cm outside
   EXPECT_FALSE(one(c).passed);
   CheckSpec m = spec("contact_wrench_match", 9.0);
-  m.contact = "C";
-  m.component = "force";
-  m.statistic = "rms";
+  auto& mp = m.params.emplace<WrenchMatchParams>();
+  mp.contact = "C";
+  mp.component = "force";
+  mp.statistic = "rms";
   EXPECT_NEAR(one(m).value, 10.0, 1e-12);
   EXPECT_FALSE(one(m).passed);
-  m.component = "torque";
+  mp.component = "torque";
   EXPECT_EQ(one(m).value, 0.0);
 }
 
 TEST(ControllerChecks, Oscillation) {
   CheckSpec a = spec("joint_acceleration_sign_changes", 4.0);
-  a.joints = {"J1", "J2"};
-  a.source = "measured";
-  a.dead_band = 1e-6;
+  auto& ap = a.params.emplace<JointSignChangesParams>();
+  ap.joints = {"J1", "J2"};
+  ap.source = "measured";
+  ap.dead_band = 1e-6;
   // cos(2 pi 2.1 t) changes sign at (2n + 1) / 8.4 s: 17 times between the first and the last
   // velocity difference (t = 0.005 .. 3.995 s), over 4 s.
   const CheckResult r = one(a);
   EXPECT_NEAR(r.value, 17.0 / 4.0, 1e-12);
   EXPECT_FALSE(r.passed);
   EXPECT_NE(r.detail.find("J1: 17"), std::string::npos) << r.detail;
-  a.joints = {"J2"};
+  ap.joints = {"J2"};
   EXPECT_EQ(one(a).value, 0.0);
   CheckSpec h = spec("joint_velocity_hf_energy", 0.1);
-  h.joints = {"J1"};
-  h.source = "commanded";
-  h.cutoff_hz = 5.0;
+  auto& hp = h.params.emplace<JointHfEnergyParams>();
+  hp.joints = {"J1"};
+  hp.source = "commanded";
+  hp.cutoff_hz = 5.0;
   // A unit 20 Hz sine passes the 5 Hz high-pass almost unchanged: mean square ~ 1/2.
   EXPECT_NEAR(one(h).value, 0.5, 0.03);
   EXPECT_FALSE(one(h).passed);
-  h.joints = {"J2"};  // 0.5 Hz: attenuated by about (0.5 / 5)^4
+  hp.joints = {"J2"};  // 0.5 Hz: attenuated by about (0.5 / 5)^4
   EXPECT_LT(one(h).value, 1e-3);
-  h.cutoff_hz = 60.0;  // above the trace's Nyquist frequency (50 Hz)
+  hp.cutoff_hz = 60.0;  // above the trace's Nyquist frequency (50 Hz)
   EXPECT_FALSE(one(h).passed);
   EXPECT_TRUE(std::isnan(one(h).value));
   CheckSpec e = spec("task_error_rate_sign_changes", 0.5);
-  e.tasks = {"c"};
-  e.dead_band = 1e-6;
+  auto& ep = e.params.emplace<TaskErrorRateParams>();
+  ep.task = "c";
+  ep.dead_band = 1e-6;
   EXPECT_NEAR(one(e).value, 1.0, 1e-12);  // 1 + sin(pi t)/2 turns at t = 0.5, 1.5, 2.5, 3.5
   EXPECT_FALSE(one(e).passed);
-  e.tasks = {"a"};
+  ep.task = "a";
   EXPECT_EQ(one(e).value, 0.0);
 }
 
 TEST(ControllerChecks, Health) {
   CheckSpec s = spec("controller_status", 0.0);
-  s.allowed = {"ok", "solver_stopped_early"};
+  auto& sp = s.params.emplace<ControllerStatusParams>();
+  sp.allowed = {"ok", "solver_stopped_early"};
   CheckResult r = one(s);
   EXPECT_EQ(r.value, 1.0);
   EXPECT_FALSE(r.passed);
   EXPECT_NE(r.detail.find("first at t = 3 s (infeasible)"), std::string::npos) << r.detail;
-  s.allowed = {"ok"};
+  sp.allowed = {"ok"};
   EXPECT_EQ(one(s).value, 9.0);  // 8 rows stopped early besides
   CheckSpec p = spec("active_set_peak", 17.0);
   EXPECT_EQ(one(p).value, 17.0);
   EXPECT_TRUE(one(p).passed);
   CheckSpec a = spec("augmented_fraction", 0.2);
-  a.level = "L";
+  auto& ap = a.params.emplace<AugmentedFractionParams>();
+  ap.level = "L";
   EXPECT_NEAR(one(a).value, 101.0 / 401.0, 1e-15);
   EXPECT_FALSE(one(a).passed);
   CheckSpec t = spec("tick_time", 300.0);
-  t.timer = "tick";
-  t.percentile = 50.0;
+  auto& tp = t.params.emplace<TickTimeParams>();
+  tp.timer = "tick";
+  tp.percentile = 50.0;
   EXPECT_EQ(one(t).value, 200.0);
-  t.percentile = 100.0;
+  tp.percentile = 100.0;
   EXPECT_EQ(one(t).value, 400.0);
   EXPECT_FALSE(one(t).passed);
 }
@@ -465,8 +482,9 @@ TEST(ControllerChecks, MethodFilterAndComparisons) {
 
 TEST(ControllerChecks, MissingChannelsAreInputErrors) {
   CheckSpec s = spec("task_error", 1.0);
-  s.tasks = {"nope"};
-  s.statistic = "final";
+  auto& sp = s.params.emplace<TaskErrorParams>();
+  sp.tasks = {"nope"};
+  sp.statistic = "final";
   s.where = "case.yaml:9";
   try {
     one(s);

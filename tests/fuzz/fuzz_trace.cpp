@@ -4,6 +4,7 @@
 
 #include "fuzz_target.hpp"
 #include "harness/checks/checks.hpp"
+#include "harness/checks/health_checks.hpp"
 #include "lexdyn/common/error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -14,7 +15,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::vector<lexdyn::checks::CheckSpec> specs(2);
     specs[0].name = "status";
     specs[0].type = "controller_status";
-    specs[0].allowed = {"ok"};
+    specs[0].params = lexdyn::checks::ControllerStatusParams{{"ok"}};
     specs[1].name = "peak";
     specs[1].type = "active_set_peak";
     specs[1].limit = 50;
