@@ -1,6 +1,7 @@
 #include "harness/cases/lexdyn_driver.hpp"
 
 #include "harness/checks/checks.hpp"
+#include "lexdyn/common/format.hpp"
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/control/controller.hpp"
 #include "lexdyn/model/robot_model.hpp"
@@ -13,11 +14,7 @@ namespace lexdyn::cases {
 
 namespace {
 
-std::string num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.10g", v);
-  return buf;
-}
+std::string num(double v) { return formatNumber(v, 10); }
 
 int indexOf(const std::vector<std::string>& names, const std::string& name) {
   const auto it = std::find(names.begin(), names.end(), name);

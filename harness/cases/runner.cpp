@@ -1,6 +1,7 @@
 #include "harness/cases/runner.hpp"
 
 #include "harness/sim/build_info.hpp"
+#include "lexdyn/common/format.hpp"
 #include "lexdyn/common/error.hpp"
 
 #include <nlohmann/json.hpp>
@@ -20,11 +21,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.10g", v);
-  return buf;
-}
+std::string num(double v) { return formatNumber(v, 10); }
 
 // The posture servo: a fixed posture plus optional periodic joint motions.
 class PostureServo {

@@ -1,5 +1,6 @@
 #include "harness/cases/task_registry.hpp"
 
+#include "lexdyn/common/format.hpp"
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/input_ranges.hpp"
 #include "lexdyn/tasks/contact_force_bounds.hpp"
@@ -21,11 +22,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 namespace R = lexdyn::ranges;
 
-std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%g", v);
-  return buf;
-}
+std::string fmt(double v) { return formatNumber(v); }
 
 // PD gains (kp 1/s^2, kv 1/s; kv absent: 2 sqrt(kp)). The task's discrete PD law over one
 // control period dt is stable only for kv dt < 2 and kp dt^2 + 2 kv dt < 4 (lexdyn/common/

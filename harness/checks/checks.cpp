@@ -1,6 +1,7 @@
 #include "harness/checks/checks.hpp"
 #include "harness/checks/check_base.hpp"
 
+#include "lexdyn/common/format.hpp"
 #include "lexdyn/common/error.hpp"
 
 #include <cmath>
@@ -9,11 +10,7 @@
 
 namespace lexdyn::checks {
 
-std::string fmt(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
+std::string fmt(double v) { return formatNumber(v); }
 
 void CheckSpec::paramsMismatch() const {
   const std::string msg = "check '" + name + "' of type " + type + " holds the params of another type (or none)";

@@ -1,6 +1,7 @@
 #include "harness/golden/golden.hpp"
 
 #include "harness/cases/runner.hpp"
+#include "lexdyn/common/format.hpp"
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
 #include "lexdyn/control/method.hpp"
@@ -19,11 +20,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.10g", v);
-  return buf;
-}
+std::string num(double v) { return formatNumber(v, 10); }
 
 // A tolerance beyond 1e6 (absolute) or 1 (relative) would accept anything a golden can hold.
 constexpr double kMaxAbsTolerance = 1e6, kMaxRelTolerance = 1.0;

@@ -4,6 +4,7 @@
 // Conventions and parameters: docs/simulator.md.
 #include "harness/sim/simulator.hpp"
 
+#include "lexdyn/common/format.hpp"
 #include "lexdyn/common/error.hpp"
 #include "harness/sim/multibody.hpp"
 
@@ -41,11 +42,7 @@ struct SensorInfo {
   Eigen::Isometry3d X_body_frame = Eigen::Isometry3d::Identity();
 };
 
-std::string fmt(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%g", v);
-  return buf;
-}
+std::string fmt(double v) { return formatNumber(v); }
 
 // Adds the integrator counters of `b` to `a` (last_step and last_order stay a's).
 void addCounters(CvodeStats& a, const CvodeStats& b) {

@@ -1,6 +1,7 @@
 #include "lexdyn/common/yaml_strict.hpp"
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/format.hpp"
 #include "lexdyn/common/input_text.hpp"
 
 #include <yaml-cpp/depthguard.h>
@@ -93,11 +94,7 @@ double Node::asNonNegativeDouble() const {
 }
 
 namespace {
-std::string fmtRange(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
+std::string fmtRange(double v) { return formatNumber(v); }
 }  // namespace
 
 double Node::asDoubleIn(double lo, double hi, const std::string& unit) const {

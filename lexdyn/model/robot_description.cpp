@@ -1,6 +1,7 @@
 #include "lexdyn/model/robot_description.hpp"
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/format.hpp"
 #include "lexdyn/common/input_ranges.hpp"
 #include "lexdyn/common/input_text.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
@@ -36,12 +37,7 @@ bool validName(const std::string& n) {
   return !n.empty() && n.find_first_of(" \t\r\n,\"'") == std::string::npos;
 }
 
-std::string fmt(double v) {
-  std::ostringstream ss;
-  ss.precision(6);
-  ss << v;
-  return ss.str();
-}
+std::string fmt(double v) { return formatNumber(v); }
 
 // ---------------------------------------------------------------------------------------------
 // URDF structure as found in the file (TinyXML pass): names, line numbers, file order.

@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/common/format.hpp"
 #include "lexdyn/common/input_text.hpp"
 
 namespace lexdyn::solver {
@@ -100,11 +101,7 @@ class PathTrackingSax {
   std::string errorPath_, errorMessage_;
 };
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
+std::string fmt(double v) { return formatNumber(v); }
 
 // A number (null: nullValue, when allowed) of magnitude at most kMaxProblemMagnitude.
 double readNumber(const json& j, const std::string& where, bool allowNull, double nullValue) {
