@@ -74,6 +74,13 @@ on_signal() {
 }
 trap 'on_signal 130' INT
 trap 'on_signal 143' TERM
+# One second between polls. Bash runs a trap only once a foreground command returns, but a
+# `wait` returns at once on a signal: the runs in flight are told to stop immediately, not
+# after the sleep (a short run could otherwise complete in that second and not be marked).
+pause() {
+  sleep 1 &
+  wait $! 2>/dev/null || true
+}
 stop_if_interrupted() {
   if [ "$INTERRUPTED" -ne 0 ]; then
     for p in "${RUNNING[@]}"; do wait "$p" 2>/dev/null; done
@@ -175,7 +182,7 @@ if [ "$DO_CTEST" -eq 1 ]; then
     RUNNING=($!)
     since=$SECONDS
     while kill -0 "${RUNNING[0]}" 2>/dev/null && [ "$INTERRUPTED" -eq 0 ]; do
-      sleep 1
+      pause
       if [ $((SECONDS - since)) -ge 30 ]; then
         since=$SECONDS
         say "ctest: $(grep -a -o -E '^ *[0-9]+/[0-9]+ Test' "$OUT/ctest/log.txt" | tail -1 | tr -d ' ' | sed 's/Test$//') tests done"
@@ -242,7 +249,7 @@ while [ $next -lt ${#PENDING[@]} ] || [ ${#RUNNING[@]} -gt 0 ]; do
     start_run ${PENDING[$next]}
     next=$((next + 1))
   done
-  sleep 1
+  pause
   still=()
   for p in "${RUNNING[@]}"; do
     if kill -0 "$p" 2>/dev/null; then still+=("$p"); continue; fi
