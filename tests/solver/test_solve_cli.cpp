@@ -153,6 +153,10 @@ namespace exit_codes {
 // Runs `cmd` in the background and sends `sig` once `started` holds (a shell test), then waits.
 int runAndSignal(const std::string& cmd, const std::string& started, const char* sig) {
   const std::string code = tempDir() + "/code";
+  // `started` reads sig.err: the previous run's must not answer for this one (the signal would
+  // then reach the shell before it starts the command).
+  std::remove((tempDir() + "/sig.err").c_str());
+  std::remove((tempDir() + "/sig.out").c_str());
   const std::string script = "(" + cmd + " > " + tempDir() + "/sig.out 2> " + tempDir() + "/sig.err & pid=$!; " +
                              "while ! (" + started + ") && kill -0 $pid 2>/dev/null; do sleep 0.01; done; kill -" + sig +
                              " $pid; wait $pid; echo $? > " + code + ")";
