@@ -399,17 +399,15 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
         for (const yaml::Node& cn : c->elements()) {
           const std::string name = cn.asString();
           std::vector<std::string> names;
-          bool found = false;
+          bool found = false, wall_clock = false;
           for (const auto& ck : s.base.checks) {
             names.push_back(ck.name);
-            found = found || ck.name == name;
+            if (ck.name != name) continue;
+            found = true;
+            wall_clock = wall_clock || checks::machineDependent(ck);
           }
           if (!found) cn.fail("the base case has no check '" + name + "' (checks: " + cases::joinNames(names) + ")");
-          for (const auto& ck : s.base.checks) {
-            if (ck.name == name && checks::machineDependent(ck)) {
-              cn.fail("check '" + name + "' is a wall-clock check (machine-dependent): a sweep's verdicts may not depend on the machine");
-            }
-          }
+          if (wall_clock) cn.fail("check '" + name + "' is a wall-clock check (machine-dependent): a sweep's verdicts may not depend on the machine");
           bool any = false;
           for (const auto& m : s.methods) {
             for (const auto& ck : s.base.checks) any = any || (ck.name == name && checks::appliesTo(ck, m));
