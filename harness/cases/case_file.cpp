@@ -500,6 +500,45 @@ void overrideMethod(CaseSpec& spec, const std::string& method, const std::string
 
 namespace {
 
+
+// expected_failures: [{method?, status?, checks?, reason}] (docs/cases.md, "Expected failures").
+void readExpectedFailures(CaseSpec& c, const yaml::Node& list, const checks::CheckContext& context) {
+  for (const yaml::Node& en : list.elements()) {
+    yaml::StrictMap m(en);
+    ExpectedFailure x;
+    x.where = en.where();
+    if (isLexdyn(c)) {
+      x.method = context.method(m.required("method"));
+    } else if (auto mn = m.optional("method")) {
+      mn->fail("a case without methods (controller type " + c.controller.type + ") names no method");
+    }
+    if (auto st = m.optional("status")) x.status = st->asEnum({"completed", "controller_failure", "integrator_failure"});
+    if (auto cn = m.optional("checks")) {
+      for (const yaml::Node& n : cn->elements()) {
+        const std::string name = n.asString();
+        const auto spec = std::find_if(c.checks.begin(), c.checks.end(), [&](const checks::CheckSpec& s) { return s.name == name; });
+        if (spec == c.checks.end()) n.fail("unknown check '" + name + "' (the case's checks)");
+        if (checks::machineDependent(*spec)) n.fail("check '" + name + "' measures wall-clock time: its outcome depends on the machine");
+        if (!spec->methods.empty() && !x.method.empty() &&
+            std::find(spec->methods.begin(), spec->methods.end(), x.method) == spec->methods.end()) {
+          n.fail("check '" + name + "' does not apply to method " + x.method);
+        }
+        if (std::find(x.checks.begin(), x.checks.end(), name) != x.checks.end()) n.fail("check '" + name + "' listed twice");
+        x.checks.push_back(name);
+      }
+      std::sort(x.checks.begin(), x.checks.end());
+    }
+    const yaml::Node reason = m.required("reason");
+    x.reason = reason.asString();
+    m.finish();
+    if (x.status == "completed" && x.checks.empty()) en.fail("expected a failure: a status other than completed, or checks");
+    for (const ExpectedFailure& o : c.expected_failures) {
+      if (o.method == x.method) en.fail(x.method.empty() ? "a second entry (one at most)" : "a second entry for method " + x.method);
+    }
+    c.expected_failures.push_back(std::move(x));
+  }
+}
+
 CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
   yaml::StrictMap top(root);
   CaseSpec c;
@@ -630,6 +669,7 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
       c.comparisons.push_back(cs);
     }
   }
+  if (auto xf = top.optional("expected_failures")) readExpectedFailures(c, *xf, check_context);
   std::optional<yaml::Node> stop = top.optional("stop_at_s");
   top.finish();
   if (isLexdyn(c)) validateLexdyn(c, controller_node);
@@ -748,6 +788,13 @@ Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotDe
     }
   }
   return q;
+}
+
+const ExpectedFailure* expectedFailureFor(const CaseSpec& spec, const std::string& method) {
+  for (const ExpectedFailure& x : spec.expected_failures) {
+    if (x.method == method) return &x;
+  }
+  return nullptr;
 }
 
 checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& cs) {

@@ -116,6 +116,18 @@ struct SimModelPerturbation {
   std::vector<LinkComOffset> com_offset;
 };
 
+/// A failure the case expects of one method (`expected_failures`; docs/cases.md, "Expected
+/// failures"): the run status it ends with and the checks that fail, with the reason. A run
+/// that fails exactly so is an expected failure (exit code 0); any other outcome, including a
+/// listed check that passes, is reported as a mismatch.
+struct ExpectedFailure {
+  std::string method;              ///< "" for a case without methods
+  std::string status = "completed";  ///< completed | controller_failure | integrator_failure
+  std::vector<std::string> checks;   ///< the checks expected to fail (sorted)
+  std::string reason;
+  std::string where;                 ///< file:line of the entry
+};
+
 struct CaseSpec {
   std::string path;  ///< the case file
   std::string name, description;
@@ -130,6 +142,7 @@ struct CaseSpec {
   TraceSpec trace;
   std::vector<checks::CheckSpec> checks;
   std::vector<checks::ComparisonSpec> comparisons;  ///< evaluated by `lexdyn-harness compare`
+  std::vector<ExpectedFailure> expected_failures;   ///< at most one per method
   SimModelPerturbation sim_model;                   ///< sim.model
   /// stop_at_s (`run --duration`): the run stops there; duration_s is already cut to it.
   double stop_at_s = 0.0;
@@ -152,6 +165,9 @@ CaseSpec loadCase(const std::string& path, const std::vector<Override>& override
 /// file paths rewritten relative to `dest_dir` (absolute when dest_dir is empty), a header
 /// comment naming the source file and the overrides.
 std::string effectiveCaseText(const CaseSpec& spec, const std::string& dest_dir);
+
+/// The case's expected failure for `method` ("" for a case without methods), or null.
+const ExpectedFailure* expectedFailureFor(const CaseSpec& spec, const std::string& method);
 
 /// Reads a method comparison (the case's `comparisons` entries) against a loaded case.
 checks::ComparisonSpec readComparison(const yaml::Node& node, const CaseSpec& spec);

@@ -289,6 +289,11 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
   j["effective_case"] = fs::path(r.case_path).filename().string();
   j["skipped_checks"] = r.skipped_checks;
   j["all_checks_passed"] = r.all_checks_passed;
+  if (r.has_expected_failure) {
+    const ExpectedFailure& x = r.expected_failure;
+    j["expected_failure"] = {{"status", x.status}, {"checks", x.checks}, {"reason", x.reason},
+                             {"met", r.expectation_mismatches.empty()}, {"mismatches", r.expectation_mismatches}};
+  }
   j["exit_code"] = exitCode(r);
   if (r.has_controller_stats) {
     const ControllerStats& cs = r.controller;
@@ -508,6 +513,11 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   }
   for (auto& c : statistic_list) r.statistics.push_back(c->result());
   r.all_checks_passed = checks::allPassed(r.checks);
+  if (const ExpectedFailure* x = expectedFailureFor(spec, r.method)) {
+    r.has_expected_failure = true;
+    r.expected_failure = *x;
+    r.expectation_mismatches = expectationMismatches(*x, r.status, r.checks);
+  }
   writeSummary(r.summary_path, spec, r, md);
   return r;
 }
@@ -517,9 +527,29 @@ std::string checkResultsJson(const std::vector<checks::CheckResult>& results) {
   return j.dump(2);
 }
 
+std::vector<std::string> expectationMismatches(const ExpectedFailure& x, const std::string& status,
+                                               const std::vector<checks::CheckResult>& results) {
+  std::vector<std::string> out;
+  if (status != x.status) out.push_back("status " + status + " (expected " + x.status + ")");
+  auto listed = [&](const std::string& name) { return std::binary_search(x.checks.begin(), x.checks.end(), name); };
+  for (const checks::CheckResult& c : results) {
+    if (c.decides && !c.passed && !listed(c.name)) out.push_back(c.name + " failed (not expected)");
+  }
+  for (const std::string& name : x.checks) {
+    const auto c = std::find_if(results.begin(), results.end(), [&](const checks::CheckResult& r) { return r.name == name; });
+    if (c == results.end()) out.push_back(name + " was not evaluated (expected to fail)");
+    else if (c->passed || !c->decides) out.push_back(name + " passed (expected to fail)");
+  }
+  return out;
+}
+
 int exitCode(const RunSummary& s) {
   if (s.status == "interrupted") return kExitInterrupted + (s.signal > 0 ? s.signal : 2);
   if (s.status == "input_error") return kExitBadInput;
+  if (s.has_expected_failure && s.status != "internal_error") {
+    if (s.expectation_mismatches.empty()) return kExitPass;
+    return s.status != "completed" && s.status != s.expected_failure.status ? kExitRunFailure : kExitCheckFailed;
+  }
   if (s.status != "completed") return kExitRunFailure;
   return s.all_checks_passed ? kExitPass : kExitCheckFailed;
 }

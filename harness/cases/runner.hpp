@@ -50,7 +50,18 @@ struct RunSummary {
   ControllerStats controller;               ///< lexdyn: per task errors, iterations, timings
   std::string trace_path, summary_path;
   std::string case_path;  ///< DIR/case.yaml: the effective case (effectiveCaseText)
+  /// The case's expected failure for this run's method (expected_failures), if it has one,
+  /// and how the run departs from it (empty: the run failed exactly as expected).
+  bool has_expected_failure = false;
+  ExpectedFailure expected_failure;
+  std::vector<std::string> expectation_mismatches;
 };
+
+/// How a finished run departs from an expected failure: a status other than the expected one,
+/// a check that decides and fails but is not listed, a listed check that passed or was not
+/// evaluated. Empty when the run failed exactly as expected.
+std::vector<std::string> expectationMismatches(const ExpectedFailure& expected, const std::string& status,
+                                               const std::vector<checks::CheckResult>& results);
 
 /// Throws lexdyn::InputError for bad input (nothing is simulated then). An exception once the
 /// run has started (an internal error, out of memory) stops it: the trace is kept with the end
@@ -65,7 +76,8 @@ inline constexpr int kExitRunFailure = 3;    ///< integrator, controller or solv
 inline constexpr int kExitInterrupted = 128; ///< + the signal: 130 SIGINT, 143 SIGTERM
 
 /// 128 + signal when interrupted (130 when the signal is unknown); 3 on a run failure; 1 when a
-/// check that decides failed; 0 otherwise.
+/// check that decides failed; 0 otherwise. With an expected failure: 0 when the run failed
+/// exactly as expected, else 3 for a run failure other than the expected status, else 1.
 int exitCode(const RunSummary& summary);
 
 /// {"checks": [...], "all_checks_passed": bool} with the checks as summary.json writes them

@@ -60,11 +60,12 @@ extern "C" void onSignal(int s) {
 
 int interruptedCode() { return lexdyn::cases::kExitInterrupted + (g_signal.load() > 0 ? g_signal.load() : SIGINT); }
 
-void printChecks(const std::vector<lexdyn::checks::CheckResult>& checks) {
+void printChecks(const std::vector<lexdyn::checks::CheckResult>& checks, const std::vector<std::string>& expected_to_fail = {}) {
   for (const auto& c : checks) {
     // A check that does not decide (a wall-clock measurement without --wall-clock-checks) is
-    // reported as "info", labelled.
-    const char* mark = c.decides ? (c.passed ? "ok" : "FAIL") : "info";
+    // reported as "info", labelled; a failure the case expects (expected_failures) as "xfail".
+    const bool expected = std::find(expected_to_fail.begin(), expected_to_fail.end(), c.name) != expected_to_fail.end();
+    const char* mark = c.decides ? (c.passed ? "ok" : (expected ? "xfail" : "FAIL")) : "info";
     std::fprintf(stderr, "  %-4s %-28s value %-12.6g limit %-10.6g %s%s%s%s\n", mark, c.name.c_str(), c.value, c.limit,
                  c.unit.c_str(), c.detail.empty() ? "" : "  (", c.detail.empty() ? "" : (c.detail + ")").c_str(),
                  c.decides ? "" : (c.passed ? "  [machine-dependent, reported only: within the limit here]"
@@ -412,7 +413,16 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "  final task errors: %s\n", errs.c_str());
       std::fprintf(stderr, "  peak active-set iterations %d at t = %g s\n", s.controller.peak_iterations, s.controller.peak_iterations_at_s);
     }
-    printChecks(s.checks);
+    printChecks(s.checks, s.has_expected_failure ? s.expected_failure.checks : std::vector<std::string>{});
+    if (s.has_expected_failure) {
+      const lexdyn::cases::ExpectedFailure& x = s.expected_failure;
+      if (s.expectation_mismatches.empty()) {
+        std::fprintf(stderr, "  expected failure, as the case says (%s): %s\n", x.where.c_str(), x.reason.c_str());
+      } else {
+        std::fprintf(stderr, "  NOT the expected failure (%s: %s):\n", x.where.c_str(), x.reason.c_str());
+        for (const std::string& m : s.expectation_mismatches) std::fprintf(stderr, "    %s\n", m.c_str());
+      }
+    }
     if (!s.skipped_checks.empty()) {
       std::string names;
       for (const auto& n : s.skipped_checks) names += (names.empty() ? "" : ", ") + n;

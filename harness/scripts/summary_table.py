@@ -14,6 +14,15 @@ import os
 import sys
 
 
+def _expectation(s):
+    """ " (expected)" when the run failed as its case expects (summary.json "expected_failure"),
+    " (NOT expected)" when the case expects another failure."""
+    x = s.get("expected_failure")
+    if not x:
+        return ""
+    return " (expected)" if x.get("met") else " (NOT expected)"
+
+
 def load(path):
     try:
         with open(path) as f:
@@ -52,7 +61,7 @@ def main():
         failed = [c["name"] for c in s.get("checks", []) if not c.get("passed", False)]
         rows.append([
             label,
-            s.get("status", "?"),
+            s.get("status", "?") + _expectation(s),
             fmt(s.get("simulated_s"), ".1f"),
             fmt(s.get("wall_s"), ".1f"),
             fmt(final, ".4f"),

@@ -54,6 +54,19 @@ TEST(CaseVariants, Exp1WlsWeakIsExp1WithThePostureWeight1e6) {
   EXPECT_EQ(YAML::LoadFile(kCases + "exp1-wls-weak.yaml")["controller"]["wls_levels"][1]["weights"]["posture"].as<double>(), 1e-6);
 }
 
+TEST(CaseVariants, Exp1Kp1IsExp1WithThePapersHandGains) {
+  EXPECT_EQ(differences("exp1.yaml", "exp1-kp1.yaml"),
+            (std::vector<std::string>{"controller.tasks[9].gains.kp", "controller.tasks[10].gains.kp", "description",
+                                      "expected_failures", "name"}));
+  const YAML::Node tasks = YAML::LoadFile(kCases + "exp1-kp1.yaml")["controller"]["tasks"];
+  for (int i : {9, 10}) EXPECT_EQ(tasks[i]["gains"]["kp"].as<double>(), 1.0) << tasks[i]["name"].as<std::string>();
+}
+
+TEST(CaseVariants, Exp2InstantIsExp2WithTheBoxChangedAtOnce) {
+  EXPECT_EQ(differences("exp2.yaml", "exp2-instant.yaml"),
+            (std::vector<std::string>{"description", "events[1].ramp_s", "events[2].ramp_s", "expected_failures", "name"}));
+}
+
 // The comparison can fail: a changed value is reported at its path.
 TEST(CaseVariants, TheComparisonNamesEveryDifferingPath) {
   const YAML::Node a = YAML::Load("{x: 1, y: [1, {z: 2}], w: 3}");

@@ -386,6 +386,36 @@ class SweepSection(unittest.TestCase):
             self.assertIn("checks[1].pass_rate", str(e.exception))
 
 
+class ExpectedFailureVerdict(unittest.TestCase):
+    """A run that fails as its case expects (summary.json "expected_failure") has its own verdict
+    and colour; one that fails otherwise says so; a run without an entry is judged as before."""
+
+    def run_with(self, d, summary):
+        os.makedirs(d)
+        with open(os.path.join(d, "summary.json"), "w") as f:
+            json.dump(summary, f)
+        return runs.Run("pm.wls", d)
+
+    def test_verdicts(self):
+        checks = [{"name": "no_overshoot", "passed": False}, {"name": "controller_ok", "passed": True}]
+        base = {"case": "pm", "method": "wls", "status": "completed", "checks": checks}
+        with tempfile.TemporaryDirectory() as d:
+            plain = self.run_with(os.path.join(d, "a"), base)
+            self.assertEqual(page._cls(plain), "fail")
+            self.assertEqual(page._verdict_text(plain), "FAIL (1/2 checks)")
+            met = self.run_with(os.path.join(d, "b"), dict(base, expected_failure={
+                "status": "completed", "checks": ["no_overshoot"], "reason": "overshoots", "met": True, "mismatches": []}))
+            self.assertTrue(met.failed_as_expected)
+            self.assertEqual(page._cls(met), "xfail")
+            self.assertEqual(page._verdict_text(met), "expected failure (1/2 checks)")
+            stopped = self.run_with(os.path.join(d, "c"), dict(base, status="controller_failure", expected_failure={
+                "status": "completed", "checks": ["no_overshoot"], "reason": "r", "met": False,
+                "mismatches": ["status controller_failure (expected completed)"]}))
+            self.assertFalse(stopped.failed_as_expected)
+            self.assertEqual(page._cls(stopped), "stop")
+            self.assertEqual(page._verdict_text(stopped), "NOT the expected failure: controller_failure (1/2 checks)")
+
+
 class CommandLine(unittest.TestCase):
     def run_report(self, *args):
         return subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "harness", "scripts", "report.py"), *args],

@@ -21,7 +21,7 @@ h1{font-size:22px}h2{font-size:18px;border-bottom:1px solid #ccd;padding-bottom:
 h3{font-size:15px;margin-top:22px}table{border-collapse:collapse;margin:8px 0;font-size:12.5px}
 th,td{border:1px solid #d0d4da;padding:3px 6px;text-align:left;vertical-align:top}th{background:#eef1f5}
 td.num{text-align:right;font-variant-numeric:tabular-nums}.pass{background:#e3f4e1}.fail{background:#fbe0dc}
-.stop{background:#fff0c2}.miss{background:#eee;color:#666}.flag-worse{background:#fbe0dc}.flag-better{background:#e3f4e1}
+.stop{background:#fff0c2}.xfail{background:#e8e8f4}.miss{background:#eee;color:#666}.flag-worse{background:#fbe0dc}.flag-better{background:#e3f4e1}
 figure{margin:10px 0 18px}figure img{max-width:100%;border:1px solid #e0e3e8}figcaption{font-size:12px;color:#555}
 nav a{margin-right:12px}.swatch{display:inline-block;width:12px;height:12px;border-radius:2px;vertical-align:middle;margin:0 4px 0 10px}
 pre,code{font-size:12px;background:#f4f6f8}pre{padding:6px;overflow-x:auto;white-space:pre-wrap}
@@ -34,6 +34,8 @@ pre,code{font-size:12px;background:#f4f6f8}pre{padding:6px;overflow-x:auto;white
 def _cls(run):
     if run.summary is None:
         return "miss"
+    if run.failed_as_expected:
+        return "xfail"
     if run.status != "completed":
         return "stop"
     return "pass" if not run.failed_checks else "fail"
@@ -44,6 +46,11 @@ def _verdict_text(run):
         return "no summary" if run.status == "no_summary" else "not run"
     n, f = len(run.checks), len(run.failed_checks)
     head = "pass" if run.status == "completed" and not f else ("FAIL" if run.status == "completed" else run.status)
+    x = run.expected_failure
+    if x:
+        # The case expects this failure (expected_failures): as expected, or a different outcome.
+        head = ("expected failure" if x.get("met") else "NOT the expected failure") + \
+            ("" if run.status == "completed" else f": {run.status}")
     return f"{head} ({n - f}/{n} checks)"
 
 
@@ -294,6 +301,12 @@ class ReportBuilder:
                            f"<pre>{esc(run.log_tail())}</pre></td></tr>")
                 n += 1
                 continue
+            x = run.expected_failure
+            if x:
+                what = "expected failure" if x.get("met") else "NOT the expected failure: " + "; ".join(x.get("mismatches", []))
+                out.append(f"<tr class='{'xfail' if x.get('met') else 'fail'}'><td>{esc(run.id)}</td><td colspan='7'>"
+                           f"{esc(what)} (the case says: {esc(x.get('reason', ''))})</td></tr>")
+                n += 1
             if run.status != "completed":
                 out.append(f"<tr class='stop'><td>{esc(run.id)}</td><td colspan='7'>run stopped: {esc(run.status)}: "
                            f"{esc(run.summary.get('message', ''))} (at t = {fnum(run.summary.get('simulated_s'), '.4g')} s)</td></tr>")

@@ -91,6 +91,17 @@ class Run:
         return [c for c in self.checks if not c.get("passed", False)]
 
     @property
+    def expected_failure(self):
+        """The case's expected failure for this run (summary.json "expected_failure": status,
+        checks, reason, met, mismatches), or None."""
+        return (self.summary or {}).get("expected_failure")
+
+    @property
+    def failed_as_expected(self):
+        x = self.expected_failure
+        return bool(x and x.get("met"))
+
+    @property
     def ok(self):
         return self.status == "completed" and not self.failed_checks
 
