@@ -63,6 +63,14 @@ TEST(ControllerRunner, EveryMethodRunsAndWritesTheControllerChannelsAndSummary) 
     const bool wls = std::string(method) == "wls";
     EXPECT_EQ(t.column("level.hands.augmented") >= 0, !wls) << method;
     EXPECT_EQ(t.column("level.objective.violation") >= 0, wls) << method;
+    // The size of the Newton rows against J^T J: a value on the augmented rows only (NaN else).
+    if (!wls) {
+      for (size_t row = 0; row < t.rows.size(); ++row) {
+        const bool aug = at(t, row, "level.hands.augmented") != 0.0;
+        for (const char* c : {"level.hands.second_order_ratio", "level.hands.curvature_ratio"})
+          EXPECT_EQ(std::isnan(at(t, row, c)), !aug) << c << " row " << row << " (" << method << ")";
+      }
+    }
     EXPECT_EQ(t.column("task.posture.error") >= 0, wls) << method;  // only the method's tasks
     EXPECT_EQ(t.column("task.velocity.error") >= 0, !wls) << method;
     // At rest in the static equilibrium, the feet carry the weight in the controller's plan and
