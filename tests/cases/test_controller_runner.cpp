@@ -122,7 +122,12 @@ TEST(ControllerRunner, RerunsAreBitIdentical) {
   for (size_t i = 0; i < ta.names.size(); ++i) {
     const int c = tc.column(ta.names[i]);
     ASSERT_GE(c, 0) << ta.names[i];
-    for (size_t r = 0; r < ta.rows.size(); ++r) ASSERT_EQ(ta.rows[r][i], tc.rows[r][static_cast<size_t>(c)]) << ta.names[i] << " row " << r;
+    for (size_t r = 0; r < ta.rows.size(); ++r) {
+      const double x = ta.rows[r][i], y = tc.rows[r][static_cast<size_t>(c)];
+      // nan (a ratio channel on a tick without Newton rows) equals nan here.
+      if (std::isnan(x) && std::isnan(y)) continue;
+      ASSERT_EQ(x, y) << ta.names[i] << " row " << r;
+    }
   }
 }
 
