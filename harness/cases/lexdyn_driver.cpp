@@ -149,7 +149,8 @@ void LexdynDriver::addChannels(checks::TraceSchema& schema) const {
     for (const char* w : {"error", "active", "engaged"}) schema.add(checks::taskChannel(t.name, w));
   }
   for (const auto& l : I.lx.hierarchy(I.lx.method)) {
-    for (const char* w : {"augmented", "hessian_updated", "violation"}) schema.add(checks::levelChannel(l.name, w));
+    for (const char* w : {"augmented", "hessian_updated", "violation", "second_order_ratio", "curvature_ratio"})
+      schema.add(checks::levelChannel(l.name, w));
   }
   for (const char* prefix : {"cmd.q.", "cmd.qd.", "cmd.tau."}) {
     for (const auto& j : I.model.jointNames()) schema.add(prefix + j);
@@ -176,6 +177,12 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
                       num(p.eps_dt2) + ", newton_target " +
                       (p.newton_target == control::NewtonTarget::Zero ? "zero" : "previous_velocity") + ", damping " +
                       num(p.damping) + ", use_qmod " + (p.use_qmod ? "true" : "false") + ", sr1 " + (p.sr1 ? "true" : "false") + ", newton_identity_weight " + num(p.newton_identity_weight) +
+                      ", bfgs_secant " +
+                      (p.bfgs_secant == control::BfgsSecant::CurrentMultipliers ? "current_multipliers"
+                       : p.bfgs_secant == control::BfgsSecant::FullDifference   ? "full_difference"
+                                                                                 : "gauss_newton") +
+                      ", ah_add_jtj " + (p.ah_add_jtj ? "true" : "false") + ", multiplier_scale " +
+                      (p.multiplier_scale == control::MultiplierScale::Dt ? "dt" : "one") +
                       ", stop_after_level " + (p.stop_after_level.empty() ? std::string("(none)") : p.stop_after_level) +
                       ", rank_switching " + (p.rank_switching ? "true" : "false") + ", sign_change_guard " +
                       (p.sign_change_guard ? "true" : "false") + ", wls_infeasibility_tolerance " +
@@ -357,6 +364,8 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
     out[i++] = r.level_augmented[static_cast<size_t>(l)] ? 1.0 : 0.0;
     out[i++] = r.level_hessian_updated[static_cast<size_t>(l)] ? 1.0 : 0.0;
     out[i++] = r.level_violation(l);
+    out[i++] = r.level_second_order_ratio(l);
+    out[i++] = r.level_curvature_ratio(l);
   }
   for (int j = 0; j < I.nj; ++j) out[i++] = c.q.joints[j];
   for (int j = 0; j < I.nj; ++j) out[i++] = c.u[c.u.size() - I.nj + j];

@@ -31,6 +31,16 @@ void readParams(yaml::StrictMap& pm, control::ControllerParams& p) {
   if (auto v = pm.optional("damping")) p.damping = dimensionless(*v);
   if (auto v = pm.optional("use_qmod")) p.use_qmod = v->asBool();
   if (auto v = pm.optional("sr1")) p.sr1 = v->asBool();
+  if (auto v = pm.optional("bfgs_secant")) {
+    const std::string r = v->asEnum({"current_multipliers", "full_difference", "gauss_newton"});
+    p.bfgs_secant = r == "current_multipliers" ? control::BfgsSecant::CurrentMultipliers
+                    : r == "full_difference"   ? control::BfgsSecant::FullDifference
+                                               : control::BfgsSecant::GaussNewton;
+  }
+  if (auto v = pm.optional("ah_add_jtj")) p.ah_add_jtj = v->asBool();
+  if (auto v = pm.optional("multiplier_scale")) {
+    p.multiplier_scale = v->asEnum({"dt", "one"}) == "dt" ? control::MultiplierScale::Dt : control::MultiplierScale::One;
+  }
   if (auto v = pm.optional("newton_identity_weight")) p.newton_identity_weight = dimensionless(*v);
   if (auto v = pm.optional("stop_after_level")) p.stop_after_level = v->asString();
   if (auto v = pm.optional("rank_switching")) p.rank_switching = v->asBool();

@@ -129,7 +129,7 @@ std::string contactForceChannel(const std::string& surface);                 // 
 std::string contactPointChannel(const std::string& surface, int point, char axis);  // contact.<S>.p<i>.<x|y>
 // The lexdyn controller's channels (docs/cases.md, "Trace channels").
 std::string taskChannel(const std::string& task, const char* what);        // task.<T>.<error|active|engaged>
-std::string levelChannel(const std::string& level, const char* what);      // level.<L>.<augmented|hessian_updated|violation>
+std::string levelChannel(const std::string& level, const char* what);      // level.<L>.<augmented|hessian_updated|violation|second_order_ratio|curvature_ratio>
 std::string wrenchChannel(const std::string& contact, bool sensed, const char* component);  // wrench[_sensed].<C>.<fx..tz>
 std::string contactActiveChannel(const std::string& contact);              // ctrl_contact.<C>.active
 std::string timerChannel(const std::string& timer);                        // time.<timer>_us

@@ -17,6 +17,28 @@ namespace lexdyn::control {
 /// the 3R benchmark keeps oscillating at the singularity (docs/controller.md).
 enum class NewtonTarget { Zero, PreviousVelocity };
 
+/// The secant pair's y of LexDynBFGS: which reading of eq. 88 (docs/controller.md, "Readings
+/// of eq. 87-89").
+enum class BfgsSecant {
+  /// y = sum_i (J_i(k) - J_i(k-1))^T lambda_i with the multipliers of the last solve only (the
+  /// paper's "we only use the Lagrange multipliers of the current iterate"): B approximates the
+  /// second-order term H of eq. 21 alone. The default.
+  CurrentMultipliers,
+  /// y = grad L(k) - grad L(k-1) with each gradient's own multipliers, sum_i J_i(k)^T lambda_i
+  /// - J_i(k-1)^T lambda_i(prev): the above plus sum_i J_i(k-1)^T (lambda_i - lambda_i(prev)).
+  FullDifference,
+  /// y = J_l^T J_l s + the above (current multipliers), J_l the level's own constraining task
+  /// rows: the secant pair of J^T J + H, so that B approximates the J^T J + H that the paper
+  /// says its B computes (sec. VI-A, after eq. 89).
+  GaussNewton,
+};
+
+/// Scale between the solver's multipliers and those of the Hessian (eq. 37).
+enum class MultiplierScale {
+  Dt,   ///< lambda_optim = dt lambda_ctrl (eq. 37; the default)
+  One,  ///< lambda_ctrl itself (a sensitivity: 1/dt = 200 times larger second-order term)
+};
+
 struct ControllerParams {
   /// Name of a registered method (lexdyn/control/method.hpp, findMethod): "bfgs" (LexDynBFGS,
   /// sec. VI-A), "ah" (LexDynAH, sec. VI-B), "gn" (pure Gauss-Newton, Fig. 14), "wls" (the
@@ -34,6 +56,7 @@ struct ControllerParams {
   double new_dof_diagonal_dt2 = 1e-3;   ///< diagonal put on newly occupied dofs, sec. VII (dt^2)
   bool sign_change_guard = true;        ///< sec. VIII-A
   bool sr1 = false;                     ///< SR1 instead of BFGS (beyond the paper; off by default)
+  BfgsSecant bfgs_secant = BfgsSecant::CurrentMultipliers;  ///< reading of eq. 88 (y)
   /// alpha of the paper's weighted identity alpha I* on the occupied joints of an augmented
   /// level (sec. IX-A: "if the movements are too jerky a weighted and dotted identity matrix
   /// alpha I* could be added to B"), in the units of B (those of J^T J, e.g. m^2/rad^2 for a
@@ -43,6 +66,12 @@ struct ControllerParams {
   // LexDynAH (sec. VI-B).
   double rho_dt2 = 1e-12;               ///< skip Hessian terms with |lambda_optim| <= rho (dt^2)
   double eps_dt2 = 1e-3;                ///< eps I* added after the Higham regularisation, eq. 91 (dt^2)
+  /// Adds the Gauss-Newton term J_l^T J_l of the level's own constraining task rows to the
+  /// analytic Hessian before Higham's regularisation, H = J_l^T J_l + sum lambda H (the J^T J + H
+  /// of the Lagrangian that the paper's B approximates, sec. VI-A). Off by default (eq. 21).
+  bool ah_add_jtj = false;
+  // Both LexDynBFGS and LexDynAH.
+  MultiplierScale multiplier_scale = MultiplierScale::Dt;  ///< eq. 37
   // Constant Levenberg-Marquardt damping mu on every augmentable level (velocity domain: rows
   // mu u(k+1) = 0, eq. 81; WLS: mu udot = 0 on the objective level, eq. 50). 0: off. Used by the
   // point-mass study of sec. V-A.

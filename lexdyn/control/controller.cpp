@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -131,6 +132,8 @@ Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&
   rec.level_augmented.assign(cfg.levels.size(), 0);
   rec.level_hessian_updated.assign(cfg.levels.size(), 0);
   rec.level_violation.setZero(static_cast<Eigen::Index>(cfg.levels.size()));
+  rec.level_second_order_ratio.setConstant(static_cast<Eigen::Index>(cfg.levels.size()), std::numeric_limits<double>::quiet_NaN());
+  rec.level_curvature_ratio.setConstant(static_cast<Eigen::Index>(cfg.levels.size()), std::numeric_limits<double>::quiet_NaN());
   rec.contact_wrench.setZero(6, layout.count());
 }
 
@@ -331,6 +334,8 @@ const Command& Controller::tick(const RobotState& s) {
   const MethodTick mt{I.ctx, I.td, I.levels, s, I.solver.result(), I.warm};
   std::fill(I.rec.level_augmented.begin(), I.rec.level_augmented.end(), 0);
   std::fill(I.rec.level_hessian_updated.begin(), I.rec.level_hessian_updated.end(), 0);
+  I.rec.level_second_order_ratio.setConstant(std::numeric_limits<double>::quiet_NaN());
+  I.rec.level_curvature_ratio.setConstant(std::numeric_limits<double>::quiet_NaN());
   I.method->addRows(mt, I.problem, I.rec);
   const auto t3 = Clock::now();
   // 4. Solve, warm-started from the previous tick.

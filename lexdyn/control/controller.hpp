@@ -66,6 +66,14 @@ struct TickRecord {
   std::vector<char> level_augmented;      ///< per configured level: Newton rows added this tick
   std::vector<char> level_hessian_updated;///< per configured level: BFGS update accepted this tick
   Eigen::VectorXd level_violation;        ///< per configured level: ||w_ctrl|| of its task rows
+  /// Per configured level while augmented (level_augmented), NaN otherwise: the size of the
+  /// second-order rows R against the level's Gauss-Newton term, trace(R^T R) / trace(J^T J),
+  /// J the level's constraining task rows (finite bound) on the velocity columns. R^T R is what
+  /// the rows add: the method's curvature term plus any identity (eps, alpha) or damping.
+  Eigen::VectorXd level_second_order_ratio;
+  /// The same for the method's own curvature term (BFGS: B; analytic: Higham's regularised
+  /// Hessian), without the identity terms eps I* and alpha I*; 0 for damping rows.
+  Eigen::VectorXd level_curvature_ratio;
   Eigen::Vector3d com = Eigen::Vector3d::Zero();
   /// Per contact: [force; torque] (world axes, torque about the contact frame origin) from gamma.
   Eigen::MatrixXd contact_wrench;

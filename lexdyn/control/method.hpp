@@ -100,7 +100,8 @@ class ControlMethod {
   /// Forgets the previous ticks (controller reset).
   virtual void reset() = 0;
   /// Fills the reserved rows of the levels for this tick (free rows, -inf <= 0 x <= inf, when
-  /// unused) and sets rec.level_augmented / level_hessian_updated (zero on entry).
+  /// unused) and sets rec.level_augmented / level_hessian_updated (zero on entry) and
+  /// level_second_order_ratio / level_curvature_ratio of augmented levels (NaN on entry).
   virtual void addRows(const MethodTick& tick, solver::Problem& problem, TickRecord& rec) = 0;
   /// The commanded u, udot, gamma and q from the solution x; the controller then adds the
   /// torques and the contact wrenches.

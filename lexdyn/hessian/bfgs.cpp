@@ -33,6 +33,18 @@ void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J,
   }
 }
 
+void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
+                                const Eigen::Ref<const Eigen::VectorXd>& lambda,
+                                const Eigen::Ref<const Eigen::VectorXd>& lambda_prev, Eigen::Ref<Eigen::VectorXd> y) {
+  LEXDYN_ALWAYS_ASSERT(J_prev.rows() == lambda.size() && lambda.size() == lambda_prev.size() && J_prev.cols() == y.size(),
+                       "accumulateMultiplierChange: sizes differ");
+  for (Eigen::Index c = 0; c < J_prev.cols(); ++c) {
+    double s = 0.0;
+    for (Eigen::Index r = 0; r < J_prev.rows(); ++r) s += J_prev(r, c) * (lambda[r] - lambda_prev[r]);
+    y[c] += s;
+  }
+}
+
 int choleskyOfOccupied(const Eigen::Ref<const Eigen::MatrixXd>& B, const std::vector<char>& occupied,
                        Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list, int* zero_pivots) {
   const Eigen::Index n = B.rows();

@@ -62,6 +62,12 @@ void addOnChain(const std::vector<char>& chain, double value, Eigen::Ref<Eigen::
 void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J,
                               const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
                               const Eigen::Ref<const Eigen::VectorXd>& lambda, Eigen::Ref<Eigen::VectorXd> y);
+/// The multiplier part of the full difference of the Lagrangian's gradient (eq. 88 read as
+/// grad L(k) - grad L(k-1) with each gradient's own multipliers, ControllerParams::bfgs_secant
+/// full_difference): y += J_prev^T (lambda - lambda_prev) (J_prev: rows x nv).
+void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
+                                const Eigen::Ref<const Eigen::VectorXd>& lambda,
+                                const Eigen::Ref<const Eigen::VectorXd>& lambda_prev, Eigen::Ref<Eigen::VectorXd> y);
 
 /// Cholesky factor of the occupied block of a positive (semi-)definite B, scattered to the
 /// occupied columns: R (rows >= m, cols == B.cols()) gets U (m x m upper triangular, U^T U = B_o)

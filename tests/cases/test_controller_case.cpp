@@ -181,6 +181,12 @@ TEST(ControllerCase, ErrorsNameFileLineAndKeyPath) {
   expectError(with("  method: bfgs\n", "  method: newton\n"), {"case.yaml:10: controller.method", "bfgs, ah, gn, wls"});
   expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  colour: red\n"),
               {"controller.colour", "unknown key"});
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  params: {bfgs_secant: sideways}\n"),
+              {"case.yaml:12: controller.params.bfgs_secant", "current_multipliers, full_difference, gauss_newton", "sideways"});
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  params: {multiplier_scale: 2}\n"),
+              {"case.yaml:12: controller.params.multiplier_scale", "dt, one"});
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  params: {ah_add_jtj: maybe}\n"),
+              {"case.yaml:12: controller.params.ah_add_jtj"});
   expectError(with("  solver: {paper_rules: true}\n", "  solver: {paper_rules: true, max_iterations: many}\n"),
               {"controller.solver.max_iterations", "expected an integer"});
   expectError(with("  solver: {paper_rules: true}\n", "  solver: {paper_rules: true, last_level_projection: sometimes}\n"),

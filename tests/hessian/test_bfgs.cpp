@@ -64,6 +64,16 @@ TEST(Bfgs, Eq89InitialisationHelpers) {
   const Eigen::MatrixXd dJ = J - Jp;
   const Eigen::VectorXd expected = y0 + dJ.transpose() * lambda;
   EXPECT_LE((y - expected).norm(), 1e-15);
+  // The full difference of the gradient (bfgs_secant: full_difference) adds the change of the
+  // multipliers at the previous Jacobian: J^T lambda - J_prev^T lambda_prev in all.
+  const Eigen::VectorXd lambda_prev = rng.uniformVector(3);
+  accumulateMultiplierChange(Jp, lambda, lambda_prev, y);
+  const Eigen::VectorXd full = y0 + J.transpose() * lambda - Jp.transpose() * lambda_prev;
+  EXPECT_LE((y - full).norm(), 1e-14);
+  // Unchanged multipliers add nothing.
+  const Eigen::VectorXd y1 = y;
+  accumulateMultiplierChange(Jp, lambda, lambda, y);
+  EXPECT_EQ(y, y1);
 }
 
 // Random sequences. With curvature pairs of a positive definite model (y = A s + noise, A SPD)

@@ -31,6 +31,8 @@ class LexDynAh final : public VelocityDomainMethod {
     const double dt2 = params_.dt * params_.dt;
     // eq. 21, skipping |lambda| <= rho.
     H_.setZero();
+    // ah_add_jtj: the Gauss-Newton term of the level's own rows, J^T J + H.
+    if (params_.ah_add_jtj) accumulateLevelGaussNewton(L, tick, H_);
     if (!have_lambda) return;
     for (const GeomTerm& g : a.terms) {
       auto wv = multipliers(g, L, tick, have_lambda);
@@ -39,6 +41,12 @@ class LexDynAh final : public VelocityDomainMethod {
       if (wv.lpNorm<Eigen::Infinity>() == 0.0) continue;
       config_->tasks[z(g.task)]->accumulateHessian(tick.ctx, *tick.td[z(g.task)], wv, H_);
     }
+  }
+
+  double identityDiagonal(size_t k) const override {
+    (void)k;
+    const double dt2 = params_.dt * params_.dt;
+    return params_.eps_dt2 * dt2 + params_.newton_identity_weight;
   }
 
   int factorLevel(size_t k, NewtonLevel& a, Eigen::MatrixXd& R) override {

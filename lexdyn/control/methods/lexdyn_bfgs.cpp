@@ -18,7 +18,7 @@ class LexDynBfgs final : public VelocityDomainMethod {
   bool newtonRows() const override { return true; }
 
   void setupLevel(size_t k, NewtonLevel& level) override {
-    (void)k, (void)level;
+    (void)k;
     if (qn_.empty()) {
       // First augmentable level: the per-tick buffers.
       for (Eigen::VectorXd* v : {&u_prev_, &s_, &y_, &rhs_, &acc_}) v->setZero(nv_);
@@ -37,10 +37,16 @@ class LexDynBfgs final : public VelocityDomainMethod {
     qo.identity_weight = params_.newton_identity_weight;
     qn_.push_back(hessian::makeQuasiNewton(nv_, qo));
     initialized_.push_back(0);
+    // full_difference: the multipliers of the previous tick, stacked over the level's terms.
+    int rows = 0;
+    for (const GeomTerm& g : level.terms) rows += g.rows;
+    lambda_prev_.emplace_back(Eigen::VectorXd::Zero(rows));
+    lambda_prev_valid_.push_back(0);
   }
 
   void resetLevels() override {
     std::fill(initialized_.begin(), initialized_.end(), 0);
+    std::fill(lambda_prev_valid_.begin(), lambda_prev_valid_.end(), 0);
     guard_.reset();
   }
 
@@ -79,22 +85,37 @@ class LexDynBfgs final : public VelocityDomainMethod {
       }
       B.initialize(rhs_);
       initialized_[k] = 1;
+      storeMultipliers(k, a, L, tick, have_lambda);
       return;
     }
     if (have_lambda) {
       // eq. 88 (sign: y = grad L(k) - grad L(k-1) = sum_i (J_i(k) - J_i(k-1))^T lambda_i).
       y_.setZero();
+      const bool full = p.bfgs_secant == BfgsSecant::FullDifference && lambda_prev_valid_[k];
+      int off = 0;
       for (const GeomTerm& g : a.terms) {
         const tasks::TaskData& d = *tick.td[z(g.task)];
-        hessian::accumulateGradientChange(d.J, J_prev_[z(g.task)], multipliers(g, L, tick, have_lambda), y_);
+        const auto lambda = multipliers(g, L, tick, have_lambda);
+        hessian::accumulateGradientChange(d.J, J_prev_[z(g.task)], lambda, y_);
+        // full_difference: + J_i(k-1)^T (lambda_i - lambda_i(prev)).
+        if (full) hessian::accumulateMultiplierChange(J_prev_[z(g.task)], lambda, lambda_prev_[k].segment(off, g.rows), y_);
+        off += g.rows;
       }
+      // gauss_newton: + J_l^T J_l s, the secant pair of J^T J + H.
+      if (p.bfgs_secant == BfgsSecant::GaussNewton) accumulateLevelGaussNewtonStep(L, tick, s_, y_);
       if (B.update(s_, y_)) rec.level_hessian_updated[z(L.config_level)] = 1;
     }
+    storeMultipliers(k, a, L, tick, have_lambda);
     B.setOccupied(a.occupied, p.new_dof_diagonal_dt2 * dt2);  // sec. VII
     if (p.sign_change_guard) {
       for (int dof : guard_.triggered())
         if (a.occupied[z(dof)]) B.addDiagonal(dof, p.zeta_dt2 * dt2);  // sec. VIII-A
     }
+  }
+
+  double identityDiagonal(size_t k) const override {
+    // factor(): B + alpha I*, or Higham + eps when rounding made B indefinite.
+    return params_.newton_identity_weight + (qn_[k]->lastFactorRegularized() ? qn_[k]->options().eps : 0.0);
   }
 
   int factorLevel(size_t k, NewtonLevel& level, Eigen::MatrixXd& R) override {
@@ -111,8 +132,22 @@ class LexDynBfgs final : public VelocityDomainMethod {
   }
 
  private:
+  // full_difference: keeps this tick's multipliers (the previous ones at the next tick).
+  void storeMultipliers(size_t k, const NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda) {
+    if (params_.bfgs_secant != BfgsSecant::FullDifference) return;
+    lambda_prev_valid_[k] = have_lambda ? 1 : 0;
+    if (!have_lambda) return;
+    int off = 0;
+    for (const GeomTerm& g : a.terms) {
+      lambda_prev_[k].segment(off, g.rows) = multipliers(g, L, tick, have_lambda);
+      off += g.rows;
+    }
+  }
+
   std::vector<std::unique_ptr<hessian::QuasiNewtonMatrix>> qn_;  // per level with reserved rows
   std::vector<char> initialized_;                                 // per level: eq. 89 done
+  std::vector<Eigen::VectorXd> lambda_prev_;                      // per level (full_difference)
+  std::vector<char> lambda_prev_valid_;
   std::vector<Eigen::MatrixXd> J_prev_;                           // per task (geometric tasks only)
   model::Configuration q_prev_;
   Eigen::VectorXd u_prev_, s_, y_, rhs_, acc_;

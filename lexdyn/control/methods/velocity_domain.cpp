@@ -1,6 +1,7 @@
 #include "lexdyn/control/methods/detail/velocity_domain.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "lexdyn/control/switching.hpp"
 
@@ -24,6 +25,40 @@ void writeDampingRows(ReservedRows& rows, double mu, const std::vector<char>* ma
     rows.lower(k) = rows.upper(k) = 0.0;
     ++k;
   }
+}
+
+namespace {
+
+// Calls f(row of TaskData::A restricted to the velocity columns) for every task row of the
+// level with a finite bound.
+template <class F>
+void forEachConstrainingRow(const SolverLevel& level, const MethodTick& tick, int nv, F&& f) {
+  for (const TaskSlot& sl : level.slots) {
+    const tasks::TaskData& d = *tick.td[z(sl.task)];
+    for (Eigen::Index r = 0; r < d.A.rows(); ++r) {
+      if (!std::isfinite(d.lower(r)) && !std::isfinite(d.upper(r))) continue;
+      f(d.A.row(r).head(nv));
+    }
+  }
+}
+
+}  // namespace
+
+double levelGaussNewtonTrace(const SolverLevel& level, const MethodTick& tick, int nv) {
+  double t = 0.0;
+  forEachConstrainingRow(level, tick, nv, [&](const auto& j) { t += j.squaredNorm(); });
+  return t;
+}
+
+void accumulateLevelGaussNewtonStep(const SolverLevel& level, const MethodTick& tick, const Eigen::Ref<const Eigen::VectorXd>& s,
+                                    Eigen::Ref<Eigen::VectorXd> y) {
+  const int nv = static_cast<int>(s.size());
+  forEachConstrainingRow(level, tick, nv, [&](const auto& j) { y += j.transpose() * j.dot(s); });
+}
+
+void accumulateLevelGaussNewton(const SolverLevel& level, const MethodTick& tick, Eigen::Ref<Eigen::MatrixXd> H) {
+  const int nv = static_cast<int>(H.rows());
+  forEachConstrainingRow(level, tick, nv, [&](const auto& j) { H.noalias() += j.transpose() * j; });
 }
 
 bool VelocityDomainMethod::reservesRows(size_t level, bool geometric) const {
@@ -84,8 +119,9 @@ bool VelocityDomainMethod::engaged(const GeomTerm& g, const tasks::TaskData& d) 
 Eigen::VectorXd::SegmentReturnType VelocityDomainMethod::multipliers(const GeomTerm& g, const SolverLevel& sl, const MethodTick& tick,
                                                                      bool have_lambda) {
   auto wv = w_.head(g.rows);
-  if (have_lambda) wv = params_.dt * tick.last.lambda.col(sl.problem_level).segment(g.lambda_row, g.rows);
-  else wv.setZero();
+  if (!have_lambda) wv.setZero();
+  else if (params_.multiplier_scale == MultiplierScale::Dt) wv = params_.dt * tick.last.lambda.col(sl.problem_level).segment(g.lambda_row, g.rows);
+  else wv = tick.last.lambda.col(sl.problem_level).segment(g.lambda_row, g.rows);
   return wv;
 }
 
@@ -109,6 +145,11 @@ void VelocityDomainMethod::addRows(const MethodTick& tick, solver::Problem& prob
     if (p.damping > 0.0) {
       writeDampingRows(spare, p.damping, &a.occupied);
       rec.level_augmented[z(L.config_level)] = 1;
+      int m = 0;
+      for (char o : a.occupied) m += o ? 1 : 0;
+      const double jtj = levelGaussNewtonTrace(L, tick, nv);
+      rec.level_second_order_ratio[L.config_level] = p.damping * p.damping * m / jtj;
+      rec.level_curvature_ratio[L.config_level] = 0.0;
       continue;
     }
     if (!newtonRows()) continue;
@@ -135,6 +176,15 @@ void VelocityDomainMethod::addRows(const MethodTick& tick, solver::Problem& prob
       spare.lower(r) = spare.upper(r) = target;
     }
     rec.level_augmented[z(L.config_level)] = rows > 0 ? 1 : 0;
+    if (rows > 0) {
+      // Size of the second-order term against the level's Gauss-Newton term.
+      const double jtj = levelGaussNewtonTrace(L, tick, nv);
+      const double added = R_.topRows(rows).squaredNorm();  // trace(R^T R)
+      int m = 0;
+      for (char o : a.occupied) m += o ? 1 : 0;
+      rec.level_second_order_ratio[L.config_level] = added / jtj;
+      rec.level_curvature_ratio[L.config_level] = (added - m * identityDiagonal(k)) / jtj;
+    }
   }
 }
 

@@ -50,6 +50,15 @@ struct NewtonLevel {
   std::vector<char> occupied;   ///< the I* of eq. 89, sec. VII (this tick)
 };
 
+/// The Gauss-Newton term of a level's own task rows: the rows of the tasks of `level` with a
+/// finite bound (equalities, engaged inequalities), on the velocity columns (nv), as the solver
+/// holds them (TaskData::A; velocity-domain row scale 1). trace(J^T J), J^T J s, and J^T J added
+/// to a matrix.
+double levelGaussNewtonTrace(const SolverLevel& level, const MethodTick& tick, int nv);
+void accumulateLevelGaussNewtonStep(const SolverLevel& level, const MethodTick& tick, const Eigen::Ref<const Eigen::VectorXd>& s,
+                                    Eigen::Ref<Eigen::VectorXd> y);
+void accumulateLevelGaussNewton(const SolverLevel& level, const MethodTick& tick, Eigen::Ref<Eigen::MatrixXd> H);
+
 class VelocityDomainMethod : public ControlMethod {
  public:
   explicit VelocityDomainMethod(const ControllerParams& params) : params_(params) {}
@@ -83,11 +92,18 @@ class VelocityDomainMethod : public ControlMethod {
     return 0;
   }
   virtual void storePrevious(const MethodTick& tick) { (void)tick; }
+  /// Per augmented level after factorLevel(): the value put on the occupied diagonal besides the
+  /// method's curvature term (eps, alpha), so that R^T R = curvature + identityDiagonal I*.
+  virtual double identityDiagonal(size_t k) const {
+    (void)k;
+    return 0.0;
+  }
 
   /// Whether a term constrains the solution (equalities always, inequalities while engaged).
   static bool engaged(const GeomTerm& g, const tasks::TaskData& d);
   /// Multipliers of level `sl`'s term `g` at the previous solve in optimisation units (eq. 37:
-  /// lambda_optim = dt lambda_ctrl); zero without them.
+  /// lambda_optim = dt lambda_ctrl; lambda_ctrl itself with multiplier_scale: one); zero
+  /// without them.
   Eigen::VectorXd::SegmentReturnType multipliers(const GeomTerm& g, const SolverLevel& sl, const MethodTick& tick,
                                                  bool have_lambda);
 
