@@ -101,7 +101,7 @@ bool KinematicTree::dofMovesBody(int dof, int body) const {
 // =============================================================================================
 // Construction
 // =============================================================================================
-RobotModel::Impl::Impl(RobotDescription d) : desc(std::move(d)), matter(system) {
+detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)), matter(system) {
   free_flyer = desc.base == BaseType::FreeFlyer;
   nb = static_cast<int>(desc.links.size());
   nj = static_cast<int>(desc.joints.size());
@@ -361,7 +361,7 @@ void RobotModel::update(ModelData& data, const Configuration& q, const Eigen::Re
 
 namespace detail {
 
-void realizeAndCache(const RobotModel::Impl& m, ModelData::Impl& d) {
+void realizeAndCache(const RobotModelImpl& m, ModelDataImpl& d) {
   m.system.realize(d.state, SimTK::Stage::Velocity);
 
   for (int b = 0; b < m.nb; ++b) {
@@ -695,7 +695,7 @@ CapsuleDistance RobotModel::capsuleDistance(const ModelData& data, int pair,
 // =============================================================================================
 namespace {
 
-void gravityBodyForces(const RobotModel::Impl& m, const ModelData::Impl& d, SimTK::Vector_<SimTK::SpatialVec>& F) {
+void gravityBodyForces(const detail::RobotModelImpl& m, const detail::ModelDataImpl& d, SimTK::Vector_<SimTK::SpatialVec>& F) {
   F.resize(m.matter.getNumBodies());
   F.setToZero();
   for (int b = 0; b < m.nb; ++b) {
