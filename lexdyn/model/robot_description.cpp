@@ -419,30 +419,19 @@ Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy) {
       .toRotationMatrix();
 }
 
-int RobotDescription::findLink(const std::string& n) const {
-  for (size_t i = 0; i < links.size(); ++i) {
-    if (links[i].name == n) return static_cast<int>(i);
+// Index of the first item named n, -1 when none is.
+template <class T>
+static int indexOfName(const std::vector<T>& items, const std::string& n) {
+  for (size_t i = 0; i < items.size(); ++i) {
+    if (items[i].name == n) return static_cast<int>(i);
   }
   return -1;
 }
-int RobotDescription::findJoint(const std::string& n) const {
-  for (size_t i = 0; i < joints.size(); ++i) {
-    if (joints[i].name == n) return static_cast<int>(i);
-  }
-  return -1;
-}
-int RobotDescription::findFrame(const std::string& n) const {
-  for (size_t i = 0; i < frames.size(); ++i) {
-    if (frames[i].name == n) return static_cast<int>(i);
-  }
-  return -1;
-}
-int RobotDescription::findCapsule(const std::string& n) const {
-  for (size_t i = 0; i < capsules.size(); ++i) {
-    if (capsules[i].name == n) return static_cast<int>(i);
-  }
-  return -1;
-}
+
+int RobotDescription::findLink(const std::string& n) const { return indexOfName(links, n); }
+int RobotDescription::findJoint(const std::string& n) const { return indexOfName(joints, n); }
+int RobotDescription::findFrame(const std::string& n) const { return indexOfName(frames, n); }
+int RobotDescription::findCapsule(const std::string& n) const { return indexOfName(capsules, n); }
 // "a, b, c": the names of `items` (name_of(item) gives one), for messages.
 template <class T, class NameOf>
 static std::string knownNames(const std::vector<T>& items, NameOf name_of) {
