@@ -37,8 +37,7 @@ void ComBoxTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& box) const
 
 std::unique_ptr<TaskData> ComBoxTask::createData(const ContactLayout& layout) const {
   requireLayoutNv(layout, nv_);
-  auto d = std::make_unique<DamperTaskData>();
-  initData(*d, layout);
+  auto d = makeData<DamperTaskData>(layout, false);
   d->dampers.resize(6);  // lower side of x, y, z, then upper side
   reset(*d);
   return d;
