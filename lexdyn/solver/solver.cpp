@@ -168,6 +168,8 @@ struct Solver::Impl {
   void run();
   void finish();
   void checkFiniteResult();
+  // One solve, from the warm start (warm, xw) or, when warm is null, from a cold start.
+  const Result& solve(const Problem& problem, const ActiveSet* warm, const Eigen::VectorXd* xw);
   double rowScale(int gid, double xnorm) const { return std::abs(target(gid)) + rowNorm(gid) * xnorm; }
   const Eigen::MatrixXd& A(int kf) const { return prob->level(kf + first).A; }
 };
@@ -911,38 +913,30 @@ void Solver::setOptions(const Options& options) {
 }
 const Result& Solver::result() const { return impl_->out; }
 
-const Result& Solver::solve(const Problem& problem) {
-  Impl& s = *impl_;
-  s.checkCompatible(problem);
-  s.loadData(problem);
-  if (s.scanNonFinite(problem)) {
-    s.out.status = Status::NonFiniteInput;
-    s.out.reason = StopReason::NonFiniteInput;
-    return s.out;
+const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm, const Eigen::VectorXd* xw) {
+  checkCompatible(problem);
+  loadData(problem);
+  if (scanNonFinite(problem)) {
+    out.status = Status::NonFiniteInput;
+    out.reason = StopReason::NonFiniteInput;
+    return out;
   }
-  s.initCold();
-  s.startFromStates();
-  s.run();
-  s.finish();
-  s.checkFiniteResult();
-  return s.out;
+  if (warm != nullptr) {
+    initWarm(*warm, *xw);
+  } else {
+    initCold();
+  }
+  startFromStates();
+  run();
+  finish();
+  checkFiniteResult();
+  return out;
 }
 
+const Result& Solver::solve(const Problem& problem) { return impl_->solve(problem, nullptr, nullptr); }
+
 const Result& Solver::solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm) {
-  Impl& s = *impl_;
-  s.checkCompatible(problem);
-  s.loadData(problem);
-  if (s.scanNonFinite(problem)) {
-    s.out.status = Status::NonFiniteInput;
-    s.out.reason = StopReason::NonFiniteInput;
-    return s.out;
-  }
-  s.initWarm(warm, xWarm);
-  s.startFromStates();
-  s.run();
-  s.finish();
-  s.checkFiniteResult();
-  return s.out;
+  return impl_->solve(problem, &warm, &xWarm);
 }
 
 }  // namespace lexdyn::solver
