@@ -419,30 +419,19 @@ Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy) {
       .toRotationMatrix();
 }
 
-int RobotDescription::findLink(const std::string& n) const {
-  for (size_t i = 0; i < links.size(); ++i) {
-    if (links[i].name == n) return static_cast<int>(i);
+// Index of the first item named n, -1 when none is.
+template <class T>
+static int indexOfName(const std::vector<T>& items, const std::string& n) {
+  for (size_t i = 0; i < items.size(); ++i) {
+    if (items[i].name == n) return static_cast<int>(i);
   }
   return -1;
 }
-int RobotDescription::findJoint(const std::string& n) const {
-  for (size_t i = 0; i < joints.size(); ++i) {
-    if (joints[i].name == n) return static_cast<int>(i);
-  }
-  return -1;
-}
-int RobotDescription::findFrame(const std::string& n) const {
-  for (size_t i = 0; i < frames.size(); ++i) {
-    if (frames[i].name == n) return static_cast<int>(i);
-  }
-  return -1;
-}
-int RobotDescription::findCapsule(const std::string& n) const {
-  for (size_t i = 0; i < capsules.size(); ++i) {
-    if (capsules[i].name == n) return static_cast<int>(i);
-  }
-  return -1;
-}
+
+int RobotDescription::findLink(const std::string& n) const { return indexOfName(links, n); }
+int RobotDescription::findJoint(const std::string& n) const { return indexOfName(joints, n); }
+int RobotDescription::findFrame(const std::string& n) const { return indexOfName(frames, n); }
+int RobotDescription::findCapsule(const std::string& n) const { return indexOfName(capsules, n); }
 // "a, b, c": the names of `items` (name_of(item) gives one), for messages.
 template <class T, class NameOf>
 static std::string knownNames(const std::vector<T>& items, NameOf name_of) {
@@ -666,84 +655,76 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, const std::string
     return f;
   };
 
-  if (auto frames = top.optional("frames")) {
-    for (const yaml::Node& fn : frames->elements()) {
-      yaml::StrictMap m(fn);
-      const yaml::Node name = m.required("name");
-      const std::string fname = name.asString();
-      if (!validName(fname)) name.fail("names may not contain whitespace, commas or quotes");
-      if (d.findFrame(fname) >= 0) name.fail("frame name '" + fname + "' is already used by a link or frame");
-      const int parent = lookupFrame(m.required("parent"));
-      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-      if (auto xyz = m.optional("xyz")) X.translation() = xyz->asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m");
-      if (auto rpy = m.optional("rpy")) X.linear() = rotationFromRpy(rpy->asVector3In(-ranges::kMaxAngle_rad, ranges::kMaxAngle_rad, "rad"));
-      m.finish();
-      FrameDescription f;
-      f.name = fname;
-      f.link = d.frames[static_cast<size_t>(parent)].link;
-      f.placement = d.frames[static_cast<size_t>(parent)].placement * X;
-      d.frames.push_back(f);
-    }
-  }
+  // The entry's name: valid, and no earlier item of `items` (a `what`) has it.
+  auto newName = [](yaml::StrictMap& m, const auto& items, const std::string& what) {
+    const yaml::Node name = m.required("name");
+    std::string n = name.asString();
+    if (!validName(n)) name.fail("names may not contain whitespace, commas or quotes");
+    if (indexOfName(items, n) >= 0) name.fail("duplicate " + what + " '" + n + "'");
+    return n;
+  };
 
-  if (auto surfaces = top.optional("contact_surfaces")) {
-    for (const yaml::Node& sn : surfaces->elements()) {
-      yaml::StrictMap m(sn);
-      ContactSurfaceDescription s;
-      const yaml::Node name = m.required("name");
-      s.name = name.asString();
-      if (!validName(s.name)) name.fail("names may not contain whitespace, commas or quotes");
-      for (const auto& o : d.contact_surfaces) {
-        if (o.name == s.name) name.fail("duplicate contact surface '" + s.name + "'");
+  // f(m) for each entry m (a map) of the list `key` when the file has it; an entry's unknown
+  // keys are refused once f has read it.
+  auto forEachEntry = [&top](const char* key, const auto& f) {
+    if (auto list = top.optional(key)) {
+      for (const yaml::Node& n : list->elements()) {
+        yaml::StrictMap m(n);
+        f(m);
+        m.finish();
       }
-      s.frame = lookupFrame(m.required("frame"));
-      const yaml::Node pts = m.required("points");
-      if (pts.size() < 1) pts.fail("a contact surface needs at least one point");
-      for (const yaml::Node& p : pts.elements()) s.points.push_back(p.asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m"));
-      m.finish();
-      d.contact_surfaces.push_back(s);
     }
-    if (!d.contact_surfaces.empty() && !top.has("friction_coefficient")) {
-      root.fail("friction_coefficient is required when contact_surfaces are given");
-    }
+  };
+
+  forEachEntry("frames", [&](yaml::StrictMap& m) {
+    const yaml::Node name = m.required("name");
+    const std::string fname = name.asString();
+    if (!validName(fname)) name.fail("names may not contain whitespace, commas or quotes");
+    if (d.findFrame(fname) >= 0) name.fail("frame name '" + fname + "' is already used by a link or frame");
+    const int parent = lookupFrame(m.required("parent"));
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    if (auto xyz = m.optional("xyz")) X.translation() = xyz->asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m");
+    if (auto rpy = m.optional("rpy")) X.linear() = rotationFromRpy(rpy->asVector3In(-ranges::kMaxAngle_rad, ranges::kMaxAngle_rad, "rad"));
+    FrameDescription f;
+    f.name = fname;
+    f.link = d.frames[static_cast<size_t>(parent)].link;
+    f.placement = d.frames[static_cast<size_t>(parent)].placement * X;
+    d.frames.push_back(f);
+  });
+
+  forEachEntry("contact_surfaces", [&](yaml::StrictMap& m) {
+    ContactSurfaceDescription s;
+    s.name = newName(m, d.contact_surfaces, "contact surface");
+    s.frame = lookupFrame(m.required("frame"));
+    const yaml::Node pts = m.required("points");
+    if (pts.size() < 1) pts.fail("a contact surface needs at least one point");
+    for (const yaml::Node& p : pts.elements()) s.points.push_back(p.asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m"));
+    d.contact_surfaces.push_back(s);
+  });
+  if (!d.contact_surfaces.empty() && !top.has("friction_coefficient")) {
+    root.fail("friction_coefficient is required when contact_surfaces are given");
   }
 
-  if (auto sensors = top.optional("force_sensors")) {
-    for (const yaml::Node& sn : sensors->elements()) {
-      yaml::StrictMap m(sn);
-      ForceSensorDescription s;
-      const yaml::Node name = m.required("name");
-      s.name = name.asString();
-      if (!validName(s.name)) name.fail("names may not contain whitespace, commas or quotes");
-      for (const auto& o : d.force_sensors) {
-        if (o.name == s.name) name.fail("duplicate force sensor '" + s.name + "'");
-      }
-      s.frame = lookupFrame(m.required("frame"));
-      m.finish();
-      d.force_sensors.push_back(s);
-    }
-  }
+  forEachEntry("force_sensors", [&](yaml::StrictMap& m) {
+    ForceSensorDescription s;
+    s.name = newName(m, d.force_sensors, "force sensor");
+    s.frame = lookupFrame(m.required("frame"));
+    d.force_sensors.push_back(s);
+  });
 
-  if (auto capsules = top.optional("capsules")) {
-    for (const yaml::Node& cn : capsules->elements()) {
-      yaml::StrictMap m(cn);
-      CapsuleDescription c;
-      const yaml::Node name = m.required("name");
-      c.name = name.asString();
-      if (!validName(c.name)) name.fail("names may not contain whitespace, commas or quotes");
-      if (d.findCapsule(c.name) >= 0) name.fail("duplicate capsule '" + c.name + "'");
-      const int frame = lookupFrame(m.required("parent"));
-      const Eigen::Isometry3d& X = d.frames[static_cast<size_t>(frame)].placement;
-      c.link = d.frames[static_cast<size_t>(frame)].link;
-      c.p0 = X * m.required("p0").asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m");
-      c.p1 = X * m.required("p1").asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m");
-      const yaml::Node rn = m.required("radius");
-      c.radius = rn.asPositiveDouble();
-      if (c.radius > ranges::kMaxLength_m) rn.fail("expected a radius in (0, " + fmt(ranges::kMaxLength_m) + "] m, found " + fmt(c.radius));
-      m.finish();
-      d.capsules.push_back(c);
-    }
-  }
+  forEachEntry("capsules", [&](yaml::StrictMap& m) {
+    CapsuleDescription c;
+    c.name = newName(m, d.capsules, "capsule");
+    const int frame = lookupFrame(m.required("parent"));
+    const Eigen::Isometry3d& X = d.frames[static_cast<size_t>(frame)].placement;
+    c.link = d.frames[static_cast<size_t>(frame)].link;
+    c.p0 = X * m.required("p0").asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m");
+    c.p1 = X * m.required("p1").asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m");
+    const yaml::Node rn = m.required("radius");
+    c.radius = rn.asPositiveDouble();
+    if (c.radius > ranges::kMaxLength_m) rn.fail("expected a radius in (0, " + fmt(ranges::kMaxLength_m) + "] m, found " + fmt(c.radius));
+    d.capsules.push_back(c);
+  });
 
   if (auto pairs = top.optional("collision_pairs")) {
     yaml::StrictMap m(*pairs);

@@ -101,7 +101,7 @@ bool KinematicTree::dofMovesBody(int dof, int body) const {
 // =============================================================================================
 // Construction
 // =============================================================================================
-RobotModel::Impl::Impl(RobotDescription d) : desc(std::move(d)), matter(system) {
+detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)), matter(system) {
   free_flyer = desc.base == BaseType::FreeFlyer;
   nb = static_cast<int>(desc.links.size());
   nj = static_cast<int>(desc.joints.size());
@@ -361,7 +361,7 @@ void RobotModel::update(ModelData& data, const Configuration& q, const Eigen::Re
 
 namespace detail {
 
-void realizeAndCache(const RobotModel::Impl& m, ModelData::Impl& d) {
+void realizeAndCache(const RobotModelImpl& m, ModelDataImpl& d) {
   m.system.realize(d.state, SimTK::Stage::Velocity);
 
   for (int b = 0; b < m.nb; ++b) {
@@ -566,15 +566,27 @@ Vector6d RobotModel::frameBias(const ModelData& data, FrameId f) const {
 
 Eigen::Vector3d RobotModel::centerOfMass(const ModelData& data) const { return data.impl().subtree_com.col(0); }
 
-Eigen::Vector3d RobotModel::centerOfMassVelocity(const ModelData& data) const {
-  const Impl& m = *impl_;
-  const ModelData::Impl& d = data.impl();
-  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+namespace {
+
+// sum_b m_b x_b / M over the bodies, x_b = of_body(b, r_b) with r_b the body's CoM relative to
+// its origin (world): the CoM's value of a rigid-body quantity given at the body origins.
+template <class OfBody>
+Eigen::Vector3d massWeightedMean(const detail::RobotModelImpl& m, const detail::ModelDataImpl& d, OfBody of_body) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (int b = 0; b < m.nb; ++b) {
     const Eigen::Vector3d r = d.com.col(b) - d.p.col(b);
-    v += m.tree.bodies[static_cast<size_t>(b)].mass * (d.v.col(b) + d.omega.col(b).cross(r));
+    sum += m.tree.bodies[static_cast<size_t>(b)].mass * of_body(b, r);
   }
-  return v / m.total_mass;
+  return sum / m.total_mass;
+}
+
+}  // namespace
+
+Eigen::Vector3d RobotModel::centerOfMassVelocity(const ModelData& data) const {
+  const ModelData::Impl& d = data.impl();
+  return massWeightedMean(*impl_, d, [&d](int b, const Eigen::Vector3d& r) -> Eigen::Vector3d {
+    return d.v.col(b) + d.omega.col(b).cross(r);
+  });
 }
 
 void RobotModel::centerOfMassJacobian(const ModelData& data, Eigen::Ref<Eigen::MatrixXd> J) const {
@@ -591,16 +603,11 @@ void RobotModel::centerOfMassJacobian(const ModelData& data, Eigen::Ref<Eigen::M
 }
 
 Eigen::Vector3d RobotModel::centerOfMassBias(const ModelData& data) const {
-  const Impl& m = *impl_;
   const ModelData::Impl& d = data.impl();
-  Eigen::Vector3d a = Eigen::Vector3d::Zero();
-  for (int b = 0; b < m.nb; ++b) {
-    const Eigen::Vector3d r = d.com.col(b) - d.p.col(b);
+  return massWeightedMean(*impl_, d, [&d](int b, const Eigen::Vector3d& r) -> Eigen::Vector3d {
     const Eigen::Vector3d w = d.omega.col(b);
-    a += m.tree.bodies[static_cast<size_t>(b)].mass *
-         (d.a_bias.col(b) + d.alpha_bias.col(b).cross(r) + w.cross(w.cross(r)));
-  }
-  return a / m.total_mass;
+    return d.a_bias.col(b) + d.alpha_bias.col(b).cross(r) + w.cross(w.cross(r));
+  });
 }
 
 void RobotModel::dofAxes(const ModelData& data, Eigen::Ref<Eigen::Matrix3Xd> axes, Eigen::Ref<Eigen::Matrix3Xd> points) const {
@@ -695,7 +702,7 @@ CapsuleDistance RobotModel::capsuleDistance(const ModelData& data, int pair,
 // =============================================================================================
 namespace {
 
-void gravityBodyForces(const RobotModel::Impl& m, const ModelData::Impl& d, SimTK::Vector_<SimTK::SpatialVec>& F) {
+void gravityBodyForces(const detail::RobotModelImpl& m, const detail::ModelDataImpl& d, SimTK::Vector_<SimTK::SpatialVec>& F) {
   F.resize(m.matter.getNumBodies());
   F.setToZero();
   for (int b = 0; b < m.nb; ++b) {

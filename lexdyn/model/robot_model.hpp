@@ -80,6 +80,12 @@ struct CapsuleDistance {
 
 class RobotModel;
 
+namespace detail {
+// The Simbody side of RobotModel and ModelData (lexdyn/model/detail/model_impl.hpp, internal).
+struct RobotModelImpl;
+struct ModelDataImpl;
+}  // namespace detail
+
 /// Per-tick workspace of a RobotModel (Simbody state + cached kinematics). Create with
 /// RobotModel::createData(); use only with the model that created it.
 class ModelData {
@@ -87,13 +93,13 @@ class ModelData {
   ModelData(ModelData&&) noexcept;
   ModelData& operator=(ModelData&&) noexcept;
   ~ModelData();
-  struct Impl;
-  Impl& impl() { return *impl_; }
-  const Impl& impl() const { return *impl_; }
 
  private:
   friend class RobotModel;
+  using Impl = detail::ModelDataImpl;
   explicit ModelData(std::unique_ptr<Impl> impl);
+  Impl& impl() { return *impl_; }
+  const Impl& impl() const { return *impl_; }
   std::unique_ptr<Impl> impl_;
 };
 
@@ -201,10 +207,8 @@ class RobotModel {
   void frameJacobianReference(const ModelData& data, FrameId f, Eigen::Ref<Eigen::MatrixXd> J) const;
   Eigen::Vector3d centerOfMassReference(const ModelData& data) const;  ///< Simbody's system CoM
 
-  struct Impl;
-  const Impl& impl() const { return *impl_; }
-
  private:
+  using Impl = detail::RobotModelImpl;
   std::unique_ptr<Impl> impl_;
 };
 

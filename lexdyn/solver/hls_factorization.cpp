@@ -695,6 +695,10 @@ void HlsFactorization::factorize(double rankTol) {
   dirtyFrom_ = L;
 }
 
+HlsFactorization::Stage HlsFactorization::stage(int k) const {
+  return {act_[z(k)], start_[z(k)], col0_[z(k)], rank_[z(k)]};
+}
+
 void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen::VectorXd& res) {
   const int L = levelCount();
   auto y = work_.head(nr_);
@@ -708,11 +712,8 @@ void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen
     for (int gid : active_[0]) res(gid) = 0.0;
   }
   for (int k = firstStage_; k < L; ++k) {
-    const int m = act_[z(k)];
+    const auto [m, s, c0, r] = stage(k);
     if (m == 0) continue;
-    const int s = start_[z(k)];
-    const int c0 = col0_[z(k)];
-    const int r = rank_[z(k)];
     auto t = t_.head(m);
     for (int j = 0; j < m; ++j) t(j) = b(colGid_[z(s + j)]);
     if (elim_) t.noalias() -= WB_.block(0, s, m0_, m).transpose() * d_.head(m0_);
@@ -793,11 +794,8 @@ void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref
   }
   if (elim_ && act_[z(k)] == 0) gB_.head(m0_).setZero();
   for (int j = k - 1; j >= firstStage_; --j) {
-    const int m = act_[z(j)];
+    const auto [m, s, c0, r] = stage(j);
     if (m == 0) continue;
-    const int s = start_[z(j)];
-    const int c0 = col0_[z(j)];
-    const int r = rank_[z(j)];
     auto u = u_.head(m);
     if (r == m) {
       u = -G.segment(c0, r);

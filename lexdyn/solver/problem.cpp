@@ -16,6 +16,16 @@ std::string levelWhere(const std::string& source, int l, const Level& lv) {
   return os.str();
 }
 
+// A level of that name and kind with those bounds (the rest is the caller's).
+Level makeLevel(std::string name, LevelKind kind, Eigen::VectorXd lower, Eigen::VectorXd upper) {
+  Level l;
+  l.name = std::move(name);
+  l.kind = kind;
+  l.lower = std::move(lower);
+  l.upper = std::move(upper);
+  return l;
+}
+
 }  // namespace
 
 int Problem::totalRows() const {
@@ -25,12 +35,8 @@ int Problem::totalRows() const {
 }
 
 int Problem::addLevel(std::string name, Eigen::MatrixXd A, Eigen::VectorXd lower, Eigen::VectorXd upper) {
-  Level l;
-  l.name = std::move(name);
-  l.kind = LevelKind::General;
+  Level l = makeLevel(std::move(name), LevelKind::General, std::move(lower), std::move(upper));
   l.A = std::move(A);
-  l.lower = std::move(lower);
-  l.upper = std::move(upper);
   levels_.push_back(std::move(l));
   return levelCount() - 1;
 }
@@ -40,13 +46,9 @@ int Problem::addBoundsLevel(std::string name, std::vector<int> variable, Eigen::
   if (!levels_.empty()) {
     throw InputError("problem: level \"" + name + "\"", "a bounds level is only allowed as the first level");
   }
-  Level l;
-  l.name = std::move(name);
-  l.kind = LevelKind::Bounds;
+  Level l = makeLevel(std::move(name), LevelKind::Bounds, std::move(lower), std::move(upper));
   l.variable = std::move(variable);
   l.coefficient = std::move(coefficient);
-  l.lower = std::move(lower);
-  l.upper = std::move(upper);
   levels_.push_back(std::move(l));
   return 0;
 }

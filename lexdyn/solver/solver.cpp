@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <string>
@@ -13,38 +14,36 @@
 
 namespace lexdyn::solver {
 
+namespace {
+
+// names[e], the names listed in the order of E's enumerators (0, 1, ...); "unknown" past them.
+template <class E, size_t N>
+const char* enumName(E e, const char* const (&names)[N]) {
+  const auto i = static_cast<size_t>(e);
+  return i < N ? names[i] : "unknown";
+}
+
+}  // namespace
+
 const char* toString(Status s) {
-  switch (s) {
-    case Status::Solved: return "solved";
-    case Status::StoppedEarly: return "stopped_early";
-    case Status::IterationLimit: return "iteration_limit";
-    case Status::NonFiniteInput: return "non_finite_input";
-    case Status::NonFiniteResult: return "non_finite_result";
-  }
-  return "unknown";
+  static const char* const kNames[] = {"solved", "stopped_early", "iteration_limit", "non_finite_input",
+                                       "non_finite_result"};
+  static_assert(std::size(kNames) == static_cast<size_t>(Status::NonFiniteResult) + 1);
+  return enumName(s, kNames);
 }
 
 const char* toString(StopReason r) {
-  switch (r) {
-    case StopReason::Optimal: return "optimal";
-    case StopReason::SlackBelowThreshold: return "slack_below_threshold";
-    case StopReason::OptimalityPhaseLimit: return "optimality_phase_limit";
-    case StopReason::TotalIterationLimit: return "total_iteration_limit";
-    case StopReason::HardIterationCap: return "hard_iteration_cap";
-    case StopReason::NonFiniteInput: return "non_finite_input";
-    case StopReason::NonFiniteResult: return "non_finite_result";
-  }
-  return "unknown";
+  static const char* const kNames[] = {"optimal", "slack_below_threshold", "optimality_phase_limit",
+                                       "total_iteration_limit", "hard_iteration_cap", "non_finite_input",
+                                       "non_finite_result"};
+  static_assert(std::size(kNames) == static_cast<size_t>(StopReason::NonFiniteResult) + 1);
+  return enumName(r, kNames);
 }
 
 const char* toString(RowState s) {
-  switch (s) {
-    case RowState::Inactive: return "inactive";
-    case RowState::Lower: return "lower";
-    case RowState::Upper: return "upper";
-    case RowState::Equality: return "equality";
-  }
-  return "unknown";
+  static const char* const kNames[] = {"inactive", "lower", "upper", "equality"};
+  static_assert(std::size(kNames) == static_cast<size_t>(RowState::Equality) + 1);
+  return enumName(s, kNames);
 }
 
 Options Options::paper(double dt) {
@@ -169,6 +168,8 @@ struct Solver::Impl {
   void run();
   void finish();
   void checkFiniteResult();
+  // One solve, from the warm start (warm, xw) or, when warm is null, from a cold start.
+  const Result& solve(const Problem& problem, const ActiveSet* warm, const Eigen::VectorXd* xw);
   double rowScale(int gid, double xnorm) const { return std::abs(target(gid)) + rowNorm(gid) * xnorm; }
   const Eigen::MatrixXd& A(int kf) const { return prob->level(kf + first).A; }
 };
@@ -912,38 +913,30 @@ void Solver::setOptions(const Options& options) {
 }
 const Result& Solver::result() const { return impl_->out; }
 
-const Result& Solver::solve(const Problem& problem) {
-  Impl& s = *impl_;
-  s.checkCompatible(problem);
-  s.loadData(problem);
-  if (s.scanNonFinite(problem)) {
-    s.out.status = Status::NonFiniteInput;
-    s.out.reason = StopReason::NonFiniteInput;
-    return s.out;
+const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm, const Eigen::VectorXd* xw) {
+  checkCompatible(problem);
+  loadData(problem);
+  if (scanNonFinite(problem)) {
+    out.status = Status::NonFiniteInput;
+    out.reason = StopReason::NonFiniteInput;
+    return out;
   }
-  s.initCold();
-  s.startFromStates();
-  s.run();
-  s.finish();
-  s.checkFiniteResult();
-  return s.out;
+  if (warm != nullptr) {
+    initWarm(*warm, *xw);
+  } else {
+    initCold();
+  }
+  startFromStates();
+  run();
+  finish();
+  checkFiniteResult();
+  return out;
 }
 
+const Result& Solver::solve(const Problem& problem) { return impl_->solve(problem, nullptr, nullptr); }
+
 const Result& Solver::solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm) {
-  Impl& s = *impl_;
-  s.checkCompatible(problem);
-  s.loadData(problem);
-  if (s.scanNonFinite(problem)) {
-    s.out.status = Status::NonFiniteInput;
-    s.out.reason = StopReason::NonFiniteInput;
-    return s.out;
-  }
-  s.initWarm(warm, xWarm);
-  s.startFromStates();
-  s.run();
-  s.finish();
-  s.checkFiniteResult();
-  return s.out;
+  return impl_->solve(problem, &warm, &xWarm);
 }
 
 }  // namespace lexdyn::solver

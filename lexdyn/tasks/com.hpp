@@ -6,8 +6,7 @@
 
 #include <optional>
 
-#include "lexdyn/tasks/pd.hpp"
-#include "lexdyn/tasks/task.hpp"
+#include "lexdyn/tasks/tracking.hpp"
 
 namespace lexdyn::tasks {
 
@@ -16,36 +15,22 @@ struct ComParams {
   PdGains gains;
 };
 
-class ComTask : public TaskModel {
+class ComTask : public TrackingTask {
  public:
   ComTask(std::string name, const model::RobotModel& model, const ComParams& params = {});
 
-  int rows() const override { return 3; }
-  TaskKind kind() const override { return TaskKind::Equality; }
-  bool hasFunction() const override { return true; }
   bool geometric() const override { return true; }
-  bool supports(Domain) const override { return true; }
-  int targetSize() const override { return 3; }
-  void checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) const override;
-
-  std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
-  /// Back to the initial target (or to holding at the next compute() when there is none).
-  void reset(TaskData& d) const override;
   void compute(const TickContext& ctx, TaskData& d) const override;
   void accumulateHessian(const TickContext& ctx, const TaskData& d, const Eigen::Ref<const Eigen::VectorXd>& w,
                          Eigen::Ref<Eigen::MatrixXd> H) const override;
   /// Every dof that moves a body with mass.
   void chainDofs(const model::RobotModel& model, std::vector<char>& mask) const override;
-
-  const Pd& gains() const { return pd_; }
-
- private:
-  int nv_ = 0;
-  std::optional<Eigen::Vector3d> initial_target_;
-  Pd pd_;
 };
 
 /// Marks every dof that moves a body of positive mass (the chain of CoM tasks).
 void markMassiveBodiesChain(const model::RobotModel& model, std::vector<char>& mask);
+/// H += sum_i w_i d^2 c_i / dq^2 for the three rows of the CoM c (com, com_box; w: 3 entries).
+void accumulateComRowsHessian(const TickContext& ctx, const Eigen::Ref<const Eigen::VectorXd>& w,
+                              Eigen::Ref<Eigen::MatrixXd> H);
 
 }  // namespace lexdyn::tasks

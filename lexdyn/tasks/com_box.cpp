@@ -37,8 +37,7 @@ void ComBoxTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& box) const
 
 std::unique_ptr<TaskData> ComBoxTask::createData(const ContactLayout& layout) const {
   requireLayoutNv(layout, nv_);
-  auto d = std::make_unique<DamperTaskData>();
-  initData(*d, layout);
+  auto d = makeData<DamperTaskData>(layout, false);
   d->dampers.resize(6);  // lower side of x, y, z, then upper side
   reset(*d);
   return d;
@@ -82,8 +81,7 @@ void ComBoxTask::compute(const TickContext& ctx, TaskData& base) const {
 
 void ComBoxTask::accumulateHessian(const TickContext& ctx, const TaskData&, const Eigen::Ref<const Eigen::VectorXd>& w,
                                    Eigen::Ref<Eigen::MatrixXd> H) const {
-  LEXDYN_ALWAYS_ASSERT(ctx.hessian != nullptr && w.size() == 3, "com_box: accumulateHessian needs ctx.hessian, w(3)");
-  hessian::accumulateComHessian(*ctx.model, *ctx.hessian, Eigen::Vector3d(w), H);
+  accumulateComRowsHessian(ctx, w, H);
 }
 
 void ComBoxTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const {

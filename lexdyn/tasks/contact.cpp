@@ -30,14 +30,8 @@ ContactTask::ContactTask(std::string name, const model::RobotModel& model, const
 }
 
 std::unique_ptr<TaskData> ContactTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_ || layout.ng() != ng_) {
-    throwTaskInput(name(), "", "built for a contact layout with nv = " + std::to_string(nv_) + ", ng = " +
-                                   std::to_string(ng_) + ", given nv = " + std::to_string(layout.nv()) +
-                                   ", ng = " + std::to_string(layout.ng()));
-  }
-  auto d = std::make_unique<ContactTaskData>();
-  initData(*d, layout);
-  return d;
+  requireLayoutSizes(layout, nv_, ng_);
+  return makeData<ContactTaskData>(layout, false);
 }
 
 void ContactTask::reset(TaskData& d) const { static_cast<ContactTaskData&>(d).holding = false; }

@@ -4,24 +4,11 @@
 
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/tasks/contact_jacobian.hpp"
-#include "lexdyn/tasks/task_params.hpp"
 
 namespace lexdyn::tasks {
 
 ContactForceBoundsTask::ContactForceBoundsTask(std::string name, const ContactLayout& layout)
-    : TaskModel(std::move(name)), nv_(layout.nv()), ng_(layout.ng()) {}
-
-std::unique_ptr<TaskData> ContactForceBoundsTask::createData(const ContactLayout& layout) const {
-  if (layout.nv() != nv_ || layout.ng() != ng_) {
-    throwTaskInput(name(), "", "built for a contact layout with nv = " + std::to_string(nv_) + ", ng = " +
-                                   std::to_string(ng_) + ", given nv = " + std::to_string(layout.nv()) +
-                                   ", ng = " + std::to_string(layout.ng()));
-  }
-  auto d = std::make_unique<TaskData>();
-  initData(*d, layout);
-  for (int k = 0; k < ng_; ++k) d->A(k, nv_ + k) = 1.0;
-  return d;
-}
+    : GeneratorRowsTask(std::move(name), layout) {}
 
 void ContactForceBoundsTask::compute(const TickContext& ctx, TaskData& d) const {
   constexpr double kInf = std::numeric_limits<double>::infinity();

@@ -11,26 +11,38 @@
 
 namespace lexdyn::tasks {
 
-class EquationOfMotionTask : public TaskModel {
- public:
-  EquationOfMotionTask(std::string name, const model::RobotModel& model);
-
-  int rows() const override { return rows_; }
-  TaskKind kind() const override { return TaskKind::Equality; }
-  bool supports(Domain) const override { return true; }
-  /// The unactuated rows can always be met exactly (by the free-flyer velocity).
-  bool separateLevel() const override { return true; }
-  std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
-  void compute(const TickContext& ctx, TaskData& d) const override;
-
- private:
-  int nv_ = 0, rows_ = 0;
-};
-
 /// Data of equation_of_motion and torque_limits: a point Jacobian and Jc^T (nv x ng).
 struct DynamicsTaskData : TaskData {
   Eigen::MatrixXd Jp;   ///< 3 x nv
   Eigen::MatrixXd JcT;  ///< nv x ng
+};
+
+/// Base of equation_of_motion and torque_limits: their rows are the rows first .. first + rows - 1
+/// of the equation of motion with the torques substituted out, A = [M, -Jc^T] (eq. 86).
+class DynamicsTask : public TaskModel {
+ public:
+  int rows() const override { return rows_; }
+  bool supports(Domain) const override { return true; }
+  /// A DynamicsTaskData, every row engaged.
+  std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
+
+ protected:
+  DynamicsTask(std::string name, const model::RobotModel& model, int first, int rows);
+  /// d.JcT = Jc^T (contact_jacobian.hpp), d.A = the task's rows of [M, -Jc^T] (eq. 86).
+  /// Allocation-free.
+  void writeDynamicsRows(const TickContext& ctx, DynamicsTaskData& d) const;
+
+  int nv_ = 0, first_ = 0, rows_ = 0;
+};
+
+class EquationOfMotionTask : public DynamicsTask {
+ public:
+  EquationOfMotionTask(std::string name, const model::RobotModel& model);
+
+  TaskKind kind() const override { return TaskKind::Equality; }
+  /// The unactuated rows can always be met exactly (by the free-flyer velocity).
+  bool separateLevel() const override { return true; }
+  void compute(const TickContext& ctx, TaskData& d) const override;
 };
 
 }  // namespace lexdyn::tasks

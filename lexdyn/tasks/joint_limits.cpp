@@ -31,8 +31,7 @@ JointLimitsTask::JointLimitsTask(std::string name, const model::RobotModel& mode
 
 std::unique_ptr<TaskData> JointLimitsTask::createData(const ContactLayout& layout) const {
   requireLayoutNv(layout, nv_);
-  auto d = std::make_unique<DamperTaskData>();
-  initData(*d, layout);
+  auto d = makeData<DamperTaskData>(layout, false);
   d->dampers.resize(static_cast<size_t>(2 * nj_));  // lower limit of each joint, then upper
   for (int j = 0; j < nj_; ++j) d->A(j, offset_ + j) = 1.0;
   return d;

@@ -4,8 +4,7 @@
 // order of `joints`); without an initial target the task holds the joints at the first compute().
 #pragma once
 
-#include "lexdyn/tasks/pd.hpp"
-#include "lexdyn/tasks/task.hpp"
+#include "lexdyn/tasks/tracking.hpp"
 
 namespace lexdyn::tasks {
 
@@ -15,35 +14,30 @@ struct JointPositionParams {
   PdGains gains;
 };
 
-class JointPositionTask : public TaskModel {
+/// Base of the joint-space PD tasks (joint_position, posture): one row per joint of joints(),
+/// e = target - q_j, J u = qdot_j, Jdot u = 0 (eq. 55, 61).
+class JointTrackingTask : public TrackingTask {
  public:
-  JointPositionTask(std::string name, const model::RobotModel& model, const JointPositionParams& params);
-
-  int rows() const override { return static_cast<int>(joints_.size()); }
-  TaskKind kind() const override { return TaskKind::Equality; }
-  bool hasFunction() const override { return true; }
-  bool supports(Domain) const override { return true; }
-  int targetSize() const override { return rows(); }
-  void checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) const override;
-
-  /// A and J: the unit rows of the selected joints' velocities (constant).
+  /// A and J: the unit rows of the joints' velocities (constant).
   std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
-  /// Back to the initial target (or to holding at the next compute() when there is none).
-  void reset(TaskData& d) const override;
+  /// Allocation-free.
   void compute(const TickContext& ctx, TaskData& d) const override;
 
   const std::vector<int>& joints() const { return joints_; }  ///< model joint indices
-  const Pd& gains() const { return pd_; }
+
+ protected:
+  JointTrackingTask(std::string name, const model::RobotModel& model, std::vector<int> joints);
+  /// The initial target: one value per joint (InputError otherwise), or none when empty.
+  void setInitialJointTarget(const Eigen::VectorXd& target);
 
  private:
-  int nv_ = 0, offset_ = 0;
+  int offset_ = 0;
   std::vector<int> joints_;
-  Eigen::VectorXd initial_target_;
-  Pd pd_;
 };
 
-/// Rows of a joint-space PD task (joint_position, posture): e = target - q_j, J u = qdot_j,
-/// Jdot u = 0 (eq. 55, 61). Allocation-free.
-void computeJointPdRows(const TickContext& ctx, const Pd& pd, int offset, const std::vector<int>& joints, TaskData& d);
+class JointPositionTask : public JointTrackingTask {
+ public:
+  JointPositionTask(std::string name, const model::RobotModel& model, const JointPositionParams& params);
+};
 
 }  // namespace lexdyn::tasks

@@ -1,7 +1,5 @@
 #include "lexdyn/tasks/orientation.hpp"
 
-#include <algorithm>
-
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/hessian/kinematic_hessian.hpp"
 
@@ -22,13 +20,10 @@ Eigen::Matrix3d rotationFromTarget(const Eigen::Ref<const Eigen::VectorXd>& targ
 }
 
 OrientationTask::OrientationTask(std::string name, const model::RobotModel& model, const OrientationParams& params)
-    : TaskModel(std::move(name)), nv_(model.nv()) {
+    : TrackingTask(std::move(name), model, 3, 9) {
   frame_ = resolveFrame(model, params.frame, this->name(), "frame");
   body_ = model.frameBody(frame_);
-  if (params.target) {
-    requireRotation(*params.target, this->name(), "target");
-    initial_target_ = params.target;
-  }
+  if (params.target) setInitialTarget(rotationToTarget(*params.target));
   pd_ = resolvePd(params.gains, this->name());
 }
 
@@ -37,18 +32,9 @@ void OrientationTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& targe
 }
 
 std::unique_ptr<TaskData> OrientationTask::createData(const ContactLayout& layout) const {
-  requireLayoutNv(layout, nv_);
-  auto d = std::make_unique<OrientationTaskData>();
-  initData(*d, layout);
+  auto d = makeTrackingData<OrientationTaskData>(layout);
   d->J6.setZero(6, nv_);
-  std::fill(d->engaged.begin(), d->engaged.end(), 1);
-  reset(*d);
   return d;
-}
-
-void OrientationTask::reset(TaskData& d) const {
-  d.target_set = initial_target_.has_value();
-  if (initial_target_) d.target = rotationToTarget(*initial_target_);
 }
 
 void OrientationTask::compute(const TickContext& ctx, TaskData& base) const {
@@ -58,10 +44,7 @@ void OrientationTask::compute(const TickContext& ctx, TaskData& base) const {
   model.frameJacobian(data, frame_, d.J6);
   d.J = d.J6.bottomRows(3);  // angular rows
   const Eigen::Matrix3d R = model.framePlacement(data, frame_).linear();
-  if (!d.target_set) {
-    d.target = rotationToTarget(R);  // hold
-    d.target_set = true;
-  }
+  holdTarget(d, rotationToTarget(R));
   const Eigen::Vector3d e = rotationError(rotationFromTarget(d.target), R);  // log(R_d R^T)
   const Eigen::Vector3d bias = model.frameBias(data, frame_).tail<3>();       // angular Jdot u
   writePdRows<3>(ctx, pd_, e, bias, nv_, d);                                  // eq. 61 / 55

@@ -12,8 +12,7 @@
 
 #include <optional>
 
-#include "lexdyn/tasks/pd.hpp"
-#include "lexdyn/tasks/task.hpp"
+#include "lexdyn/tasks/tracking.hpp"
 
 namespace lexdyn::tasks {
 
@@ -27,36 +26,24 @@ struct OrientationTaskData : TaskData {
   Eigen::MatrixXd J6;  ///< 6 x nv frame Jacobian workspace
 };
 
-class OrientationTask : public TaskModel {
+class OrientationTask : public TrackingTask {
  public:
   OrientationTask(std::string name, const model::RobotModel& model, const OrientationParams& params);
 
-  int rows() const override { return 3; }
-  TaskKind kind() const override { return TaskKind::Equality; }
-  bool hasFunction() const override { return true; }
   bool geometric() const override { return true; }
-  bool supports(Domain) const override { return true; }
-  int targetSize() const override { return 9; }
   /// Finite, a rotation (orthonormal to 1e-6, det 1).
   void checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) const override;
-
   std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
-  /// Back to the initial target (or to holding at the next compute() when there is none).
-  void reset(TaskData& d) const override;
   void compute(const TickContext& ctx, TaskData& d) const override;
   void accumulateHessian(const TickContext& ctx, const TaskData& d, const Eigen::Ref<const Eigen::VectorXd>& w,
                          Eigen::Ref<Eigen::MatrixXd> H) const override;
   void chainDofs(const model::RobotModel& model, std::vector<char>& mask) const override;
 
   model::FrameId frame() const { return frame_; }
-  const Pd& gains() const { return pd_; }
 
  private:
-  int nv_ = 0;
   model::FrameId frame_ = -1;
   int body_ = -1;
-  std::optional<Eigen::Matrix3d> initial_target_;
-  Pd pd_;
 };
 
 /// 9 values, row-major, of a rotation matrix (the target layout of orientation tasks).

@@ -1,41 +1,18 @@
 #include "lexdyn/tasks/position.hpp"
 
-#include <algorithm>
-
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/hessian/kinematic_hessian.hpp"
 
 namespace lexdyn::tasks {
 
 PositionTask::PositionTask(std::string name, const model::RobotModel& model, const PositionParams& params)
-    : TaskModel(std::move(name)), nv_(model.nv()) {
+    : TrackingTask(std::move(name), model, 3, 3) {
   frame_ = resolveFrame(model, params.frame, this->name(), "frame");
   body_ = model.frameBody(frame_);
   requireFinite(params.point, this->name(), "point");
   point_ = params.point;
-  if (params.target) {
-    requireFinite(*params.target, this->name(), "target");
-    initial_target_ = params.target;
-  }
+  if (params.target) setInitialTarget(*params.target);
   pd_ = resolvePd(params.gains, this->name());
-}
-
-void PositionTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) const {
-  requireFinite(target, name(), "target");
-}
-
-std::unique_ptr<TaskData> PositionTask::createData(const ContactLayout& layout) const {
-  requireLayoutNv(layout, nv_);
-  auto d = std::make_unique<TaskData>();
-  initData(*d, layout);
-  std::fill(d->engaged.begin(), d->engaged.end(), 1);
-  reset(*d);
-  return d;
-}
-
-void PositionTask::reset(TaskData& d) const {
-  d.target_set = initial_target_.has_value();
-  if (initial_target_) d.target = *initial_target_;
 }
 
 void PositionTask::compute(const TickContext& ctx, TaskData& d) const {
@@ -43,10 +20,7 @@ void PositionTask::compute(const TickContext& ctx, TaskData& d) const {
   const model::ModelData& data = *ctx.data;
   model.pointJacobian(data, frame_, point_, d.J);
   const Eigen::Vector3d p = model.pointPosition(data, frame_, point_);
-  if (!d.target_set) {
-    d.target = p;  // hold
-    d.target_set = true;
-  }
+  holdTarget(d, p);
   const Eigen::Vector3d e = d.target.head<3>() - p;
   writePdRows<3>(ctx, pd_, e, model.pointBias(data, frame_, point_), nv_, d);  // eq. 61 / 55
 }

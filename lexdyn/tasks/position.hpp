@@ -6,8 +6,7 @@
 
 #include <optional>
 
-#include "lexdyn/tasks/pd.hpp"
-#include "lexdyn/tasks/task.hpp"
+#include "lexdyn/tasks/tracking.hpp"
 
 namespace lexdyn::tasks {
 
@@ -18,21 +17,11 @@ struct PositionParams {
   PdGains gains;                                          ///< kp default 1 /s^2
 };
 
-class PositionTask : public TaskModel {
+class PositionTask : public TrackingTask {
  public:
   PositionTask(std::string name, const model::RobotModel& model, const PositionParams& params);
 
-  int rows() const override { return 3; }
-  TaskKind kind() const override { return TaskKind::Equality; }
-  bool hasFunction() const override { return true; }
   bool geometric() const override { return true; }
-  bool supports(Domain) const override { return true; }
-  int targetSize() const override { return 3; }
-  void checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) const override;
-
-  std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
-  /// Back to the initial target (or to holding at the next compute() when there is none).
-  void reset(TaskData& d) const override;
   void compute(const TickContext& ctx, TaskData& d) const override;
   void accumulateHessian(const TickContext& ctx, const TaskData& d, const Eigen::Ref<const Eigen::VectorXd>& w,
                          Eigen::Ref<Eigen::MatrixXd> H) const override;
@@ -40,15 +29,11 @@ class PositionTask : public TaskModel {
 
   model::FrameId frame() const { return frame_; }
   const Eigen::Vector3d& point() const { return point_; }
-  const Pd& gains() const { return pd_; }
 
  private:
-  int nv_ = 0;
   model::FrameId frame_ = -1;
   int body_ = -1;
   Eigen::Vector3d point_ = Eigen::Vector3d::Zero();
-  std::optional<Eigen::Vector3d> initial_target_;
-  Pd pd_;
 };
 
 }  // namespace lexdyn::tasks

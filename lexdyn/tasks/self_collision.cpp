@@ -54,8 +54,7 @@ SelfCollisionTask::SelfCollisionTask(std::string name, const model::RobotModel& 
 
 std::unique_ptr<TaskData> SelfCollisionTask::createData(const ContactLayout& layout) const {
   requireLayoutNv(layout, nv_);
-  auto d = std::make_unique<SelfCollisionTaskData>();
-  initData(*d, layout);
+  auto d = makeData<SelfCollisionTaskData>(layout, false);
   d->point_a.setZero(3, rows());
   d->point_b.setZero(3, rows());
   d->normal.setZero(3, rows());

@@ -1,8 +1,11 @@
 # Tasks and constraints of the controller (docs/controller.md, "Task types"): one file pair per
-# task type, plus the shared helpers (parameter checks, PD rows, velocity damper, Jc^T).
+# task type, plus the shared helpers (parameter checks, PD rows, the bases of the target-tracking
+# tasks and of the tasks whose rows are variables, velocity damper, Jc^T).
 target_sources(lexdyn PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/task.cpp
   ${CMAKE_CURRENT_LIST_DIR}/task_params.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/tracking.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/variable_rows.cpp
   ${CMAKE_CURRENT_LIST_DIR}/contact_jacobian.cpp
   ${CMAKE_CURRENT_LIST_DIR}/contact_force_bounds.cpp
   ${CMAKE_CURRENT_LIST_DIR}/joint_limits.cpp

@@ -41,23 +41,27 @@ void TaskModel::requireLayoutNv(const ContactLayout& layout, int nv) const {
   }
 }
 
-void TaskModel::initData(TaskData& d, const ContactLayout& layout) const {
+void TaskModel::requireLayoutSizes(const ContactLayout& layout, int nv, int ng) const {
+  if (layout.nv() != nv || layout.ng() != ng) {
+    throwTaskInput(name(), "", "built for a contact layout with nv = " + std::to_string(nv) + ", ng = " +
+                                   std::to_string(ng) + ", given nv = " + std::to_string(layout.nv()) +
+                                   ", ng = " + std::to_string(layout.ng()));
+  }
+}
+
+void TaskModel::initData(TaskData& d, const ContactLayout& layout, bool engaged) const {
   const int m = rows();
   d.A.setZero(m, layout.nx());
   d.lower.setZero(m);
   d.upper.setZero(m);
   d.error.setZero(m);
   d.J.setZero(m, layout.nv());
-  d.engaged.assign(static_cast<size_t>(m), 0);
+  d.engaged.assign(static_cast<size_t>(m), engaged ? 1 : 0);
   d.target.setZero(targetSize());
   d.target_set = false;
 }
 
-std::unique_ptr<TaskData> TaskModel::createData(const ContactLayout& layout) const {
-  auto d = std::make_unique<TaskData>();
-  initData(*d, layout);
-  return d;
-}
+std::unique_ptr<TaskData> TaskModel::createData(const ContactLayout& layout) const { return makeData(layout, false); }
 
 void TaskModel::boundVariables(const ContactLayout&, std::vector<int>& vars) const {
   vars.clear();

@@ -177,11 +177,21 @@ class TaskModel {
 
  protected:
   /// Sizes the base members of d for this task (A rows x nx, bounds, error, J rows x nv,
-  /// engaged, target) and zeroes them; used by createData() overrides of derived data types.
-  void initData(TaskData& d, const ContactLayout& layout) const;
+  /// engaged, target) and zeroes them; with `engaged`, every row is marked engaged (rows that
+  /// always constrain the solution). Used by createData() overrides of derived data types.
+  void initData(TaskData& d, const ContactLayout& layout, bool engaged = false) const;
+  /// A new data of type D (TaskData or derived from it) set up by initData().
+  template <class D = TaskData>
+  std::unique_ptr<D> makeData(const ContactLayout& layout, bool engaged) const {
+    auto d = std::make_unique<D>();
+    initData(*d, layout, engaged);
+    return d;
+  }
   /// Throws lexdyn::InputError naming the task when the layout's nv is not the model's (`nv`,
   /// the one the task was built for); used by createData() overrides.
   void requireLayoutNv(const ContactLayout& layout, int nv) const;
+  /// The same for tasks built for a contact layout: its nv and ng must be `nv` and `ng`.
+  void requireLayoutSizes(const ContactLayout& layout, int nv, int ng) const;
 
  private:
   std::string name_;

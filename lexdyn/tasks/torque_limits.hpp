@@ -8,7 +8,6 @@
 #pragma once
 
 #include "lexdyn/tasks/equation_of_motion.hpp"
-#include "lexdyn/tasks/task.hpp"
 
 namespace lexdyn::tasks {
 
@@ -16,20 +15,16 @@ struct TorqueLimitsParams {
   double scale = 1.0;  ///< fraction of the URDF effort limits, in (0, 1]
 };
 
-class TorqueLimitsTask : public TaskModel {
+class TorqueLimitsTask : public DynamicsTask {
  public:
   TorqueLimitsTask(std::string name, const model::RobotModel& model, const TorqueLimitsParams& params = {});
 
-  int rows() const override { return nj_; }
   TaskKind kind() const override { return TaskKind::Inequality; }
-  bool supports(Domain) const override { return true; }
-  std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;  ///< a DynamicsTaskData
   void compute(const TickContext& ctx, TaskData& d) const override;
 
   const Eigen::VectorXd& torqueLimits() const { return tau_max_; }  ///< Nm (N), per joint
 
  private:
-  int nv_ = 0, nj_ = 0, offset_ = 0;
   Eigen::VectorXd tau_max_;
 };
 

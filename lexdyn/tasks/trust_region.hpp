@@ -4,7 +4,7 @@
 // bounds task although each row has one variable.
 #pragma once
 
-#include "lexdyn/tasks/task.hpp"
+#include "lexdyn/tasks/variable_rows.hpp"
 
 namespace lexdyn::tasks {
 
@@ -12,21 +12,16 @@ struct TrustRegionParams {
   double delta = 0.01;  ///< Delta, rad or m per tick, > 0
 };
 
-class TrustRegionTask : public TaskModel {
+class TrustRegionTask : public VelocityRowsTask {
  public:
   TrustRegionTask(std::string name, const model::RobotModel& model, const TrustRegionParams& params = {});
 
-  int rows() const override { return nv_; }
   TaskKind kind() const override { return TaskKind::Inequality; }
-  bool supports(Domain d) const override { return d == Domain::Velocity; }
-  /// A = [I 0] (constant).
-  std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
   void compute(const TickContext& ctx, TaskData& d) const override;
 
   double delta() const { return delta_; }
 
  private:
-  int nv_ = 0;
   double delta_ = 0.01;
 };
 

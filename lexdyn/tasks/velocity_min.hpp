@@ -2,23 +2,17 @@
 // Velocity domain only.
 #pragma once
 
-#include "lexdyn/tasks/task.hpp"
+#include "lexdyn/tasks/variable_rows.hpp"
 
 namespace lexdyn::tasks {
 
-class VelocityMinTask : public TaskModel {
+class VelocityMinTask : public VelocityRowsTask {
  public:
   VelocityMinTask(std::string name, const model::RobotModel& model);
 
-  int rows() const override { return nv_; }
   TaskKind kind() const override { return TaskKind::Equality; }
-  bool supports(Domain d) const override { return d == Domain::Velocity; }
-  /// A = [I 0], lower = upper = 0 (constant).
-  std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
+  /// lower = upper = 0.
   void compute(const TickContext& ctx, TaskData& d) const override;
-
- private:
-  int nv_ = 0;
 };
 
 }  // namespace lexdyn::tasks

@@ -24,10 +24,12 @@ inline Eigen::Matrix3d toEigen(const SimTK::Rotation& R) {
   return M;
 }
 
-struct RobotModel::Impl {
-  explicit Impl(RobotDescription d);
-  Impl(const Impl&) = delete;
-  Impl& operator=(const Impl&) = delete;
+namespace detail {
+
+struct RobotModelImpl {
+  explicit RobotModelImpl(RobotDescription d);
+  RobotModelImpl(const RobotModelImpl&) = delete;
+  RobotModelImpl& operator=(const RobotModelImpl&) = delete;
 
   RobotDescription desc;
   bool free_flyer = true;
@@ -52,7 +54,7 @@ struct RobotModel::Impl {
   std::vector<std::vector<int>> children;         // per body
 };
 
-struct ModelData::Impl {
+struct ModelDataImpl {
   SimTK::State state;
   bool updated = false;
   // Per body (world frame).
@@ -75,11 +77,9 @@ struct ModelData::Impl {
   SimTK::Vector_<SimTK::SpatialVec> simbody_body_forces;
 };
 
-}  // namespace lexdyn::model
-
-namespace lexdyn::model::detail {
-
 /// Realizes Velocity and fills the kinematic caches of `d`.
-void realizeAndCache(const RobotModel::Impl& m, ModelData::Impl& d);
+void realizeAndCache(const RobotModelImpl& m, ModelDataImpl& d);
 
-}  // namespace lexdyn::model::detail
+}  // namespace detail
+
+}  // namespace lexdyn::model

@@ -153,6 +153,11 @@ class HlsFactorization {
   // Layout of the last factorisation: active columns of levels >= firstStage_, contiguous.
   Eigen::MatrixXd W_;
   std::vector<int> start_, act_, col0_, rank_;
+  // Stage k of that layout: m active columns from physical column s, its rows from c0, rank r.
+  struct Stage {
+    int m, s, c0, r;
+  };
+  Stage stage(int k) const;
   std::vector<int> colGid_;  // physical column -> gid
   std::vector<int> pos_;     // gid -> physical column or -1
   Eigen::VectorXd tau_, colNorm_, colNormRef_, colOrig_;
