@@ -29,6 +29,7 @@
 #include <string>
 
 #include "exact_reference.hpp"
+#include "harness/cli/exception_exit.hpp"
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/solver/problem_io.hpp"
 #include "lexdyn/solver/solver.hpp"
@@ -183,15 +184,8 @@ int main(int argc, char** argv) {
       }
       if ((c + 1) % 100000 == 0) std::fprintf(stderr, "lexdyn-solver-sweep: %ld/%ld, %ld failures\n", c + 1, cases, failures);
     }
-  } catch (const lexdyn::InputError& e) {
-    std::fprintf(stderr, "lexdyn-solver-sweep: error: %s\n", e.what());
-    return kExitBadInput;
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "lexdyn-solver-sweep: error: out of memory\n");
-    return kExitInternal;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "lexdyn-solver-sweep: internal error: %s\n", e.what());
-    return kExitInternal;
+  } catch (...) {
+    return lexdyn::cli::exitCodeOfException("lexdyn-solver-sweep", kExitInternal);
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("{\"problems\": %ld, \"solved\": %ld, \"failures\": %ld, \"cap_hits\": %ld, \"non_finite\": %ld, "

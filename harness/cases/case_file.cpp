@@ -227,30 +227,29 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
       }
       n.fail("pattern '" + pattern + "' matches no link of the model");
     };
-    if (auto ms = mm.optional("mass_scale")) {
-      for (const yaml::Node& e : ms->elements()) {
-        yaml::StrictMap em(e);
-        LinkMassScale x;
-        x.match = linkPattern(em.required("match"));
-        const yaml::Node sc = em.required("scale");
-        x.scale = sc.asPositiveDouble();
-        if (x.scale < 0.1 || x.scale > 10.0) sc.fail("expected a scale in [0.1, 10], found " + sc.raw().Scalar());
-        em.finish();
-        c.sim_model.mass_scale.push_back(x);
+    // The entries {match: LINK_PATTERN, ...} of the list `key`: read(entry, pattern) reads the rest.
+    auto linkEntries = [&](const char* key, auto read) {
+      if (auto list = mm.optional(key)) {
+        for (const yaml::Node& e : list->elements()) {
+          yaml::StrictMap em(e);
+          const std::string match = linkPattern(em.required("match"));
+          read(em, match);
+          em.finish();
+        }
       }
-    }
-    if (auto co = mm.optional("com_offset_m")) {
-      for (const yaml::Node& e : co->elements()) {
-        yaml::StrictMap em(e);
-        LinkComOffset x;
-        x.match = linkPattern(em.required("match"));
-        const yaml::Node off = em.required("offset");
-        x.offset_m = off.asVector3();
-        if (x.offset_m.cwiseAbs().maxCoeff() > 0.5) off.fail("expected offsets within +-0.5 m");
-        em.finish();
-        c.sim_model.com_offset.push_back(x);
-      }
-    }
+    };
+    linkEntries("mass_scale", [&](yaml::StrictMap& em, const std::string& match) {
+      const yaml::Node sc = em.required("scale");
+      const double scale = sc.asPositiveDouble();
+      if (scale < 0.1 || scale > 10.0) sc.fail("expected a scale in [0.1, 10], found " + sc.raw().Scalar());
+      c.sim_model.mass_scale.push_back(LinkMassScale{match, scale});
+    });
+    linkEntries("com_offset_m", [&](yaml::StrictMap& em, const std::string& match) {
+      const yaml::Node off = em.required("offset");
+      const Eigen::Vector3d offset = off.asVector3();
+      if (offset.cwiseAbs().maxCoeff() > 0.5) off.fail("expected offsets within +-0.5 m");
+      c.sim_model.com_offset.push_back(LinkComOffset{match, offset});
+    });
     mm.finish();
   }
   if (auto integ = m.optional("integrator")) {

@@ -100,9 +100,7 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
   yaml::StrictMap m(node);
   ContactEntry c;
   c.where = node.where();
-  const yaml::Node name = m.required("name");
-  c.name = name.asString();
-  requireChannelName(name, c.name);
+  c.name = channelName(m.required("name"));
   auto surface = m.optional("surface");
   auto frame = m.optional("frame");
   if (surface && frame) frame->fail("give either surface or frame (with points), not both");
@@ -165,8 +163,7 @@ std::vector<LevelEntry> readLevels(const yaml::Node& node, const LexdynSpec& spe
     LevelEntry e;
     e.where = items[l].where();
     const yaml::Node name = m.required("name");
-    e.name = name.asString();
-    requireChannelName(name, e.name);
+    e.name = channelName(name);
     for (const auto& o : out) {
       if (o.name == e.name) name.fail("duplicate level name '" + e.name + "'");
     }
@@ -222,19 +219,22 @@ const std::string& LexdynSpec::hierarchyWhere(const std::string& m) const {
   return control::findMethod(m, "method").weighted_hierarchy ? wls_levels_where : levels_where;
 }
 
-int LexdynSpec::findTask(const std::string& name) const {
-  for (size_t i = 0; i < tasks.size(); ++i) {
-    if (tasks[i].name == name) return static_cast<int>(i);
+namespace {
+
+// The index of the entry named `name`, or -1.
+template <class Entry>
+int indexOfName(const std::vector<Entry>& entries, const std::string& name) {
+  for (size_t i = 0; i < entries.size(); ++i) {
+    if (entries[i].name == name) return static_cast<int>(i);
   }
   return -1;
 }
 
-int LexdynSpec::findContact(const std::string& name) const {
-  for (size_t i = 0; i < contacts.size(); ++i) {
-    if (contacts[i].name == name) return static_cast<int>(i);
-  }
-  return -1;
-}
+}  // namespace
+
+int LexdynSpec::findTask(const std::string& name) const { return indexOfName(tasks, name); }
+
+int LexdynSpec::findContact(const std::string& name) const { return indexOfName(contacts, name); }
 
 LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, double dt) {
   LexdynSpec s;

@@ -366,14 +366,18 @@ void requireChannelName(const yaml::Node& n, const std::string& name) {
   }
 }
 
+std::string channelName(const yaml::Node& n) {
+  std::string name = n.asString();
+  requireChannelName(n, name);
+  return name;
+}
+
 TaskSpec readTaskSpec(const yaml::Node& node, const model::RobotDescription& robot, const std::vector<std::string>& contacts,
                       double control_period_s) {
   yaml::StrictMap m(node);
   TaskSpec s;
   s.where = node.where();
-  const yaml::Node name = m.required("name");
-  s.name = name.asString();
-  requireChannelName(name, s.name);
+  s.name = channelName(m.required("name"));
   const yaml::Node type = m.required("type");
   s.type = type.asEnum(taskTypes());
   const TaskType* t = findType(s.type);

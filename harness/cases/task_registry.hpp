@@ -95,5 +95,7 @@ Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy);
 
 /// Names used in trace channels: non-empty, letters, digits, '_' and '-' only.
 void requireChannelName(const yaml::Node& n, const std::string& name);
+/// The string of `n`, a name used in trace channels (requireChannelName).
+std::string channelName(const yaml::Node& n);
 
 }  // namespace lexdyn::cases

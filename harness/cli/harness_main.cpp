@@ -25,6 +25,7 @@
 //   0          the run completed and every check that decides passed (wall-clock checks decide
 //              only with --wall-clock-checks).
 #include "harness/cases/runner.hpp"
+#include "harness/cli/exception_exit.hpp"
 #include "harness/cli/sweep_cmd.hpp"
 #include "harness/golden/golden.hpp"
 #include "lexdyn/common/error.hpp"
@@ -430,17 +431,7 @@ int main(int argc, char** argv) {
     }
     std::fprintf(stderr, "  wrote %s and %s\n", s.trace_path.c_str(), s.summary_path.c_str());
     return lexdyn::cases::exitCode(s);
-  } catch (const lexdyn::InputError& e) {
-    std::fprintf(stderr, "lexdyn-harness: error: %s\n", e.what());
-    return lexdyn::cases::kExitBadInput;
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "lexdyn-harness: error: out of memory\n");
-    return lexdyn::cases::kExitRunFailure;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "lexdyn-harness: internal error: %s\n", e.what());
-    return lexdyn::cases::kExitRunFailure;
   } catch (...) {
-    std::fprintf(stderr, "lexdyn-harness: internal error: an exception of unknown type\n");
-    return lexdyn::cases::kExitRunFailure;
+    return lexdyn::cli::exitCodeOfException("lexdyn-harness", lexdyn::cases::kExitRunFailure);
   }
 }

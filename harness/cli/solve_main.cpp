@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "lexdyn/common/error.hpp"
+#include "harness/cli/exception_exit.hpp"
 #include "lexdyn/solver/problem_io.hpp"
 #include "lexdyn/solver/solver.hpp"
 
@@ -204,17 +205,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "lexdyn-solve: solver failure on %s: status %s (%s) after %d iterations\n", files[0].c_str(),
                  lexdyn::solver::toString(r.status), lexdyn::solver::toString(r.reason), r.iterations);
     return kExitSolverFailure;
-  } catch (const lexdyn::InputError& e) {
-    std::fprintf(stderr, "lexdyn-solve: error: %s\n", e.what());
-    return kExitBadInput;
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "lexdyn-solve: error: out of memory\n");
-    return kExitSolverFailure;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "lexdyn-solve: internal error: %s\n", e.what());
-    return kExitSolverFailure;
   } catch (...) {
-    std::fprintf(stderr, "lexdyn-solve: internal error: an exception of unknown type\n");
-    return kExitSolverFailure;
+    return lexdyn::cli::exitCodeOfException("lexdyn-solve", kExitSolverFailure);
   }
 }

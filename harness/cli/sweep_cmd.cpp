@@ -19,69 +19,75 @@ namespace lexdyn::cli {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// The options several sweep subcommands share: the same member of SweepCommand, with the help
+// text of the subcommand where it differs. Each adds one option and returns the builder, so a
+// subcommand's options read in the order of its help.
+struct SweepOptions {
+  CLI::App* s;
+  SweepCommand& c;
+
+  SweepOptions& out(const std::string& help) { s->add_option("--out", c.out, help)->required(); return *this; }
+  SweepOptions& jobs(const std::string& help) { s->add_option("-j,--jobs", c.jobs, help); return *this; }
+  SweepOptions& points(const std::string& help) { s->add_option("--points", c.points, help); return *this; }
+  SweepOptions& timeout() { s->add_option("--timeout", c.timeout_s, "seconds per run (default: the sweep file's timeout_s)"); return *this; }
+  SweepOptions& keepTraces() { s->add_flag("--keep-traces", c.keep_traces, "keep the traces of passing runs too"); return *this; }
+  SweepOptions& noShrink() { s->add_flag("--no-shrink", c.no_shrink, "do not shrink the failures"); return *this; }
+  SweepOptions& db(const std::string& help) { s->add_option("--db", c.db, help); return *this; }
+  SweepOptions& noDb(const std::string& help) { s->add_flag("--no-db", c.no_db, help); return *this; }
+  SweepOptions& quiet() { s->add_flag("--quiet", c.quiet, "no progress lines"); return *this; }
+};
+
+const char* const kDefaultDb = "failure database (default: .lexdyn/sweep-failures/<sweep>.jsonl)";
+
+}  // namespace
+
 void addSweepCommands(CLI::App& app, SweepCommand& c) {
   c.sweep = app.add_subcommand("sweep", "property-based sweeps of gains and thresholds (docs/sweeps.md)");
   c.sweep->require_subcommand(1);
-  auto common = [&](CLI::App* s) { s->add_option("file", c.file, "sweep file (YAML, cases/sweeps/)")->required(); };
+  // A subcommand with the sweep file, its first argument.
+  auto command = [&](CLI::App*& sub, const char* name, const char* help) {
+    sub = c.sweep->add_subcommand(name, help);
+    sub->add_option("file", c.file, "sweep file (YAML, cases/sweeps/)")->required();
+    return SweepOptions{sub, c};
+  };
 
-  c.run = c.sweep->add_subcommand("run", "run a sweep on the local cores (resumable: run it again to finish an interrupted one)");
-  common(c.run);
-  c.run->add_option("--out", c.out, "output directory")->required();
-  c.run->add_option("-j,--jobs", c.jobs, "parallel processes (default: the number of cores)");
-  c.run->add_option("--points", c.points, "run only the first N points (a smaller budget)");
-  c.run->add_option("--timeout", c.timeout_s, "seconds per run (default: the sweep file's timeout_s)");
-  c.run->add_flag("--keep-traces", c.keep_traces, "keep the traces of passing runs too");
-  c.run->add_flag("--no-shrink", c.no_shrink, "do not shrink the failures");
-  c.run->add_option("--db", c.db, "failure database (default: .lexdyn/sweep-failures/<sweep>.jsonl)");
-  c.run->add_flag("--no-db", c.no_db, "neither replay nor record failures");
-  c.run->add_flag("--quiet", c.quiet, "no progress lines");
+  command(c.run, "run", "run a sweep on the local cores (resumable: run it again to finish an interrupted one)")
+      .out("output directory").jobs("parallel processes (default: the number of cores)")
+      .points("run only the first N points (a smaller budget)").timeout().keepTraces().noShrink().db(kDefaultDb)
+      .noDb("neither replay nor record failures").quiet();
 
-  c.point = c.sweep->add_subcommand("point", "one run of a sweep in this process (what the driver runs for each point and method)");
-  common(c.point);
+  command(c.point, "point", "one run of a sweep in this process (what the driver runs for each point and method)");
   c.point->add_option("--method", c.method, "method")->required();
   c.point->add_option("--out", c.out, "the run's directory")->required();
   c.point->add_option("--index", c.index, "the point (its values from the seed and the index)");
   c.point->add_option("--value", c.values, "NAME=VALUE of a parameter (instead of --index; the others at the base case's values)");
   c.point->add_option("--duration", c.duration, "run length (s; default: the sweep's)");
-  c.point->add_flag("--quiet", c.quiet, "no progress lines");
+  SweepOptions{c.point, c}.quiet();
 
-  c.chunk = c.sweep->add_subcommand("chunk", "run some points of a sweep, one at a time (a Slurm array task)");
-  common(c.chunk);
-  c.chunk->add_option("--out", c.out, "output directory")->required();
+  command(c.chunk, "chunk", "run some points of a sweep, one at a time (a Slurm array task)").out("output directory");
   c.chunk->add_option("--points", c.points_list, "point indices, comma-separated, or @FILE (one per line)")->required();
   c.chunk->add_option("--chunk-size", c.chunk_size, "with @FILE: this task's slice of that many points");
   c.chunk->add_option("--task", c.index, "with @FILE: the slice (the array task id)");
-  c.chunk->add_option("--timeout", c.timeout_s, "seconds per run (default: the sweep file's timeout_s)");
-  c.chunk->add_flag("--keep-traces", c.keep_traces, "keep the traces of passing runs too");
+  SweepOptions{c.chunk, c}.timeout().keepTraces();
 
-  c.merge = c.sweep->add_subcommand("merge", "merge the points of OUT, shrink the failures, write the summary");
-  common(c.merge);
-  c.merge->add_option("--out", c.out, "output directory")->required();
-  c.merge->add_option("-j,--jobs", c.jobs, "parallel shrinking runs (default: the number of cores)");
-  c.merge->add_option("--points", c.points, "the sweep's first N points only");
-  c.merge->add_flag("--no-shrink", c.no_shrink, "do not shrink the failures");
-  c.merge->add_option("--db", c.db, "failure database (default: .lexdyn/sweep-failures/<sweep>.jsonl)");
-  c.merge->add_flag("--no-db", c.no_db, "do not record failures");
-  c.merge->add_flag("--quiet", c.quiet, "no progress lines");
+  command(c.merge, "merge", "merge the points of OUT, shrink the failures, write the summary")
+      .out("output directory").jobs("parallel shrinking runs (default: the number of cores)")
+      .points("the sweep's first N points only").noShrink().db(kDefaultDb).noDb("do not record failures").quiet();
 
-  c.submit = c.sweep->add_subcommand("submit", "run a sweep on Slurm: an array job over the missing points, then a merge job");
-  common(c.submit);
-  c.submit->add_option("--out", c.out, "output directory (on a file system the nodes share)")->required();
+  command(c.submit, "submit", "run a sweep on Slurm: an array job over the missing points, then a merge job")
+      .out("output directory (on a file system the nodes share)");
   c.submit->add_option("--chunk", c.chunk_size, "points per array task (default 4)");
   c.submit->add_option("--partition", c.partition, "Slurm partition");
   c.submit->add_option("--throttle", c.throttle, "at most this many array tasks at once (sbatch --array=...%N)");
-  c.submit->add_option("--points", c.points, "the sweep's first N points only");
-  c.submit->add_option("-j,--jobs", c.jobs, "CPUs of the merge job (parallel shrinking runs; default 1)");
-  c.submit->add_option("--db", c.db, "failure database of the merge job");
-  c.submit->add_flag("--no-db", c.no_db, "no failure database");
+  SweepOptions{c.submit, c}.points("the sweep's first N points only").jobs("CPUs of the merge job (parallel shrinking runs; default 1)")
+      .db("failure database of the merge job").noDb("no failure database");
   c.submit->add_flag("--dry-run", c.dry_run, "write the job scripts, do not submit them");
 
-  c.list = c.sweep->add_subcommand("list", "print the points: index and parameter values");
-  common(c.list);
-  c.list->add_option("--points", c.points, "the first N points only");
+  command(c.list, "list", "print the points: index and parameter values").points("the first N points only");
 
-  c.check = c.sweep->add_subcommand("check", "validate a sweep file (every parameter value loads in the base case)");
-  common(c.check);
+  command(c.check, "check", "validate a sweep file (every parameter value loads in the base case)");
 }
 
 namespace {

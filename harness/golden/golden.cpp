@@ -82,11 +82,9 @@ Manifest loadManifest(const std::string& path) {
   if (auto ct = top.optional("channel_tolerances")) {
     for (const yaml::Node& n : ct->elements()) {
       yaml::StrictMap cm(n);
-      ChannelTolerance c;
       const yaml::Node match = cm.required("match");
-      c.match = match.asString();
+      ChannelTolerance c{match.asString(), m.tolerance};
       patterns.emplace_back(c.match, match);
-      c.tolerance = m.tolerance;
       if (auto v = cm.optional("abs")) c.tolerance.abs = v->asDoubleIn(0.0, kMaxAbsTolerance);
       if (auto v = cm.optional("rel")) c.tolerance.rel = v->asDoubleIn(0.0, kMaxRelTolerance);
       cm.finish();

@@ -6,21 +6,12 @@
 # Usage: harness/scripts/bench-sim.sh [-n RUNS] [-b BUILD_DIR] [case.yaml ...]
 #        (defaults: 5 runs, build/, cases/stand.yaml cases/squat_sway.yaml)
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 RUNS=5
 BUILD="$ROOT/build"
-while getopts "n:b:" opt; do
-  case "$opt" in
-    n) RUNS="$OPTARG" ;;
-    b) BUILD="$OPTARG" ;;
-    *) echo "usage: $0 [-n RUNS] [-b BUILD_DIR] [case.yaml ...]" >&2; exit 2 ;;
-  esac
-done
-shift $((OPTIND - 1))
-CASES=("$@")
-if [ ${#CASES[@]} -eq 0 ]; then CASES=("$ROOT/cases/stand.yaml" "$ROOT/cases/squat_sway.yaml"); fi
-HARNESS="$BUILD/bin/lexdyn-harness"
-[ -x "$HARNESS" ] || { echo "bench-sim: $HARNESS not built" >&2; exit 2; }
+lexdyn_options "[-n RUNS] [-b BUILD_DIR] [case.yaml ...]" n=RUNS b=BUILD -- "$@"
+lexdyn_cases "${LEXDYN_OPERANDS[@]}"
+lexdyn_harness bench-sim
 OUT="$(mktemp -d)"
 trap 'rm -rf "$OUT"' EXIT
 

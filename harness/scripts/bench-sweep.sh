@@ -6,20 +6,12 @@
 #
 # Usage: harness/scripts/bench-sweep.sh [-b BUILD_DIR] [-r REPEATS] [-n EXP1_POINTS]
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 BUILD="$ROOT/build"
 REPEATS=3
 EXP1_POINTS=4
-while getopts "b:r:n:" opt; do
-  case "$opt" in
-    b) BUILD="$OPTARG" ;;
-    r) REPEATS="$OPTARG" ;;
-    n) EXP1_POINTS="$OPTARG" ;;
-    *) echo "usage: $0 [-b BUILD_DIR] [-r REPEATS] [-n EXP1_POINTS]" >&2; exit 2 ;;
-  esac
-done
-H="$BUILD/bin/lexdyn-harness"
-[ -x "$H" ] || { echo "bench-sweep: $H not built" >&2; exit 2; }
+lexdyn_options "[-b BUILD_DIR] [-r REPEATS] [-n EXP1_POINTS]" b=BUILD r=REPEATS n=EXP1_POINTS -- "$@"
+lexdyn_harness bench-sweep
 W="$(mktemp -d /tmp/lexdyn-bench-sweep.XXXXXX)"
 trap 'rm -rf "$W"' EXIT
 now() { date +%s.%N; }
@@ -29,7 +21,7 @@ sweep_once() {  # FILE JOBS POINTS
   local out="$W/out-$RANDOM$RANDOM"
   local t0 t1
   t0=$(now)
-  "$H" sweep run "$1" --out "$out" -j "$2" --points "$3" --no-db --no-shrink --quiet > /dev/null 2>&1 || true
+  "$HARNESS" sweep run "$1" --out "$out" -j "$2" --points "$3" --no-db --no-shrink --quiet > /dev/null 2>&1 || true
   t1=$(now)
   python3 - "$out" "$t0" "$t1" << 'EOF'
 import json, sys
@@ -59,7 +51,7 @@ bench() {  # LABEL FILE POINTS
     # The driver's one-time start: reading and validating the sweep file (a case load per
     # parameter value probed).
     local c0 c1
-    c0=$(now); "$H" sweep check "$file" > /dev/null; c1=$(now)
+    c0=$(now); "$HARNESS" sweep check "$file" > /dev/null; c1=$(now)
     start+="$(python3 -c "print($c1 - $c0)") "
     read -r wall inner runs < <(sweep_once "$file" 1 "$points")
     j1+="$wall "
@@ -96,8 +88,8 @@ bench "exp1 bfgs (120 s runs)" "$W/exp1-bench.yaml" "$EXP1_POINTS"
 # configuration: exp1 cut at 1 s, so that the fixed costs show.
 pw="" pr=""
 for _ in $(seq "$REPEATS"); do
-  t0=$(now); "$H" sweep point "$W/exp1-bench.yaml" --value kp=0.3 --method bfgs --duration 1 --out "$W/p" --quiet > /dev/null 2>&1 || true; t1=$(now)
-  "$H" run "$ROOT/cases/exp1.yaml" --method bfgs --set 'controller.tasks[right_hand].gains.kp=0.3' \
+  t0=$(now); "$HARNESS" sweep point "$W/exp1-bench.yaml" --value kp=0.3 --method bfgs --duration 1 --out "$W/p" --quiet > /dev/null 2>&1 || true; t1=$(now)
+  "$HARNESS" run "$ROOT/cases/exp1.yaml" --method bfgs --set 'controller.tasks[right_hand].gains.kp=0.3' \
     --set 'controller.tasks[left_hand].gains.kp=0.3' --set trace.every_n_ticks=50 --duration 1 --out "$W/q" --quiet > /dev/null 2>&1 || true; t2=$(now)
   pw+="$(python3 -c "print($t1 - $t0)") "
   pr+="$(python3 -c "print($t2 - $t1)") "

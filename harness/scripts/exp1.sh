@@ -13,21 +13,13 @@
 # WLS fails checks and the final-error comparisons at the committed gains (docs/results.md), so a
 # complete main job exits 1. 3: a run stopped early or wrote no summary.
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-source "$ROOT/harness/scripts/exit-codes.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 BUILD="$ROOT/build"
 OUT="$ROOT/out/exp1"
+lexdyn_options "[-b BUILD_DIR] [-o OUT_DIR] [-d DURATION_S]" b=BUILD o=OUT d=DURATION_S -- "$@"
 DURATION=()
-while getopts "b:o:d:" opt; do
-  case "$opt" in
-    b) BUILD="$OPTARG" ;;
-    o) OUT="$OPTARG" ;;
-    d) DURATION=(--duration "$OPTARG") ;;
-    *) echo "usage: $0 [-b BUILD_DIR] [-o OUT_DIR] [-d DURATION_S]" >&2; exit 2 ;;
-  esac
-done
-HARNESS="$BUILD/bin/lexdyn-harness"
-[ -x "$HARNESS" ] || { echo "exp1: $HARNESS not built" >&2; exit 2; }
+[ -z "${DURATION_S+given}" ] || DURATION=(--duration "$DURATION_S")
+lexdyn_harness exp1
 CASE="$ROOT/cases/exp1.yaml"
 METHODS=(bfgs ah wls)
 mkdir -p "$OUT"

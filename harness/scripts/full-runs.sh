@@ -12,28 +12,15 @@
 # failed, 0 everything passed); the table is printed in every case. Some runs are expected to fail
 # (exp1-gn, exp1-wls-weak; docs/results.md), so a full set of runs exits 1 or 3.
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-source "$ROOT/harness/scripts/exit-codes.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 BUILD="$ROOT/build"
 OUT="$ROOT/out/full-runs"
 JOBS=2
 MANIFEST="$ROOT/golden/manifest.yaml"
-while getopts "b:o:j:m:" opt; do
-  case "$opt" in
-    b) BUILD="$OPTARG" ;;
-    o) OUT="$OPTARG" ;;
-    j) JOBS="$OPTARG" ;;
-    m) MANIFEST="$OPTARG" ;;
-    *) echo "usage: $0 [-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [ID ...]" >&2; exit 2 ;;
-  esac
-done
-shift $((OPTIND - 1))
-HARNESS="$BUILD/bin/lexdyn-harness"
-[ -x "$HARNESS" ] || { echo "full-runs: $HARNESS not built (cmake --build $BUILD)" >&2; exit 2; }
+lexdyn_options "[-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [ID ...]" b=BUILD o=OUT j=JOBS m=MANIFEST -- "$@"
+lexdyn_harness full-runs " (cmake --build $BUILD)"
 mkdir -p "$OUT"
-ONLY=()
-if [ $# -gt 0 ]; then ONLY=(--only "$(IFS=,; echo "$*")"); fi
-"$HARNESS" golden list --manifest "$MANIFEST" "${ONLY[@]}" > "$OUT/runs.txt"   # ID CASE_FILE METHOD
+lexdyn_golden_list "$MANIFEST" "${LEXDYN_OPERANDS[@]}" > "$OUT/runs.txt"   # ID CASE_FILE METHOD
 
 run_one() {
   local id="$1" case_file="$2" method="$3" dir="$OUT/$1"
@@ -51,18 +38,13 @@ export HARNESS OUT
 xargs -P "$JOBS" -L 1 bash -c 'run_one "$0" "$1" "$2"' < "$OUT/runs.txt"
 
 # The method comparisons of the cases that have some, on the traces just written.
-cut -d' ' -f2 "$OUT/runs.txt" | sort -u | while read -r case_file; do
-  grep -q '^comparisons:' "$case_file" || continue
-  traces=()
-  while read -r id cf m; do
-    [ "$cf" = "$case_file" ] && [ -f "$OUT/$id/trace.csv" ] && traces+=("$OUT/$id/trace.csv")
-  done < "$OUT/runs.txt"
-  [ ${#traces[@]} -ge 2 ] || continue
-  name="$(basename "$case_file" .yaml)"
-  code=0
-  "$HARNESS" compare --case "$case_file" "${traces[@]}" > "$OUT/$name.compare.txt" 2>&1 || code=$?
+compare_case() {  # NAME CASE_FILE TRACE ...
+  local name="$1" case_file="$2" code=0
+  shift 2
+  "$HARNESS" compare --case "$case_file" "$@" > "$OUT/$name.compare.txt" 2>&1 || code=$?
   echo "$code" > "$OUT/$name.compare.exit_code"
-done
+}
+lexdyn_each_comparison "$OUT/runs.txt" "$OUT" compare_case
 
 # The table (harness/scripts/summary_table.py), then the comparisons.
 set +e

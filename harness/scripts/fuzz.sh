@@ -19,23 +19,16 @@
 # is kept as findings/stall-* and not counted; the fuzzing goes on after every finding.
 # Exit codes: 0 no finding; 1 findings (listed); 2 usage or build failure; 130 / 143 interrupted.
 set -uo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 MINUTES=10
 ENGINE=""
 OUT="$ROOT/out/fuzz"
 SEED=1
 TIMEOUT=10   # seconds per input before libFuzzer calls it a hang
-usage() { echo "usage: $0 [-m MINUTES] [-e libfuzzer|mutate] [-o OUT_DIR] [-s SEED] [TARGET ...]" >&2; exit 2; }
-while getopts "m:e:o:s:" opt; do
-  case "$opt" in
-    m) MINUTES="$OPTARG" ;;
-    e) ENGINE="$OPTARG" ;;
-    o) OUT="$OPTARG" ;;
-    s) SEED="$OPTARG" ;;
-    *) usage ;;
-  esac
-done
-shift $((OPTIND - 1))
+USAGE="[-m MINUTES] [-e libfuzzer|mutate] [-o OUT_DIR] [-s SEED] [TARGET ...]"
+usage() { echo "usage: $0 $USAGE" >&2; exit 2; }
+lexdyn_options "$USAGE" m=MINUTES e=ENGINE o=OUT s=SEED -- "$@"
+set -- "${LEXDYN_OPERANDS[@]}"
 [[ "$MINUTES" =~ ^[0-9]+([.][0-9]+)?$ ]] || { echo "fuzz: -m expects minutes, found '$MINUTES'" >&2; exit 2; }
 [[ "$SEED" =~ ^[0-9]+$ ]] || { echo "fuzz: -s expects a non-negative integer, found '$SEED'" >&2; exit 2; }
 if [ -z "$ENGINE" ]; then

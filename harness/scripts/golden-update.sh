@@ -10,26 +10,14 @@
 # Exit codes (harness/scripts/exit-codes.sh): the worst of the `golden update` runs: 130/143
 # interrupted, 2 bad input, 3 a run failure, 0 every golden written.
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-source "$ROOT/harness/scripts/exit-codes.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 BUILD="$ROOT/build"
 JOBS=2
 MANIFEST="$ROOT/golden/manifest.yaml"
-while getopts "b:j:m:" opt; do
-  case "$opt" in
-    b) BUILD="$OPTARG" ;;
-    j) JOBS="$OPTARG" ;;
-    m) MANIFEST="$OPTARG" ;;
-    *) echo "usage: $0 [-b BUILD_DIR] [-j JOBS] [-m MANIFEST] [ID ...]" >&2; exit 2 ;;
-  esac
-done
-shift $((OPTIND - 1))
-HARNESS="$BUILD/bin/lexdyn-harness"
-[ -x "$HARNESS" ] || { echo "golden-update: $HARNESS not built (cmake --build $BUILD)" >&2; exit 2; }
+lexdyn_options "[-b BUILD_DIR] [-j JOBS] [-m MANIFEST] [ID ...]" b=BUILD j=JOBS m=MANIFEST -- "$@"
+lexdyn_harness golden-update " (cmake --build $BUILD)"
 
-ONLY=()
-if [ $# -gt 0 ]; then ONLY=(--only "$(IFS=,; echo "$*")"); fi
-IDS="$("$HARNESS" golden list --manifest "$MANIFEST" "${ONLY[@]}" | cut -d' ' -f1)"
+IDS="$(lexdyn_golden_list "$MANIFEST" "${LEXDYN_OPERANDS[@]}" | cut -d' ' -f1)"
 echo "golden-update: $(echo "$IDS" | wc -l) golden(s), $JOBS at a time" >&2
 CODES="$(mktemp)"
 export HARNESS MANIFEST CODES

@@ -23,7 +23,7 @@
 # summary) or a step failed (build, report); 130 / 143 interrupted by SIGINT / SIGTERM (what was
 # done is kept; run the same command again to resume).
 set -uo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 OUT=""
 HISTORY=""
 JOBS="${LEXDYN_JOBS:-$(nproc)}"
@@ -271,22 +271,18 @@ stop_if_interrupted
 
 # ------------------------------------------------------------------ 4. the cases' method comparisons
 mkdir -p "$OUT/compare"
-cut -d' ' -f2 "$OUT/runs.txt" | sort -u | while read -r case_file; do
-  grep -q '^comparisons:' "$case_file" || continue
-  traces=()
-  while read -r id cf m; do
-    [ "$cf" = "$case_file" ] && [ -f "$OUT/$id/trace.csv" ] && traces+=("$OUT/$id/trace.csv")
-  done < "$OUT/runs.txt"
-  [ ${#traces[@]} -ge 2 ] || continue
-  name="$(basename "$case_file" .yaml)"
-  "$HARNESS" compare --case "$case_file" --json "${traces[@]}" > "$OUT/compare/$name.json.partial" 2> "$OUT/compare/$name.txt"
+compare_case() {  # NAME CASE_FILE TRACE ...
+  local name="$1" case_file="$2"
+  shift 2
+  "$HARNESS" compare --case "$case_file" --json "$@" > "$OUT/compare/$name.json.partial" 2> "$OUT/compare/$name.txt"
   if grep -q '"checks"' "$OUT/compare/$name.json.partial"; then
     mv "$OUT/compare/$name.json.partial" "$OUT/compare/$name.json"
   else
     rm -f "$OUT/compare/$name.json.partial"
     say "compare $name: no result (see $OUT/compare/$name.txt)"
   fi
-done
+}
+lexdyn_each_comparison "$OUT/runs.txt" "$OUT" compare_case
 
 # ------------------------------------------------------------------ 5. sweeps
 SWEEP_ARGS=()

@@ -8,19 +8,11 @@
 # Usage: harness/scripts/sim-accuracy.sh [-b BUILD_DIR] [case.yaml ...]
 #        (defaults: build/, cases/stand.yaml cases/squat_sway.yaml)
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 BUILD="$ROOT/build"
-while getopts "b:" opt; do
-  case "$opt" in
-    b) BUILD="$OPTARG" ;;
-    *) echo "usage: $0 [-b BUILD_DIR] [case.yaml ...]" >&2; exit 2 ;;
-  esac
-done
-shift $((OPTIND - 1))
-CASES=("$@")
-if [ ${#CASES[@]} -eq 0 ]; then CASES=("$ROOT/cases/stand.yaml" "$ROOT/cases/squat_sway.yaml"); fi
-HARNESS="$BUILD/bin/lexdyn-harness"
-[ -x "$HARNESS" ] || { echo "sim-accuracy: $HARNESS not built" >&2; exit 2; }
+lexdyn_options "[-b BUILD_DIR] [case.yaml ...]" b=BUILD -- "$@"
+lexdyn_cases "${LEXDYN_OPERANDS[@]}"
+lexdyn_harness sim-accuracy
 OUT="$(mktemp -d)"
 trap 'rm -rf "$OUT"' EXIT
 

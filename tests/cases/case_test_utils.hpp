@@ -1,5 +1,8 @@
-// Helpers for case-file tests: a minimal valid case whose sections tests replace.
+// Helpers for case-file tests: a minimal valid case whose sections tests replace (and the text
+// expectations of tests/common/expect_text.hpp).
 #pragma once
+
+#include "../common/expect_text.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -8,6 +11,9 @@
 #include <string>
 
 namespace lexdyn::cases::testing {
+
+using lexdyn::testing::containsAll;
+using lexdyn::testing::inputErrorOf;
 
 inline std::string outputDir(const std::string& name) {
   const std::filesystem::path p = std::filesystem::path(LEXDYN_BINARY_DIR) / "test_output" / name;

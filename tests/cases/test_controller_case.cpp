@@ -18,27 +18,30 @@
 namespace lexdyn::cases {
 namespace {
 
-using testing::lexdynController;
-using testing::minimalLexdynCase;
-using testing::outputDir;
-using testing::writeCase;
+using namespace testing;  // case_test_utils.hpp
 
 std::string src(const std::string& rel) { return std::string(LEXDYN_SOURCE_DIR) + "/" + rel; }
 
 std::string errorOf(const std::map<std::string, std::string>& sections, const std::string& dir = "controller_case_errors") {
   const std::string path = writeCase(outputDir(dir), sections);
-  try {
-    loadCase(path);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "<no error>";
+  return inputErrorOf([&] { loadCase(path); });
 }
 
 // Expects an error whose message holds every fragment.
 void expectError(const std::map<std::string, std::string>& sections, const std::vector<std::string>& fragments) {
   const std::string msg = errorOf(sections);
   for (const auto& f : fragments) EXPECT_NE(msg.find(f), std::string::npos) << "missing '" << f << "' in: " << msg;
+}
+
+// The sections with an events section of one event at 0.1 s, {at_s: 0.1, action: ACTION}, or a
+// checks section of the one entry `entry`.
+std::map<std::string, std::string> withEvent(std::map<std::string, std::string> sections, const std::string& action) {
+  sections["g_events"] = "events:\n  - {at_s: 0.1, action: " + action + "}\n";
+  return sections;
+}
+std::map<std::string, std::string> withCheck(std::map<std::string, std::string> sections, const std::string& entry) {
+  sections["h_checks"] = "checks:\n  - " + entry + "\n";
+  return sections;
 }
 
 TEST(ControllerCase, RepositoryCasesLoadWithEveryMethod) {
@@ -221,63 +224,38 @@ TEST(ControllerCase, ErrorsNameFileLineAndKeyPath) {
   const size_t w = s["e_controller"].find("  wls_levels:");
   s["e_controller"] = s["e_controller"].substr(0, w);
   CaseSpec c = loadCase(writeCase(outputDir("controller_case_nowls"), s));
-  try {
-    overrideMethod(c, "wls", "--method");
-    FAIL() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("--method: method wls needs controller.wls_levels"), std::string::npos) << e.what();
-  }
+  EXPECT_TRUE(containsAll(inputErrorOf([&] { overrideMethod(c, "wls", "--method"); }),
+                          {"--method: method wls needs controller.wls_levels"}));
 }
 
 TEST(ControllerCase, EventAndCheckErrors) {
   auto s = minimalLexdynCase();
-  s["g_events"] = "events:\n  - {at_s: 0.1, action: set_target, task: right_hand, value: [1, 2]}\n";
-  expectError(s, {"case.yaml", "events[0]", "task 'right_hand' takes a target of 3 values, found 2"});
-  s["g_events"] = "events:\n  - {at_s: 0.1, action: set_target, task: com_box, lower: [0.1, 0, 0], upper: [-0.1, 1, 1]}\n";
-  expectError(s, {"events[0]", "task \"com_box\""});
-  s["g_events"] = "events:\n  - {at_s: 0.1, action: set_target, task: velocity, value: [1]}\n";
-  expectError(s, {"events[0]", "has no target"});
-  s["g_events"] = "events:\n  - {at_s: 0.1, action: add_contact, contact: HAND}\n";
-  expectError(s, {"case.yaml:", "events[0].contact", "unknown controller contact 'HAND'"});
-  s["g_events"] = "events:\n  - {at_s: 0.1, action: grasp_on, grasp: left}\n";
-  expectError(s, {"events[0].grasp", "linked to controller contact 'POLE'"});
-  s["g_events"] = "events:\n  - {at_s: 0.1, action: swing, task: posture, from: [0, 0, 0], to: [1, 1, 1], period_s: 2}\n";
-  expectError(s, {"events[0]", "drives 3-D targets"});
-  s["g_events"] = "events:\n  - {at_s: 0.1, action: target_trajectory, task: right_hand, file: nowhere.csv}\n";
-  expectError(s, {"events[0].file", "file not found"});
+  expectError(withEvent(s, "set_target, task: right_hand, value: [1, 2]"),
+              {"case.yaml", "events[0]", "task 'right_hand' takes a target of 3 values, found 2"});
+  expectError(withEvent(s, "set_target, task: com_box, lower: [0.1, 0, 0], upper: [-0.1, 1, 1]"), {"events[0]", "task \"com_box\""});
+  expectError(withEvent(s, "set_target, task: velocity, value: [1]"), {"events[0]", "has no target"});
+  expectError(withEvent(s, "add_contact, contact: HAND"), {"case.yaml:", "events[0].contact", "unknown controller contact 'HAND'"});
+  expectError(withEvent(s, "grasp_on, grasp: left"), {"events[0].grasp", "linked to controller contact 'POLE'"});
+  expectError(withEvent(s, "swing, task: posture, from: [0, 0, 0], to: [1, 1, 1], period_s: 2"), {"events[0]", "drives 3-D targets"});
+  expectError(withEvent(s, "target_trajectory, task: right_hand, file: nowhere.csv"), {"events[0].file", "file not found"});
   const std::string dir = outputDir("controller_case_traj");
   std::ofstream(dir + "/bad.csv") << "t,x,y,z\n0,0,0,0\n1,0,0\n";
-  s["g_events"] = "events:\n  - {at_s: 0.1, action: target_trajectory, task: right_hand, file: bad.csv}\n";
-  {
-    const std::string path = writeCase(dir, s);
-    try {
-      loadCase(path);
-      FAIL() << "no error";
-    } catch (const InputError& e) {
-      const std::string msg = e.what();
-      EXPECT_NE(msg.find("events[0].file"), std::string::npos) << msg;
-      EXPECT_NE(msg.find("bad.csv:3: expected 4 values"), std::string::npos) << msg;
-    }
-  }
-  s.erase("g_events");
-  s["h_checks"] = "checks:\n  - {name: p, type: task_error, tasks: [posture], statistic: final, limit: 1}\n";
-  expectError(s, {"checks[0].tasks", "not in the hierarchy of method bfgs", "methods:"});
-  s["h_checks"] = "checks:\n  - {name: p, type: task_error, tasks: [posture], statistic: final, limit: 1, methods: [wls]}\n";
-  EXPECT_EQ(errorOf(s), "<no error>");
-  s["h_checks"] = "checks:\n  - {name: c, type: contact_wrench_match, contact: RIGHT_FOOT, limit_Nm: 3}\n";
-  expectError(s, {"checks[0]", "missing required key 'limit_N'"});
-  s["h_checks"] = "checks:\n  - {name: c, type: contact_cop, contact: POLE}\n";
-  expectError(s, {"checks[0].contact", "support polygon"});
-  s["h_checks"] = "checks:\n  - {name: a, type: augmented_fraction, level: hands, max_fraction: 1}\n";
-  expectError(s, {"checks[0].level", "not in the hierarchy of method wls"});
-  s["h_checks"] = "checks:\n  - {name: j, type: joint_velocity_hf_energy, cutoff_hz: 150, limit_rad2_per_s2: 1}\n";
-  expectError(s, {"checks[0].cutoff_hz", "Nyquist"});
-  s["h_checks"] = "checks:\n  - {name: j, type: joint_acceleration_sign_changes, joints: [\"*FINGER*\"], limit_per_s: 1}\n";
-  expectError(s, {"checks[0].joints[0]", "matches no joint"});
+  const std::string path = writeCase(dir, withEvent(s, "target_trajectory, task: right_hand, file: bad.csv"));
+  EXPECT_TRUE(containsAll(inputErrorOf([&] { loadCase(path); }), {"events[0].file", "bad.csv:3: expected 4 values"}));
+  expectError(withCheck(s, "{name: p, type: task_error, tasks: [posture], statistic: final, limit: 1}"),
+              {"checks[0].tasks", "not in the hierarchy of method bfgs", "methods:"});
+  EXPECT_EQ(errorOf(withCheck(s, "{name: p, type: task_error, tasks: [posture], statistic: final, limit: 1, methods: [wls]}")), "<no error>");
+  expectError(withCheck(s, "{name: c, type: contact_wrench_match, contact: RIGHT_FOOT, limit_Nm: 3}"),
+              {"checks[0]", "missing required key 'limit_N'"});
+  expectError(withCheck(s, "{name: c, type: contact_cop, contact: POLE}"), {"checks[0].contact", "support polygon"});
+  expectError(withCheck(s, "{name: a, type: augmented_fraction, level: hands, max_fraction: 1}"),
+              {"checks[0].level", "not in the hierarchy of method wls"});
+  expectError(withCheck(s, "{name: j, type: joint_velocity_hf_energy, cutoff_hz: 150, limit_rad2_per_s2: 1}"),
+              {"checks[0].cutoff_hz", "Nyquist"});
+  expectError(withCheck(s, "{name: j, type: joint_acceleration_sign_changes, joints: [\"*FINGER*\"], limit_per_s: 1}"),
+              {"checks[0].joints[0]", "matches no joint"});
   // Controller checks need the lexdyn controller.
-  auto p = testing::minimalCase();
-  p["h_checks"] = "checks:\n  - {name: s, type: active_set_peak, limit_iterations: 3}\n";
-  expectError(p, {"checks[0].type", "lexdyn"});
+  expectError(withCheck(testing::minimalCase(), "{name: s, type: active_set_peak, limit_iterations: 3}"), {"checks[0].type", "lexdyn"});
 }
 
 // --- Target paths ---------------------------------------------------------------------------
@@ -325,12 +303,7 @@ TEST(TargetPath, CsvFilesAndTheirErrors) {
   EXPECT_EQ(t.raw(0.25), Eigen::Vector3d(1.5, 2.5, 3.5));
   auto err = [&](const std::string& text) {
     std::ofstream(dir + "/bad.csv") << text;
-    try {
-      TargetTrajectory::fromCsv(dir + "/bad.csv", 0.0, false);
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("<no error>");
+    return inputErrorOf([&] { TargetTrajectory::fromCsv(dir + "/bad.csv", 0.0, false); });
   };
   EXPECT_NE(err("0,0,0,0\n0,1,1,1\n").find("bad.csv:2: times must increase strictly"), std::string::npos);
   EXPECT_NE(err("0,0,0,0\n1,1,x,1\n").find("bad.csv:2: column y: expected a finite number"), std::string::npos);

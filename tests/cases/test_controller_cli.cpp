@@ -6,6 +6,8 @@
 #include "harness/cases/case_file.hpp"
 #include "harness/checks/task_checks.hpp"
 #include "case_test_utils.hpp"
+#include "../common/cli_test_utils.hpp"
+#include "../common/expect_text.hpp"
 #include "lexdyn/common/error.hpp"
 
 #include <gtest/gtest.h>
@@ -15,36 +17,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-#include <sys/wait.h>
 
 namespace lexdyn::cases {
 namespace {
 
 using testing::outputDir;
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-Result harness(const std::string& args, const std::string& dir) {
-  const std::string cmd = std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-harness " + args + " > " + dir + "/stdout.txt 2> " + dir +
-                          "/stderr.txt";
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(dir + "/stdout.txt");
-  r.err = slurp(dir + "/stderr.txt");
-  return r;
-}
+using namespace lexdyn::testing;  // the command-line test helpers
 
 /// A point-mass case with every kind of check that applies to a 1-dof robot without contacts,
 /// and a comparison between the velocity and the acceleration domain.
@@ -99,7 +78,7 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
   const std::string c = pointMassCase(dir, 3.0, "  method_params: {gn: {damping: 0.01}}\n");
   for (const char* method : {"gn", "wls"}) {
     const std::string out = dir + "/" + method;
-    const Result run = harness("run " + c + " --out " + out + " --method " + method + " --quiet", dir);
+    const CliResult run = harness("run " + c + " --out " + out + " --method " + method + " --quiet", dir);
     ASSERT_TRUE(run.code == 0 || run.code == 1) << run.err;
     const nlohmann::json summary = nlohmann::json::parse(slurp(out + "/summary.json"));
     EXPECT_EQ(summary["method"], method);
@@ -107,13 +86,13 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
     // The trace header records the method and the damping of the method (method_params).
     const checks::TraceTable t = checks::readTrace(out + "/trace.csv");
     EXPECT_EQ(*checks::findMetadata(t.metadata, "method"), method);
-    const std::string params = *checks::findMetadata(t.metadata, "controller_params");
-    EXPECT_NE(params.find(std::string("damping ") + (std::string(method) == "gn" ? "0.01," : "1,")), std::string::npos) << params;
+    EXPECT_TRUE(containsAll(*checks::findMetadata(t.metadata, "controller_params"),
+                            {std::string("damping ") + (std::string(method) == "gn" ? "0.01," : "1,")}));
     // The augmented_fraction check is for the velocity-domain methods only.
     const size_t expected_checks = std::string(method) == "wls" ? 11u : 12u;
     ASSERT_EQ(summary["checks"].size(), expected_checks) << method;
     // Re-evaluated on the stored trace: the same checks, values, verdicts and details.
-    const Result check = harness("check " + out + "/trace.csv --case " + c + " --json", dir);
+    const CliResult check = harness("check " + out + "/trace.csv --case " + c + " --json", dir);
     const nlohmann::json stored = nlohmann::json::parse(check.out);
     EXPECT_EQ(stored["checks"], summary["checks"]) << method << "\nstored: " << stored.dump(1) << "\nsummary: " << summary["checks"].dump(1);
     EXPECT_EQ(stored["all_checks_passed"], summary["all_checks_passed"]);
@@ -127,7 +106,7 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
     EXPECT_EQ(run.code, std::string(method) == "gn" ? 0 : 1) << run.err;
   }
   // compare: the mean error of gn (critically damped, mu 0.01) is below that of wls, not the other way.
-  Result cmp = harness("compare --case " + c + " " + dir + "/gn/trace.csv " + dir + "/wls/trace.csv --json", dir);
+  CliResult cmp = harness("compare --case " + c + " " + dir + "/gn/trace.csv " + dir + "/wls/trace.csv --json", dir);
   EXPECT_EQ(cmp.code, 1) << cmp.err;
   const nlohmann::json j = nlohmann::json::parse(cmp.out);
   ASSERT_EQ(j["checks"].size(), 2u);
@@ -138,12 +117,10 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
   EXPECT_DOUBLE_EQ(j["checks"][1]["value"].get<double>(), -j["checks"][0]["value"].get<double>());
   // A trace missing for one of the methods: that comparison fails, naming the methods.
   cmp = harness("compare --case " + c + " " + dir + "/gn/trace.csv", dir);
-  EXPECT_EQ(cmp.code, 1);
-  EXPECT_NE(cmp.err.find("needs traces of methods gn and wls"), std::string::npos) << cmp.err;
+  expectExit(cmp, 1, {"needs traces of methods gn and wls"});
   // Two traces of one method: bad input.
   cmp = harness("compare --case " + c + " " + dir + "/gn/trace.csv " + dir + "/gn/trace.csv", dir);
-  EXPECT_EQ(cmp.code, 2);
-  EXPECT_NE(cmp.err.find("a second trace of method gn"), std::string::npos) << cmp.err;
+  expectExit(cmp, 2, {"a second trace of method gn"});
 }
 
 TEST(ControllerCli, TwoProcessesWriteBitIdenticalTracesButForTheWallTimes) {
@@ -160,7 +137,7 @@ TEST(ControllerCli, TwoProcessesWriteBitIdenticalTracesButForTheWallTimes) {
   for (const Run& run : {Run{pm, "gn", "2", 401}, Run{pm, "wls", "2", 401}, Run{exp1, "ah", "0.3", 61}}) {
     const std::string method = run.method;
     for (const char* k : {"a", "b"}) {
-      const Result r = harness("run " + run.case_file + " --method " + method + " --duration " + run.duration + " --out " + dir + "/" +
+      const CliResult r = harness("run " + run.case_file + " --method " + method + " --duration " + run.duration + " --out " + dir + "/" +
                                    method + k + " --quiet",
                                dir);
       ASSERT_TRUE(r.code == 0 || r.code == 1) << r.err;
@@ -189,9 +166,8 @@ TEST(ControllerCli, TwoProcessesWriteBitIdenticalTracesButForTheWallTimes) {
 TEST(ControllerCli, BadMethodOverridesAreInputErrors) {
   const std::string dir = outputDir("ctl_cli_method");
   const std::string c = pointMassCase(dir, 0.1);
-  Result r = harness("run " + c + " --out " + dir + "/out --method lm --quiet", dir);
-  EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("--method"), std::string::npos) << r.err;
+  CliResult r = harness("run " + c + " --out " + dir + "/out --method lm --quiet", dir);
+  expectExit(r, 2, {"--method"});
   EXPECT_FALSE(std::filesystem::exists(dir + "/out/trace.csv"));
   // A case without wls_levels cannot run wls.
   std::string text = slurp(c);
@@ -199,31 +175,22 @@ TEST(ControllerCli, BadMethodOverridesAreInputErrors) {
   text.erase(text.find("comparisons:"));
   std::ofstream(dir + "/no_wls.yaml") << text;
   r = harness("run " + dir + "/no_wls.yaml --out " + dir + "/out --method wls --quiet", dir);
-  EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("--method: method wls needs controller.wls_levels"), std::string::npos) << r.err;
+  expectExit(r, 2, {"--method: method wls needs controller.wls_levels"});
   // A stand case (posture servo) has no methods.
   r = harness("run " + std::string(LEXDYN_SOURCE_DIR) + "/cases/stand.yaml --out " + dir + "/out --method bfgs --quiet", dir);
-  EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("--method needs a case with controller type lexdyn"), std::string::npos) << r.err;
+  expectExit(r, 2, {"--method needs a case with controller type lexdyn"});
 }
 
 TEST(ControllerCli, MethodParamsErrorsNameFileLineAndKey) {
   const std::string dir = outputDir("ctl_cli_method_params");
   auto errorOf = [&](const std::string& extra) {
-    try {
-      loadCase(pointMassCase(dir, 0.1, extra));
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("<no error>");
+    return inputErrorOf([&] { loadCase(pointMassCase(dir, 0.1, extra)); });
   };
-  std::string msg = errorOf("  method_params: {lm: {damping: 0.1}}\n");
-  EXPECT_NE(msg.find("pm.yaml:10: controller.method_params.lm: unknown method 'lm'"), std::string::npos) << msg;
-  msg = errorOf("  method_params: {gn: {dampng: 0.1}}\n");
-  EXPECT_NE(msg.find("controller.method_params.gn.dampng"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("unknown key"), std::string::npos) << msg;
-  msg = errorOf("  method_params: {gn: {damping: -1}}\n");
-  EXPECT_NE(msg.find("controller.method_params.gn.damping"), std::string::npos) << msg;
+  EXPECT_TRUE(containsAll(errorOf("  method_params: {lm: {damping: 0.1}}\n"),
+                          {"pm.yaml:10: controller.method_params.lm: unknown method 'lm'"}));
+  EXPECT_TRUE(containsAll(errorOf("  method_params: {gn: {dampng: 0.1}}\n"),
+                          {"controller.method_params.gn.dampng", "unknown key"}));
+  EXPECT_TRUE(containsAll(errorOf("  method_params: {gn: {damping: -1}}\n"), {"controller.method_params.gn.damping"}));
   // Without an override every method takes `params`.
   const CaseSpec spec = loadCase(pointMassCase(dir, 0.1, "  method_params: {wls: {damping: 0.5}}\n"));
   EXPECT_EQ(spec.controller.lexdyn.params.damping, 1.0);  // gn
@@ -239,12 +206,7 @@ TEST(ControllerCli, ClosedFormAndOvershootChecksInTheCaseFile) {
     return loadCase(dir + "/pm.yaml");
   };
   auto errorOf = [&](const std::string& check) {
-    try {
-      load(check);
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("<no error>");
+    return inputErrorOf([&] { load(check); });
   };
   // The gains default to the task's: kp 4, kv 2 sqrt(kp) = 4; kv given, or kp alone (kv critical).
   CaseSpec c = load("{name: cf, type: task_error_closed_form, task: position, limit_rel: 0.01}");
@@ -261,16 +223,13 @@ TEST(ControllerCli, ClosedFormAndOvershootChecksInTheCaseFile) {
   EXPECT_EQ(c.checks.back().limit, 0.001);
   EXPECT_EQ(c.checks.back().from_s, 0.05);
   // Errors name the file, the line and the key.
-  std::string msg = errorOf("{name: cf, type: task_error_closed_form, task: torque, limit_rel: 0.01}");
-  EXPECT_NE(msg.find("pm.yaml:36: checks[12].task"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("has no PD gains; give kp"), std::string::npos) << msg;
-  msg = errorOf("{name: cf, type: task_error_closed_form, task: hand, limit_rel: 0.01}");
-  EXPECT_NE(msg.find("checks[12].task: unknown task 'hand'"), std::string::npos) << msg;
-  msg = errorOf("{name: os, type: task_overshoot, task: position}");
-  EXPECT_NE(msg.find("missing required key 'limit_rel'"), std::string::npos) << msg;
-  msg = errorOf("{name: os, type: task_overshoot, task: position, limit_rel: 0.1, kp: 1}");
-  EXPECT_NE(msg.find("checks[12].kp"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("unknown key"), std::string::npos) << msg;
+  EXPECT_TRUE(containsAll(errorOf("{name: cf, type: task_error_closed_form, task: torque, limit_rel: 0.01}"),
+                          {"pm.yaml:36: checks[12].task", "has no PD gains; give kp"}));
+  EXPECT_TRUE(containsAll(errorOf("{name: cf, type: task_error_closed_form, task: hand, limit_rel: 0.01}"),
+                          {"checks[12].task: unknown task 'hand'"}));
+  EXPECT_TRUE(containsAll(errorOf("{name: os, type: task_overshoot, task: position}"), {"missing required key 'limit_rel'"}));
+  EXPECT_TRUE(containsAll(errorOf("{name: os, type: task_overshoot, task: position, limit_rel: 0.1, kp: 1}"),
+                          {"checks[12].kp", "unknown key"}));
 }
 
 TEST(ControllerCli, SigintKeepsTheTraceAndWritesTheControllerSummary) {
@@ -278,15 +237,7 @@ TEST(ControllerCli, SigintKeepsTheTraceAndWritesTheControllerSummary) {
   const std::string dir = outputDir("ctl_cli_sigint");
   const std::string c = pointMassCase(dir, 2000.0);
   const std::string out = dir + "/out";
-  const std::string script = "(" + std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-harness run " + c + " --out " + out +
-                             " --quiet 2> " + dir + "/stderr.txt & pid=$!; "
-                             "while [ ! -s " + out + "/trace.csv.partial ] && kill -0 $pid 2>/dev/null; do sleep 0.01; done; sleep 0.2; "
-                             "kill -INT $pid; wait $pid; echo $? > " + dir + "/code)";
-  ASSERT_EQ(std::system(("bash -c '" + script + "'").c_str()), 0);
-  std::ifstream code_in(dir + "/code");
-  int code = -1;
-  code_in >> code;
-  EXPECT_EQ(code, 130);
+  EXPECT_EQ(harnessRunSignalled(c, out, dir, "INT", "0.2"), 130);
   ASSERT_TRUE(std::filesystem::exists(out + "/summary.json"));
   ASSERT_TRUE(std::filesystem::exists(out + "/trace.csv"));
   EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv.partial"));
@@ -304,7 +255,7 @@ TEST(ControllerCli, SigintKeepsTheTraceAndWritesTheControllerSummary) {
   EXPECT_EQ(static_cast<long>(t.rows.size()), ticks);
   EXPECT_DOUBLE_EQ(t.rows.back()[0], j["simulated_s"].get<double>());
   // Its checks can be run again; those that need the whole run fail honestly (not a crash).
-  const Result r = harness("check " + out + "/trace.csv --case " + c, dir);
+  const CliResult r = harness("check " + out + "/trace.csv --case " + c, dir);
   EXPECT_TRUE(r.code == 0 || r.code == 1) << r.err;
 }
 

@@ -17,10 +17,7 @@
 namespace lexdyn::cases {
 namespace {
 
-using testing::lexdynController;
-using testing::minimalLexdynCase;
-using testing::outputDir;
-using testing::writeCase;
+using namespace testing;  // case_test_utils.hpp
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -135,14 +132,14 @@ TEST(ControllerRunner, EventsApplyAtTheirTicks) {
   const std::string dir = outputDir("ctl_runner_events");
   std::ofstream(dir + "/path.csv") << "t,x,y,z\n0,0.2,-0.4,0.8\n0.1,0.3,-0.4,0.8\n0.2,0.3,-0.3,0.9\n";
   auto sections = minimalLexdynCase(0.5);
-  sections["g_events"] =
-      "events:\n"
-      "  - {at_s: 0.1, action: set_target, task: right_hand, value: [0.35, -0.45, 0.95]}\n"
-      "  - {at_s: 0.1, action: add_contact, contact: POLE}\n"
-      "  - {at_s: 0.2, action: set_target, task: com_box, lower: [-0.04, -0.1, -.inf], upper: [0.04, 0.1, .inf]}\n"
-      "  - {at_s: 0.25, action: swing, task: left_hand, from: [0.2, 0.3, 0.7], to: [0.3, 0.5, 0.9], period_s: 0.4}\n"
-      "  - {at_s: 0.3, action: target_trajectory, task: right_hand, file: path.csv, moving_average_s: 0.05}\n"
-      "  - {at_s: 0.4, action: remove_contact, contact: POLE}\n";
+  sections["g_events"] = R"(events:
+  - {at_s: 0.1, action: set_target, task: right_hand, value: [0.35, -0.45, 0.95]}
+  - {at_s: 0.1, action: add_contact, contact: POLE}
+  - {at_s: 0.2, action: set_target, task: com_box, lower: [-0.04, -0.1, -.inf], upper: [0.04, 0.1, .inf]}
+  - {at_s: 0.25, action: swing, task: left_hand, from: [0.2, 0.3, 0.7], to: [0.3, 0.5, 0.9], period_s: 0.4}
+  - {at_s: 0.3, action: target_trajectory, task: right_hand, file: path.csv, moving_average_s: 0.05}
+  - {at_s: 0.4, action: remove_contact, contact: POLE}
+)";
   const CaseSpec spec = loadCase(writeCase(dir, sections));
   const RunSummary s = run(spec, dir + "/out");
   ASSERT_EQ(s.status, "completed") << s.message;
@@ -215,21 +212,21 @@ TEST(ControllerRunner, ControllerFailureStopsTheRunKeepingTheTrace) {
 TEST(ControllerRunner, StoredTraceChecksEqualTheLiveOnes) {
   const std::string dir = outputDir("ctl_runner_checks");
   auto sections = minimalLexdynCase(0.3);
-  sections["h_checks"] =
-      "checks:\n"
-      "  - {name: hands, type: task_error, tasks: [right_hand, left_hand], statistic: mean, limit: 1.0}\n"
-      "  - {name: torques, type: torque_limits, limit_fraction: 0.5}\n"
-      "  - {name: unilateral, type: contact_unilateral, contact: LEFT_FOOT, source: sensed, min_N: 100}\n"
-      "  - {name: cone, type: contact_friction, contact: RIGHT_FOOT}\n"
-      "  - {name: cop, type: contact_cop, contact: RIGHT_FOOT, source: sensed, limit_m: -0.01}\n"
-      "  - {name: match, type: contact_wrench_match, contact: RIGHT_FOOT, limit_N: 50}\n"
-      "  - {name: acc, type: joint_acceleration_sign_changes, dead_band_rad_per_s2: 0.1, limit_per_s: 10}\n"
-      "  - {name: hf, type: joint_velocity_hf_energy, cutoff_hz: 10, limit_rad2_per_s2: 1}\n"
-      "  - {name: rate, type: task_error_rate_sign_changes, task: right_hand, limit_per_s: 5}\n"
-      "  - {name: status, type: controller_status}\n"
-      "  - {name: peak, type: active_set_peak, limit_iterations: 30}\n"
-      "  - {name: aug, type: augmented_fraction, level: hands, max_fraction: 1.0, methods: [bfgs, ah, gn]}\n"
-      "  - {name: tick, type: tick_time, timer: tick, percentile: 50, limit_us: 1.0e6}\n";
+  sections["h_checks"] = R"(checks:
+  - {name: hands, type: task_error, tasks: [right_hand, left_hand], statistic: mean, limit: 1.0}
+  - {name: torques, type: torque_limits, limit_fraction: 0.5}
+  - {name: unilateral, type: contact_unilateral, contact: LEFT_FOOT, source: sensed, min_N: 100}
+  - {name: cone, type: contact_friction, contact: RIGHT_FOOT}
+  - {name: cop, type: contact_cop, contact: RIGHT_FOOT, source: sensed, limit_m: -0.01}
+  - {name: match, type: contact_wrench_match, contact: RIGHT_FOOT, limit_N: 50}
+  - {name: acc, type: joint_acceleration_sign_changes, dead_band_rad_per_s2: 0.1, limit_per_s: 10}
+  - {name: hf, type: joint_velocity_hf_energy, cutoff_hz: 10, limit_rad2_per_s2: 1}
+  - {name: rate, type: task_error_rate_sign_changes, task: right_hand, limit_per_s: 5}
+  - {name: status, type: controller_status}
+  - {name: peak, type: active_set_peak, limit_iterations: 30}
+  - {name: aug, type: augmented_fraction, level: hands, max_fraction: 1.0, methods: [bfgs, ah, gn]}
+  - {name: tick, type: tick_time, timer: tick, percentile: 50, limit_us: 1.0e6}
+)";
   const CaseSpec spec = loadCase(writeCase(dir, sections));
   const RunSummary s = run(spec, dir + "/out");
   ASSERT_EQ(s.status, "completed");

@@ -15,9 +15,7 @@
 namespace lexdyn::cases {
 namespace {
 
-using testing::minimalCase;
-using testing::outputDir;
-using testing::writeCase;
+using namespace testing;  // case_test_utils.hpp
 
 std::string src(const std::string& rel) { return std::string(LEXDYN_SOURCE_DIR) + "/" + rel; }
 

@@ -9,6 +9,7 @@
 #include "harness/checks/task_checks.hpp"
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
+#include "../common/expect_text.hpp"
 
 #include <gtest/gtest.h>
 
@@ -47,14 +48,7 @@ yaml::Node firstCheck(const std::string& text) {
   return root.entries()[0].second[0];
 }
 
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+std::string errorOf(const std::function<void()>& f) { return lexdyn::testing::inputErrorOf(f); }
 
 // One entry per built-in type, with its required keys.
 const std::map<std::string, std::string>& entries() {

@@ -8,6 +8,7 @@
 #include "harness/checks/task_checks.hpp"
 #include "harness/checks/trace.hpp"
 #include "lexdyn/common/error.hpp"
+#include "check_test_utils.hpp"
 
 #include <gtest/gtest.h>
 
@@ -20,6 +21,9 @@ namespace lexdyn::checks {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::kFail;
+using testing::kNoValue;
+using testing::kPass;
 
 CheckSpec legacy(const std::string& name, const std::string& type, const std::string& frame,
                  const std::vector<std::string>& surfaces, double from_s, double limit, const std::string& where) {
@@ -307,10 +311,12 @@ CheckSpec spec(const std::string& type, double limit) {
   return s;
 }
 
-CheckResult one(const CheckSpec& s) {
-  const std::vector<CheckResult> r = runChecks({s}, controllerTrace());
-  EXPECT_EQ(r.size(), 1u);
-  return r.empty() ? CheckResult{} : r[0];
+CheckResult one(const CheckSpec& s) { return testing::runOne(s, controllerTrace()); }
+
+/// testing::expectOutcome on controllerTrace().
+CheckResult expectOne(const CheckSpec& s, testing::Expected value, testing::Verdict verdict,
+                      std::initializer_list<std::string> detail = {}) {
+  return testing::expectOutcome(s, controllerTrace(), value, verdict, detail);
 }
 
 TEST(ControllerChecks, TaskErrorStatistics) {
@@ -318,11 +324,9 @@ TEST(ControllerChecks, TaskErrorStatistics) {
   auto& sp = s.params.emplace<TaskErrorParams>();
   sp.tasks = {"a", "b"};
   sp.statistic = "final";
-  EXPECT_NEAR(one(s).value, 1.1, 1e-12);
-  EXPECT_TRUE(one(s).passed);
+  expectOne(s, {1.1, 1e-12}, kPass);
   sp.statistic = "max";
-  EXPECT_NEAR(one(s).value, 1.5, 1e-12);
-  EXPECT_FALSE(one(s).passed);
+  expectOne(s, {1.5, 1e-12}, kFail);
   sp.statistic = "mean";  // time average of 1.5 - 0.1 t over [0, 4]
   EXPECT_NEAR(one(s).value, 1.3, 1e-12);
   s.from_s = 2.0;
@@ -336,13 +340,9 @@ TEST(ControllerChecks, TorqueLimits) {
   sp.joints = {"J1"};
   sp.joint_limits = {100.0};
   sp.source = "applied";
-  EXPECT_NEAR(one(s).value, 0.5, 1e-4);  // 50 sin(t) peaks near t = pi / 2
-  EXPECT_TRUE(one(s).passed);
+  expectOne(s, {0.5, 1e-4}, kPass);  // 50 sin(t) peaks near t = pi / 2
   sp.source = "both";
-  const CheckResult r = one(s);
-  EXPECT_NEAR(r.value, 0.6, 1e-12);  // commanded 60 N m at t = 2
-  EXPECT_FALSE(r.passed);
-  EXPECT_NE(r.detail.find("commanded torque of J1 60"), std::string::npos) << r.detail;
+  expectOne(s, {0.6, 1e-12}, kFail, {"commanded torque of J1 60"});  // commanded 60 N m at t = 2
   s.limit = 0.6;  // on the limit passes
   EXPECT_TRUE(one(s).passed);
 }
@@ -352,11 +352,9 @@ TEST(ControllerChecks, ContactWrenches) {
   auto& sp = s.params.emplace<ContactParams>();
   sp.contact = "C";
   sp.source = "computed";
-  EXPECT_EQ(one(s).value, 100.0);  // inactive rows (-1000) are skipped
-  EXPECT_TRUE(one(s).passed);
+  expectOne(s, 100.0, kPass);  // inactive rows (-1000) are skipped
   sp.source = "sensed";
-  EXPECT_EQ(one(s).value, 90.0);
-  EXPECT_FALSE(one(s).passed);
+  expectOne(s, 90.0, kFail);
   CheckSpec f = spec("contact_friction", 1.0);
   auto& fp = f.params.emplace<ContactFrictionParams>();
   fp.contact = "C";
@@ -365,42 +363,33 @@ TEST(ControllerChecks, ContactWrenches) {
   fp.min_normal_N = 1.0;
   EXPECT_NEAR(one(f).value, 50.0 / 70.0, 1e-12);
   fp.friction = 0.4;
-  EXPECT_NEAR(one(f).value, 50.0 / 40.0, 1e-12);
-  EXPECT_FALSE(one(f).passed);
+  expectOne(f, {50.0 / 40.0, 1e-12}, kFail);
   CheckSpec c = spec("contact_cop", 0.0);
   auto& cp = c.params.emplace<ContactCopParams>();
   cp.contact = "C";
   cp.source = "computed";
   cp.min_normal_N = 1.0;
   cp.polygon = {{-0.1, -0.1}, {0.1, -0.1}, {0.1, 0.1}, {-0.1, 0.1}};
-  EXPECT_NEAR(one(c).value, -0.05, 1e-12);  // CoP (0.02, 0.05): 5 cm inside the y = 0.1 edge
-  EXPECT_TRUE(one(c).passed);
+  expectOne(c, {-0.05, 1e-12}, kPass);  // CoP (0.02, 0.05): 5 cm inside the y = 0.1 edge
   cp.polygon = {{-0.1, -0.1}, {0.1, -0.1}, {0.1, 0.03}, {-0.1, 0.03}};
-  EXPECT_NEAR(one(c).value, 0.02, 1e-12);  // 2 cm outside
-  EXPECT_FALSE(one(c).passed);
+  expectOne(c, {0.02, 1e-12}, kFail);  // 2 cm outside
   CheckSpec m = spec("contact_wrench_match", 9.0);
   auto& mp = m.params.emplace<WrenchMatchParams>();
   mp.contact = "C";
   mp.component = "force";
   mp.statistic = "rms";
-  EXPECT_NEAR(one(m).value, 10.0, 1e-12);
-  EXPECT_FALSE(one(m).passed);
+  expectOne(m, {10.0, 1e-12}, kFail);
   mp.component = "torque";
   EXPECT_EQ(one(m).value, 0.0);
 }
 
 TEST(ControllerChecks, Oscillation) {
   CheckSpec a = spec("joint_acceleration_sign_changes", 4.0);
-  auto& ap = a.params.emplace<JointSignChangesParams>();
-  ap.joints = {"J1", "J2"};
-  ap.source = "measured";
+  auto& ap = testing::measuredJoints<JointSignChangesParams>(a, {"J1", "J2"});
   ap.dead_band = 1e-6;
   // cos(2 pi 2.1 t) changes sign at (2n + 1) / 8.4 s: 17 times between the first and the last
   // velocity difference (t = 0.005 .. 3.995 s), over 4 s.
-  const CheckResult r = one(a);
-  EXPECT_NEAR(r.value, 17.0 / 4.0, 1e-12);
-  EXPECT_FALSE(r.passed);
-  EXPECT_NE(r.detail.find("J1: 17"), std::string::npos) << r.detail;
+  expectOne(a, {17.0 / 4.0, 1e-12}, kFail, {"J1: 17"});
   ap.joints = {"J2"};
   EXPECT_EQ(one(a).value, 0.0);
   CheckSpec h = spec("joint_velocity_hf_energy", 0.1);
@@ -409,19 +398,16 @@ TEST(ControllerChecks, Oscillation) {
   hp.source = "commanded";
   hp.cutoff_hz = 5.0;
   // A unit 20 Hz sine passes the 5 Hz high-pass almost unchanged: mean square ~ 1/2.
-  EXPECT_NEAR(one(h).value, 0.5, 0.03);
-  EXPECT_FALSE(one(h).passed);
+  expectOne(h, {0.5, 0.03}, kFail);
   hp.joints = {"J2"};  // 0.5 Hz: attenuated by about (0.5 / 5)^4
   EXPECT_LT(one(h).value, 1e-3);
   hp.cutoff_hz = 60.0;  // above the trace's Nyquist frequency (50 Hz)
-  EXPECT_FALSE(one(h).passed);
-  EXPECT_TRUE(std::isnan(one(h).value));
+  expectOne(h, kNoValue, kFail);
   CheckSpec e = spec("task_error_rate_sign_changes", 0.5);
   auto& ep = e.params.emplace<TaskErrorRateParams>();
   ep.task = "c";
   ep.dead_band = 1e-6;
-  EXPECT_NEAR(one(e).value, 1.0, 1e-12);  // 1 + sin(pi t)/2 turns at t = 0.5, 1.5, 2.5, 3.5
-  EXPECT_FALSE(one(e).passed);
+  expectOne(e, {1.0, 1e-12}, kFail);  // 1 + sin(pi t)/2 turns at t = 0.5, 1.5, 2.5, 3.5
   ep.task = "a";
   EXPECT_EQ(one(e).value, 0.0);
 }
@@ -430,28 +416,22 @@ TEST(ControllerChecks, Health) {
   CheckSpec s = spec("controller_status", 0.0);
   auto& sp = s.params.emplace<ControllerStatusParams>();
   sp.allowed = {"ok", "solver_stopped_early"};
-  CheckResult r = one(s);
-  EXPECT_EQ(r.value, 1.0);
-  EXPECT_FALSE(r.passed);
-  EXPECT_NE(r.detail.find("first at t = 3 s (infeasible)"), std::string::npos) << r.detail;
+  expectOne(s, 1.0, kFail, {"first at t = 3 s (infeasible)"});
   sp.allowed = {"ok"};
   EXPECT_EQ(one(s).value, 9.0);  // 8 rows stopped early besides
   CheckSpec p = spec("active_set_peak", 17.0);
-  EXPECT_EQ(one(p).value, 17.0);
-  EXPECT_TRUE(one(p).passed);
+  expectOne(p, 17.0, kPass);
   CheckSpec a = spec("augmented_fraction", 0.2);
   auto& ap = a.params.emplace<AugmentedFractionParams>();
   ap.level = "L";
-  EXPECT_NEAR(one(a).value, 101.0 / 401.0, 1e-15);
-  EXPECT_FALSE(one(a).passed);
+  expectOne(a, {101.0 / 401.0, 1e-15}, kFail);
   CheckSpec t = spec("tick_time", 300.0);
   auto& tp = t.params.emplace<TickTimeParams>();
   tp.timer = "tick";
   tp.percentile = 50.0;
   EXPECT_EQ(one(t).value, 200.0);
   tp.percentile = 100.0;
-  EXPECT_EQ(one(t).value, 400.0);
-  EXPECT_FALSE(one(t).passed);
+  expectOne(t, 400.0, kFail);
 }
 
 TEST(ControllerChecks, MethodFilterAndComparisons) {

@@ -11,6 +11,7 @@
 #include "lexdyn/control/controller.hpp"
 #include "lexdyn/control/method.hpp"
 #include "lexdyn/control/switching.hpp"
+#include "../common/expect_text.hpp"
 
 namespace lexdyn::control {
 namespace {
@@ -76,14 +77,7 @@ TEST(MethodRegistry, BuiltInMethodsInOrder) {
   EXPECT_EQ(makeMethod(p, "x")->domain(), tasks::Domain::Acceleration);
 }
 
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "no error";
-}
+std::string errorOf(const std::function<void()>& f) { return lexdyn::testing::inputErrorOf(f); }
 
 TEST(MethodRegistry, UnknownNameListsTheKnownOnes) {
   const std::string msg = errorOf([] { findMethod("newton", "case.yaml:10: controller.method"); });

@@ -5,19 +5,14 @@
 // its first and last points without anything but an InputError.
 #include "fuzz_target.hpp"
 #include "harness/sweep/sweep_file.hpp"
-#include "lexdyn/common/error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const std::string path = lexdyn::fuzz::writeScratch("cases/sweeps/fuzz.yaml", data, size);
-  try {
+  return lexdyn::fuzz::parseScratchFile("cases/sweeps/fuzz.yaml", data, size, [](const std::string& path) {
     const lexdyn::sweep::SweepSpec s = lexdyn::sweep::loadSweep(path);
     for (const long i : {0L, s.points - 1}) {
       if (i < 0) continue;
       const lexdyn::sweep::Point p = lexdyn::sweep::pointAt(s, i);
       (void)lexdyn::sweep::overridesOf(s, p.values);
     }
-  } catch (const lexdyn::InputError& e) {
-    lexdyn::fuzz::noteRejected(e.what());
-  }
-  return 0;
+  });
 }

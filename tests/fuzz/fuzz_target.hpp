@@ -6,6 +6,8 @@
 // build, with fuzz_driver.cpp (replay of the kept inputs under ctest, and a seeded mutation runner).
 #pragma once
 
+#include "lexdyn/common/error.hpp"
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -25,6 +27,20 @@ std::string writeScratch(const std::string& relative_path, const std::uint8_t* d
 /// input); the replay driver counts them and prints the message with LEXDYN_FUZZ_VERBOSE=1.
 void noteRejected(const char* message);
 long rejectedCount();
+
+/// The body of a target whose parser reads a file: writes the input to `relative_path` of the
+/// scratch directory and runs parse(path); an InputError is a refusal (noteRejected), anything
+/// else goes through (a finding). Returns 0, libFuzzer's convention.
+template <class Parse>
+int parseScratchFile(const char* relative_path, const std::uint8_t* data, std::size_t size, Parse parse) {
+  const std::string path = writeScratch(relative_path, data, size);
+  try {
+    parse(path);
+  } catch (const InputError& e) {
+    noteRejected(e.what());
+  }
+  return 0;
+}
 
 }  // namespace lexdyn::fuzz
 

@@ -4,6 +4,7 @@
 // channels; golden files keep their provenance; the repository's manifest and golden files agree.
 #include "harness/golden/golden.hpp"
 #include "lexdyn/common/error.hpp"
+#include "../common/expect_text.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 namespace lexdyn::golden {
 namespace {
 
+using lexdyn::testing::inputErrorOf;
 namespace fs = std::filesystem;
 
 std::string tempDir(const std::string& name) {
@@ -146,12 +148,7 @@ TEST(Golden, ManifestErrorsNameFileLineAndKey) {
   const std::string dir = tempDir("golden_manifest");
   auto err = [&](const std::string& text) {
     std::ofstream(dir + "/manifest.yaml") << text;
-    try {
-      loadManifest(dir + "/manifest.yaml");
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("<no error>");
+    return inputErrorOf([&] { loadManifest(dir + "/manifest.yaml"); });
   };
   const std::string cases = std::string(LEXDYN_SOURCE_DIR) + "/cases/";
   EXPECT_NE(err("format: lexdyn-golden-manifest/1\nentries:\n  - {case: nowhere.yaml, methods: [bfgs], duration_s: 1}\n")

@@ -281,14 +281,22 @@ TEST(KinematicHessian, FreeFlyerWithPrismaticBetweenRevolutes) {
   runCase({"branched_rpr", &testing::loadBranched, "", 0.0, 5}, 44);
 }
 
-TEST(KinematicHessian, ExactlySymmetricAndZeroOffTheChain) {
+// The humanoid at a random configuration near half-sitting (seeded, zero velocity) with its
+// Hessian workspace updated; the generator goes on from there.
+struct HumanoidWorkspace {
+  explicit HumanoidWorkspace(std::uint64_t seed) : rng(seed), data(m.createData()), ws(m) {
+    m.update(data, testing::randomConfiguration(m, rng, "half_sitting", 0.3), Eigen::VectorXd::Zero(m.nv()));
+    ws.update(m, data);
+  }
   const RobotModel m = testing::loadHumanoid();
-  Rng rng(45);
-  const Configuration q0 = testing::randomConfiguration(m, rng, "half_sitting", 0.3);
-  model::ModelData data = m.createData();
-  m.update(data, q0, Eigen::VectorXd::Zero(m.nv()));
-  KinematicHessianWorkspace ws(m);
-  ws.update(m, data);
+  Rng rng;
+  model::ModelData data;
+  KinematicHessianWorkspace ws;
+};
+
+TEST(KinematicHessian, ExactlySymmetricAndZeroOffTheChain) {
+  HumanoidWorkspace state(45);
+  auto& [m, rng, data, ws] = state;
   const int nv = m.nv();
   for (FrameId f = 0; f < m.numFrames(); ++f) {
     const Eigen::Vector3d w = rng.uniformVector(3);
@@ -317,13 +325,8 @@ TEST(KinematicHessian, ExactlySymmetricAndZeroOffTheChain) {
 
 TEST(KinematicHessian, WorkspaceSubtreeCentresOfMass) {
   // The base dofs' subtree is the whole robot: its CoM is the model's.
-  const RobotModel m = testing::loadHumanoid();
-  Rng rng(46);
-  const Configuration q0 = testing::randomConfiguration(m, rng, "half_sitting", 0.3);
-  model::ModelData data = m.createData();
-  m.update(data, q0, Eigen::VectorXd::Zero(m.nv()));
-  KinematicHessianWorkspace ws(m);
-  ws.update(m, data);
+  HumanoidWorkspace state(46);
+  auto& [m, rng, data, ws] = state;
   for (int k = 0; k < 6; ++k) {
     EXPECT_LE((ws.subtreeCom().col(k) - m.centerOfMass(data)).norm(), 1e-12);
     EXPECT_DOUBLE_EQ(ws.subtreeMassFraction()[k], 1.0);

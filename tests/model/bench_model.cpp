@@ -30,55 +30,34 @@ void BM_Update(benchmark::State& st) {
   Fixture& f = fixture();
   for (auto _ : st) f.model.update(f.data, f.q, f.u);
 }
-void BM_MassMatrix(benchmark::State& st) {
+// Benchmarks query(f, out), writing into `out`.
+template <class Out, class Query>
+void benchQuery(benchmark::State& st, Out out, Query query) {
   Fixture& f = fixture();
-  Eigen::MatrixXd M(38, 38);
   for (auto _ : st) {
-    f.model.massMatrix(f.data, M);
-    benchmark::DoNotOptimize(M.data());
+    query(f, out);
+    benchmark::DoNotOptimize(out.data());
   }
+}
+void BM_MassMatrix(benchmark::State& st) {
+  benchQuery(st, Eigen::MatrixXd(38, 38), [](Fixture& f, Eigen::MatrixXd& M) { f.model.massMatrix(f.data, M); });
 }
 void BM_MassMatrixSimbodyCalcM(benchmark::State& st) {
-  Fixture& f = fixture();
-  Eigen::MatrixXd M(38, 38);
-  for (auto _ : st) {
-    f.model.massMatrixReference(f.data, M);
-    benchmark::DoNotOptimize(M.data());
-  }
+  benchQuery(st, Eigen::MatrixXd(38, 38), [](Fixture& f, Eigen::MatrixXd& M) { f.model.massMatrixReference(f.data, M); });
 }
 void BM_NonlinearEffects(benchmark::State& st) {
-  Fixture& f = fixture();
-  Eigen::VectorXd N(38);
-  for (auto _ : st) {
-    f.model.nonlinearEffects(f.data, N);
-    benchmark::DoNotOptimize(N.data());
-  }
+  benchQuery(st, Eigen::VectorXd(38), [](Fixture& f, Eigen::VectorXd& N) { f.model.nonlinearEffects(f.data, N); });
 }
 void BM_FrameJacobian(benchmark::State& st) {
-  Fixture& f = fixture();
-  Eigen::MatrixXd J(6, 38);
-  const FrameId id = f.model.frameId("LGRASP");
-  for (auto _ : st) {
-    f.model.frameJacobian(f.data, id, J);
-    benchmark::DoNotOptimize(J.data());
-  }
+  const FrameId id = fixture().model.frameId("LGRASP");
+  benchQuery(st, Eigen::MatrixXd(6, 38), [id](Fixture& f, Eigen::MatrixXd& J) { f.model.frameJacobian(f.data, id, J); });
 }
 void BM_FrameJacobianSimbody(benchmark::State& st) {
-  Fixture& f = fixture();
-  Eigen::MatrixXd J(6, 38);
-  const FrameId id = f.model.frameId("LGRASP");
-  for (auto _ : st) {
-    f.model.frameJacobianReference(f.data, id, J);
-    benchmark::DoNotOptimize(J.data());
-  }
+  const FrameId id = fixture().model.frameId("LGRASP");
+  benchQuery(st, Eigen::MatrixXd(6, 38), [id](Fixture& f, Eigen::MatrixXd& J) { f.model.frameJacobianReference(f.data, id, J); });
 }
 void BM_CenterOfMassJacobian(benchmark::State& st) {
-  Fixture& f = fixture();
-  Eigen::MatrixXd J(3, 38);
-  for (auto _ : st) {
-    f.model.centerOfMassJacobian(f.data, J);
-    benchmark::DoNotOptimize(J.data());
-  }
+  benchQuery(st, Eigen::MatrixXd(3, 38), [](Fixture& f, Eigen::MatrixXd& J) { f.model.centerOfMassJacobian(f.data, J); });
 }
 void BM_CapsuleDistances16(benchmark::State& st) {
   Fixture& f = fixture();

@@ -66,6 +66,27 @@ class ModelDynamics : public ::testing::TestWithParam<ModelCase> {
     return (fp - fm) / (2.0 * kH);
   }
 
+  // `trials` random states (RandomStates(seed), velocities of scale `speed`): at each the model is
+  // updated, then body(q, u).
+  template <class Body>
+  void forRandomStates(unsigned seed, int trials, double speed, Body body) {
+    RandomStates rs(seed);
+    for (int trial = 0; trial < trials; ++trial) {
+      const Configuration q = rs.configuration(model());
+      const Eigen::VectorXd u = rs.velocity(model(), speed);
+      model().update(data(), q, u);
+      body(q, u);
+    }
+  }
+
+  // The rows x cols matrix that the model's query (data, args..., out) writes.
+  template <class Query, class... Args>
+  Eigen::MatrixXd matrixOf(int rows, int cols, Query query, const Args&... args) {
+    Eigen::MatrixXd out(rows, cols);
+    (model().*query)(data(), args..., out);
+    return out;
+  }
+
   std::unique_ptr<RobotModel> model_;
   std::unique_ptr<ModelData> data_;
 };
@@ -110,26 +131,18 @@ TEST_P(ModelDynamics, EquationOfMotionMatchesSimbodyInverseAndForwardDynamics) {
 TEST_P(ModelDynamics, VelocityTermsObeyThePowerIdentity) {
   // d/dt (1/2 u^T M u) = u^T (tau - N_gravity) for any udot; with M udot + C + G = tau this is
   // u^T C = 1/2 u^T Mdot u (skew-symmetry of Mdot - 2C along the motion).
-  RandomStates rs(13);
   const int n = model().nv();
-  for (int trial = 0; trial < 4; ++trial) {
-    const Configuration q = rs.configuration(model());
-    const Eigen::VectorXd u = rs.velocity(model(), 1.5);
-    model().update(data(), q, u);
+  forRandomStates(13, 4, 1.5, [&](const Configuration& q, const Eigen::VectorXd& u) {
     Eigen::VectorXd N(n), G(n);
     model().nonlinearEffects(data(), N);
     model().update(data(), q, Eigen::VectorXd::Zero(n));
     model().nonlinearEffects(data(), G);
     model().update(data(), q, u);
-    const Eigen::MatrixXd Mdot = centralDifference(q, u, [&] {
-      Eigen::MatrixXd M(n, n);
-      model().massMatrix(data(), M);
-      return M;
-    });
+    const Eigen::MatrixXd Mdot = centralDifference(q, u, [&] { return matrixOf(n, n, &RobotModel::massMatrix); });
     const double lhs = u.dot(N - G);
     const double rhs = 0.5 * u.dot(Mdot * u);
     EXPECT_NEAR(lhs, rhs, 1e-6 * std::max(1.0, std::abs(rhs)));
-  }
+  });
 }
 
 TEST_P(ModelDynamics, GravityTermIsMinusCoMJacobianTransposeTimesWeight) {
@@ -146,12 +159,8 @@ TEST_P(ModelDynamics, GravityTermIsMinusCoMJacobianTransposeTimesWeight) {
 }
 
 TEST_P(ModelDynamics, FrameJacobiansAndBiasesMatchFiniteDifferencesAndSimbody) {
-  RandomStates rs(15);
   const int n = model().nv();
-  for (int trial = 0; trial < 3; ++trial) {
-    const Configuration q = rs.configuration(model());
-    const Eigen::VectorXd u = rs.velocity(model(), 1.5);
-    model().update(data(), q, u);
+  forRandomStates(15, 3, 1.5, [&](const Configuration& q, const Eigen::VectorXd& u) {
     for (FrameId f = 0; f < model().numFrames(); ++f) {
       SCOPED_TRACE(model().frameName(f));
       Eigen::MatrixXd J(6, n), Jref(6, n);
@@ -179,11 +188,7 @@ TEST_P(ModelDynamics, FrameJacobiansAndBiasesMatchFiniteDifferencesAndSimbody) {
       EXPECT_TRUE(near(model().frameVelocity(data(), f), Ju, 1e-12));
       (void)X0;
       // Jdot u against the finite difference of J along u.
-      const Eigen::MatrixXd Jdot = centralDifference(q, u, [&] {
-        Eigen::MatrixXd Jh(6, n);
-        model().frameJacobian(data(), f, Jh);
-        return Jh;
-      });
+      const Eigen::MatrixXd Jdot = centralDifference(q, u, [&] { return matrixOf(6, n, &RobotModel::frameJacobian, f); });
       EXPECT_TRUE(near(model().frameBias(data(), f), Jdot * u, 1e-6));
       // A point of the frame.
       const Eigen::Vector3d pt(0.05, -0.02, 0.1);
@@ -194,14 +199,10 @@ TEST_P(ModelDynamics, FrameJacobiansAndBiasesMatchFiniteDifferencesAndSimbody) {
       });
       EXPECT_TRUE(near(Jp * u, dpt, 1e-6));
       EXPECT_TRUE(near(model().pointVelocity(data(), f, pt), Jp * u, 1e-12));
-      const Eigen::MatrixXd Jpdot = centralDifference(q, u, [&] {
-        Eigen::MatrixXd Jh(3, n);
-        model().pointJacobian(data(), f, pt, Jh);
-        return Jh;
-      });
+      const Eigen::MatrixXd Jpdot = centralDifference(q, u, [&] { return matrixOf(3, n, &RobotModel::pointJacobian, f, pt); });
       EXPECT_TRUE(near(model().pointBias(data(), f, pt), Jpdot * u, 1e-6));
     }
-  }
+  });
 }
 
 TEST_P(ModelDynamics, FrameAndPointJacobiansMatchFiniteDifferencesColumnByColumn) {
@@ -253,12 +254,8 @@ TEST_P(ModelDynamics, FrameAndPointJacobiansMatchFiniteDifferencesColumnByColumn
 }
 
 TEST_P(ModelDynamics, CenterOfMassJacobianAndBiasMatchFiniteDifferences) {
-  RandomStates rs(16);
   const int n = model().nv();
-  for (int trial = 0; trial < 4; ++trial) {
-    const Configuration q = rs.configuration(model());
-    const Eigen::VectorXd u = rs.velocity(model(), 1.5);
-    model().update(data(), q, u);
+  forRandomStates(16, 4, 1.5, [&](const Configuration& q, const Eigen::VectorXd& u) {
     EXPECT_TRUE(near(model().centerOfMass(data()), model().centerOfMassReference(data()), 1e-12));
     Eigen::MatrixXd Jc(3, n);
     model().centerOfMassJacobian(data(), Jc);
@@ -270,13 +267,9 @@ TEST_P(ModelDynamics, CenterOfMassJacobianAndBiasMatchFiniteDifferences) {
     }
     model().update(data(), q, u);
     EXPECT_TRUE(near(model().centerOfMassVelocity(data()), Jc * u, 1e-12));
-    const Eigen::MatrixXd Jcdot = centralDifference(q, u, [&] {
-      Eigen::MatrixXd Jh(3, n);
-      model().centerOfMassJacobian(data(), Jh);
-      return Jh;
-    });
+    const Eigen::MatrixXd Jcdot = centralDifference(q, u, [&] { return matrixOf(3, n, &RobotModel::centerOfMassJacobian); });
     EXPECT_TRUE(near(model().centerOfMassBias(data()), Jcdot * u, 1e-6));
-  }
+  });
 }
 
 TEST_P(ModelDynamics, DofAxesAndTreeRelationAgreeWithJacobians) {

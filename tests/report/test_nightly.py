@@ -12,7 +12,6 @@ report.nightly (label report).
   - a directory of another commit is refused (exit code 2), as is a bad configuration.
 Usage: test_nightly.py --build-dir BUILD --work DIR
 """
-import argparse
 import json
 import os
 import shutil
@@ -21,6 +20,8 @@ import subprocess
 import sys
 import time
 import unittest
+
+import suite_options
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
@@ -146,14 +147,5 @@ class Nightly(unittest.TestCase):
         self.assertIn("-j: expected a positive integer, found '0'", r.stderr)
 
 
-def main():
-    global ARGS
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--build-dir", required=True)
-    ap.add_argument("--work", required=True)
-    ARGS, rest = ap.parse_known_args()
-    unittest.main(argv=[sys.argv[0]] + rest, verbosity=2)
-
-
 if __name__ == "__main__":
-    main()
+    suite_options.main(sys.modules[__name__], "--build-dir", "--work")

@@ -20,7 +20,6 @@ protocol (chromium_cdp.py, network emulated offline) and the test asserts:
     replay's quantisation allows (see fk_tolerance).
 Usage: test_report_browser.py --harness build/bin/lexdyn-harness --work DIR
 """
-import argparse
 import fnmatch
 import io
 import json
@@ -40,6 +39,7 @@ ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(ROOT, "harness", "scripts"))
 
+import suite_options  # noqa: E402
 from chromium_cdp import Browser  # noqa: E402
 from lexdyn_report.trace import read_trace  # noqa: E402
 
@@ -450,14 +450,5 @@ class ReportInBrowser(unittest.TestCase):
         self.assertLess(total, 10e6)
 
 
-def main():
-    global ARGS
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--harness", required=True)
-    ap.add_argument("--work", required=True)
-    ARGS, rest = ap.parse_known_args()
-    unittest.main(argv=[sys.argv[0]] + rest, verbosity=2)
-
-
 if __name__ == "__main__":
-    main()
+    suite_options.main(sys.modules[__name__], "--harness", "--work")

@@ -25,6 +25,13 @@ SimulatorSettings tightSettings(int nj, double period) {
   return s;
 }
 
+// One step of the simulator; a failure says its status, message and time.
+::testing::AssertionResult stepped(Simulator& sim, const JointCommand& cmd) {
+  const StepResult r = sim.step(cmd);
+  if (r.ok) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "status " << toString(r.status) << " msg " << r.message << " t " << sim.time();
+}
+
 JointCommand hold(const Eigen::VectorXd& q) {
   return JointCommand{q, Eigen::VectorXd::Zero(q.size()), Eigen::VectorXd::Zero(q.size())};
 }
@@ -108,18 +115,24 @@ class PointMass : public ::testing::Test {
     s.grasps = std::move(grasps);
     return Simulator(src("models/point_mass/point_mass.urdf"), src("models/point_mass/point_mass.yaml"), s);
   }
+  // From rest at 0: `ticks` steps holding the set-point q_ref, then check(t) after each.
+  template <class Check>
+  void holdFromRest(Simulator& sim, double q_ref, int ticks, Check check) {
+    sim.reset(sim.model().neutralConfiguration(), Eigen::VectorXd::Zero(1));
+    const JointCommand cmd = hold(Eigen::VectorXd::Constant(1, q_ref));
+    for (int k = 1; k <= ticks; ++k) {
+      ASSERT_TRUE(stepped(sim, cmd));
+      check(sim.time());
+    }
+  }
 };
 
 TEST_F(PointMass, StepResponseOfTheServoIsCriticallyDamped) {
   // m = 1, kp = 100, kd = 20: x(t) = x_ref (1 - (1 + 10 t) exp(-10 t)).
   Simulator sim = make(100.0, 20.0, SetpointProfile::Step);
-  sim.reset(sim.model().neutralConfiguration(), Eigen::VectorXd::Zero(1));
-  const JointCommand cmd = hold(Eigen::VectorXd::Constant(1, 0.1));
-  for (int k = 1; k <= 200; ++k) {
-    { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
-    const double t = sim.time();
+  holdFromRest(sim, 0.1, 200, [&](double t) {
     EXPECT_NEAR(sim.sensors().q[0], 0.1 * (1.0 - (1.0 + 10.0 * t) * std::exp(-10.0 * t)), 1e-8) << t;
-  }
+  });
 }
 
 TEST_F(PointMass, HermiteAndLinearSetPointsFollowARampExactlyAStepDoesNot) {
@@ -136,7 +149,7 @@ TEST_F(PointMass, HermiteAndLinearSetPointsFollowARampExactlyAStepDoesNot) {
     for (int k = 1; k <= 200; ++k) {
       JointCommand cmd = hold(Eigen::VectorXd::Constant(1, v * 0.005 * k));
       cmd.qdot[0] = v;
-      { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+      ASSERT_TRUE(stepped(sim, cmd));
       const double t = sim.time();
       worst = std::max(worst, std::abs(sim.sensors().q[0] - (v * t - v * t * std::exp(-10.0 * t))));
     }
@@ -151,14 +164,10 @@ TEST_F(PointMass, HermiteAndLinearSetPointsFollowARampExactlyAStepDoesNot) {
 TEST_F(PointMass, TorqueIsSaturatedAtTheEffortLimitAndRecorded) {
   // Effort limit 100 N: with kp = 1e4 towards 1 m the force saturates, x = 50 t^2.
   Simulator sim = make(1e4, 0.0, SetpointProfile::Step);
-  sim.reset(sim.model().neutralConfiguration(), Eigen::VectorXd::Zero(1));
-  const JointCommand cmd = hold(Eigen::VectorXd::Constant(1, 1.0));
-  for (int k = 1; k <= 20; ++k) {
-    { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
-    const double t = sim.time();
+  holdFromRest(sim, 1.0, 20, [&](double t) {
     EXPECT_NEAR(sim.sensors().q[0], 50.0 * t * t, 1e-9);
     EXPECT_EQ(sim.sensors().tau[0], 100.0);
-  }
+  });
 }
 
 TEST_F(PointMass, GraspBushingIsADampedSpringThatSwitchesOff) {
@@ -180,14 +189,14 @@ TEST_F(PointMass, GraspBushingIsADampedSpringThatSwitchesOff) {
   };
   const JointCommand cmd = hold(Eigen::VectorXd::Zero(1));
   for (int k = 1; k <= 100; ++k) {
-    { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+    ASSERT_TRUE(stepped(sim, cmd));
     EXPECT_NEAR(sim.sensors().q[0], x(sim.time()), 1e-8);
     EXPECT_NEAR(sim.graspWrenchWorld(0).force.x(), -400.0 * x(sim.time()) - 4.0 * xd(sim.time()), 1e-6);
   }
   sim.setGraspActive(0, false);
   const double x1 = x(0.5), v1 = xd(0.5);
   for (int k = 1; k <= 20; ++k) {
-    { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+    ASSERT_TRUE(stepped(sim, cmd));
     EXPECT_NEAR(sim.sensors().q[0], x1 + v1 * 0.005 * k, 1e-8);
     EXPECT_EQ(sim.graspWrenchWorld(0).force.norm(), 0.0);
   }
@@ -218,7 +227,7 @@ TEST_F(Humanoid, FootSensorsReportTheContactWrench) {
   const JointCommand cmd = hold(hs);
   const auto& model = sim.model();
   const double weight = model.totalMass() * 9.81;
-  for (int k = 0; k < 300; ++k) { const StepResult r_ = sim.step(cmd); ASSERT_TRUE(r_.ok) << "status " << toString(r_.status) << " msg " << r_.message << " t " << sim.time(); }
+  for (int k = 0; k < 300; ++k) ASSERT_TRUE(stepped(sim, cmd));
   // Sensors 0 and 1 are on the feet. Rotate their forces to world and compare with the
   // contact points' forces and with the weight (the robot is at rest after 1.5 s).
   Eigen::Vector3d total = Eigen::Vector3d::Zero();

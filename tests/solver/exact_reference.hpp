@@ -56,6 +56,21 @@ namespace exact {
 using Q = mpq_class;
 using Mat = std::vector<std::vector<Q>>;
 
+/// Gauss-Jordan pivot on m[row][col]: that row scaled to a 1 there, the column cleared in every
+/// other row.
+inline void pivot(Mat& m, int row, int col) {
+  auto& pr = m[static_cast<size_t>(row)];
+  const Q inv = 1 / pr[static_cast<size_t>(col)];
+  for (auto& v : pr) v *= inv;
+  for (size_t r = 0; r < m.size(); ++r) {
+    if (r == static_cast<size_t>(row)) continue;
+    auto& rr = m[r];
+    const Q f = rr[static_cast<size_t>(col)];
+    if (sgn(f) == 0) continue;
+    for (size_t k = 0; k < rr.size(); ++k) rr[k] -= f * pr[k];
+  }
+}
+
 /// Reduced row echelon form in place; returns the pivot column of each pivot row.
 inline std::vector<int> rref(Mat& m, int cols) {
   std::vector<int> pivots;
@@ -71,16 +86,7 @@ inline std::vector<int> rref(Mat& m, int cols) {
     }
     if (p < 0) continue;
     std::swap(m[static_cast<size_t>(p)], m[static_cast<size_t>(row)]);
-    auto& pr = m[static_cast<size_t>(row)];
-    const Q inv = 1 / pr[static_cast<size_t>(c)];
-    for (auto& v : pr) v *= inv;
-    for (int r = 0; r < rows; ++r) {
-      if (r == row) continue;
-      auto& rr = m[static_cast<size_t>(r)];
-      const Q f = rr[static_cast<size_t>(c)];
-      if (sgn(f) == 0) continue;
-      for (size_t k = 0; k < rr.size(); ++k) rr[k] -= f * pr[k];
-    }
+    pivot(m, row, c);
     pivots.push_back(c);
     ++row;
   }
@@ -152,16 +158,7 @@ inline bool lpFeasible(const Mat& A, const std::vector<Q>& b, int k) {
       }
     }
     if (leave < 0) break;  // unbounded direction: cannot happen in phase 1 (objective >= 0)
-    auto& pr = T[static_cast<size_t>(leave)];
-    const Q inv = 1 / pr[static_cast<size_t>(enter)];
-    for (auto& v : pr) v *= inv;
-    for (int r = 0; r < m; ++r) {
-      if (r == leave) continue;
-      auto& rr = T[static_cast<size_t>(r)];
-      const Q f = rr[static_cast<size_t>(enter)];
-      if (sgn(f) == 0) continue;
-      for (size_t c = 0; c < rr.size(); ++c) rr[c] -= f * pr[c];
-    }
+    pivot(T, leave, enter);
     basis[static_cast<size_t>(leave)] = enter;
   }
   Q infeas(0);

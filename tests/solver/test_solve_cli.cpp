@@ -1,4 +1,6 @@
 // lexdyn-solve: output format, exit codes and bad-input messages.
+#include "../common/cli_test_utils.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,10 +13,7 @@
 
 namespace {
 
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
+using CliRun = lexdyn::testing::CliResult;
 
 const std::string kBin = std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-solve";
 
@@ -33,20 +32,9 @@ std::string writeFile(const std::string& name, const std::string& text) {
   return path;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
+using lexdyn::testing::slurp;
 
-CliRun run(const std::string& args) {
-  const std::string o = tempDir() + "/stdout", e = tempDir() + "/stderr";
-  const int st = std::system((kBin + " " + args + " >" + o + " 2>" + e).c_str());
-  CliRun r;
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  r.out = slurp(o);
-  r.err = slurp(e);
-  return r;
-}
+CliRun run(const std::string& args) { return lexdyn::testing::runCli(kBin + " " + args, tempDir()); }
 
 const char* kValid = R"({"variables": 2, "levels": [
   {"name": "box", "A": [[1, 0], [0, 1]], "lower": [-1, -1], "upper": [1, 1]},
@@ -157,13 +145,7 @@ int runAndSignal(const std::string& cmd, const std::string& started, const char*
   // then reach the shell before it starts the command).
   std::remove((tempDir() + "/sig.err").c_str());
   std::remove((tempDir() + "/sig.out").c_str());
-  const std::string script = "(" + cmd + " > " + tempDir() + "/sig.out 2> " + tempDir() + "/sig.err & pid=$!; " +
-                             "while ! (" + started + ") && kill -0 $pid 2>/dev/null; do sleep 0.01; done; kill -" + sig +
-                             " $pid; wait $pid; echo $? > " + code + ")";
-  if (std::system(("bash -c '" + script + "'").c_str()) != 0) return -1;
-  int c = -1;
-  std::ifstream(code) >> c;
-  return c;
+  return lexdyn::testing::runAndSignal(cmd + " > " + tempDir() + "/sig.out 2> " + tempDir() + "/sig.err", started, sig, code);
 }
 
 const std::string kSweep = std::string(LEXDYN_BINARY_DIR) + "/bin/lexdyn-solver-sweep";
@@ -199,8 +181,7 @@ TEST(SolveCliExitCodes, InterruptedBenchIs130Or143) {
 TEST(SolverSweepExitCodes, ZeroOneTwoAndInterruption) {
   const std::string out = tempDir() + "/sweep.out", err = tempDir() + "/sweep.err";
   auto sweep = [&](const std::string& args) {
-    const int st = std::system((kSweep + " " + args + " > " + out + " 2> " + err).c_str());
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return lexdyn::testing::exitCode(std::system((kSweep + " " + args + " > " + out + " 2> " + err).c_str()));
   };
   EXPECT_EQ(sweep("--cases 200 --seed 3"), 0) << slurp(err);
   EXPECT_NE(slurp(out).find("\"failures\": 0"), std::string::npos) << slurp(out);

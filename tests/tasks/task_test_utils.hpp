@@ -5,16 +5,23 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "../common/expect_text.hpp"
 #include "../model/model_test_utils.hpp"
 #include "lexdyn/hessian/kinematic_hessian.hpp"
 #include "lexdyn/model/robot_model.hpp"
 #include "lexdyn/tasks/task.hpp"
 
 namespace lexdyn::tasks::testing {
+
+using lexdyn::testing::inputErrorWhere;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 using model::Configuration;
 using model::RobotModel;
@@ -115,10 +122,10 @@ inline ::testing::AssertionResult near(const Eigen::MatrixXd& a, const Eigen::Ma
                                        << a << "\nB=\n" << b;
 }
 
-/// Central difference of f along q(t) = integrate(q, v, t) at t = 0 (the fixture's u is kept).
-/// Restores the fixture's state afterwards.
+/// f at q(h) and at q(-h), q(t) = integrate(q, v, t) (the fixture's u is kept). Restores the
+/// fixture's state afterwards.
 template <class F>
-Eigen::MatrixXd centralDifference(TickFixture& fx, const Eigen::VectorXd& v, F f, double h = kH) {
+std::pair<Eigen::MatrixXd, Eigen::MatrixXd> valuesAround(TickFixture& fx, const Eigen::VectorXd& v, F f, double h) {
   const Configuration q0 = fx.q;
   Configuration qp = q0, qm = q0;
   fx.model.integrate(q0, v, h, qp);
@@ -131,25 +138,22 @@ Eigen::MatrixXd centralDifference(TickFixture& fx, const Eigen::VectorXd& v, F f
   const Eigen::MatrixXd fm = f();
   fx.q = q0;
   fx.update();
+  return {fp, fm};
+}
+
+/// Central difference of f along q(t) = integrate(q, v, t) at t = 0 (the fixture's u is kept).
+/// Restores the fixture's state afterwards.
+template <class F>
+Eigen::MatrixXd centralDifference(TickFixture& fx, const Eigen::VectorXd& v, F f, double h = kH) {
+  const auto [fp, fm] = valuesAround(fx, v, f, h);
   return (fp - fm) / (2.0 * h);
 }
 
 /// Second derivative of f along q(t) = integrate(q, v, t) at t = 0.
 template <class F>
 Eigen::MatrixXd secondDifference(TickFixture& fx, const Eigen::VectorXd& v, F f, double h = 1e-4) {
-  const Configuration q0 = fx.q;
-  Configuration qp = q0, qm = q0;
-  fx.model.integrate(q0, v, h, qp);
-  fx.model.integrate(q0, v, -h, qm);
   const Eigen::MatrixXd f0 = f();
-  fx.q = qp;
-  fx.update();
-  const Eigen::MatrixXd fp = f();
-  fx.q = qm;
-  fx.update();
-  const Eigen::MatrixXd fm = f();
-  fx.q = q0;
-  fx.update();
+  const auto [fp, fm] = valuesAround(fx, v, f, h);
   return (fp - 2.0 * f0 + fm) / (h * h);
 }
 

@@ -22,7 +22,6 @@ namespace lexdyn::tasks {
 namespace {
 
 using namespace testing;
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 TEST(Damper, FormulaAndSigns) {
   const double d_i = 0.1, d_s = 0.02, xi = 0.5;
@@ -125,14 +124,7 @@ INSTANTIATE_TEST_SUITE_P(Models, JointLimits, ::testing::Values("hrp2kai_like", 
 
 TEST(JointLimitsParams, Validation) {
   const RobotModel model = testing::loadModel("planar_3r");
-  auto where = [&](JointLimitsParams p) {
-    try {
-      JointLimitsTask t("jl", model, p);
-    } catch (const InputError& e) {
-      return e.where();
-    }
-    return std::string("none");
-  };
+  auto where = [&](JointLimitsParams p) { return inputErrorWhere([&] { JointLimitsTask t("jl", model, p); }); };
   JointLimitsParams p;
   p.interaction_fraction = 0.6;
   EXPECT_EQ(where(p), "task \"jl\": interaction_fraction");
@@ -212,14 +204,7 @@ TEST(SelfCollision, PairSelectionAndValidation) {
   EXPECT_EQ(task.modelPair(0), 0);   // [RARM_LINK3_C, WAIST_C], either order
   EXPECT_EQ(task.modelPair(1), 15);  // [LARM_LINK5_C, CHEST_LINK1_C]
   EXPECT_DOUBLE_EQ(task.damper().interaction, 0.08);
-  auto where = [&](const SelfCollisionParams& q) {
-    try {
-      SelfCollisionTask t("sc", model, q);
-    } catch (const InputError& e) {
-      return e.where();
-    }
-    return std::string("none");
-  };
+  auto where = [&](const SelfCollisionParams& q) { return inputErrorWhere([&] { SelfCollisionTask t("sc", model, q); }); };
   SelfCollisionParams q;
   q.pairs = {{"WAIST_C", "RARM_LINK3_C"}, {"NOPE", "WAIST_C"}};
   EXPECT_EQ(where(q), "task \"sc\": pairs[1]");

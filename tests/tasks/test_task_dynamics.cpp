@@ -25,7 +25,6 @@ namespace lexdyn::tasks {
 namespace {
 
 using namespace testing;
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 TEST(Generators, UnitEdgesOfTheFrictionPyramid) {
   RandomStates rs(201);
@@ -236,20 +235,10 @@ TEST(ConstantRows, WrenchMinVelocityMinAndTrustRegion) {
   EXPECT_TRUE(near(dtr->upper, Eigen::VectorXd::Constant(nv, 0.02 / fx.ctx.dt), 1e-15));
   EXPECT_TRUE(near(dtr->lower, Eigen::VectorXd::Constant(nv, -0.02 / fx.ctx.dt), 1e-15));
   tp.delta = 0.0;
-  try {
-    TrustRegionTask bad("trust", fx.model, tp);
-    ADD_FAILURE();
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), "task \"trust\": delta");
-  }
+  EXPECT_EQ(inputErrorWhere([&] { TrustRegionTask bad("trust", fx.model, tp); }), "task \"trust\": delta");
   TorqueLimitsParams tl;
   tl.scale = 1.5;
-  try {
-    TorqueLimitsTask bad("tau", fx.model, tl);
-    ADD_FAILURE();
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), "task \"tau\": scale");
-  }
+  EXPECT_EQ(inputErrorWhere([&] { TorqueLimitsTask bad("tau", fx.model, tl); }), "task \"tau\": scale");
 }
 
 }  // namespace

@@ -1,7 +1,12 @@
-"""Shared pieces: atomic writes, the method colours, number formatting, input errors."""
+"""Shared pieces: atomic writes, the method colours, number formatting, input errors, YAML files."""
 import html
 import math
 import os
+
+try:
+    import yaml
+except ImportError:  # pragma: no cover
+    yaml = None
 
 # One colour per method across every figure and table of the report (matplotlib's tab10
 # entries, colour-blind distinguishable in pairs). A run without a method (posture servo) is grey.
@@ -16,6 +21,16 @@ class ReportInputError(Exception):
 
     def __init__(self, where, what):
         super().__init__(f"{where}: {what}")
+
+
+def read_yaml(path, what):
+    """The YAML document of PATH ({} when it is empty); a file that cannot be read or parsed is a
+    ReportInputError saying that WHAT ("case file") was expected. Needs python3-yaml."""
+    try:
+        with open(path) as f:
+            return yaml.safe_load(f) or {}
+    except (OSError, yaml.YAMLError) as e:
+        raise ReportInputError(path, f"expected a readable {what} ({e})")
 
 
 def method_colour(method):

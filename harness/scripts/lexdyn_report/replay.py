@@ -19,7 +19,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from .common import ReportInputError
+from .common import ReportInputError, read_yaml
 
 try:
     import yaml
@@ -190,11 +190,7 @@ def _add_data_file(model, data_path):
     if yaml is None:
         model["warnings"].append(f"{data_path}: python3-yaml missing; data-file frames not drawn")
         return
-    try:
-        with open(data_path) as f:
-            d = yaml.safe_load(f) or {}
-    except (OSError, yaml.YAMLError) as e:
-        raise ReportInputError(data_path, f"expected a readable robot data file ({e})")
+    d = read_yaml(data_path, "robot data file")
     model["floating"] = d.get("base") == "free_flyer"
     for i, fr in enumerate(d.get("frames", []) or []):
         for key in ("name", "parent"):

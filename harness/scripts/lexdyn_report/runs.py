@@ -15,7 +15,7 @@ import os
 import re
 import xml.etree.ElementTree as ET
 
-from .common import ReportInputError, finite, method_sort_key
+from .common import ReportInputError, finite, method_sort_key, read_yaml
 
 # Paths stored relative to where a run was started (usually the repository root).
 REPO_ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
@@ -136,11 +136,7 @@ class CaseInfo:
         self.robot = {}
         if not path or yaml is None:
             return
-        try:
-            with open(path) as f:
-                doc = yaml.safe_load(f) or {}
-        except (OSError, yaml.YAMLError) as e:
-            raise ReportInputError(path, f"expected a readable case file ({e})")
+        doc = read_yaml(path, "case file")
         self.description = doc.get("description", "")
         self.robot = doc.get("robot", {}) or {}
         ctrl = doc.get("controller", {}) or {}
