@@ -6,15 +6,11 @@
 
 #include <cmath>
 
-#include "lexdyn/control/controller.hpp"
-#include "lexdyn/tasks/position.hpp"
-#include "lexdyn/tasks/trust_region.hpp"
-#include "lexdyn/tasks/velocity_min.hpp"
+#include "planar_arm.hpp"
 
 namespace lexdyn::control {
 namespace {
 
-const std::string kDir = std::string(LEXDYN_SOURCE_DIR) + "/models/planar_3r/";
 const Eigen::Vector3d kTarget(2.0, 0.0, 0.5);
 constexpr double kReach = 0.5 + 0.4 + 0.3;  // link lengths of models/planar_3r
 constexpr double kDt = 0.005;
@@ -37,29 +33,14 @@ struct Options {
 
 ArmRun run(const std::string& method, bool trustRegion, NewtonTarget target = NewtonTarget::Zero, double seconds = 20.0,
            Options extra = {}) {
-  const model::RobotModel m = model::RobotModel::fromFiles(kDir + "planar_3r.urdf", kDir + "planar_3r.yaml");
-  ControllerConfig cfg;
-  cfg.params.method = method;
-  cfg.params.newton_target = target;
-  cfg.params.sr1 = extra.sr1;
-  cfg.params.rank_switching = extra.rankSwitching;
-  tasks::PositionParams pp;
-  pp.frame = "tool";
-  pp.target = kTarget;
-  pp.gains.kp = 10.0;
-  cfg.tasks.push_back(std::make_unique<tasks::PositionTask>("tool", m, pp));
-  cfg.tasks.push_back(std::make_unique<tasks::VelocityMinTask>("velocity", m));
-  if (trustRegion) {
-    cfg.tasks.push_back(std::make_unique<tasks::TrustRegionTask>("trust", m));
-    cfg.levels = {{"trust", {2}, {}}, {"tool", {0}, {}}, {"velocity", {1}, {}}};
-  } else {
-    cfg.levels = {{"tool", {0}, {}}, {"velocity", {1}, {}}};
-  }
-  Controller c(m, std::move(cfg));
-  RobotState s;
-  s.q = m.neutralConfiguration();
-  s.q.joints = m.posture("bent");
-  s.u = Eigen::VectorXd::Zero(3);
+  const model::RobotModel m = testing::planarArm();
+  ControllerParams params;
+  params.method = method;
+  params.newton_target = target;
+  params.sr1 = extra.sr1;
+  params.rank_switching = extra.rankSwitching;
+  Controller c(m, testing::planarArmConfig(m, params, trustRegion, kTarget));
+  RobotState s = testing::planarArmStart(m);
   c.reset(s);
   ArmRun r;
   const int ticks = static_cast<int>(std::lround(seconds / kDt));

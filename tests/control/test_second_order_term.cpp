@@ -9,15 +9,11 @@
 #include <cmath>
 #include <vector>
 
-#include "lexdyn/control/controller.hpp"
-#include "lexdyn/tasks/position.hpp"
-#include "lexdyn/tasks/trust_region.hpp"
-#include "lexdyn/tasks/velocity_min.hpp"
+#include "planar_arm.hpp"
 
 namespace lexdyn::control {
 namespace {
 
-const std::string kDir = std::string(LEXDYN_SOURCE_DIR) + "/models/planar_3r/";
 constexpr double kDt = 0.005;
 constexpr int kToolLevel = 1;  // configured levels: trust, tool, velocity
 
@@ -30,22 +26,9 @@ struct Tick {
 };
 
 std::vector<Tick> run(const ControllerParams& params, double seconds) {
-  const model::RobotModel m = model::RobotModel::fromFiles(kDir + "planar_3r.urdf", kDir + "planar_3r.yaml");
-  ControllerConfig cfg;
-  cfg.params = params;
-  tasks::PositionParams pp;
-  pp.frame = "tool";
-  pp.target = Eigen::Vector3d(2.0, 0.0, 0.5);
-  pp.gains.kp = 10.0;
-  cfg.tasks.push_back(std::make_unique<tasks::PositionTask>("tool", m, pp));
-  cfg.tasks.push_back(std::make_unique<tasks::VelocityMinTask>("velocity", m));
-  cfg.tasks.push_back(std::make_unique<tasks::TrustRegionTask>("trust", m));
-  cfg.levels = {{"trust", {2}, {}}, {"tool", {0}, {}}, {"velocity", {1}, {}}};
-  Controller c(m, std::move(cfg));
-  RobotState s;
-  s.q = m.neutralConfiguration();
-  s.q.joints = m.posture("bent");
-  s.u = Eigen::VectorXd::Zero(3);
+  const model::RobotModel m = testing::planarArm();
+  Controller c(m, testing::planarArmConfig(m, params, true));
+  RobotState s = testing::planarArmStart(m);
   c.reset(s);
   const int nv = m.nv();
   std::vector<Tick> out;
@@ -99,6 +82,24 @@ double medianCurvature(const std::vector<Tick>& ticks) {
   return median(v);
 }
 
+// A reading (params) and the default readings of the same method over 6 s. The readings act
+// through the Newton rows only: both runs are the same up to the first augmented tick k0 (-1
+// when either run has none or they differ there).
+struct Variant {
+  std::vector<Tick> ticks, base;
+  int k0 = -1;
+};
+
+Variant runVariant(const ControllerParams& p) {
+  Variant v;
+  v.ticks = run(p, 6.0);
+  v.base = run(params(p.method), 6.0);
+  const int k0 = firstAugmented(v.base);
+  EXPECT_EQ(firstAugmented(v.ticks), k0);
+  if (k0 >= 0 && firstAugmented(v.ticks) == k0) v.k0 = k0;
+  return v;
+}
+
 TEST(SecondOrderTerm, RatioIsTraceOfTheNewtonRowsOverTraceOfJtJ) {
   for (const std::string method : {"bfgs", "ah"}) {
     ControllerParams p = params(method);
@@ -150,15 +151,12 @@ TEST(SecondOrderTerm, BfgsFullDifferenceChangesTheUpdates) {
   // (lambda - lambda_prev) is added, so B (and the rows) differ from the default reading.
   ControllerParams p = params("bfgs");
   p.bfgs_secant = BfgsSecant::FullDifference;
-  const std::vector<Tick> full = run(p, 6.0);
-  const std::vector<Tick> base = run(params("bfgs"), 6.0);
   // Identical until the first augmented tick (B does not act before), different afterwards.
-  const int k0 = firstAugmented(base);
-  ASSERT_GE(k0, 0);
-  EXPECT_EQ(firstAugmented(full), k0);
+  const Variant v = runVariant(p);
+  ASSERT_GE(v.k0, 0);
   bool differs = false;
-  for (size_t k = static_cast<size_t>(k0); k < base.size(); ++k)
-    differs = differs || (full[k].augmented && base[k].augmented && full[k].curvature != base[k].curvature);
+  for (size_t k = static_cast<size_t>(v.k0); k < v.base.size(); ++k)
+    differs = differs || (v.ticks[k].augmented && v.base[k].augmented && v.ticks[k].curvature != v.base[k].curvature);
   EXPECT_TRUE(differs);
 }
 
@@ -167,13 +165,10 @@ TEST(SecondOrderTerm, MultiplierScaleOneScalesTheAnalyticHessianByOneOverDt) {
   // times larger at the first augmented tick (the runs are identical up to it).
   ControllerParams p = params("ah");
   p.multiplier_scale = MultiplierScale::One;
-  const std::vector<Tick> one = run(p, 6.0);
-  const std::vector<Tick> base = run(params("ah"), 6.0);
-  const int k0 = firstAugmented(base);
-  ASSERT_GE(k0, 0);
-  ASSERT_EQ(firstAugmented(one), k0);
-  const Tick& a = one[static_cast<size_t>(k0)];
-  const Tick& b = base[static_cast<size_t>(k0)];
+  const Variant v = runVariant(p);
+  ASSERT_GE(v.k0, 0);
+  const Tick& a = v.ticks[static_cast<size_t>(v.k0)];
+  const Tick& b = v.base[static_cast<size_t>(v.k0)];
   ASSERT_GT(b.curvature, 0.0);
   EXPECT_NEAR(a.curvature / b.curvature, 1.0 / kDt, 1e-6 / kDt);
   // And for BFGS the later term is larger too (its secant pairs carry the scale).
