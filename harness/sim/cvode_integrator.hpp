@@ -1,6 +1,9 @@
 // The one adapter to SUNDIALS CVODE (the only file that includes SUNDIALS headers is
-// cvode_integrator.cpp). Integrates ydot = f(t, y) with BDF, a Newton nonlinear solver and a
-// dense direct linear solver whose Jacobian CVODE approximates by difference quotients.
+// cvode_integrator.cpp). Integrates ydot = f(t, y) with BDF and a Newton nonlinear solver whose
+// dense Jacobian CVODE approximates by difference quotients. The Newton systems
+// (I - gamma J) x = b are solved by our own direct linear solver (cvode_integrator.cpp,
+// NewtonSolver): for a system y = [q; u] whose q block is kinematic (CvodeSettings::
+// kinematic_block) by eliminating the q block, otherwise by a dense LU of the whole matrix.
 // Integration is advanced to a given time with CVodeSetStopTime + CV_NORMAL, so CVODE never
 // steps past a control tick and keeps its history (order, step size, Jacobian) across ticks.
 #pragma once
@@ -27,6 +30,14 @@ struct CvodeSettings {
   long max_steps = 20000;       ///< per advance() call
   double max_step = 0.0;        ///< 0: no limit
   double initial_step = 0.0;    ///< 0: CVODE's estimate
+  /// Size p of a leading block q of y = [q; u] whose rates depend on u through a sparse map
+  /// (qdot = N(q) u, e.g. joint rates = joint speeds): the Newton matrix is then factorised by
+  /// eliminating the q block (its blocks I - gamma dqdot/dq and -gamma N are sparse) and a
+  /// dense LU of the (n - p) x (n - p) Schur complement. Only the cost depends on the
+  /// structure: any matrix is solved correctly, and the whole matrix is factorised instead
+  /// when the q block is not safely invertible without pivoting across the blocks. 0: always
+  /// the dense LU of the whole matrix.
+  int kinematic_block = 0;
 };
 
 struct CvodeStats {
@@ -37,6 +48,8 @@ struct CvodeStats {
   long nonlin_iters = 0;
   long nonlin_conv_fails = 0;
   long err_test_fails = 0;
+  long lin_setups = 0;          ///< Newton-matrix factorisations
+  long lin_full_setups = 0;     ///< of which of the whole matrix (kinematic block not used)
   double last_step = 0.0;
   int last_order = 0;
 };

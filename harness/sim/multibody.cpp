@@ -13,6 +13,7 @@
 #include <Simbody.h>
 
 #include <cmath>
+#include <cstring>
 
 namespace lexdyn::sim {
 
@@ -257,9 +258,22 @@ MultibodyState Multibody::createState() const {
 void Multibody::setState(MultibodyState& st, const double* q, const double* u) const {
   const Impl& m = *impl_;
   MultibodyState::Impl& s = *st.impl_;
-  {
+  // q or u are written only when they differ (bit for bit) from the state's: writing them
+  // invalidates Simbody's Position (Velocity) stage and everything computed from it, such as
+  // the articulated-body inertias, which depend on q only. The difference-quotient Jacobian
+  // changes u alone in half of its evaluations.
+  auto same = [](const SimTK::Vector& V, const std::vector<int>& index, const double* x, int n) {
+    for (int k = 0; k < n; ++k) {
+      const double v = V[index[static_cast<size_t>(k)]];
+      if (std::memcmp(&v, &x[k], sizeof(double)) != 0) return false;
+    }
+    return true;
+  };
+  if (!same(s.state.getQ(), m.q_index, q, m.nq)) {
     SimTK::Vector& Q = s.state.updQ();
     for (int k = 0; k < m.nq; ++k) Q[m.q_index[static_cast<size_t>(k)]] = q[k];
+  }
+  if (!same(s.state.getU(), m.u_index, u, m.nv)) {
     SimTK::Vector& U = s.state.updU();
     for (int k = 0; k < m.nv; ++k) U[m.u_index[static_cast<size_t>(k)]] = u[k];
   }

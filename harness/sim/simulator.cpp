@@ -53,6 +53,8 @@ void addCounters(CvodeStats& a, const CvodeStats& b) {
   a.nonlin_iters += b.nonlin_iters;
   a.nonlin_conv_fails += b.nonlin_conv_fails;
   a.err_test_fails += b.err_test_fails;
+  a.lin_setups += b.lin_setups;
+  a.lin_full_setups += b.lin_full_setups;
 }
 
 // Rotation vector of R (angle * axis), |angle| <= pi.
@@ -351,6 +353,7 @@ Simulator::Simulator(model::RobotDescription description, SimulatorSettings sett
   cs.max_order = is.max_order;
   cs.max_steps = is.max_steps_per_tick;
   cs.max_step = is.max_step_s;
+  cs.kinematic_block = s.nqc;  // q = [Euler angles, base position, joints]: qdot = N(q) u
   s.cvode = std::make_unique<CvodeIntegrator>(s, cs);
 }
 
