@@ -289,8 +289,8 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
   j["effective_case"] = fs::path(r.case_path).filename().string();
   j["skipped_checks"] = r.skipped_checks;
   j["all_checks_passed"] = r.all_checks_passed;
-  if (r.has_expected_failure) {
-    const ExpectedFailure& x = r.expected_failure;
+  if (r.expected_failure) {
+    const ExpectedFailure& x = *r.expected_failure;
     j["expected_failure"] = {{"status", x.status}, {"checks", x.checks}, {"reason", x.reason},
                              {"met", r.expectation_mismatches.empty()}, {"mismatches", r.expectation_mismatches}};
   }
@@ -514,7 +514,6 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   for (auto& c : statistic_list) r.statistics.push_back(c->result());
   r.all_checks_passed = checks::allPassed(r.checks);
   if (const ExpectedFailure* x = expectedFailureFor(spec, r.method)) {
-    r.has_expected_failure = true;
     r.expected_failure = *x;
     r.expectation_mismatches = expectationMismatches(*x, r.status, r.checks);
   }
@@ -546,9 +545,9 @@ std::vector<std::string> expectationMismatches(const ExpectedFailure& x, const s
 int exitCode(const RunSummary& s) {
   if (s.status == "interrupted") return kExitInterrupted + (s.signal > 0 ? s.signal : 2);
   if (s.status == "input_error") return kExitBadInput;
-  if (s.has_expected_failure && s.status != "internal_error") {
+  if (s.expected_failure && s.status != "internal_error") {
     if (s.expectation_mismatches.empty()) return kExitPass;
-    return s.status != "completed" && s.status != s.expected_failure.status ? kExitRunFailure : kExitCheckFailed;
+    return s.status != "completed" && s.status != s.expected_failure->status ? kExitRunFailure : kExitCheckFailed;
   }
   if (s.status != "completed") return kExitRunFailure;
   return s.all_checks_passed ? kExitPass : kExitCheckFailed;

@@ -6,6 +6,7 @@
 #include "harness/cases/lexdyn_driver.hpp"
 
 #include <atomic>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,8 +53,7 @@ struct RunSummary {
   std::string case_path;  ///< DIR/case.yaml: the effective case (effectiveCaseText)
   /// The case's expected failure for this run's method (expected_failures), if it has one,
   /// and how the run departs from it (empty: the run failed exactly as expected).
-  bool has_expected_failure = false;
-  ExpectedFailure expected_failure;
+  std::optional<ExpectedFailure> expected_failure;
   std::vector<std::string> expectation_mismatches;
 };
 

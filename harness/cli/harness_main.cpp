@@ -414,9 +414,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "  final task errors: %s\n", errs.c_str());
       std::fprintf(stderr, "  peak active-set iterations %d at t = %g s\n", s.controller.peak_iterations, s.controller.peak_iterations_at_s);
     }
-    printChecks(s.checks, s.has_expected_failure ? s.expected_failure.checks : std::vector<std::string>{});
-    if (s.has_expected_failure) {
-      const lexdyn::cases::ExpectedFailure& x = s.expected_failure;
+    printChecks(s.checks, s.expected_failure ? s.expected_failure->checks : std::vector<std::string>{});
+    if (s.expected_failure) {
+      const lexdyn::cases::ExpectedFailure& x = *s.expected_failure;
       if (s.expectation_mismatches.empty()) {
         std::fprintf(stderr, "  expected failure, as the case says (%s): %s\n", x.where.c_str(), x.reason.c_str());
       } else {

@@ -12,6 +12,9 @@ them); run it with /usr/bin/python3. Writes PNG files into DIR:
   augmentation.png      map of augmented (Newton) levels and active tasks (Fig. 5, 8)
   torques.png           commanded joint torques per run (Fig. 12)
   wrench_<contact>.png  computed (controller) and sensed contact force/torque (Fig. 13, 27)
+  second_order.png      size of the Newton rows against J^T J on every augmented level
+                        (level.<L>.second_order_ratio solid, .curvature_ratio dashed; log scale),
+                        when a trace has those channels
 Files are written to a temporary name first and renamed, so an interrupted run leaves no
 half-written figure. Traces are read with their '#' header lines skipped.
 """
@@ -177,6 +180,44 @@ def plot_wrench(traces, contact, out, title):
     save(fig, out, f"wrench_{contact}.png")
 
 
+def plot_second_order(traces, out, title):
+    """Per level, level.<L>.second_order_ratio (the rows the method added, identity terms included)
+    and .curvature_ratio (the method's own curvature alone) of every run, log scale; nan (the
+    level not augmented) leaves a gap."""
+    levels = []
+    for tr in traces:
+        for n in tr.header:
+            if n.startswith("level.") and n.endswith(".second_order_ratio"):
+                lv = n[6:-len(".second_order_ratio")]
+                if lv not in levels and np.isfinite(tr.col(n)).any():
+                    levels.append(lv)
+    if not levels:
+        return
+    fig, axes = plt.subplots(len(levels), 1, figsize=(9, 3.2 * len(levels)), sharex=True, squeeze=False)
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, lv in zip(axes[:, 0], levels):
+        for k, tr in enumerate(traces):
+            c = colors[k % len(colors)]
+            for suffix, ls, what in [("second_order_ratio", "-", "rows"), ("curvature_ratio", "--", "curvature")]:
+                ch = f"level.{lv}.{suffix}"
+                if not tr.has(ch):
+                    continue
+                v = tr.col(ch)
+                ok = np.isfinite(v) & (v > 0)
+                if not ok.any():
+                    continue
+                med = np.median(v[ok])
+                ax.plot(tr.t, np.where(ok, v, np.nan), lw=0.7, ls=ls, color=c, label=f"{tr.label} {what} (median {med:.2g})")
+        ax.set_yscale("log")
+        ax.set_ylabel("trace ratio to J^T J")
+        ax.set_title(f"{title}: level {lv}, Newton rows (solid) and curvature alone (dashed)", fontsize=9)
+        ax.grid(alpha=0.3, which="both")
+        if ax.lines:
+            ax.legend(fontsize=7)
+    axes[-1, 0].set_xlabel("t (s)")
+    save(fig, out, "second_order.png")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", required=True)
@@ -203,6 +244,7 @@ def main():
     plot_augmentation(traces, a.out, title)
     for c in a.contact:
         plot_wrench(traces, c, a.out, title)
+    plot_second_order(traces, a.out, title)
 
 
 if __name__ == "__main__":

@@ -100,14 +100,14 @@ TEST(ExpectedFailures, ExitCodes) {
   s.status = "completed";
   s.all_checks_passed = false;
   EXPECT_EQ(exitCode(s), kExitCheckFailed);  // no entry: a failure
-  s.has_expected_failure = true;
-  s.expected_failure.checks = {"a"};
+  s.expected_failure.emplace();
+  s.expected_failure->checks = {"a"};
   EXPECT_EQ(exitCode(s), kExitPass);  // failed as expected
   s.expectation_mismatches = {"b failed (not expected)"};
   EXPECT_EQ(exitCode(s), kExitCheckFailed);
   s.status = "controller_failure";  // another run failure than the one expected (completed)
   EXPECT_EQ(exitCode(s), kExitRunFailure);
-  s.expected_failure.status = "controller_failure";
+  s.expected_failure->status = "controller_failure";
   s.expectation_mismatches = {"a passed (expected to fail)"};
   EXPECT_EQ(exitCode(s), kExitCheckFailed);  // the expected status, a check differs
   s.expectation_mismatches.clear();
@@ -133,7 +133,7 @@ RunSummary runWls(const std::string& path, const std::string& dir) {
 TEST(ExpectedFailures, ThePointMassWlsRunFailsAsItsCaseSays) {
   const RunSummary declared = runWls(kPointMass, "expected_failures_pm");
   EXPECT_FALSE(declared.all_checks_passed);
-  ASSERT_TRUE(declared.has_expected_failure);
+  ASSERT_TRUE(declared.expected_failure.has_value());
   EXPECT_TRUE(declared.expectation_mismatches.empty()) << declared.expectation_mismatches.front();
   EXPECT_EQ(exitCode(declared), kExitPass);
   std::ifstream in(declared.summary_path);
@@ -142,7 +142,7 @@ TEST(ExpectedFailures, ThePointMassWlsRunFailsAsItsCaseSays) {
   EXPECT_NE(json.find("\"met\": true"), std::string::npos);
 
   const RunSummary plain = runWls(pointMassWith("expected_failures_plain", ""), "expected_failures_pm_plain");
-  EXPECT_FALSE(plain.has_expected_failure);
+  EXPECT_FALSE(plain.expected_failure.has_value());
   EXPECT_EQ(exitCode(plain), kExitCheckFailed);
 
   // Expecting only one of the two failures: the other is reported and the run fails.

@@ -104,7 +104,7 @@ TEST(PointmassDamping, AccelerationDomainOvershootsAsInFig1) {
   EXPECT_TRUE(r.checks.at("closed_form_eq51").passed) << r.checks.at("closed_form_eq51").detail;
   // The case declares both failures for wls (expected_failures): the run fails as expected.
   EXPECT_FALSE(r.summary.all_checks_passed);
-  EXPECT_TRUE(r.summary.has_expected_failure);
+  EXPECT_TRUE(r.summary.expected_failure.has_value());
   EXPECT_TRUE(r.summary.expectation_mismatches.empty());
   EXPECT_EQ(exitCode(r.summary), 0);
   // Tick by tick: eq. 52.

@@ -415,6 +415,26 @@ class ExpectedFailureVerdict(unittest.TestCase):
             self.assertEqual(page._cls(stopped), "stop")
             self.assertEqual(page._verdict_text(stopped), "NOT the expected failure: controller_failure (1/2 checks)")
 
+    def test_failing_checks_rows(self):
+        """In the failing-checks table a check the case expects to fail has the xfail colour, a check
+        it does not list the failure colour, also when the run is otherwise as expected."""
+        checks = [{"name": "no_overshoot", "passed": False}, {"name": "eq49", "passed": False},
+                  {"name": "controller_ok", "passed": True}]
+        base = {"case": "pm", "method": "wls", "status": "completed", "checks": checks}
+        with tempfile.TemporaryDirectory() as d:
+            plain = page._failing_rows(self.run_with(os.path.join(d, "a"), base))
+            self.assertEqual([r.split("'")[1] for r in plain], ["fail", "fail"])
+            partial = page._failing_rows(self.run_with(os.path.join(d, "b"), dict(base, expected_failure={
+                "status": "completed", "checks": ["no_overshoot"], "reason": "overshoots", "met": False,
+                "mismatches": ["eq49 failed (not expected)"]})))
+            self.assertEqual([r.split("'")[1] for r in partial], ["fail", "xfail", "fail"])
+            self.assertIn("NOT the expected failure: eq49 failed (not expected)", partial[0])
+            self.assertIn(">no_overshoot<", partial[1])
+            self.assertIn(">eq49<", partial[2])
+            met = page._failing_rows(self.run_with(os.path.join(d, "c"), dict(base, expected_failure={
+                "status": "completed", "checks": ["eq49", "no_overshoot"], "reason": "r", "met": True, "mismatches": []})))
+            self.assertEqual([r.split("'")[1] for r in met], ["xfail", "xfail", "xfail"])
+
 
 class CommandLine(unittest.TestCase):
     def run_report(self, *args):

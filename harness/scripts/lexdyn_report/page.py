@@ -54,6 +54,32 @@ def _verdict_text(run):
     return f"{head} ({n - f}/{n} checks)"
 
 
+def _failing_rows(run):
+    """The rows of the failing-checks table for one run: a stopped or summary-less run, the
+    expected-failure verdict, then each failing check; a check the case expects to fail
+    (expected_failures) in the xfail colour, any other in the failure colour."""
+    out = []
+    if run.summary is None:
+        return [f"<tr class='miss'><td>{esc(run.id)}</td><td colspan='7'>{esc(_verdict_text(run))}"
+                f"<pre>{esc(run.log_tail())}</pre></td></tr>"]
+    x = run.expected_failure
+    if x:
+        what = "expected failure" if x.get("met") else "NOT the expected failure: " + "; ".join(x.get("mismatches", []))
+        out.append(f"<tr class='{'xfail' if x.get('met') else 'fail'}'><td>{esc(run.id)}</td><td colspan='7'>"
+                   f"{esc(what)} (the case says: {esc(x.get('reason', ''))})</td></tr>")
+    if run.status != "completed":
+        out.append(f"<tr class='stop'><td>{esc(run.id)}</td><td colspan='7'>run stopped: {esc(run.status)}: "
+                   f"{esc(run.summary.get('message', ''))} (at t = {fnum(run.summary.get('simulated_s'), '.4g')} s)</td></tr>")
+    expected = set(x.get("checks", [])) if x else set()
+    for c in run.failed_checks:
+        t = detail_time(c.get("detail"))
+        cls = "xfail" if c.get("name") in expected else "fail"
+        out.append(f"<tr class='{cls}'><td>{esc(run.id)}</td><td>{esc(c.get('name'))}</td><td>{esc(c.get('type'))}</td>"
+                   f"<td class='num'>{fnum(c.get('value'), '.6g')}</td><td class='num'>{fnum(c.get('limit'), '.6g')}</td>"
+                   f"<td>{esc(c.get('unit', ''))}</td><td class='num'>{fnum(t, '.4g')}</td><td>{esc(c.get('detail', ''))}</td></tr>")
+    return out
+
+
 class ReportBuilder:
     def __init__(self, results, sweeps, history_path, out_dir, append_history=False, title=None):
         self.results = results
@@ -294,29 +320,9 @@ class ReportBuilder:
         out.append("<h3>Failing checks and stopped runs</h3>")
         out.append("<table id='failing-checks'><tr><th>run</th><th>check</th><th>type</th><th>value</th><th>limit</th>"
                    "<th>unit</th><th>at t (s)</th><th>where</th></tr>")
-        n = 0
-        for run in r.runs:
-            if run.summary is None:
-                out.append(f"<tr class='miss'><td>{esc(run.id)}</td><td colspan='7'>{esc(_verdict_text(run))}"
-                           f"<pre>{esc(run.log_tail())}</pre></td></tr>")
-                n += 1
-                continue
-            x = run.expected_failure
-            if x:
-                what = "expected failure" if x.get("met") else "NOT the expected failure: " + "; ".join(x.get("mismatches", []))
-                out.append(f"<tr class='{'xfail' if x.get('met') else 'fail'}'><td>{esc(run.id)}</td><td colspan='7'>"
-                           f"{esc(what)} (the case says: {esc(x.get('reason', ''))})</td></tr>")
-                n += 1
-            if run.status != "completed":
-                out.append(f"<tr class='stop'><td>{esc(run.id)}</td><td colspan='7'>run stopped: {esc(run.status)}: "
-                           f"{esc(run.summary.get('message', ''))} (at t = {fnum(run.summary.get('simulated_s'), '.4g')} s)</td></tr>")
-                n += 1
-            for c in run.failed_checks:
-                t = detail_time(c.get("detail"))
-                out.append(f"<tr class='fail'><td>{esc(run.id)}</td><td>{esc(c.get('name'))}</td><td>{esc(c.get('type'))}</td>"
-                           f"<td class='num'>{fnum(c.get('value'), '.6g')}</td><td class='num'>{fnum(c.get('limit'), '.6g')}</td>"
-                           f"<td>{esc(c.get('unit', ''))}</td><td class='num'>{fnum(t, '.4g')}</td><td>{esc(c.get('detail', ''))}</td></tr>")
-                n += 1
+        rows = [row for run in r.runs for row in _failing_rows(run)]
+        out.extend(rows)
+        n = len(rows)
         if n == 0:
             out.append("<tr><td colspan='8'>none</td></tr>")
         out.append("</table></section>")
