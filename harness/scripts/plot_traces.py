@@ -2,7 +2,10 @@
 """Plots of lexdyn-harness traces, one figure per quantity the paper plots (docs/results.md).
 
 Usage: /usr/bin/python3 harness/scripts/plot_traces.py --out DIR [--title NAME]
-                                      [--errors TASK,TASK] [--contact NAME] LABEL=TRACE.csv ...
+                                      [--errors TASK,TASK] [--contact NAME]
+                                      [--figures NAME,NAME] LABEL=TRACE.csv ...
+--figures: only these figures (errors, velocities, torques, timing, augmentation, wrench,
+second_order); all by default.
 
 Needs Debian's python3-numpy and python3-matplotlib (harness/scripts/install-deps.sh installs
 them); run it with /usr/bin/python3. Writes PNG files into DIR:
@@ -28,6 +31,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+FIGURES = ["errors", "velocities", "torques", "timing", "augmentation", "wrench", "second_order"]
 
 
 def read_trace(path):
@@ -224,8 +229,13 @@ def main():
     ap.add_argument("--title", default="")
     ap.add_argument("--errors", default="right_hand,left_hand", help="tasks whose error norms are summed")
     ap.add_argument("--contact", action="append", default=[], help="contact for the wrench figure (repeatable)")
+    ap.add_argument("--figures", default=",".join(FIGURES), help="comma-separated: " + ", ".join(FIGURES))
     ap.add_argument("runs", nargs="+", help="LABEL=TRACE.csv")
     a = ap.parse_args()
+    figures = [f for f in a.figures.split(",") if f]
+    for f in figures:
+        if f not in FIGURES:
+            sys.exit(f"plot_traces: --figures: unknown figure '{f}' (one of {', '.join(FIGURES)})")
     traces = []
     for r in a.runs:
         if "=" not in r:
@@ -236,15 +246,21 @@ def main():
         traces.append(Trace(label, path))
     os.makedirs(a.out, exist_ok=True)
     title = a.title or os.path.basename(os.path.dirname(os.path.abspath(traces[0].path)))
-    plot_errors(traces, [t for t in a.errors.split(",") if t], a.out, title)
-    panels(traces, "cmd.qd.", "rad/s", a.out, "joint_velocities.png", f"{title}: commanded joint velocities")
-    panels(traces, "cmd.tau.", "N m", a.out, "torques.png", f"{title}: commanded joint torques")
-    if any(tr.has("time.tick_us") for tr in traces):
+    if "errors" in figures:
+        plot_errors(traces, [t for t in a.errors.split(",") if t], a.out, title)
+    if "velocities" in figures:
+        panels(traces, "cmd.qd.", "rad/s", a.out, "joint_velocities.png", f"{title}: commanded joint velocities")
+    if "torques" in figures:
+        panels(traces, "cmd.tau.", "N m", a.out, "torques.png", f"{title}: commanded joint torques")
+    if "timing" in figures and any(tr.has("time.tick_us") for tr in traces):
         plot_timing(traces, a.out, title)
-    plot_augmentation(traces, a.out, title)
-    for c in a.contact:
-        plot_wrench(traces, c, a.out, title)
-    plot_second_order(traces, a.out, title)
+    if "augmentation" in figures:
+        plot_augmentation(traces, a.out, title)
+    if "wrench" in figures:
+        for c in a.contact:
+            plot_wrench(traces, c, a.out, title)
+    if "second_order" in figures:
+        plot_second_order(traces, a.out, title)
 
 
 if __name__ == "__main__":

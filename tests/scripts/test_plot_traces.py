@@ -57,6 +57,21 @@ class SecondOrderFigure(unittest.TestCase):
             self.assertEqual(r.returncode, 0, r.stderr)
             self.assertIn("second_order.png", r.stdout)
             self.assertTrue(os.path.isfile(os.path.join(d, "fig", "second_order.png")))
+            self.assertTrue(os.path.isfile(os.path.join(d, "fig", "task_errors.png")))
+
+    def test_figures_option(self):
+        with tempfile.TemporaryDirectory() as d:
+            trace = os.path.join(d, "trace.csv")
+            write_trace(trace, True)
+            fig = os.path.join(d, "fig")
+            r = subprocess.run(["/usr/bin/python3", SCRIPT, "--out", fig, "--figures", "second_order", f"bfgs={trace}"],
+                               capture_output=True, text=True, timeout=120)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertEqual(sorted(os.listdir(fig)), ["second_order.png"])
+            r = subprocess.run(["/usr/bin/python3", SCRIPT, "--out", fig, "--figures", "second-order", f"bfgs={trace}"],
+                               capture_output=True, text=True, timeout=120)
+            self.assertNotEqual(r.returncode, 0)
+            self.assertIn("unknown figure 'second-order'", r.stderr)
 
 
 if __name__ == "__main__":
