@@ -68,13 +68,17 @@ void TraceWriter::write(const double* row) {
   LEXDYN_ALWAYS_ASSERT(file_ != nullptr, "TraceWriter::write after finish()");
   // Shortest representation that reads back to the same double (std::to_chars), so the
   // file round-trips bit for bit.
-  char buf[64];
+  // The row is formatted into line_ and written with one fwrite (each fwrite takes the
+  // stream's lock). 32 characters hold any double (at most 24) and its separator.
   const int n = schema_.size();
+  line_.resize(static_cast<size_t>(n) * 32);
+  char* p = line_.data();
   for (int i = 0; i < n; ++i) {
-    const std::to_chars_result r = std::to_chars(buf, buf + sizeof(buf) - 1, row[i]);
+    const std::to_chars_result r = std::to_chars(p, p + 31, row[i]);
     *r.ptr = i + 1 < n ? ',' : '\n';
-    std::fwrite(buf, 1, static_cast<size_t>(r.ptr - buf + 1), file_);
+    p = r.ptr + 1;
   }
+  std::fwrite(line_.data(), 1, static_cast<size_t>(p - line_.data()), file_);
   ++rows_;
   if (flush_every_ > 0 && rows_ % flush_every_ == 0) std::fflush(file_);
 }

@@ -67,6 +67,7 @@ class TraceWriter {
   int flush_every_;
   long rows_ = 0;
   std::vector<char> buffer_;
+  std::vector<char> line_;  ///< one row, formatted before a single fwrite
 };
 
 /// A trace read back into memory.
