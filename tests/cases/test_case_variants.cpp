@@ -54,6 +54,12 @@ TEST(CaseVariants, Exp1WlsWeakIsExp1WithThePostureWeight1e6) {
   EXPECT_EQ(YAML::LoadFile(kCases + "exp1-wls-weak.yaml")["controller"]["wls_levels"][1]["weights"]["posture"].as<double>(), 1e-6);
 }
 
+TEST(CaseVariants, Exp1WlsUnbiasedIsExp1WithTheRegulariserWeight1e7) {
+  EXPECT_EQ(differences("exp1.yaml", "exp1-wls-unbiased.yaml"),
+            (std::vector<std::string>{"controller.method", "controller.wls_levels[1].weights.wrench", "description", "name"}));
+  EXPECT_EQ(YAML::LoadFile(kCases + "exp1-wls-unbiased.yaml")["controller"]["wls_levels"][1]["weights"]["wrench"].as<double>(), 1e-7);
+}
+
 TEST(CaseVariants, Exp1Kp1IsExp1WithThePapersHandGains) {
   EXPECT_EQ(differences("exp1.yaml", "exp1-kp1.yaml"),
             (std::vector<std::string>{"controller.tasks[9].gains.kp", "controller.tasks[10].gains.kp", "description",

@@ -53,6 +53,7 @@ TEST(ControllerCase, RepositoryCasesLoadWithEveryMethod) {
   for (const Expect& e : {Expect{"cases/exp1.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
                           Expect{"cases/exp1-gn.yaml", "gn", {"bfgs", "ah", "gn", "wls"}},
                           Expect{"cases/exp1-wls-weak.yaml", "wls", {"bfgs", "ah", "gn", "wls"}},
+                          Expect{"cases/exp1-wls-unbiased.yaml", "wls", {"bfgs", "ah", "gn", "wls"}},
                           Expect{"cases/exp2.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
                           Expect{"cases/exp3.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
                           Expect{"cases/pointmass-damping.yaml", "gn", {"bfgs", "ah", "gn", "wls"}}}) {
