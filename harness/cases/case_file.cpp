@@ -266,6 +266,10 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
       i.max_steps_per_tick = v->asIntIn(1, R::kMaxIntegratorStepsPerTick);
     }
     if (auto v = im.optional("max_step_s")) i.max_step_s = v->asDoubleIn(0.0, c.control_period_s, "s (0: no limit; at most the control period)");
+    if (auto v = im.optional("linear_solver")) {
+      i.linear_solver = v->asEnum({"block_elimination", "dense_lu"}) == "dense_lu" ? sim::LinearSolver::DenseLU
+                                                                                  : sim::LinearSolver::BlockElimination;
+    }
     im.finish();
   }
   m.finish();

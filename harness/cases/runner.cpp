@@ -199,7 +199,11 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
                                     ", atol_velocity " + num(s.integrator.atol_velocity) + ", max_order " +
                                     std::to_string(s.integrator.max_order) + ", max_steps_per_tick " +
                                     std::to_string(s.integrator.max_steps_per_tick) + ", max_step_s " +
-                                    num(s.integrator.max_step_s));
+                                    num(s.integrator.max_step_s) +
+                                    // Only when not the default, so that the default traces keep their header.
+                                    (s.integrator.linear_solver != sim::LinearSolver::BlockElimination
+                                         ? std::string(", linear_solver ") + sim::toString(s.integrator.linear_solver)
+                                         : std::string()));
   md.emplace_back("contact", "Hunt-Crossley k " + num(s.contact.stiffness) + " N/m^" + num(s.contact.exponent) +
                                  ", c " + num(s.contact.dissipation_s_per_m) + " s/m; regularised Coulomb mu " +
                                  num(s.contact.friction_coefficient) + ", v_s " + num(s.contact.slip_velocity_m_per_s) +

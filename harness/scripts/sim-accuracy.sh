@@ -5,17 +5,86 @@
 # two traces over the run: WAIST position, joint positions, joint torques, vertical force of
 # each foot, horizontal force at the foot sensors (also after t = 2 s).
 #
-# Usage: harness/scripts/sim-accuracy.sh [-b BUILD_DIR] [case.yaml ...]
+# With -p N, each case is also run at N relative tolerances spread around its own one,
+# rtol x (1 + k STEP) for k = -(N-1)/2 ... (N-1)/2 (STEP 0.01 unless -k; for an odd N the middle
+# one is the case as written), against the same reference run, and the script prints per
+# quantity (the feet combined) the unperturbed figure, the median and the max over the N runs,
+# and the integrator's work (steps, right-hand sides; summary.json). These figures move with
+# rounding; the median over the perturbations is the one to compare. --check (with -p) exits 1
+# when a median exceeds its documented bound (harness/scripts/lib/sim_accuracy.py, BOUNDS).
+#
+# Options for the runs under test (the reference run always uses the default settings):
+#   -s SOLVER   sim.integrator.linear_solver: block_elimination | dense_lu
+#   -a ATOL     sim.integrator.atol_velocity
+#   -d S        stop every run (the reference too) at S seconds (run --duration)
+#   -j J        runs at a time (default 1)
+#   -o DIR      keep the runs in DIR (default: a temporary directory, removed at the end)
+#
+# Usage: harness/scripts/sim-accuracy.sh [-b BUILD_DIR] [-p N [-k STEP] [--check]] [-s SOLVER]
+#          [-a ATOL] [-d S] [-j J] [-o DIR] [case.yaml ...]
 #        (defaults: build/, cases/stand.yaml cases/squat_sway.yaml)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
+USAGE="[-b BUILD_DIR] [-p N [-k STEP] [--check]] [-s SOLVER] [-a ATOL] [-d S] [-j J] [-o DIR] [case.yaml ...]"
 BUILD="$ROOT/build"
-lexdyn_options "[-b BUILD_DIR] [case.yaml ...]" b=BUILD -- "$@"
-lexdyn_cases "${LEXDYN_OPERANDS[@]}"
+NPERT=0
+STEP=0.01
+SOLVER=""
+ATOLV=""
+DURATION=""
+JOBS=1
+KEEP=""
+CHECK=0
+args=()
+for a in "$@"; do
+  if [ "$a" = "--check" ]; then CHECK=1; else args+=("$a"); fi
+done
+lexdyn_options "$USAGE" b=BUILD p=NPERT k=STEP s=SOLVER a=ATOLV d=DURATION j=JOBS o=KEEP -- ${args[@]+"${args[@]}"}
+usage_error() { echo "sim-accuracy: $1" >&2; echo "usage: $0 $USAGE" >&2; exit 2; }
+[[ "$NPERT" =~ ^[0-9]+$ ]] || usage_error "-p expects a count, found '$NPERT'"
+[[ "$STEP" =~ ^[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?$ ]] || usage_error "-k expects a relative step, found '$STEP'"
+[[ "$JOBS" =~ ^[1-9][0-9]*$ ]] || usage_error "-j expects a positive count, found '$JOBS'"
+case "$SOLVER" in ""|block_elimination|dense_lu) ;; *) usage_error "-s expects block_elimination or dense_lu, found '$SOLVER'" ;; esac
+[ "$CHECK" = 0 ] || [ "$NPERT" -ge 1 ] || usage_error "--check needs -p N"
+lexdyn_cases ${LEXDYN_OPERANDS[@]+"${LEXDYN_OPERANDS[@]}"}
 lexdyn_harness sim-accuracy
-OUT="$(mktemp -d)"
-trap 'rm -rf "$OUT"' EXIT
+PY="$ROOT/harness/scripts/lib/sim_accuracy.py"
+if [ -n "$KEEP" ]; then
+  mkdir -p "$KEEP"
+  OUT="$(cd "$KEEP" && pwd)"
+else
+  OUT="$(mktemp -d)"
+  trap 'rm -rf "$OUT"' EXIT
+fi
 
+# Overrides of the runs under test, and the options of every run.
+SETS=()
+[ -z "$SOLVER" ] || SETS+=(--set "sim.integrator.linear_solver=$SOLVER")
+[ -z "$ATOLV" ] || SETS+=(--set "sim.integrator.atol_velocity=$ATOLV")
+RUNOPTS=(--quiet)
+[ -z "$DURATION" ] || RUNOPTS+=(--duration "$DURATION")
+
+# run_case CASE DIR [ARG ...]: one run; a failed run leaves no trace (the comparison says so).
+run_case() {
+  local c="$1" dir="$2"
+  shift 2
+  "$HARNESS" run "$c" --out "$dir" "${RUNOPTS[@]}" "$@" 2>/dev/null || true
+}
+
+# run_all: the runs of the lines "CASE DIR [ARG ...]" of stdin (no spaces inside a word), at
+# most $JOBS at a time.
+run_all() {
+  local line running=0
+  while read -r line; do
+    # shellcheck disable=SC2086
+    run_case $line &
+    running=$((running + 1))
+    if [ "$running" -ge "$JOBS" ]; then wait -n || true; running=$((running - 1)); fi
+  done
+  wait || true
+}
+
+status=0
 for c in "${CASES[@]}"; do
   name="$(basename "$c" .yaml)"
   # The reference case: the same file with the integrator settings replaced and the robot
@@ -53,42 +122,49 @@ for line in open(src):
         placed = True
 open(dst, "w").write("".join(out))
 PY
-  "$HARNESS" run "$c" --out "$OUT/$name.default" --quiet 2>/dev/null || true
-  "$HARNESS" run "$OUT/$name.reference.yaml" --out "$OUT/$name.reference" --quiet 2>/dev/null || true
-  python3 - "$OUT/$name.default/trace.csv" "$OUT/$name.reference/trace.csv" "$name" <<'PY'
-import csv, math, sys
-def load(path):
-    rows = [l for l in open(path) if not l.startswith("#")]
-    r = list(csv.reader(rows))
-    return r[0], [list(map(float, x)) for x in r[1:]]
-(h, a), (h2, b) = load(sys.argv[1]), load(sys.argv[2])
-assert h == h2, "traces have different channels"
-ix = {n: i for i, n in enumerate(h)}
-n = min(len(a), len(b))
-assert all(a[k][0] == b[k][0] for k in range(n)), "rows at different times"
-def worst(cols, norm=False, after=-1.0):
-    best, at = 0.0, 0.0
-    for k in range(n):
-        if a[k][0] < after:
-            continue
-        d = [a[k][ix[c]] - b[k][ix[c]] for c in cols]
-        v = math.sqrt(sum(x * x for x in d)) if norm else max(abs(x) for x in d)
-        if v > best:
-            best, at = v, a[k][0]
-    return best, at
-print(f"{sys.argv[3]}: {n} rows compared (default vs reference)")
-if "frame.WAIST.x" in ix:
-    v, t = worst(["frame.WAIST.x", "frame.WAIST.y", "frame.WAIST.z"], norm=True)
-    print(f"  WAIST position        {v:.3g} m (at t = {t:g} s)")
-for prefix, unit, label in (("q.", "rad", "joint positions"), ("tau.", "N m", "joint torques")):
-    v, t = worst([c for c in h if c.startswith(prefix)])
-    print(f"  {label:21s} {v:.3g} {unit} (at t = {t:g} s)")
-for c in [c for c in h if c.startswith("contact.") and c.endswith(".fz")]:
-    v, t = worst([c])
-    print(f"  {c:21s} {v:.3g} N (at t = {t:g} s; mean {sum(x[ix[c]] for x in b[:n]) / n:.1f} N)")
-for s in sorted({c.split(".")[1] for c in h if c.startswith("ft.") and "Foot" in c}):
-    v, t = worst([f"ft.{s}.fx", f"ft.{s}.fy"], norm=True)
-    v2, _ = worst([f"ft.{s}.fx", f"ft.{s}.fy"], norm=True, after=2.0)
-    print(f"  ft.{s} horizontal {v:.3g} N (at t = {t:g} s; {v2:.3g} N after t = 2 s)")
+  ref="$OUT/$name.reference.yaml $OUT/$name.reference"
+  if [ "$NPERT" = 0 ]; then
+    printf '%s\n' "$c $OUT/$name.default ${SETS[*]+${SETS[*]}}" "$ref" | run_all
+    python3 "$PY" single "$name" "$OUT/$name.default/trace.csv" "$OUT/$name.reference/trace.csv"
+    continue
+  fi
+  # The case as written (with -s / -a) first: its trace header gives the case's own rtol.
+  run_case "$c" "$OUT/$name.0" ${SETS[@]+"${SETS[@]}"}
+  rtol="$(sed -n 's/^# integrator: .*; rtol \([^,]*\),.*/\1/p' "$OUT/$name.0/trace.csv" 2>/dev/null | head -1)"
+  if [ -z "$rtol" ]; then
+    echo "$name: the run of the case as written failed" >&2
+    status=$(lexdyn_worse "$status" 3)
+    continue
+  fi
+  # "LABEL DIR [rtol]" of the N runs; for an odd N the middle one is the run above.
+  mapfile -t values < <(python3 - "$rtol" "$NPERT" "$STEP" "$OUT/$name" <<'PY'
+import sys
+rtol, n, step, stem = float(sys.argv[1]), int(sys.argv[2]), float(sys.argv[3]), sys.argv[4]
+for i in range(n):
+    k = i - (n - 1) / 2
+    if k == 0:
+        print(f"{sys.argv[1]} {stem}.0")
+    else:
+        r = f"{rtol * (1 + k * step):.6g}"
+        print(f"{r} {stem}.k{k:g} {r}")
 PY
+  )
+  runs=()
+  {
+    echo "$ref"
+    for v in "${values[@]}"; do
+      read -r label dir r <<< "$v"
+      [ -z "${r:-}" ] || echo "$c $dir ${SETS[*]+${SETS[*]}} --set sim.integrator.rtol=$r"
+    done
+  } | run_all
+  for v in "${values[@]}"; do
+    read -r label dir r <<< "$v"
+    runs+=("$label=$dir")
+  done
+  check=()
+  [ "$CHECK" = 0 ] || check=(--check)
+  rc=0
+  python3 "$PY" perturbed "$name" "$OUT/$name.reference/trace.csv" "$OUT/$name.0" "${runs[@]}" ${check[@]+"${check[@]}"} || rc=$?
+  status=$(lexdyn_worse "$status" "$rc")
 done
+exit "$status"

@@ -10,6 +10,7 @@
 #include <sundials/sundials_config.h>
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
+#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <Eigen/Core>
@@ -262,6 +263,14 @@ int lsFree(SUNLinearSolver S) {
 
 }  // namespace
 
+const char* toString(LinearSolver s) {
+  switch (s) {
+    case LinearSolver::BlockElimination: return "block_elimination";
+    case LinearSolver::DenseLU: return "dense_lu";
+  }
+  return "unknown";
+}
+
 const char* toString(CvodeStatus s) {
   switch (s) {
     case CvodeStatus::Success: return "success";
@@ -359,15 +368,21 @@ CvodeIntegrator::CvodeIntegrator(OdeSystem& system, const CvodeSettings& setting
   m.check(CVodeSetErrHandlerFn(m.mem, &Impl::errorHandler, &m), "CVodeSetErrHandlerFn");
   m.check(CVodeSVtolerances(m.mem, settings.rtol, m.atol), "CVodeSVtolerances");
   m.A = SUNDenseMatrix(m.n, m.n, m.ctx);
-  m.newton = std::make_unique<NewtonSolver>(m.n, settings.kinematic_block);
-  m.LS = SUNLinSolNewEmpty(m.ctx);
-  if (!m.A || !m.LS) throw std::runtime_error("dense matrix / linear solver creation failed");
-  m.LS->content = m.newton.get();
-  m.LS->ops->gettype = lsGetType;
-  m.LS->ops->getid = lsGetId;
-  m.LS->ops->setup = lsSetup;
-  m.LS->ops->solve = lsSolve;
-  m.LS->ops->free = lsFree;
+  if (!m.A) throw std::runtime_error("dense matrix creation failed");
+  if (settings.linear_solver == LinearSolver::DenseLU) {
+    m.LS = SUNLinSol_Dense(m.y, m.A, m.ctx);
+    if (!m.LS) throw std::runtime_error("SUNLinSol_Dense creation failed");
+  } else {
+    m.newton = std::make_unique<NewtonSolver>(m.n, settings.kinematic_block);
+    m.LS = SUNLinSolNewEmpty(m.ctx);
+    if (!m.LS) throw std::runtime_error("linear solver creation failed");
+    m.LS->content = m.newton.get();
+    m.LS->ops->gettype = lsGetType;
+    m.LS->ops->getid = lsGetId;
+    m.LS->ops->setup = lsSetup;
+    m.LS->ops->solve = lsSolve;
+    m.LS->ops->free = lsFree;
+  }
   m.check(CVodeSetLinearSolver(m.mem, m.LS, m.A), "CVodeSetLinearSolver");  // Newton iteration
   m.check(CVodeSetMaxOrd(m.mem, settings.max_order), "CVodeSetMaxOrd");
   m.check(CVodeSetMaxNumSteps(m.mem, settings.max_steps), "CVodeSetMaxNumSteps");
@@ -381,7 +396,7 @@ void CvodeIntegrator::initialize(double t0, const double* y0) {
   Impl& m = *impl_;
   std::memcpy(N_VGetArrayPointer(m.y), y0, sizeof(double) * static_cast<size_t>(m.n));
   m.check(CVodeReInit(m.mem, t0, m.y), "CVodeReInit");
-  m.newton->resetCounters();  // CVodeReInit resets CVODE's counters
+  if (m.newton) m.newton->resetCounters();  // CVodeReInit resets CVODE's counters
   m.t = t0;
   m.message.clear();
 }
@@ -429,7 +444,7 @@ CvodeStats CvodeIntegrator::stats() const {
   if (CVodeGetNumNonlinSolvConvFails(m.mem, &v) == CV_SUCCESS) s.nonlin_conv_fails = v;
   if (CVodeGetNumErrTestFails(m.mem, &v) == CV_SUCCESS) s.err_test_fails = v;
   if (CVodeGetNumLinSolvSetups(m.mem, &v) == CV_SUCCESS) s.lin_setups = v;
-  s.lin_full_setups = m.newton->fullSetups();
+  s.lin_full_setups = m.newton ? m.newton->fullSetups() : 0;
   realtype h = 0.0;
   if (CVodeGetLastStep(m.mem, &h) == CV_SUCCESS) s.last_step = h;
   int q = 0;

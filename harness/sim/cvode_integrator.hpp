@@ -3,7 +3,8 @@
 // dense Jacobian CVODE approximates by difference quotients. The Newton systems
 // (I - gamma J) x = b are solved by our own direct linear solver (cvode_integrator.cpp,
 // NewtonSolver): for a system y = [q; u] whose q block is kinematic (CvodeSettings::
-// kinematic_block) by eliminating the q block, otherwise by a dense LU of the whole matrix.
+// kinematic_block) by eliminating the q block, otherwise by a dense LU of the whole matrix; or,
+// on request (CvodeSettings::linear_solver), by SUNDIALS' own dense LU (SUNLinSol_Dense).
 // Integration is advanced to a given time with CVodeSetStopTime + CV_NORMAL, so CVODE never
 // steps past a control tick and keeps its history (order, step size, Jacobian) across ticks.
 #pragma once
@@ -23,6 +24,14 @@ class OdeSystem {
   virtual void rhs(double t, const double* y, double* ydot) = 0;
 };
 
+/// Who solves the Newton systems (I - gamma J) x = b.
+enum class LinearSolver {
+  BlockElimination,  ///< NewtonSolver: block elimination of the kinematic block (the default)
+  DenseLU            ///< SUNDIALS' SUNLinSol_Dense on the SUNDenseMatrix (LU of the whole matrix)
+};
+
+const char* toString(LinearSolver s);  ///< "block_elimination" | "dense_lu"
+
 struct CvodeSettings {
   double rtol = 1e-4;           ///< relative tolerance
   std::vector<double> atol;     ///< absolute tolerance per component (size of the system)
@@ -38,6 +47,8 @@ struct CvodeSettings {
   /// when the q block is not safely invertible without pivoting across the blocks. 0: always
   /// the dense LU of the whole matrix.
   int kinematic_block = 0;
+  /// DenseLU ignores kinematic_block.
+  LinearSolver linear_solver = LinearSolver::BlockElimination;
 };
 
 struct CvodeStats {
@@ -49,7 +60,7 @@ struct CvodeStats {
   long nonlin_conv_fails = 0;
   long err_test_fails = 0;
   long lin_setups = 0;          ///< Newton-matrix factorisations
-  long lin_full_setups = 0;     ///< of which of the whole matrix (kinematic block not used)
+  long lin_full_setups = 0;     ///< of which of the whole matrix by NewtonSolver (kinematic block not used; 0 with DenseLU)
   double last_step = 0.0;
   int last_order = 0;
 };

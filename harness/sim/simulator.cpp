@@ -354,6 +354,7 @@ Simulator::Simulator(model::RobotDescription description, SimulatorSettings sett
   cs.max_steps = is.max_steps_per_tick;
   cs.max_step = is.max_step_s;
   cs.kinematic_block = s.nqc;  // q = [Euler angles, base position, joints]: qdot = N(q) u
+  cs.linear_solver = is.linear_solver;
   s.cvode = std::make_unique<CvodeIntegrator>(s, cs);
 }
 

@@ -69,6 +69,9 @@ struct IntegratorSettings {
   int max_order = 5;
   long max_steps_per_tick = 20000;
   double max_step_s = 0.0;      ///< 0: no limit (the control period bounds each call anyway)
+  /// Solver of CVODE's Newton systems: our block elimination of the kinematic block, or
+  /// SUNDIALS' dense LU of the whole matrix (for comparisons; docs/simulator.md, "Integrator").
+  LinearSolver linear_solver = LinearSolver::BlockElimination;
 };
 
 struct SimulatorSettings {

@@ -86,6 +86,20 @@ TEST(CaseFile, WrongTypesAreErrors) {
   s = minimalCase();
   s["f_sim"] += "  integrator: {rtol: \"1e-4\"}\n";
   EXPECT_TRUE(containsAll(errorOf(s), {"sim.integrator.rtol"}));
+  s = minimalCase();
+  s["f_sim"] += "  integrator: {linear_solver: sparse_lu}\n";
+  EXPECT_TRUE(containsAll(errorOf(s), {"case.yaml:", "sim.integrator.linear_solver", "expected one of {block_elimination, dense_lu}",
+                                       "found 'sparse_lu'"}))
+      << errorOf(s);
+}
+
+TEST(CaseFile, IntegratorLinearSolver) {
+  EXPECT_EQ(loadCase(src("cases/stand.yaml")).sim.integrator.linear_solver, sim::LinearSolver::BlockElimination);
+  for (const char* v : {"block_elimination", "dense_lu"}) {
+    auto s = minimalCase();
+    s["f_sim"] += std::string("  integrator: {linear_solver: ") + v + "}\n";
+    EXPECT_STREQ(sim::toString(loadCase(writeCase(outputDir("case_file_linear_solver"), s)).sim.integrator.linear_solver), v);
+  }
 }
 
 TEST(CaseFile, MissingKeysAreErrors) {

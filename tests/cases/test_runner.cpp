@@ -1,13 +1,16 @@
 // The case runner: the stand acceptance case and its static-equilibrium start, bit-identical
 // reruns, failure and interruption handling (the trace so far is kept), checks on a stored
-// trace, grasp events.
+// trace, grasp events; the two solvers of the Newton systems agree.
 #include "harness/cases/runner.hpp"
+#include "harness/checks/trace.hpp"
 #include "case_test_utils.hpp"
 #include "lexdyn/common/error.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -134,6 +137,39 @@ TEST(Runner, RerunsAreBitIdentical) {
   EXPECT_TRUE(ta == tb) << "traces differ";
   EXPECT_EQ(a.integrator.steps, b.integrator.steps);
   EXPECT_EQ(a.integrator.rhs_evals, b.integrator.rhs_evals);
+}
+
+// sim.integrator.linear_solver: SUNDIALS' dense LU and our block elimination solve the same
+// Newton systems, so the runs differ by rounding only, amplified by the integrator at its
+// tolerances and by the stiff friction to the size of the integrator's own error against a tight
+// reference (docs/simulator.md, "Integrator"); the limits are a few times the figures seen.
+TEST(Runner, TheTwoNewtonSystemSolversAgree) {
+  const std::string base = outputDir("runner_linear_solver");
+  CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 0.5, base));
+  ASSERT_EQ(spec.sim.integrator.linear_solver, sim::LinearSolver::BlockElimination);  // the default
+  const RunSummary a = run(spec, base + "/block");
+  spec.sim.integrator.linear_solver = sim::LinearSolver::DenseLU;
+  const RunSummary b = run(spec, base + "/dense");
+  ASSERT_EQ(a.status, "completed");
+  ASSERT_EQ(b.status, "completed");
+  EXPECT_EQ(b.integrator.lin_full_setups, 0);
+  const checks::TraceTable ta = checks::readTrace(base + "/block/trace.csv");
+  const checks::TraceTable tb = checks::readTrace(base + "/dense/trace.csv");
+  ASSERT_EQ(ta.names, tb.names);
+  ASSERT_EQ(ta.rows.size(), tb.rows.size());
+  EXPECT_EQ(checks::findMetadata(ta.metadata, "integrator")->find("linear_solver"), std::string::npos);
+  EXPECT_NE(checks::findMetadata(tb.metadata, "integrator")->find("linear_solver dense_lu"), std::string::npos);
+  double dq = 0.0, dtau = 0.0, dwaist = 0.0;
+  for (size_t c = 0; c < ta.names.size(); ++c) {
+    const std::string& n = ta.names[c];
+    double* worst = n.rfind("q.", 0) == 0 ? &dq : n.rfind("tau.", 0) == 0 ? &dtau : n.rfind("frame.WAIST.", 0) == 0 ? &dwaist : nullptr;
+    if (!worst) continue;
+    for (size_t k = 0; k < ta.rows.size(); ++k) *worst = std::max(*worst, std::abs(ta.rows[k][c] - tb.rows[k][c]));
+  }
+  EXPECT_LT(dq, 1e-4) << "joint positions";  // 2.4e-5 rad
+  EXPECT_LT(dtau, 5.0) << "joint torques";   // 1.7 N m, at the friction transient of t = 0.32 s
+  EXPECT_LT(dwaist, 1e-4) << "WAIST position";  // 1.2e-5 m
+  EXPECT_GT(dq + dtau, 0.0);  // really two different solvers
 }
 
 TEST(Runner, IntegratorFailureKeepsTheTraceAndReportsTheStatus) {

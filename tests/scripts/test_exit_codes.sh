@@ -25,4 +25,8 @@ expect "fuzz.sh -e nosuchengine" 2 "$?"
 expect "full-runs.sh -x" 2 "$?"
 "$ROOT/harness/scripts/golden-update.sh" -x > /dev/null 2>&1
 expect "golden-update.sh -x" 2 "$?"
+"$ROOT/harness/scripts/sim-accuracy.sh" --check > /dev/null 2>&1
+expect "sim-accuracy.sh --check (without -p)" 2 "$?"
+"$ROOT/harness/scripts/sim-accuracy.sh" -p 3 -s sparse_lu > /dev/null 2>&1
+expect "sim-accuracy.sh -s sparse_lu" 2 "$?"
 exit $fail
