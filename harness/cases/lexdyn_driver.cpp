@@ -5,6 +5,7 @@
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/control/controller.hpp"
 #include "lexdyn/model/robot_model.hpp"
+#include "lexdyn/solver/problem_io.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -399,6 +400,8 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
   }
   return i;
 }
+
+void LexdynDriver::writeProblem(const std::string& path) const { solver::writeProblemJson(impl_->ctl->problem(), path); }
 
 ControllerStats LexdynDriver::stats() const {
   const Impl& I = *impl_;

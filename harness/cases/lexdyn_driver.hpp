@@ -65,6 +65,8 @@ class LexdynDriver {
   /// number of values written.
   int fill(const sim::Simulator& simu, double* out) const;
   ControllerStats stats() const;
+  /// Writes the solver problem of the last tick to `path` (problem file format).
+  void writeProblem(const std::string& path) const;
 
  private:
   struct Impl;

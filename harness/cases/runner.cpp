@@ -364,6 +364,16 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   } else {
     servo = std::make_unique<PostureServo>(spec.controller, m.posture(spec.controller.posture));
   }
+  const bool dump = !options.dump_problems_dir.empty();
+  if (dump) {
+    if (!driver) throw InputError(options.dump_problems_dir, "solver problems are dumped only for a lexdyn controller (this case has the posture servo)");
+    if (!(options.dump_from_s <= options.dump_to_s)) {
+      throw InputError(options.dump_problems_dir, "the dump window starts after it ends (" + num(options.dump_from_s) + " > " + num(options.dump_to_s) + " s)");
+    }
+    std::error_code dec;
+    fs::create_directories(options.dump_problems_dir, dec);
+    if (dec || !fs::is_directory(options.dump_problems_dir)) throw InputError(options.dump_problems_dir, "cannot create the problem directory");
+  }
 
   Recorder recorder(spec, simu, driver.get());
   const checks::TraceMetadata md = metadata(spec, simu, rest, driver.get());
@@ -444,6 +454,11 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     bool ok = true;
     if (driver) {
       ok = driver->tick(t, simu, cmd, failure);
+      if (dump && t >= options.dump_from_s && t <= options.dump_to_s) {
+        char name[32];
+        std::snprintf(name, sizeof(name), "tick_%06ld.json", k);
+        driver->writeProblem((fs::path(options.dump_problems_dir) / name).string());
+      }
       recorder.fillController();
     } else {
       servo->command(static_cast<double>(k + 1) * T, cmd);

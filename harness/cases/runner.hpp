@@ -28,6 +28,13 @@ struct RunOptions {
   /// Wall-clock checks (tick_time) decide pass/fail only when true; otherwise they are reported
   /// and labelled machine-dependent (docs/cases.md, "Checks").
   bool wall_clock_checks = false;
+  /// When not empty: the solver problem of every controller tick with dump_from_s <= t <=
+  /// dump_to_s is written to this directory as tick_NNNNNN.json (the problem file format,
+  /// docs/file-formats.md), for lexdyn-solve (a single tick, or --bench on the sequence). Only
+  /// for a lexdyn controller; writing does not change the run.
+  std::string dump_problems_dir;
+  double dump_from_s = 0.0;
+  double dump_to_s = 1e300;
 };
 
 struct RunSummary {

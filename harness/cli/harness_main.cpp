@@ -1,7 +1,7 @@
 // lexdyn-harness: runs case files, checks stored traces, compares methods, golden traces.
 //
 //   lexdyn-harness run CASE --out DIR [--method bfgs|ah|gn|wls] [--duration S] [--set PATH=VALUE]... [--quiet]
-//                                     [--wall-clock-checks]
+//                                     [--wall-clock-checks] [--dump-problems DIR [--dump-window FROM:TO]]
 //   lexdyn-harness case CASE [--method M] [--duration S] [--set PATH=VALUE]... [--out FILE]
 //                                                         (the effective case as one YAML file)
 //   lexdyn-harness check TRACE --case CASE [--json] [--wall-clock-checks]  (the case's checks on a stored trace)
@@ -37,6 +37,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <csignal>
 #include <cerrno>
 #include <cstdio>
@@ -106,6 +107,22 @@ std::vector<std::string> splitList(const std::string& s) {
     if (!item.empty()) out.push_back(item);
   }
   return out;
+}
+
+// "FROM:TO" in seconds, both finite, FROM <= TO; "FROM:" runs to the end. Throws InputError.
+void parseDumpWindow(const std::string& text, double& from, double& to) {
+  const auto colon = text.find(':');
+  auto number = [&](const std::string& s, double& v) {
+    char* end = nullptr;
+    v = std::strtod(s.c_str(), &end);
+    return !s.empty() && end == s.c_str() + s.size() && std::isfinite(v);
+  };
+  double a = 0.0, b = 1e300;
+  const bool ok = colon != std::string::npos && number(text.substr(0, colon), a) &&
+                  (colon + 1 == text.size() || number(text.substr(colon + 1), b)) && a <= b;
+  if (!ok) throw lexdyn::InputError("--dump-window", "expected FROM:TO in seconds with FROM <= TO (e.g. 31.5:32.5, or 31.5: to the end), found '" + text + "'");
+  from = a;
+  to = b;
 }
 
 int runCheck(const std::vector<std::string>& positional, const std::string& case_opt, bool json, bool wall_clock) {
@@ -282,6 +299,7 @@ int main(int argc, char** argv) {
   bool quiet = false, progress = false, json = false, wall_clock = false;
   std::vector<std::string> positional, traces, sets;
   std::string case_out;
+  std::string dump_dir, dump_window;
 
   std::string method_names;  // the registry's, "bfgs | ah | gn | wls"
   for (const std::string& m : lexdyn::control::methodNames()) method_names += (method_names.empty() ? "" : " | ") + m;
@@ -301,6 +319,9 @@ int main(int argc, char** argv) {
   casecmd->add_option("--set", sets, "override a value of the case: PATH=VALUE; repeatable");
   casecmd->add_option("--out", case_out, "write it to this file (paths relative to it) instead of stdout (absolute paths)");
   run->add_flag("--wall-clock-checks", wall_clock, "tick_time checks decide pass/fail (machine-dependent; reported otherwise)");
+  run->add_option("--dump-problems", dump_dir,
+                  "write each tick's solver problem to DIR/tick_NNNNNN.json (lexdyn controllers; for lexdyn-solve)");
+  run->add_option("--dump-window", dump_window, "with --dump-problems: only the ticks with FROM <= t <= TO (s), e.g. 31.5:32.5");
 
   CLI::App* check = app.add_subcommand("check", "evaluate a case's checks on a stored trace");
   check->add_option("args", positional, "TRACE (with --case CASE), or CASE TRACE")->required()->expected(1, 2);
@@ -399,6 +420,11 @@ int main(int argc, char** argv) {
     options.interrupt = &g_interrupt;
     options.interrupt_signal = &g_signal;
     options.wall_clock_checks = wall_clock;
+    options.dump_problems_dir = dump_dir;
+    if (!dump_window.empty()) {
+      if (dump_dir.empty()) throw lexdyn::InputError("--dump-window", "needs --dump-problems DIR");
+      parseDumpWindow(dump_window, options.dump_from_s, options.dump_to_s);
+    }
     const lexdyn::cases::RunSummary s = lexdyn::cases::runCase(spec, options);
     const std::string label = spec.name + (s.method.empty() ? "" : " " + s.method);
     std::fprintf(stderr, "[%s] %s: %.3f s simulated in %.3f s wall (%.1fx real time), %ld ticks\n", label.c_str(),

@@ -9,10 +9,12 @@
 #include "../common/cli_test_utils.hpp"
 #include "../common/expect_text.hpp"
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/solver/problem_io.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -161,6 +163,52 @@ TEST(ControllerCli, TwoProcessesWriteBitIdenticalTracesButForTheWallTimes) {
     EXPECT_EQ(timers, 5);
     EXPECT_EQ(a.metadata.size(), b.metadata.size());
   }
+}
+
+// --dump-problems writes the solver problem of each tick in the window; the files load, solve
+// with lexdyn-solve to the trace's iteration count's status, and writing them leaves the run
+// unchanged. Misuse is bad input (exit code 2) naming the option or the directory.
+TEST(ControllerCli, DumpProblemsWritesEachTicksProblemWithoutChangingTheRun) {
+  const std::string dir = outputDir("ctl_cli_dump");
+  const std::string pm = pointMassCase(dir, 1.0);
+  const CliResult plain = harness("run " + pm + " --method bfgs --out " + dir + "/plain --quiet", dir);
+  ASSERT_TRUE(plain.code == 0 || plain.code == 1) << plain.err;
+  const CliResult dumped =
+      harness("run " + pm + " --method bfgs --out " + dir + "/dumped --quiet --dump-problems " + dir + "/problems --dump-window 0.2:0.3", dir);
+  ASSERT_EQ(dumped.code, plain.code) << dumped.err;
+  // Ticks t = k dt with 0.2 <= t <= 0.3 (dt 5 ms): k = 40 ... 60, give or take the rounding of k dt.
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir + "/problems")) files.push_back(e.path().filename().string());
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 20u);
+  ASSERT_LE(files.size(), 21u);
+  EXPECT_TRUE(files.front() == "tick_000040.json" || files.front() == "tick_000041.json") << files.front();
+  EXPECT_TRUE(files.back() == "tick_000060.json" || files.back() == "tick_000059.json") << files.back();
+  for (const std::string& f : files) {
+    const solver::Problem p = solver::readProblemJson(dir + "/problems/" + f);
+    EXPECT_EQ(p.variables(), solver::readProblemJson(dir + "/problems/" + files.front()).variables());
+    EXPECT_GE(p.levelCount(), 2) << f;
+  }
+  const CliResult solved = runCli(binPath("lexdyn-solve") + " " + dir + "/problems/" + files[5], dir);
+  EXPECT_EQ(solved.code, 0) << solved.err;
+  EXPECT_NE(solved.out.find("\"status\":\"solved\""), std::string::npos) << solved.out;
+  // The run is the same with and without the dump (every channel but the wall times).
+  const checks::TraceTable a = checks::readTrace(dir + "/plain/trace.csv");
+  const checks::TraceTable b = checks::readTrace(dir + "/dumped/trace.csv");
+  ASSERT_EQ(a.names, b.names);
+  ASSERT_EQ(a.rows.size(), b.rows.size());
+  for (size_t i = 0; i < a.names.size(); ++i) {
+    if (a.names[i].rfind("time.", 0) == 0) continue;
+    for (size_t r = 0; r < a.rows.size(); ++r) ASSERT_EQ(std::memcmp(&a.rows[r][i], &b.rows[r][i], sizeof(double)), 0) << a.names[i];
+  }
+  // Misuse.
+  expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-window 0.1:0.2", dir), 2, {"--dump-window", "needs --dump-problems"});
+  expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-problems " + dir + "/p2 --dump-window 0.3:0.2", dir), 2,
+             {"--dump-window", "FROM <= TO", "0.3:0.2"});
+  expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-problems " + dir + "/p2 --dump-window x", dir), 2, {"--dump-window"});
+  const std::string stand = std::string(LEXDYN_SOURCE_DIR) + "/cases/stand.yaml";
+  expectExit(harness("run " + stand + " --duration 0.1 --out " + dir + "/s --quiet --dump-problems " + dir + "/p3", dir), 2,
+             {dir + "/p3", "lexdyn controller"});
 }
 
 TEST(ControllerCli, BadMethodOverridesAreInputErrors) {
