@@ -37,6 +37,8 @@ QUANTITIES = [
 ]
 
 
+WAIST = ["frame.WAIST.x", "frame.WAIST.y", "frame.WAIST.z"]
+
 _kept = {}
 
 
@@ -81,38 +83,45 @@ class Pair:
     def foot_sensors(self):
         return sorted({c.split(".")[1] for c in self.h if c.startswith("ft.") and "Foot" in c})
 
+    def horizontal(self, sensor, after=-1.0):
+        """Largest horizontal force difference at a foot sensor (and when)."""
+        return self.worst([f"ft.{sensor}.fx", f"ft.{sensor}.fy"], norm=True, after=after)
+
+    def prefixed(self, prefix):
+        return [c for c in self.h if c.startswith(prefix)]
+
     def quantities(self):
         """{key: (value, time)} of QUANTITIES, the feet combined (the larger figure)."""
         out = {}
-        if "frame.WAIST.x" in self.ix:
-            out["waist"] = self.worst(["frame.WAIST.x", "frame.WAIST.y", "frame.WAIST.z"], norm=True)
-        out["q"] = self.worst([c for c in self.h if c.startswith("q.")])
-        out["tau"] = self.worst([c for c in self.h if c.startswith("tau.")])
+        if WAIST[0] in self.ix:
+            out["waist"] = self.worst(WAIST, norm=True)
+        out["q"] = self.worst(self.prefixed("q."))
+        out["tau"] = self.worst(self.prefixed("tau."))
         fz = [self.worst([c]) for c in self.fz_channels()]
         if fz:
             out["fz"] = max(fz)
         sensors = self.foot_sensors()
         if sensors:
-            out["fh"] = max(self.worst([f"ft.{s}.fx", f"ft.{s}.fy"], norm=True) for s in sensors)
-            out["fh2"] = max(self.worst([f"ft.{s}.fx", f"ft.{s}.fy"], norm=True, after=2.0) for s in sensors)
+            out["fh"] = max(self.horizontal(s) for s in sensors)
+            out["fh2"] = max(self.horizontal(s, after=2.0) for s in sensors)
         return out
 
 
 def single(name, trace, reference):
     p = Pair(trace, reference)
     print(f"{name}: {p.n} rows compared (default vs reference)")
-    if "frame.WAIST.x" in p.ix:
-        v, t = p.worst(["frame.WAIST.x", "frame.WAIST.y", "frame.WAIST.z"], norm=True)
+    if WAIST[0] in p.ix:
+        v, t = p.worst(WAIST, norm=True)
         print(f"  WAIST position        {v:.3g} m (at t = {t:g} s)")
     for prefix, unit, label in (("q.", "rad", "joint positions"), ("tau.", "N m", "joint torques")):
-        v, t = p.worst([c for c in p.h if c.startswith(prefix)])
+        v, t = p.worst(p.prefixed(prefix))
         print(f"  {label:21s} {v:.3g} {unit} (at t = {t:g} s)")
     for c in p.fz_channels():
         v, t = p.worst([c])
         print(f"  {c:21s} {v:.3g} N (at t = {t:g} s; mean {sum(x[p.ix[c]] for x in p.b[:p.n]) / p.n:.1f} N)")
     for s in p.foot_sensors():
-        v, t = p.worst([f"ft.{s}.fx", f"ft.{s}.fy"], norm=True)
-        v2, _ = p.worst([f"ft.{s}.fx", f"ft.{s}.fy"], norm=True, after=2.0)
+        v, t = p.horizontal(s)
+        v2, _ = p.horizontal(s, after=2.0)
         print(f"  ft.{s} horizontal {v:.3g} N (at t = {t:g} s; {v2:.3g} N after t = 2 s)")
     return 0
 
