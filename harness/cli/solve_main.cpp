@@ -4,6 +4,9 @@
 //   lexdyn-solve --details FILE       adds the active set, ranks and per-row violations
 //   lexdyn-solve --bench FILES...     consecutive ticks: each solved cold and warm-started from the
 //                                     previous tick; prints timing statistics as JSON
+//     --repeats N                     runs the sequence N times; adds the minimum over the repeats
+//                                     of each statistic's median (a shared machine's false tails)
+//     --warm-only                     skips the cold solves (profiles of the warm path)
 //
 // Exit codes (docs/architecture.md, "Errors and exit codes"):
 //   0    a solution was produced: status solved (relaxed levels included), or stopped_early by the
@@ -87,7 +90,8 @@ double qrUnitUs() {
   return percentile(t, 0.5);
 }
 
-nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iters, int capHits, double unit) {
+nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iters, int capHits, double unit,
+                     const std::vector<double>& repeatMedians) {
   nlohmann::json j;
   double sumIt = 0.0;
   int maxIt = 0;
@@ -105,10 +109,15 @@ nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iter
   j["median_qr_units"] = percentile(us, 0.5) / unit;
   j["p99_qr_units"] = percentile(us, 0.99) / unit;
   j["max_qr_units"] = (us.empty() ? 0.0 : *std::max_element(us.begin(), us.end())) / unit;
+  j["repeats"] = repeatMedians.size();
+  const double minMedian = repeatMedians.empty() ? 0.0 : *std::min_element(repeatMedians.begin(), repeatMedians.end());
+  j["min_repeat_median_us"] = minMedian;
+  j["min_repeat_median_qr_units"] = minMedian / unit;
   return j;
 }
 
-int runBench(const std::vector<std::string>& files, const Options& options, bool detectBounds) {
+int runBench(const std::vector<std::string>& files, const Options& options, bool detectBounds, int repeats,
+             bool warmOnly) {
   std::vector<Problem> ticks;
   ticks.reserve(files.size());
   for (size_t i = 0; i < files.size(); ++i) {
@@ -122,36 +131,47 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
   cold.setup(ticks[0], options);
   warm.setup(ticks[0], options);
   const double unit = qrUnitUs();
-  std::vector<double> coldUs, warmUs, maxXs;
+  std::vector<double> coldUs, warmUs, coldMedians, warmMedians;
   std::vector<int> coldIt, warmIt;
   int coldCap = 0, warmCap = 0;
   double maxAbsX = 0.0;
-  for (size_t k = 0; k < ticks.size(); ++k) {
-    if (g_signal.load()) return interrupted();
-    const auto a = Clock::now();
-    const auto& rc = cold.solve(ticks[k]);
-    const auto b = Clock::now();
-    coldUs.push_back(elapsedUs(a, b));
-    coldIt.push_back(rc.iterations);
-    coldCap += (rc.status == Status::IterationLimit);
-    maxAbsX = std::max(maxAbsX, rc.x.lpNorm<Eigen::Infinity>());
-    if (k == 0) {
-      warm.solve(ticks[0]);
-      continue;
+  for (int rep = 0; rep < repeats; ++rep) {
+    const size_t coldFrom = coldUs.size(), warmFrom = warmUs.size();
+    for (size_t k = 0; k < ticks.size(); ++k) {
+      if (g_signal.load()) return interrupted();
+      if (!warmOnly) {
+        const auto a = Clock::now();
+        const auto& rc = cold.solve(ticks[k]);
+        const auto b = Clock::now();
+        coldUs.push_back(elapsedUs(a, b));
+        coldIt.push_back(rc.iterations);
+        coldCap += (rc.status == Status::IterationLimit);
+        maxAbsX = std::max(maxAbsX, rc.x.lpNorm<Eigen::Infinity>());
+      }
+      if (k == 0) {
+        warm.solve(ticks[0]);  // each repeat starts cold, like the first
+        continue;
+      }
+      const auto c = Clock::now();
+      const auto& rw = warm.solve(ticks[k], warm.result().active, warm.result().x);
+      const auto d = Clock::now();
+      warmUs.push_back(elapsedUs(c, d));
+      warmIt.push_back(rw.iterations);
+      warmCap += (rw.status == Status::IterationLimit);
+      maxAbsX = std::max(maxAbsX, rw.x.lpNorm<Eigen::Infinity>());
     }
-    const auto c = Clock::now();
-    const auto& rw = warm.solve(ticks[k], warm.result().active, warm.result().x);
-    const auto d = Clock::now();
-    warmUs.push_back(elapsedUs(c, d));
-    warmIt.push_back(rw.iterations);
-    warmCap += (rw.status == Status::IterationLimit);
-    maxAbsX = std::max(maxAbsX, rw.x.lpNorm<Eigen::Infinity>());
+    auto medianFrom = [](const std::vector<double>& v, size_t from) {
+      return percentile(std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(from), v.end()), 0.5);
+    };
+    if (coldUs.size() > coldFrom) coldMedians.push_back(medianFrom(coldUs, coldFrom));
+    if (warmUs.size() > warmFrom) warmMedians.push_back(medianFrom(warmUs, warmFrom));
+    if (repeats > 1) std::fprintf(stderr, "lexdyn-solve: repeat %d/%d\n", rep + 1, repeats);
   }
   nlohmann::json out;
   out["qr_unit_us"] = unit;
   out["ticks"] = ticks.size();
-  out["cold"] = stats(coldUs, coldIt, coldCap, unit);
-  out["warm"] = stats(warmUs, warmIt, warmCap, unit);
+  if (!warmOnly) out["cold"] = stats(coldUs, coldIt, coldCap, unit, coldMedians);
+  out["warm"] = stats(warmUs, warmIt, warmCap, unit, warmMedians);
   out["max_abs_x"] = maxAbsX;
   std::cout << out.dump(2) << std::endl;
   // A benchmark measures time; a tick that hit the cap is counted in iteration_limit_hits.
@@ -163,10 +183,12 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
 int main(int argc, char** argv) {
   CLI::App app{"lexdyn-solve: hierarchical least-squares solver (docs/solver.md)"};
   std::vector<std::string> files;
-  bool bench = false, details = false, noBounds = false;
-  int maxIterations = 1000;
+  bool bench = false, details = false, noBounds = false, warmOnly = false;
+  int maxIterations = 1000, repeats = 1;
   double paperDt = 0.0;
   app.add_flag("--bench", bench, "treat the files as consecutive ticks and print timing statistics");
+  app.add_option("--repeats", repeats, "with --bench: run the sequence this many times")->check(CLI::Range(1, 1000));
+  app.add_flag("--warm-only", warmOnly, "with --bench: skip the cold solves");
   app.add_flag("--details", details, "also print the active set, ranks and per-row violations");
   app.add_flag("--no-bounds-level", noBounds, "do not treat a first level of single-variable rows as bounds");
   app.add_option("--max-iterations", maxIterations, "hard cap on active-set iterations")->check(CLI::Range(1, 1000000));
@@ -187,7 +209,11 @@ int main(int argc, char** argv) {
   Options options = paperDt > 0.0 ? Options::paper(paperDt) : Options{};
   options.max_iterations = maxIterations;
   try {
-    if (bench) return runBench(files, options, !noBounds);
+    if (!bench && (app.count("--repeats") || warmOnly)) {
+      std::fprintf(stderr, "lexdyn-solve: error: --repeats and --warm-only need --bench\n");
+      return kExitBadInput;
+    }
+    if (bench) return runBench(files, options, !noBounds, repeats, warmOnly);
     if (files.size() != 1) {
       std::fprintf(stderr, "lexdyn-solve: error: expected one problem file, found %zu (use --bench for several)\n", files.size());
       return kExitBadInput;

@@ -130,6 +130,48 @@ TEST(SolveCli, BenchReportsColdAndWarmStatistics) {
   EXPECT_EQ(j["cold"]["count"], 2);
   EXPECT_EQ(j["warm"]["count"], 1);
   EXPECT_EQ(j["warm"]["max_iterations"], 1);  // same problem: the previous active set is optimal
+  EXPECT_EQ(j["warm"]["repeats"], 1);
+  EXPECT_EQ(j["warm"]["min_repeat_median_us"], j["warm"]["median_us"]);
+}
+
+TEST(SolveCli, BenchRepeatsReportTheMinimumOfTheMedians) {
+  const std::string a = writeFile("r0.json", kValid);
+  const std::string b = writeFile("r1.json", kValid);
+  const std::string c = writeFile("r2.json", kValid);
+  const CliRun r = run("--bench --repeats 3 " + a + " " + b + " " + c);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* k : {"cold", "warm"}) {
+    EXPECT_EQ(j[k]["repeats"], 3) << k;
+    // The smallest of the repeats' medians lies between the pooled times' extremes.
+    const double minMedian = j[k]["min_repeat_median_us"].get<double>();
+    EXPECT_GT(minMedian, 0.0) << k;
+    EXPECT_LE(minMedian, j[k]["max_us"].get<double>()) << k;
+    EXPECT_DOUBLE_EQ(j[k]["min_repeat_median_qr_units"].get<double>(), minMedian / j["qr_unit_us"].get<double>()) << k;
+  }
+  EXPECT_EQ(j["cold"]["count"], 9);
+  EXPECT_EQ(j["warm"]["count"], 6);  // each repeat starts cold: two warm ticks per repeat
+  EXPECT_NE(r.err.find("repeat 3/3"), std::string::npos) << r.err;
+}
+
+TEST(SolveCli, BenchWarmOnlySkipsTheColdSolves) {
+  const std::string a = writeFile("w0.json", kValid);
+  const std::string b = writeFile("w1.json", kValid);
+  const CliRun r = run("--bench --warm-only " + a + " " + b);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j.contains("cold"));
+  EXPECT_EQ(j["warm"]["count"], 1);
+}
+
+TEST(SolveCli, RepeatsAndWarmOnlyNeedBench) {
+  const std::string a = writeFile("n0.json", kValid);
+  for (const std::string opt : {"--repeats 2", "--warm-only"}) {
+    const CliRun r = run(opt + " " + a);
+    EXPECT_EQ(r.code, 2) << opt;
+    EXPECT_NE(r.err.find("need --bench"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(run("--bench --repeats 0 " + a).code, 2);
 }
 
 }  // namespace
