@@ -34,7 +34,7 @@ struct RunOptions {
   /// for a lexdyn controller; writing does not change the run.
   std::string dump_problems_dir;
   double dump_from_s = 0.0;
-  double dump_to_s = 1e300;
+  double dump_to_s = 1e300;  // the end of any run
 };
 
 struct RunSummary {

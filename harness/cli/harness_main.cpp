@@ -109,7 +109,8 @@ std::vector<std::string> splitList(const std::string& s) {
   return out;
 }
 
-// "FROM:TO" in seconds, both finite, FROM <= TO; "FROM:" runs to the end. Throws InputError.
+// "FROM:TO" in seconds, both finite, FROM <= TO; "FROM:" keeps `to` (RunOptions' default: the end
+// of the run). Throws InputError.
 void parseDumpWindow(const std::string& text, double& from, double& to) {
   const auto colon = text.find(':');
   auto number = [&](const std::string& s, double& v) {
@@ -117,7 +118,7 @@ void parseDumpWindow(const std::string& text, double& from, double& to) {
     v = std::strtod(s.c_str(), &end);
     return !s.empty() && end == s.c_str() + s.size() && std::isfinite(v);
   };
-  double a = 0.0, b = 1e300;
+  double a = 0.0, b = to;
   const bool ok = colon != std::string::npos && number(text.substr(0, colon), a) &&
                   (colon + 1 == text.size() || number(text.substr(colon + 1), b)) && a <= b;
   if (!ok) throw lexdyn::InputError("--dump-window", "expected FROM:TO in seconds with FROM <= TO (e.g. 31.5:32.5, or 31.5: to the end), found '" + text + "'");

@@ -201,6 +201,18 @@ TEST(ControllerCli, DumpProblemsWritesEachTicksProblemWithoutChangingTheRun) {
     if (a.names[i].rfind("time.", 0) == 0) continue;
     for (size_t r = 0; r < a.rows.size(); ++r) ASSERT_EQ(std::memcmp(&a.rows[r][i], &b.rows[r][i], sizeof(double)), 0) << a.names[i];
   }
+  // "FROM:" runs to the end of the run: ticks 190 ... 199 (t = 0.995 s), give or take the rounding
+  // of k dt. The final row's tick at t = 1 s, whose command is never applied, is not dumped.
+  const CliResult open = harness("run " + pm + " --method bfgs --out " + dir + "/open --quiet --dump-problems " + dir +
+                                     "/open_problems --dump-window 0.95:",
+                                 dir);
+  ASSERT_EQ(open.code, plain.code) << open.err;
+  std::vector<std::string> tail;
+  for (const auto& e : std::filesystem::directory_iterator(dir + "/open_problems")) tail.push_back(e.path().filename().string());
+  std::sort(tail.begin(), tail.end());
+  ASSERT_GE(tail.size(), 9u);
+  ASSERT_LE(tail.size(), 10u);
+  EXPECT_EQ(tail.back(), "tick_000199.json");
   // Misuse.
   expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-window 0.1:0.2", dir), 2, {"--dump-window", "needs --dump-problems"});
   expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-problems " + dir + "/p2 --dump-window 0.3:0.2", dir), 2,
