@@ -637,6 +637,26 @@ void HlsFactorization::projectDeferredLevel(int k) {
     Z(c0 + i, i) = 1.0;
     applyEarlierStagesQ(Z.col(i), k);
   }
+  // A row with a single nonzero v at reduced coordinate i (a regularisation row x_j = 0 on a
+  // non-basic variable) projects to v Z(i, :), with the same bits as the product Z^T a, whose
+  // other terms are exact zeros. When every row is such a row (exp1's minimum-wrench rows before
+  // the Newton switch), the product is skipped. Otherwise all rows go through one product: a
+  // product of only the other rows would round them differently (Eigen's matrix-product kernel
+  // sums a column's terms in an order that depends on its place among the columns).
+  bool allSingle = true;
+  for (int j = 0; j < m && allSingle; ++j) {
+    const auto a = RawP_.col(j).head(nr_);
+    int nz = 0, at = -1;
+    for (int i = 0; i < nr_ && nz < 2; ++i) {
+      if (a(i) != 0.0) {
+        ++nz;
+        at = i;
+      }
+    }
+    allSingle = nz == 1;
+    if (allSingle) W_.col(s + j).segment(c0, d) = a(at) * Z.row(at).transpose();
+  }
+  if (allSingle) return;
   auto P = P_.block(0, 0, d, m);
   P.noalias() = Z.transpose() * RawP_.block(0, 0, nr_, m);
   W_.block(c0, s, d, m) = P;
