@@ -1,36 +1,64 @@
 #!/usr/bin/env bash
-# Closed-loop simulator speed (docs/performance.md, "Simulator"): runs each case N times with
-# lexdyn-harness and prints the median and maximum real-time factor (simulated seconds per wall
-# second, from summary.json). Figures compare on one machine only.
+# Closed-loop speed (docs/performance.md, "Simulator" and "Controller tick in the closed loop"):
+# runs each case N times with lexdyn-harness and prints, from the runs' summary.json:
+#   - the wall time: minimum, median and maximum over the runs, and the real-time factor
+#     (simulated seconds per wall second) at the minimum and the median;
+#   - for a lexdyn or WLS controller, each timed part of the tick (tick, solver, model, tasks,
+#     Hessians): the minimum over the runs of the per-run median, the median of those medians,
+#     and the largest per-run p99.
+# A single run on a shared machine can show false tails of one scheduler slice (about 4 ms): the
+# minimum over runs is the figure to compare. Figures compare on one machine only.
 #
-# Usage: harness/scripts/bench-sim.sh [-n RUNS] [-b BUILD_DIR] [case.yaml ...]
-#        (defaults: 5 runs, build/, cases/stand.yaml cases/squat_sway.yaml)
+# Usage: harness/scripts/bench-sim.sh [-n RUNS] [-b BUILD_DIR] [-m METHOD] [-d DURATION] [case.yaml ...]
+#        (defaults: 5 runs, build/, each case's own method and duration,
+#         cases/stand.yaml cases/squat_sway.yaml)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 RUNS=5
 BUILD="$ROOT/build"
-lexdyn_options "[-n RUNS] [-b BUILD_DIR] [case.yaml ...]" n=RUNS b=BUILD -- "$@"
+METHOD=""
+DURATION=""
+lexdyn_options "[-n RUNS] [-b BUILD_DIR] [-m METHOD] [-d DURATION] [case.yaml ...]" n=RUNS b=BUILD m=METHOD d=DURATION -- "$@"
+[[ "$RUNS" =~ ^[1-9][0-9]*$ ]] || { echo "bench-sim.sh: -n: expected a positive number of runs, found '$RUNS'" >&2; exit 2; }
 lexdyn_cases "${LEXDYN_OPERANDS[@]}"
 lexdyn_harness bench-sim
 OUT="$(mktemp -d)"
 trap 'rm -rf "$OUT"' EXIT
+extra=()
+[ -n "$METHOD" ] && extra+=(--method "$METHOD")
+[ -n "$DURATION" ] && extra+=(--duration "$DURATION")
 
-echo "machine: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores"
+echo "machine: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; load: $(cut -d' ' -f1-3 /proc/loadavg)"
 for c in "${CASES[@]}"; do
   name="$(basename "$c" .yaml)"
   for i in $(seq 1 "$RUNS"); do
-    "$HARNESS" run "$c" --out "$OUT/$name.$i" --quiet 2>/dev/null || true
+    code=0
+    "$HARNESS" run "$c" --out "$OUT/$name.$i" --quiet "${extra[@]}" 2>"$OUT/$name.$i.err" || code=$?
+    if [ ! -f "$OUT/$name.$i/summary.json" ]; then
+      echo "bench-sim.sh: $c: run $i wrote no summary (exit $code):" >&2
+      tail -3 "$OUT/$name.$i.err" >&2
+      exit "$(lexdyn_code "$code")"
+    fi
   done
   python3 - "$OUT" "$name" "$RUNS" <<'PY'
 import json, statistics, sys
 out, name, runs = sys.argv[1], sys.argv[2], int(sys.argv[3])
 s = [json.load(open(f"{out}/{name}.{i}/summary.json")) for i in range(1, runs + 1)]
-rtf = [x["realtime_factor"] for x in s]
+wall = [x["wall_s"] for x in s]
+sim = s[0]["simulated_s"]
 st = {x["status"] for x in s}
 ok = all(x["all_checks_passed"] for x in s)
-print(f"{name}: realtime factor median {statistics.median(rtf):.1f}x, max {max(rtf):.1f}x, min {min(rtf):.1f}x "
-      f"over {runs} runs of {s[0]['simulated_s']:.1f} s; wall median {statistics.median(x['wall_s'] for x in s):.3f} s; "
-      f"steps {s[0]['integrator']['steps']}, rhs {s[0]['integrator']['rhs_evals']} + {s[0]['integrator']['jac_rhs_evals']} (Jacobians); "
-      f"status {','.join(sorted(st))}; checks {'passed' if ok else 'FAILED'}")
+method = s[0].get("method") or "-"
+print(f"{name} ({method}), {runs} runs of {sim:.1f} s: wall min {min(wall):.3f} s, median {statistics.median(wall):.3f} s, "
+      f"max {max(wall):.3f} s; real-time factor {sim / min(wall):.1f}x at the minimum, {sim / statistics.median(wall):.1f}x "
+      f"at the median; steps {s[0]['integrator']['steps']}, rhs {s[0]['integrator']['rhs_evals']} + "
+      f"{s[0]['integrator']['jac_rhs_evals']} (Jacobians); status {','.join(sorted(st))}; checks {'passed' if ok else 'FAILED'}")
+timing = [x.get("timing_us") or {} for x in s]
+for part in ("tick", "solver", "model", "tasks", "hessian"):
+    if not all(part in t for t in timing):
+        continue
+    med = [t[part]["median"] for t in timing]
+    p99 = [t[part]["p99"] for t in timing]
+    print(f"  {part:8s} median: min {min(med):8.1f} us, median {statistics.median(med):8.1f} us; p99: max {max(p99):8.1f} us")
 PY
 done

@@ -29,4 +29,10 @@ expect "golden-update.sh -x" 2 "$?"
 expect "sim-accuracy.sh --check (without -p)" 2 "$?"
 "$ROOT/harness/scripts/sim-accuracy.sh" -p 3 -s sparse_lu > /dev/null 2>&1
 expect "sim-accuracy.sh -s sparse_lu" 2 "$?"
+"$ROOT/harness/scripts/bench-sim.sh" -n x > /dev/null 2>&1
+expect "bench-sim.sh -n x" 2 "$?"
+"$ROOT/harness/scripts/bench-solver.sh" -r 0 > /dev/null 2>&1
+expect "bench-solver.sh -r 0" 2 "$?"
+"$ROOT/harness/scripts/bench-solver.sh" abc > /dev/null 2>&1
+expect "bench-solver.sh abc" 2 "$?"
 exit $fail
