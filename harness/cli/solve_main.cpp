@@ -109,10 +109,15 @@ nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iter
   j["median_qr_units"] = percentile(us, 0.5) / unit;
   j["p99_qr_units"] = percentile(us, 0.99) / unit;
   j["max_qr_units"] = (us.empty() ? 0.0 : *std::max_element(us.begin(), us.end())) / unit;
-  j["repeats"] = repeatMedians.size();
-  const double minMedian = repeatMedians.empty() ? 0.0 : *std::min_element(repeatMedians.begin(), repeatMedians.end());
-  j["min_repeat_median_us"] = minMedian;
-  j["min_repeat_median_qr_units"] = minMedian / unit;
+  // null without a timed solve (a single file has no warm tick)
+  if (repeatMedians.empty()) {
+    j["min_repeat_median_us"] = nullptr;
+    j["min_repeat_median_qr_units"] = nullptr;
+  } else {
+    const double minMedian = *std::min_element(repeatMedians.begin(), repeatMedians.end());
+    j["min_repeat_median_us"] = minMedian;
+    j["min_repeat_median_qr_units"] = minMedian / unit;
+  }
   return j;
 }
 
@@ -170,6 +175,7 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
   nlohmann::json out;
   out["qr_unit_us"] = unit;
   out["ticks"] = ticks.size();
+  out["repeats"] = repeats;
   if (!warmOnly) out["cold"] = stats(coldUs, coldIt, coldCap, unit, coldMedians);
   out["warm"] = stats(warmUs, warmIt, warmCap, unit, warmMedians);
   out["max_abs_x"] = maxAbsX;

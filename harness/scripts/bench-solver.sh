@@ -30,7 +30,9 @@ d = json.load(open(path))
 print(f"{regime:14s} qr_unit {d['qr_unit_us']:.1f} us   max|x| {d['max_abs_x']:.3g}")
 for k in ("cold", "warm"):
     s = d[k]
-    print(f"  {k:5s} min of medians {s['min_repeat_median_us']:8.1f} us ({s['min_repeat_median_qr_units']:.2f} u)"
+    mm = s["min_repeat_median_us"]
+    mm = f"{mm:8.1f} us ({s['min_repeat_median_qr_units']:.2f} u)" if mm is not None else "       - (nothing timed)"
+    print(f"  {k:5s} min of medians {mm}"
           f"  median {s['median_us']:8.1f} us ({s['median_qr_units']:.2f} u)  p99 {s['p99_us']:8.1f}  max {s['max_us']:8.1f} us"
           f"  iterations mean {s['mean_iterations']:.2f} max {s['max_iterations']}  cap hits {s['iteration_limit_hits']}")
 PY

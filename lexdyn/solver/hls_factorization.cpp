@@ -638,12 +638,14 @@ void HlsFactorization::projectDeferredLevel(int k) {
     applyEarlierStagesQ(Z.col(i), k);
   }
   // A row with a single nonzero v at reduced coordinate i (a regularisation row x_j = 0 on a
-  // non-basic variable) projects to v Z(i, :), with the same bits as the product Z^T a, whose
-  // other terms are exact zeros. When every row is such a row (exp1's minimum-wrench rows before
-  // the Newton switch), the product is skipped. Otherwise all rows go through one product: a
-  // product of only the other rows would round them differently (Eigen's matrix-product kernel
-  // sums a column's terms in an order that depends on its place among the columns).
-  bool allSingle = true;
+  // non-basic variable) projects to v Z(i, :) + 0: the same bits as the matrix product Z^T a,
+  // whose other terms are exact zeros and whose sum starts at +0 (hence the + 0, which turns a
+  // -0 into +0). When every row is such a row (exp1's minimum-wrench rows before the Newton
+  // switch), the product is skipped. Otherwise all rows go through one product: a product of
+  // only the other rows would round them differently (Eigen's matrix-product kernel sums a
+  // column's terms in an order that depends on its place among the columns). Only where Eigen
+  // takes its matrix-product kernel (two or more rows, not a small coefficient-wise product).
+  bool allSingle = m >= 2 && nr_ + d + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD;
   for (int j = 0; j < m && allSingle; ++j) {
     const auto a = RawP_.col(j).head(nr_);
     int nz = 0, at = -1;
@@ -654,7 +656,7 @@ void HlsFactorization::projectDeferredLevel(int k) {
       }
     }
     allSingle = nz == 1;
-    if (allSingle) W_.col(s + j).segment(c0, d) = a(at) * Z.row(at).transpose();
+    if (allSingle) W_.col(s + j).segment(c0, d) = (a(at) * Z.row(at).transpose()).array() + 0.0;
   }
   if (allSingle) return;
   auto P = P_.block(0, 0, d, m);

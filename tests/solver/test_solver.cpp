@@ -3,6 +3,8 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <random>
+#include <cstring>
 
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/solver/problem.hpp"
@@ -240,6 +242,78 @@ TEST(Solver, WarmStartGivesTheColdAnswer) {
     for (int l = 0; l < p.levelCount(); ++l)
       EXPECT_NEAR(rw.violation_norm(l), rc.violation_norm(l), 1e-8 * (1 + rc.violation_norm(l))) << "seed " << seed;
     EXPECT_LE((rw.x - rc.x).norm(), 1e-7 * (1 + rc.x.norm())) << "seed " << seed;
+  }
+}
+
+// Levels whose rows are never active (here: inequalities far from any solution) between the
+// others: stages without rows, whose snapshots the restarts at the next level read. The answer
+// is that of the problem without them, over the many restarts of cold solves with inequalities.
+TEST(Solver, NeverActiveLevelsBetweenOthersChangeNothing) {
+  GenOptions g;
+  g.inequalities = true;
+  g.maxRows = 4;
+  int restarts = 0;
+  for (std::uint64_t seed = 7000; seed < 7120; ++seed) {
+    g.n = 5 + static_cast<int>(seed % 7);
+    g.levels = 3 + static_cast<int>(seed % 3);
+    Problem p = randomProblem(seed, g);
+    appendMinNorm(p);
+    // q: p with two never-active levels before each general level after the first.
+    Problem q(p.variables());
+    bool firstGeneral = true;
+    for (int l = 0; l < p.levelCount(); ++l) {
+      const Level& lv = p.level(l);
+      if (lv.kind == LevelKind::Bounds) {
+        q.addBoundsLevel(lv.name, lv.variable, lv.coefficient, lv.lower, lv.upper);
+        continue;
+      }
+      if (!firstGeneral) {
+        for (int e = 0; e < 2; ++e) {
+          Eigen::MatrixXd A = Eigen::MatrixXd::Ones(2, p.variables());
+          A(1, 0) = -1.0;
+          q.addLevel("never" + std::to_string(e), A, Eigen::VectorXd::Constant(2, -1e9), Eigen::VectorXd::Constant(2, 1e9));
+        }
+      }
+      firstGeneral = false;
+      q.addLevel(lv.name, lv.A, lv.lower, lv.upper);
+    }
+    Solver sp, sq;
+    const Result rp = solveOnce(sp, p);
+    const Result& rq = solveOnce(sq, q);
+    ASSERT_EQ(rp.status, Status::Solved) << "seed " << seed;
+    ASSERT_EQ(rq.status, Status::Solved) << "seed " << seed;
+    restarts += rq.iterations > 1 ? 1 : 0;
+    EXPECT_LE((rq.x - rp.x).norm(), 1e-9 * (1 + rp.x.norm())) << "seed " << seed;
+    EXPECT_EQ(checkKkt(q, rq), "") << "seed " << seed;
+  }
+  EXPECT_GE(restarts, 60);  // most solves change their active set at least once
+}
+
+// The premise of the projected level's shortcut (HlsFactorization::projectDeferredLevel): with
+// Eigen's matrix-product kernel, Z^T A for columns of A with a single nonzero v at row i gives
+// v Z(i, :) + 0 bit for bit, signed zeros included (Z with exact zeros, v of both signs).
+TEST(Solver, ProductWithSingleNonzeroColumnsIsAScaledRow) {
+  std::mt19937_64 rng(91);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int nr = 10 + static_cast<int>(rng() % 60), d = 1 + static_cast<int>(rng() % static_cast<std::uint64_t>(nr));
+    const int m = 2 + static_cast<int>(rng() % 40);
+    if (nr + d + m < EIGEN_GEMM_TO_COEFFBASED_THRESHOLD) continue;
+    Eigen::MatrixXd Z(nr, d), A = Eigen::MatrixXd::Zero(nr, m);
+    for (int j = 0; j < d; ++j)
+      for (int i = 0; i < nr; ++i) Z(i, j) = (rng() % 4 == 0) ? 0.0 : u(rng);
+    std::vector<int> at(static_cast<size_t>(m));
+    for (int j = 0; j < m; ++j) {
+      at[static_cast<size_t>(j)] = static_cast<int>(rng() % static_cast<std::uint64_t>(nr));
+      A(at[static_cast<size_t>(j)], j) = (rng() % 2 ? 1.0 : -1.0) * (0.5 + u(rng) * u(rng));
+    }
+    Eigen::MatrixXd P(d, m);
+    P.noalias() = Z.transpose() * A;
+    for (int j = 0; j < m; ++j) {
+      const int i = at[static_cast<size_t>(j)];
+      const Eigen::VectorXd row = (A(i, j) * Z.row(i).transpose()).array() + 0.0;
+      ASSERT_EQ(std::memcmp(row.data(), P.col(j).data(), sizeof(double) * static_cast<size_t>(d)), 0) << "trial " << trial << " column " << j;
+    }
   }
 }
 
