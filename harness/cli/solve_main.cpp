@@ -100,24 +100,28 @@ nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iter
     maxIt = std::max(maxIt, it);
   }
   j["count"] = us.size();
+  if (us.empty()) {
+    // Nothing timed (a single file has no warm tick): no figure rather than zeros.
+    for (const char* k : {"median_us", "p99_us", "max_us", "median_qr_units", "p99_qr_units", "max_qr_units",
+                          "min_repeat_median_us", "min_repeat_median_qr_units"})
+      j[k] = nullptr;
+    j["mean_iterations"] = nullptr;
+    j["max_iterations"] = nullptr;
+    j["iteration_limit_hits"] = 0;
+    return j;
+  }
   j["median_us"] = percentile(us, 0.5);
   j["p99_us"] = percentile(us, 0.99);
-  j["max_us"] = us.empty() ? 0.0 : *std::max_element(us.begin(), us.end());
-  j["mean_iterations"] = iters.empty() ? 0.0 : sumIt / static_cast<double>(iters.size());
+  j["max_us"] = *std::max_element(us.begin(), us.end());
+  j["mean_iterations"] = sumIt / static_cast<double>(iters.size());
   j["max_iterations"] = maxIt;
   j["iteration_limit_hits"] = capHits;
   j["median_qr_units"] = percentile(us, 0.5) / unit;
   j["p99_qr_units"] = percentile(us, 0.99) / unit;
-  j["max_qr_units"] = (us.empty() ? 0.0 : *std::max_element(us.begin(), us.end())) / unit;
-  // null without a timed solve (a single file has no warm tick)
-  if (repeatMedians.empty()) {
-    j["min_repeat_median_us"] = nullptr;
-    j["min_repeat_median_qr_units"] = nullptr;
-  } else {
-    const double minMedian = *std::min_element(repeatMedians.begin(), repeatMedians.end());
-    j["min_repeat_median_us"] = minMedian;
-    j["min_repeat_median_qr_units"] = minMedian / unit;
-  }
+  j["max_qr_units"] = *std::max_element(us.begin(), us.end()) / unit;
+  const double minMedian = *std::min_element(repeatMedians.begin(), repeatMedians.end());
+  j["min_repeat_median_us"] = minMedian;
+  j["min_repeat_median_qr_units"] = minMedian / unit;
   return j;
 }
 

@@ -54,13 +54,13 @@ void report(const std::string& name, int reps, const std::function<void()>& f) {
   std::sort(all.begin(), all.end());
   const double median = all[all.size() / 2];
   const double p99 = all[static_cast<size_t>(0.99 * static_cast<double>(all.size() - 1))];
-  std::printf("| %-58s | %9.2f | %9.2f | %9.2f | %9.2f |\n", name.c_str(), minMedian, median, p99, all.back());
+  std::printf("| %-58s | %10.2f | %9.2f | %9.2f | %9.2f |\n", name.c_str(), minMedian, median, p99, all.back());
 }
 
 void header() {
-  std::printf("| %-58s | %9s | %9s | %9s | %9s |\n", "operation", "min med", "median us", "p99 us", "max us");
+  std::printf("| %-58s | %10s | %9s | %9s | %9s |\n", "operation", "min med us", "median us", "p99 us", "max us");
   const std::string c(11, '-');
-  std::printf("|%s|%s|%s|%s|%s|\n", std::string(60, '-').c_str(), c.c_str(), c.c_str(), c.c_str(), c.c_str());
+  std::printf("|%s|%s|%s|%s|%s|\n", std::string(60, '-').c_str(), std::string(12, '-').c_str(), c.c_str(), c.c_str(), c.c_str());
 }
 
 struct Term {
@@ -73,8 +73,10 @@ struct Term {
 
 int main(int argc, char** argv) {
   if (argc > 1) {
-    g_repeats = std::atoi(argv[1]);
-    if (g_repeats < 1 || g_repeats > 100) {
+    char* end = nullptr;
+    const long v = std::strtol(argv[1], &end, 10);
+    g_repeats = (end && *end == '\0' && v >= 1 && v <= 100) ? static_cast<int>(v) : 0;
+    if (g_repeats < 1) {
       std::fprintf(stderr, "bench_hessian: expected a number of repeats in [1, 100], found '%s'\n", argv[1]);
       return 2;
     }
@@ -145,6 +147,7 @@ int main(int argc, char** argv) {
   Eigen::MatrixXd R(nv, nv);
   const double dt = 0.005, eps = 1e-3 * dt * dt;
 
+  std::printf("%d repeats of each line's timed calls; min med: the smallest of the repeats' medians\n", g_repeats);
   std::printf("Hessians on %s (nv = %d), %d accumulate calls for the 5 augmented levels\n\n", m.name().c_str(), nv,
               calls);
   header();
