@@ -75,6 +75,9 @@ solver::Options readSolver(yaml::StrictMap& sm, double dt) {
     o.elimination_tolerance = v->asPositiveDouble();
     if (o.elimination_tolerance > 1.0) v->asDoubleIn(0.0, 1.0);
   }
+  if (auto v = sm.optional("split_force_coordinates")) {
+    o.split_from_variable = v->asBool() ? solver::Options::kSplitAtControllerForces : -1;
+  }
   if (auto v = sm.optional("last_level_projection")) {
     const std::string mode = v->asString();
     if (mode == "auto") {

@@ -223,6 +223,8 @@ void Controller::Impl::buildLevels() {
     if (!rest.slots.empty() || rest.augmentable) addLevel(std::move(rest), ls.name);
   }
   solver::Options so = p.solver;
+  // Split coordinates: the velocities are variables 0 .. nv - 1, the contact forces follow.
+  if (so.split_from_variable == solver::Options::kSplitAtControllerForces) so.split_from_variable = nv;
   if (!p.stop_after_level.empty()) {
     // The paper's early stop applies once this configured level is optimal (sec. VIII-B): its last
     // solver level (a bounds-only level is the solver's bounds level).

@@ -70,6 +70,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   isFree_.assign(z(nn), 1);
   flag_.assign(z(nn), 0);
   newOrder_.assign(z(nn), 0);
+  isFreeTmp_.assign(z(nn), 0);
   DTs_.setZero(nn, m0max);
   transp_.assign(z(nn), 0);
   WB_.setZero(m0max, colsW);
@@ -82,6 +83,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   act_.assign(z(L), 0);
   col0_.assign(z(L + 1), 0);
   rank_.assign(z(L), 0);
+  stageEnd_.assign(z(L), 0);
   colGid_.assign(z(colsW), -1);
   pos_.assign(z(mTot_), -1);
   tau_.setZero(colsW);
@@ -205,6 +207,12 @@ bool HlsFactorization::tryEliminate() {
   elim_ = false;
   m0_ = 0;
   if (!elimAllowed_ || levelCount() == 0) return false;
+  // Split coordinates: basic variables among those from split_ on, else the plain pivoting.
+  if (split_ >= 0 && eliminateOnce(true)) return true;
+  return eliminateOnce(false);
+}
+
+bool HlsFactorization::eliminateOnce(bool preferSplit) {
   const auto& lst = active_[0];
   const int m0 = static_cast<int>(lst.size());
   if (m0 == 0 || m0 > nf_ || m0 > G_.cols()) return false;
@@ -216,6 +224,12 @@ bool HlsFactorization::tryEliminate() {
     double* g = G_.data() + f;
     for (int i = 0; i < m0; ++i) g[i * ldG] = col[lst[z(i)] - rowOff_[0]];
   }
+  // Preferring the variables from split_ on: the others' rows scaled by 2^-20 (exact) lose the
+  // partial pivoting's comparisons, and are scaled back in D^T below.
+  const double kDisfavour = std::ldexp(1.0, -20);
+  if (preferSplit)
+    for (int f = 0; f < nf_; ++f)
+      if (freeVar_[z(f)] < split_) G_.row(f).head(m0) *= kDisfavour;
   // Blocked LU with partial pivoting of the tall G (Eigen's kernel): P G = [L1; L2] U. The pivot
   // rows are the basic variables.
   int nbTranspositions = 0;
@@ -223,6 +237,9 @@ bool HlsFactorization::tryEliminate() {
       nf_, m0, G_.data(), G_.outerStride(), transp_.data(), nbTranspositions);
   for (int f = 0; f < nf_; ++f) varPerm_[z(f)] = freeVar_[z(f)];
   for (int i = 0; i < m0; ++i) std::swap(varPerm_[z(i)], varPerm_[z(transp_[z(i)])]);
+  if (preferSplit)
+    for (int i = 0; i < m0; ++i)
+      if (varPerm_[z(i)] < split_) return false;  // not enough well-conditioned preferred pivots
   // Accept only well-conditioned pivots (full row rank, safe for elimination).
   auto rowMax = t_.head(A0.rows());
   rowMax = A0.cwiseAbs().rowwise().maxCoeff();
@@ -236,6 +253,27 @@ bool HlsFactorization::tryEliminate() {
     auto L1 = G_.topLeftCorner(m0, m0).triangularView<Eigen::UnitLower>();
     auto L2 = G_.block(m0, 0, nr, m0);
     L1.solveInPlace<Eigen::OnTheRight>(L2);
+  }
+  if (preferSplit && nr > 0) {
+    for (int f = m0; f < nf_; ++f)
+      if (varPerm_[z(f)] < split_) G_.row(f).head(m0) /= kDisfavour;
+    // The reduced variables in their own order (the row swaps moved some of the disfavoured
+    // ones among the others), so that a level's rows keep their support contiguous.
+    for (int f = 0; f < nr; ++f) {  // insertion sort by variable: nearly sorted, allocates nothing
+      const int cur = m0 + f;
+      int q = f;
+      while (q > 0 && varPerm_[z(newOrder_[z(q - 1)])] > varPerm_[z(cur)]) {
+        newOrder_[z(q)] = newOrder_[z(q - 1)];
+        --q;
+      }
+      newOrder_[z(q)] = cur;
+    }
+    for (int f = 0; f < nr; ++f) {
+      DTs_.row(f).head(m0) = G_.row(newOrder_[z(f)]).head(m0);
+    }
+    for (int f = 0; f < nr; ++f) isFreeTmp_[z(f)] = varPerm_[z(newOrder_[z(f)])];
+    for (int f = 0; f < nr; ++f) varPerm_[z(m0 + f)] = isFreeTmp_[z(f)];
+    G_.block(m0, 0, nr, m0) = DTs_.topRows(nr).leftCols(m0);
   }
   elim_ = true;
   elimDataValid_ = true;
@@ -329,7 +367,7 @@ void HlsFactorization::applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int
     const int c0 = col0_[z(k)];
     const int s = start_[z(k)];
     for (int i = 0; i < rank_[z(k)]; ++i) {
-      const int len = nr_ - c0 - i;
+      const int len = stageEnd_[z(k)] - c0 - i;
       applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), col.segment(c0 + i, len));
     }
   }
@@ -340,7 +378,7 @@ void HlsFactorization::applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int 
     const int c0 = col0_[z(k)];
     const int s = start_[z(k)];
     for (int i = rank_[z(k)] - 1; i >= 0; --i) {
-      const int len = nr_ - c0 - i;
+      const int len = stageEnd_[z(k)] - c0 - i;
       applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), col.segment(c0 + i, len));
     }
   }
@@ -508,7 +546,23 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   const int s = start_[z(k)];
   const int m = act_[z(k)];
   const int c0 = col0_[z(k)];
-  const int d = nr_ - c0;
+  // Split coordinates: the stage works on rows c0 .. e only, e past the last nonzero of its
+  // columns (the rows below are exact zeros, and so are its reflectors there).
+  int e = nr_;
+  if (split_ >= 0) {
+    e = c0;
+    for (int j = 0; j < m; ++j) {
+      const double* col = W_.col(s + j).data();
+      for (int i = nr_ - 1; i >= e; --i) {
+        if (col[i] != 0.0) {
+          e = i + 1;
+          break;
+        }
+      }
+    }
+  }
+  stageEnd_[z(k)] = e;
+  const int d = e - c0;
   static const double kSqrtEps = std::sqrt(std::numeric_limits<double>::epsilon());
 
   for (int j = 0; j < m; ++j) {

@@ -74,6 +74,7 @@ void Options::validate() const {
   tolerance("zero_tolerance", zero_tolerance, false);
   tolerance("dual_tolerance", dual_tolerance, false);
   if (!(elimination_tolerance > 0.0 && elimination_tolerance <= 1.0)) fail("elimination_tolerance", "a number in (0, 1]", elimination_tolerance);
+  if (split_from_variable < -1) fail("split_from_variable", "-1 (off) or a variable index", split_from_variable);
   count("max_iterations", max_iterations, 1);
   count("bland_after_degenerate_steps", bland_after_degenerate_steps, 1);
   if (!(std::isfinite(cycle_tolerance_factor) && cycle_tolerance_factor >= 1.0)) {
@@ -301,6 +302,7 @@ void Solver::Impl::loadData(const Problem& problem) {
     allEq = (l0.lower.array() == l0.upper.array()).all();
   }
   fact.setElimination(opt.eliminate_first_level && allEq, opt.elimination_tolerance);
+  fact.setSplit(opt.split_from_variable);
   fact.setLastLevelMode(opt.last_level_projection == Options::LastLevel::Never    ? HlsFactorization::LastLevel::Standard
                         : opt.last_level_projection == Options::LastLevel::Always ? HlsFactorization::LastLevel::Projected
                                                                                   : HlsFactorization::LastLevel::Auto);

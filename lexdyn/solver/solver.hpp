@@ -68,6 +68,16 @@ struct Options {
   /// other levels. Exact either way; much cheaper for an equation-of-motion level.
   bool eliminate_first_level = true;
   double elimination_tolerance = 1e-6;
+  /// Split coordinates (off: -1). When >= 0, the elimination stage prefers basic variables with
+  /// index >= split_from_variable (in a controller's problem: the contact forces, which follow
+  /// the velocities), falling back to the plain pivoting when they are not well conditioned; the
+  /// reduced variables keep their order; and each level's stage works only on the rows its
+  /// active rows reach. A level over velocities only then leaves the force coordinates alone and
+  /// the other way round. Exact either way; it changes the rounding. A case asks for it with
+  /// `solver: {split_force_coordinates: true}`, which the controller turns into its number of
+  /// velocities (kSplitAtControllerForces until then).
+  int split_from_variable = -1;
+  static constexpr int kSplitAtControllerForces = -2;
   /// How the last general level is factorised. Never: like the others (every earlier stage's
   /// reflectors are applied to its active rows). Always: its rows are projected once onto the
   /// null space left by the earlier levels through an explicit basis of it. Auto: projected when

@@ -118,10 +118,11 @@ TEST(ControllerCase, EveryTaskTypeIsBuiltWithEveryParamsField) {
   s["e_controller"] = lexdynController("bfgs", extra);
   const std::string solverFrom = "  solver: {paper_rules: true}\n";
   s["e_controller"].replace(s["e_controller"].find(solverFrom), solverFrom.size(),
-                            "  solver: {paper_rules: true, last_level_projection: never}\n");
+                            "  solver: {paper_rules: true, last_level_projection: never, split_force_coordinates: true}\n");
   const CaseSpec c = loadCase(writeCase(outputDir("controller_case_registry"), s));
   const LexdynSpec& lx = c.controller.lexdyn;
   EXPECT_EQ(lx.params.solver.last_level_projection, solver::Options::LastLevel::Never);
+  EXPECT_EQ(lx.params.solver.split_from_variable, solver::Options::kSplitAtControllerForces);
   EXPECT_EQ(lx.params.solver.stop_total_iterations, 30);
   auto task = [&](const std::string& n) -> const TaskSpec& { return lx.tasks[static_cast<size_t>(lx.findTask(n))]; };
   EXPECT_EQ(task("jl").paramsAs<tasks::JointLimitsParams>().interaction_fraction, 0.2);

@@ -51,6 +51,13 @@ TEST(SolveCli, PrintsTheResultAsJson) {
   ASSERT_EQ(j["level_violation"].size(), 2u);
   EXPECT_NEAR(j["level_violation"][1].get<double>(), 3.0, 1e-12);  // relaxed, still exit 0
   EXPECT_GE(j["iterations"].get<int>(), 1);
+  // Split coordinates (docs/solver.md) give the same answer; a negative index is bad input.
+  const CliRun split = run("--split-from 1 " + writeFile("valid_split.json", kValid));
+  ASSERT_EQ(split.code, 0) << split.err;
+  const auto js = nlohmann::json::parse(split.out);
+  EXPECT_NEAR(js["x"][0].get<double>(), 1.0, 1e-12);
+  EXPECT_NEAR(js["x"][1].get<double>(), 1.0, 1e-12);
+  EXPECT_EQ(run("--split-from -3 " + writeFile("valid_split2.json", kValid)).code, 2);
 }
 
 TEST(SolveCli, MalformedJson) {

@@ -317,6 +317,71 @@ TEST(Solver, ProductWithSingleNonzeroColumnsIsAScaledRow) {
   }
 }
 
+// Split coordinates (Options::split_from_variable): a first level of equalities over all the
+// variables, eliminated with its basic variables taken from the second half when they are well
+// conditioned, later levels over the first half, the second half or both, and a last level over
+// all. The answer, the level violations and the multipliers are those of the plain solver, cold
+// and warm-started, over the many restarts of inequality levels; a split index beyond the
+// variables (no preferred pivot) falls back to the plain elimination.
+TEST(Solver, SplitCoordinatesGiveThePlainAnswer) {
+  int checked = 0;
+  for (std::uint64_t seed = 8000; seed < 8120; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const int n = 8 + static_cast<int>(seed % 9), half = n / 2;
+    Problem p(n);
+    const int m0 = 1 + static_cast<int>(seed % 3);
+    Eigen::MatrixXd E(m0, n);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m0; ++i) E(i, j) = (j < half ? 10.0 : 1.0) * u(rng);  // the first half pivots unless disfavoured
+    Eigen::VectorXd e(m0);
+    for (int i = 0; i < m0; ++i) e(i) = u(rng);
+    p.addLevel("eq", E, e, e);
+    for (int l = 0; l < 3 + static_cast<int>(seed % 3); ++l) {
+      const int rows = 1 + static_cast<int>(rng() % 4);
+      const int part = static_cast<int>(rng() % 3);  // 0: first half, 1: second half, 2: all
+      Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, n);
+      for (int i = 0; i < rows; ++i)
+        for (int j = 0; j < n; ++j)
+          if (part == 2 || (part == 0) == (j < half)) A(i, j) = u(rng);
+      Eigen::VectorXd lo(rows), hi(rows);
+      for (int i = 0; i < rows; ++i) {
+        lo(i) = u(rng);
+        hi(i) = (rng() % 2) ? lo(i) : lo(i) + 0.5;  // equalities and inequalities
+      }
+      p.addLevel("l" + std::to_string(l), A, lo, hi);
+    }
+    appendMinNorm(p);
+    Options split;
+    split.split_from_variable = half;
+    Options none;
+    none.split_from_variable = n + 5;  // no preferred variable: the plain elimination
+    Solver s0, s1, s2;
+    const Result r0 = solveOnce(s0, p);
+    const Result r1 = solveOnce(s1, p, split);
+    const Result r2 = solveOnce(s2, p, none);
+    ASSERT_EQ(r0.status, Status::Solved) << "seed " << seed;
+    ASSERT_EQ(r1.status, Status::Solved) << "seed " << seed;
+    EXPECT_LE((r1.x - r0.x).norm(), 1e-9 * (1 + r0.x.norm())) << "seed " << seed;
+    for (int l = 0; l < p.levelCount(); ++l)
+      EXPECT_NEAR(r1.violation_norm(l), r0.violation_norm(l), 1e-9 * (1 + r0.violation_norm(l))) << "seed " << seed;
+    EXPECT_LE((r1.lambda - r0.lambda).norm(), 1e-7 * (1 + r0.lambda.norm())) << "seed " << seed;
+    EXPECT_EQ(checkKkt(p, r1), "") << "seed " << seed;
+    ASSERT_EQ(r2.status, Status::Solved) << "seed " << seed;
+    EXPECT_LE((r2.x - r0.x).norm(), 1e-9 * (1 + r0.x.norm())) << "seed " << seed;
+    // Warm-started from the plain answer's active set.
+    Solver w;
+    w.setup(p, split);
+    w.solve(p, r0.active, r0.x);
+    EXPECT_LE((w.result().x - r0.x).norm(), 1e-9 * (1 + r0.x.norm())) << "seed " << seed;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 120);
+  Options bad;
+  bad.split_from_variable = -2;
+  EXPECT_THROW(bad.validate(), InputError);
+}
+
 TEST(Solver, ProjectedLastLevelGivesTheStandardAnswer) {
   // A large last level (minimum norm over all variables) after a few small ones: Auto projects
   // it onto the null space left by the earlier levels; the answer, the multipliers and the

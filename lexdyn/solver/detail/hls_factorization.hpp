@@ -46,6 +46,8 @@ class HlsFactorization {
     elimAllowed_ = allowed;
     elimTol_ = elimTol;
   }
+  /// Split coordinates from variable `from` on (-1: off; Options::split_from_variable).
+  void setSplit(int from) { split_ = from; }
   /// How the last level is factorised. Standard: like every other level (each earlier stage's
   /// reflectors are applied to its rows). Projected: its rows are kept in reduced coordinates
   /// and projected once onto the null space left by the earlier levels, Z^T a with Z formed
@@ -103,6 +105,7 @@ class HlsFactorization {
 
  private:
   bool tryEliminate();
+  bool eliminateOnce(bool preferSplit);
   bool updateElimination();
   void gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Eigen::MatrixXd& SB);
   int colGidTmp(int q) const { return tmpGid_[static_cast<size_t>(q)]; }
@@ -135,6 +138,7 @@ class HlsFactorization {
   // Elimination of level 0: P G = [L1; L2] U with G = A_0^T (free variables x active rows);
   // the lower part of G_ holds D^T = L2 L1^{-1} after factorisation.
   bool elimAllowed_ = false;
+  int split_ = -1;
   double elimTol_ = 1e-6;
   bool elim_ = false;
   int m0_ = 0;
@@ -142,7 +146,7 @@ class HlsFactorization {
   Eigen::MatrixXd G_;
   std::vector<int> varPerm_;  // position -> variable id; first m0_ basic, then reduced coordinates
   std::vector<char> isFree_, flag_;
-  std::vector<int> newOrder_;
+  std::vector<int> newOrder_, isFreeTmp_;
   Eigen::MatrixXd DTs_;
   bool elimDataValid_ = false;
   int nrElim_ = 0;
@@ -153,6 +157,7 @@ class HlsFactorization {
   // Layout of the last factorisation: active columns of levels >= firstStage_, contiguous.
   Eigen::MatrixXd W_;
   std::vector<int> start_, act_, col0_, rank_;
+  std::vector<int> stageEnd_;  // stage k works on rows col0_[k] .. stageEnd_[k] (nr_ unless split)
   // Stage k of that layout: m active columns from physical column s, its rows from c0, rank r.
   struct Stage {
     int m, s, c0, r;
