@@ -207,8 +207,13 @@ bool HlsFactorization::tryEliminate() {
   elim_ = false;
   m0_ = 0;
   if (!elimAllowed_ || levelCount() == 0) return false;
-  // Split coordinates: basic variables among those from split_ on, else the plain pivoting.
-  if (split_ >= 0 && eliminateOnce(true)) return true;
+  // Split coordinates: basic variables among those from split_ on (when there are enough of
+  // them), else the plain pivoting.
+  if (split_ >= 0) {
+    int preferred = 0;
+    for (int f = 0; f < nf_; ++f) preferred += freeVar_[z(f)] >= split_ ? 1 : 0;
+    if (preferred >= static_cast<int>(active_[0].size()) && eliminateOnce(true)) return true;
+  }
   return eliminateOnce(false);
 }
 
