@@ -16,6 +16,10 @@ namespace lexdyn::solver {
 
 namespace {
 
+// Split coordinates: the largest multiplier of a disfavoured variable's row accepted in the
+// preferred elimination (threshold pivoting).
+constexpr double kSplitMaxMultiplier = 1e4;
+
 // x <- (I - tau v v^T) x with v = [1; ess] (x and v of the same length).
 template <typename Ess, typename X>
 inline void applyReflector(const Ess& ess, double tau, X&& x) {
@@ -70,7 +74,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   isFree_.assign(z(nn), 1);
   flag_.assign(z(nn), 0);
   newOrder_.assign(z(nn), 0);
-  isFreeTmp_.assign(z(nn), 0);
+  varTmp_.assign(z(nn), 0);
   DTs_.setZero(nn, m0max);
   transp_.assign(z(nn), 0);
   WB_.setZero(m0max, colsW);
@@ -206,13 +210,17 @@ int HlsFactorization::totalRank() const {
 bool HlsFactorization::tryEliminate() {
   elim_ = false;
   m0_ = 0;
+  splitApplied_ = false;
   if (!elimAllowed_ || levelCount() == 0) return false;
   // Split coordinates: basic variables among those from split_ on (when there are enough of
   // them), else the plain pivoting.
   if (split_ >= 0) {
     int preferred = 0;
     for (int f = 0; f < nf_; ++f) preferred += freeVar_[z(f)] >= split_ ? 1 : 0;
-    if (preferred >= static_cast<int>(active_[0].size()) && eliminateOnce(true)) return true;
+    if (preferred >= static_cast<int>(active_[0].size()) && eliminateOnce(true)) {
+      splitApplied_ = true;
+      return true;
+    }
   }
   return eliminateOnce(false);
 }
@@ -242,9 +250,14 @@ bool HlsFactorization::eliminateOnce(bool preferSplit) {
       nf_, m0, G_.data(), G_.outerStride(), transp_.data(), nbTranspositions);
   for (int f = 0; f < nf_; ++f) varPerm_[z(f)] = freeVar_[z(f)];
   for (int i = 0; i < m0; ++i) std::swap(varPerm_[z(i)], varPerm_[z(transp_[z(i)])]);
-  if (preferSplit)
+  if (preferSplit) {
     for (int i = 0; i < m0; ++i)
       if (varPerm_[z(i)] < split_) return false;  // not enough well-conditioned preferred pivots
+    // Threshold pivoting: the disfavoured rows' multipliers (|L2| <= 1 for the others) may not
+    // exceed kSplitMaxMultiplier, so that D^T stays moderate (exp1: at most 368, exp2: 291).
+    for (int f = m0; f < nf_; ++f)
+      if (varPerm_[z(f)] < split_ && G_.row(f).head(m0).cwiseAbs().maxCoeff() > kSplitMaxMultiplier * kDisfavour) return false;
+  }
   // Accept only well-conditioned pivots (full row rank, safe for elimination).
   auto rowMax = t_.head(A0.rows());
   rowMax = A0.cwiseAbs().rowwise().maxCoeff();
@@ -262,28 +275,31 @@ bool HlsFactorization::eliminateOnce(bool preferSplit) {
   if (preferSplit && nr > 0) {
     for (int f = m0; f < nf_; ++f)
       if (varPerm_[z(f)] < split_) G_.row(f).head(m0) /= kDisfavour;
-    // The reduced variables in their own order (the row swaps moved some of the disfavoured
-    // ones among the others), so that a level's rows keep their support contiguous.
-    for (int f = 0; f < nr; ++f) {  // insertion sort by variable: nearly sorted, allocates nothing
-      const int cur = m0 + f;
-      int q = f;
-      while (q > 0 && varPerm_[z(newOrder_[z(q - 1)])] > varPerm_[z(cur)]) {
-        newOrder_[z(q)] = newOrder_[z(q - 1)];
-        --q;
-      }
-      newOrder_[z(q)] = cur;
-    }
-    for (int f = 0; f < nr; ++f) {
-      DTs_.row(f).head(m0) = G_.row(newOrder_[z(f)]).head(m0);
-    }
-    for (int f = 0; f < nr; ++f) isFreeTmp_[z(f)] = varPerm_[z(newOrder_[z(f)])];
-    for (int f = 0; f < nr; ++f) varPerm_[z(m0 + f)] = isFreeTmp_[z(f)];
-    G_.block(m0, 0, nr, m0) = DTs_.topRows(nr).leftCols(m0);
+    sortReducedVariables(m0, nr);
   }
   elim_ = true;
   elimDataValid_ = true;
   m0_ = m0;
   return true;
+}
+
+// Split coordinates: the reduced variables (positions m0 .. m0 + nr of varPerm_, rows of D^T in
+// G_) in increasing variable order, so that a level's rows keep their support at the top. An
+// insertion sort: the order is nearly sorted, and it allocates nothing.
+void HlsFactorization::sortReducedVariables(int m0, int nr) {
+  for (int f = 0; f < nr; ++f) {
+    const int cur = m0 + f;
+    int q = f;
+    while (q > 0 && varPerm_[z(newOrder_[z(q - 1)])] > varPerm_[z(cur)]) {
+      newOrder_[z(q)] = newOrder_[z(q - 1)];
+      --q;
+    }
+    newOrder_[z(q)] = cur;
+  }
+  for (int f = 0; f < nr; ++f) DTs_.row(f).head(m0) = G_.row(newOrder_[z(f)]).head(m0);
+  for (int f = 0; f < nr; ++f) varTmp_[z(f)] = varPerm_[z(newOrder_[z(f)])];
+  for (int f = 0; f < nr; ++f) varPerm_[z(m0 + f)] = varTmp_[z(f)];
+  G_.block(m0, 0, nr, m0) = DTs_.topRows(nr).leftCols(m0);
 }
 
 // The free set changed but the data did not: if every basic variable is still free, the LU of
@@ -322,6 +338,7 @@ bool HlsFactorization::updateElimination() {
   if (q != nf_ - m0) return false;  // cannot happen; be safe
   if (q > 0) G_.block(m0, 0, q, m0) = DTs_.topRows(q).leftCols(m0);
   for (int f = 0; f < q; ++f) varPerm_[z(m0 + f)] = newOrder_[z(f)];
+  if (split_ >= 0 && splitApplied_) sortReducedVariables(m0, q);  // a freed variable was appended
   nrElim_ = q;
   return true;
 }

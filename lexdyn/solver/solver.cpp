@@ -812,6 +812,7 @@ void Solver::Impl::finish() {
   const Problem& problem = *prob;
   out.x = x;
   out.last_level_projected = fact.lastLevelProjected();
+  out.split_applied = fact.splitApplied();
   // True violations at the final x (Ax is kept up to date along the steps).
   if (hasBounds) {
     const Level& lv = problem.level(0);

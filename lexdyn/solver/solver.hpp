@@ -72,8 +72,8 @@ struct Options {
   /// index >= split_from_variable (in a controller's problem: the contact forces, which follow
   /// the velocities), falling back to the plain pivoting when they are not well conditioned; the
   /// reduced variables keep their order; and each level's stage works only on the rows its
-  /// active rows reach. A level over velocities only then leaves the force coordinates alone and
-  /// the other way round. Exact either way; it changes the rounding. A case asks for it with
+  /// active rows reach. A level over velocities only then leaves the force coordinates alone.
+  /// Exact up to rounding either way; it changes the rounding. A case asks for it with
   /// `solver: {split_force_coordinates: true}`, which the controller turns into its number of
   /// velocities (kSplitAtControllerForces until then).
   int split_from_variable = -1;
@@ -155,6 +155,8 @@ struct Result {
   int cycles_broken = 0;
   /// The last factorisation projected the last level (Options::last_level_projection).
   bool last_level_projected = false;
+  /// The last factorisation's elimination took its basic variables from split_from_variable on.
+  bool split_applied = false;
   int bad_level = -1, bad_row = -1;  ///< NonFiniteInput location
 };
 

@@ -321,15 +321,23 @@ TEST(Solver, ProductWithSingleNonzeroColumnsIsAScaledRow) {
 // variables, eliminated with its basic variables taken from the second half when they are well
 // conditioned, later levels over the first half, the second half or both, and a last level over
 // all. The answer, the level violations and the multipliers are those of the plain solver, cold
-// and warm-started, over the many restarts of inequality levels; a split index beyond the
-// variables (no preferred pivot) falls back to the plain elimination.
+// and warm-started, over the many restarts of inequality levels and bound changes; a split index
+// beyond the variables (no preferred pivot) and preferred pivots that need large multipliers
+// fall back to the plain elimination.
 TEST(Solver, SplitCoordinatesGiveThePlainAnswer) {
-  int checked = 0;
+  int checked = 0, applied = 0;
   for (std::uint64_t seed = 8000; seed < 8120; ++seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     const int n = 8 + static_cast<int>(seed % 9), half = n / 2;
     Problem p(n);
+    // Bounds on a few variables of both halves: their activation during the solve changes the
+    // free set (the elimination is then updated, keeping the reduced variables' order).
+    {
+      std::vector<int> vars = {0, half - 1, half, n - 1};
+      Eigen::VectorXd c = Eigen::VectorXd::Ones(4), lo = Eigen::VectorXd::Constant(4, -0.05), hi = Eigen::VectorXd::Constant(4, 0.05);
+      p.addBoundsLevel("box", vars, c, lo, hi);
+    }
     const int m0 = 1 + static_cast<int>(seed % 3);
     Eigen::MatrixXd E(m0, n);
     for (int j = 0; j < n; ++j)
@@ -362,6 +370,9 @@ TEST(Solver, SplitCoordinatesGiveThePlainAnswer) {
     const Result r2 = solveOnce(s2, p, none);
     ASSERT_EQ(r0.status, Status::Solved) << "seed " << seed;
     ASSERT_EQ(r1.status, Status::Solved) << "seed " << seed;
+    EXPECT_FALSE(r0.split_applied);
+    applied += r1.split_applied ? 1 : 0;
+    EXPECT_FALSE(r2.split_applied) << "seed " << seed;
     EXPECT_LE((r1.x - r0.x).norm(), 1e-9 * (1 + r0.x.norm())) << "seed " << seed;
     for (int l = 0; l < p.levelCount(); ++l)
       EXPECT_NEAR(r1.violation_norm(l), r0.violation_norm(l), 1e-9 * (1 + r0.violation_norm(l))) << "seed " << seed;
@@ -377,6 +388,25 @@ TEST(Solver, SplitCoordinatesGiveThePlainAnswer) {
     ++checked;
   }
   EXPECT_EQ(checked, 120);
+  EXPECT_GE(applied, 100);  // the preferred elimination was taken (the rest: a bound fixed a preferred pivot)
+  // Preferred variables that would need large multipliers (threshold pivoting): the plain
+  // elimination instead, with the same answer.
+  {
+    Problem q(4);
+    q.addLevel("eq", mat(1, 4, {1, 1, 1e-5, 1e-5}), vec({1}), vec({1}));  // pivots pass, multipliers 1e5 do not
+    q.addLevel("t", mat(2, 4, {1, 0, 0, 0, 0, 0, 1, 0}), vec({0.3, 0.2}), vec({0.3, 0.2}));
+    appendMinNorm(q);
+    Options o;
+    o.split_from_variable = 2;
+    Solver sa, sb;
+    const Result ra = solveOnce(sa, q);
+    const Result& rb = solveOnce(sb, q, o);
+    EXPECT_FALSE(rb.split_applied);
+    EXPECT_LE((rb.x - ra.x).norm(), 1e-12);
+    o.split_from_variable = 1;  // variable 1 has a large coefficient: taken
+    Solver sc;
+    EXPECT_TRUE(solveOnce(sc, q, o).split_applied);
+  }
   Options bad;
   bad.split_from_variable = -2;
   EXPECT_THROW(bad.validate(), InputError);

@@ -48,6 +48,8 @@ class HlsFactorization {
   }
   /// Split coordinates from variable `from` on (-1: off; Options::split_from_variable).
   void setSplit(int from) { split_ = from; }
+  /// True when the last elimination took its basic variables from the split's preferred ones.
+  bool splitApplied() const { return elim_ && splitApplied_; }
   /// How the last level is factorised. Standard: like every other level (each earlier stage's
   /// reflectors are applied to its rows). Projected: its rows are kept in reduced coordinates
   /// and projected once onto the null space left by the earlier levels, Z^T a with Z formed
@@ -106,6 +108,7 @@ class HlsFactorization {
  private:
   bool tryEliminate();
   bool eliminateOnce(bool preferSplit);
+  void sortReducedVariables(int m0, int nr);
   bool updateElimination();
   void gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Eigen::MatrixXd& SB);
   int colGidTmp(int q) const { return tmpGid_[static_cast<size_t>(q)]; }
@@ -139,6 +142,7 @@ class HlsFactorization {
   // the lower part of G_ holds D^T = L2 L1^{-1} after factorisation.
   bool elimAllowed_ = false;
   int split_ = -1;
+  bool splitApplied_ = false;
   double elimTol_ = 1e-6;
   bool elim_ = false;
   int m0_ = 0;
@@ -146,7 +150,7 @@ class HlsFactorization {
   Eigen::MatrixXd G_;
   std::vector<int> varPerm_;  // position -> variable id; first m0_ basic, then reduced coordinates
   std::vector<char> isFree_, flag_;
-  std::vector<int> newOrder_, isFreeTmp_;
+  std::vector<int> newOrder_, varTmp_;
   Eigen::MatrixXd DTs_;
   bool elimDataValid_ = false;
   int nrElim_ = 0;
