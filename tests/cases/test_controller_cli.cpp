@@ -165,6 +165,14 @@ TEST(ControllerCli, TwoProcessesWriteBitIdenticalTracesButForTheWallTimes) {
   }
 }
 
+// The names of the files in `dir`, sorted.
+std::vector<std::string> sortedFileNames(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 // --dump-problems writes the solver problem of each tick in the window; the files load, solve
 // with lexdyn-solve to the trace's iteration count's status, and writing them leaves the run
 // unchanged. Misuse is bad input (exit code 2) naming the option or the directory.
@@ -177,9 +185,7 @@ TEST(ControllerCli, DumpProblemsWritesEachTicksProblemWithoutChangingTheRun) {
       harness("run " + pm + " --method bfgs --out " + dir + "/dumped --quiet --dump-problems " + dir + "/problems --dump-window 0.2:0.3", dir);
   ASSERT_EQ(dumped.code, plain.code) << dumped.err;
   // Ticks t = k dt with 0.2 <= t <= 0.3 (dt 5 ms): k = 40 ... 60, give or take the rounding of k dt.
-  std::vector<std::string> files;
-  for (const auto& e : std::filesystem::directory_iterator(dir + "/problems")) files.push_back(e.path().filename().string());
-  std::sort(files.begin(), files.end());
+  const std::vector<std::string> files = sortedFileNames(dir + "/problems");
   ASSERT_GE(files.size(), 20u);
   ASSERT_LE(files.size(), 21u);
   EXPECT_TRUE(files.front() == "tick_000040.json" || files.front() == "tick_000041.json") << files.front();
@@ -207,9 +213,7 @@ TEST(ControllerCli, DumpProblemsWritesEachTicksProblemWithoutChangingTheRun) {
                                      "/open_problems --dump-window 0.95:",
                                  dir);
   ASSERT_EQ(open.code, plain.code) << open.err;
-  std::vector<std::string> tail;
-  for (const auto& e : std::filesystem::directory_iterator(dir + "/open_problems")) tail.push_back(e.path().filename().string());
-  std::sort(tail.begin(), tail.end());
+  const std::vector<std::string> tail = sortedFileNames(dir + "/open_problems");
   ASSERT_GE(tail.size(), 9u);
   ASSERT_LE(tail.size(), 10u);
   EXPECT_EQ(tail.back(), "tick_000199.json");

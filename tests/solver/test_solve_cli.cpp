@@ -121,6 +121,16 @@ TEST(SolveCli, MissingFileAndUsage) {
   EXPECT_EQ(run("").code, 2);
 }
 
+// `lexdyn-solve OPTIONS --bench` on `count` copies of the valid problem; exits 0, its JSON.
+nlohmann::json benchOnCopies(const std::string& options, int count, CliRun* out = nullptr) {
+  std::string files;
+  for (int i = 0; i < count; ++i) files += " " + writeFile("copy" + std::to_string(i) + ".json", kValid);
+  const CliRun r = run("--bench " + options + files);
+  EXPECT_EQ(r.code, 0) << r.err;
+  if (out) *out = r;
+  return r.code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+}
+
 TEST(SolveCli, BenchReportsColdAndWarmStatistics) {
   const std::string a = writeFile("t0.json", kValid);
   const std::string b = writeFile("t1.json", kValid);
@@ -142,12 +152,9 @@ TEST(SolveCli, BenchReportsColdAndWarmStatistics) {
 }
 
 TEST(SolveCli, BenchRepeatsReportTheMinimumOfTheMedians) {
-  const std::string a = writeFile("r0.json", kValid);
-  const std::string b = writeFile("r1.json", kValid);
-  const std::string c = writeFile("r2.json", kValid);
-  const CliRun r = run("--bench --repeats 3 " + a + " " + b + " " + c);
-  ASSERT_EQ(r.code, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
+  CliRun r;
+  const auto j = benchOnCopies("--repeats 3", 3, &r);
+  ASSERT_FALSE(j.empty());
   EXPECT_EQ(j["repeats"], 3);
   for (const char* k : {"cold", "warm"}) {
     // The smallest of the repeats' medians is positive and at most the pooled median (if every
@@ -163,17 +170,13 @@ TEST(SolveCli, BenchRepeatsReportTheMinimumOfTheMedians) {
 }
 
 TEST(SolveCli, BenchWarmOnlySkipsTheColdSolves) {
-  const std::string a = writeFile("w0.json", kValid);
-  const std::string b = writeFile("w1.json", kValid);
-  const CliRun r = run("--bench --warm-only " + a + " " + b);
-  ASSERT_EQ(r.code, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
+  const auto j = benchOnCopies("--warm-only", 2);
+  ASSERT_FALSE(j.empty());
   EXPECT_FALSE(j.contains("cold"));
   EXPECT_EQ(j["warm"]["count"], 1);
   // A single file has no warm tick: no median to take the minimum of.
-  const CliRun one = run("--bench " + a);
-  ASSERT_EQ(one.code, 0) << one.err;
-  const auto j1 = nlohmann::json::parse(one.out);
+  const auto j1 = benchOnCopies("", 1);
+  ASSERT_FALSE(j1.empty());
   EXPECT_EQ(j1["warm"]["count"], 0);
   for (const char* f : {"median_us", "p99_us", "max_us", "min_repeat_median_us", "mean_iterations"})
     EXPECT_TRUE(j1["warm"][f].is_null()) << f;  // no figure rather than zeros
