@@ -709,9 +709,15 @@ void HlsFactorization::projectDeferredLevel(int k) {
   if (c0 == 0 || d == 0) return;  // no earlier reflector (Z = I), or nothing left to project on
   auto Z = Z_.block(0, 0, nr_, d);
   Z.setZero();
+  // A unit vector at or below every earlier stage's last row (split coordinates: a force
+  // coordinate that no velocity stage reaches) is left unchanged by all their reflectors, to the
+  // bit: each would add exact zeros. It is not multiplied through them.
+  int reach = 0;
+  for (int j = firstStage_; j < k; ++j)
+    if (rank_[z(j)] > 0) reach = std::max(reach, stageEnd_[z(j)]);
   for (int i = 0; i < d; ++i) {
     Z(c0 + i, i) = 1.0;
-    applyEarlierStagesQ(Z.col(i), k);
+    if (c0 + i < reach) applyEarlierStagesQ(Z.col(i), k);
   }
   // A row with a single nonzero v at reduced coordinate i (a regularisation row x_j = 0 on a
   // non-basic variable) projects to v Z(i, :) + 0: the same bits as the matrix product Z^T a,
