@@ -24,7 +24,7 @@ BUILD="$ROOT/build"
 METHOD=""
 DURATION=""
 lexdyn_options "[-n RUNS] [-b BUILD_DIR] [-m METHOD] [-d DURATION] [case.yaml ...]" n=RUNS b=BUILD m=METHOD d=DURATION -- "$@"
-[[ "$RUNS" =~ ^[1-9][0-9]*$ ]] || { echo "bench-sim.sh: -n: expected a positive number of runs, found '$RUNS'" >&2; exit 2; }
+lexdyn_positive_count "bench-sim.sh: -n" runs "$RUNS"
 lexdyn_cases "${LEXDYN_OPERANDS[@]}"
 lexdyn_harness bench-sim
 OUT="$(mktemp -d)"

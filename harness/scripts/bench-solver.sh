@@ -11,8 +11,8 @@ cd "$ROOT"
 REPEATS=3
 lexdyn_options "[-r REPEATS] [ticks]" r=REPEATS -- "$@"
 TICKS="${LEXDYN_OPERANDS[0]:-1000}"
-[[ "$REPEATS" =~ ^[1-9][0-9]*$ ]] || { echo "bench-solver.sh: -r: expected a positive number of repeats, found '$REPEATS'" >&2; exit 2; }
-[[ "$TICKS" =~ ^[1-9][0-9]*$ ]] || { echo "bench-solver.sh: expected a positive number of ticks, found '$TICKS'" >&2; exit 2; }
+lexdyn_positive_count "bench-solver.sh: -r" repeats "$REPEATS"
+lexdyn_positive_count "bench-solver.sh" ticks "$TICKS"
 [ -x build/bin/lexdyn-solve ] && [ -x build/bin/lexdyn-bench-solver-problems ] || harness/scripts/build.sh
 OUT=build/bench
 mkdir -p "$OUT"

@@ -34,6 +34,17 @@ inline void applyReflector(const Ess& ess, double tau, X&& x) {
 
 inline size_t z(int i) { return static_cast<size_t>(i); }
 
+// The one nonzero of v[0 .. n): its index; -1 when all are zero, -2 when there are several.
+int singleNonzero(const double* v, int n) {
+  int at = -1;
+  for (int i = 0; i < n; ++i) {
+    if (v[i] == 0.0) continue;
+    if (at >= 0) return -2;
+    at = i;
+  }
+  return at;
+}
+
 // Below this many reflectors, trailing updates apply them one by one (see factorLevel).
 constexpr int kDirectReflectors = LEXDYN_DIRECT_REFLECTORS;
 
@@ -371,17 +382,7 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Ei
     double* dst = SB.data() + i;
     for (int c = 0; c < cnt; ++c) dst[qs[c] * ldB] = col[rows[c]];
   }
-  for (int c = 0; c < cnt; ++c) {
-    const double* db = SB.col(qs[c]).data();
-    int nz = 0, last = -1;
-    for (int i = 0; i < m0_; ++i) {
-      if (db[i] != 0.0) {
-        ++nz;
-        last = i;
-      }
-    }
-    sparseB_[z(qs[c])] = (nz == 0) ? -1 : (nz == 1 ? last : -2);
-  }
+  for (int c = 0; c < cnt; ++c) sparseB_[z(qs[c])] = singleNonzero(SB.col(qs[c]).data(), m0_);
 }
 
 void HlsFactorization::applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int stages) const {
@@ -729,16 +730,9 @@ void HlsFactorization::projectDeferredLevel(int k) {
   // takes its matrix-product kernel (two or more rows, not a small coefficient-wise product).
   bool allSingle = m >= 2 && nr_ + d + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD;
   for (int j = 0; j < m && allSingle; ++j) {
-    const auto a = RawP_.col(j).head(nr_);
-    int nz = 0, at = -1;
-    for (int i = 0; i < nr_ && nz < 2; ++i) {
-      if (a(i) != 0.0) {
-        ++nz;
-        at = i;
-      }
-    }
-    allSingle = nz == 1;
-    if (allSingle) W_.col(s + j).segment(c0, d) = (a(at) * Z.row(at).transpose()).array() + 0.0;
+    const int at = singleNonzero(RawP_.col(j).data(), nr_);
+    allSingle = at >= 0;
+    if (allSingle) W_.col(s + j).segment(c0, d) = (RawP_(at, j) * Z.row(at).transpose()).array() + 0.0;
   }
   if (allSingle) return;
   auto P = P_.block(0, 0, d, m);

@@ -24,6 +24,12 @@ lexdyn_options() {
   LEXDYN_OPERANDS=("${@:OPTIND}")
 }
 
+# lexdyn_positive_count PREFIX WHAT VALUE: exits 2 with "PREFIX: expected a positive number of
+# WHAT, found 'VALUE'" unless VALUE is a positive integer.
+lexdyn_positive_count() {
+  [[ "$3" =~ ^[1-9][0-9]*$ ]] || { echo "$1: expected a positive number of $2, found '$3'" >&2; exit 2; }
+}
+
 # lexdyn_harness NAME [HINT]: HARNESS, the lexdyn-harness of $BUILD; exits 2 with
 # "NAME: ... not built[HINT]" when it is not there.
 lexdyn_harness() {
