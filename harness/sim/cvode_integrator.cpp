@@ -26,12 +26,19 @@
 #include <utility>
 #include <vector>
 
+// CVODE's difference-quotient Jacobian (cvode_ls.c). Not declared in SUNDIALS' public headers,
+// but an external symbol of the static library linked here (a SUNDIALS without it fails to
+// link). The block-elimination solver calls it from its own linear-system function, so that the
+// Jacobian has exactly the increments and bits of CVODE's own (docs/simulator.md, "Integrator").
+extern "C" int cvLsDQJac(realtype t, N_Vector y, N_Vector fy, SUNMatrix Jac, void* cvode_mem, N_Vector tmp1,
+                         N_Vector tmp2, N_Vector tmp3);
+
 namespace lexdyn::sim {
 
 namespace {
 
-// The direct solver of CVODE's Newton systems A x = b, A = I - gamma J (n x n, column-major, as
-// CVODE forms it from its difference-quotient Jacobian).
+// The direct solver of CVODE's Newton systems A x = b, A = I - gamma J (n x n), from CVODE's
+// difference-quotient Jacobian J (column-major, kept in CVODE's system matrix) and gamma.
 //
 // With a kinematic block of size p (y = [q; u], q the first p components) A is split as
 //   [A11 A12]   A11 = I - gamma dqdot/dq   (p x p: identity but for the rows whose rates
@@ -76,12 +83,23 @@ class NewtonSolver {
   long fullSetups() const { return full_setups_; }
   void resetCounters() { full_setups_ = 0; }
 
-  // Factorises A (column-major n x n). Returns false when A is singular (a zero pivot).
-  bool factor(const double* A) {
-    blocked_ = p_ > 0 && factorBlocked(A);
+  // The gamma of the next factorisation (set by the integrator's linear-system function).
+  void setGamma(double gamma) { gamma_ = gamma; }
+  // false: factor() receives I - gamma J as CVODE formed it (CVODE's own linear-system function).
+  void setFormsSystem(bool forms) { forms_system_ = forms; }
+
+  // Factorises A = I - gamma J for the Jacobian J (column-major n x n) and the gamma last set.
+  // Each entry of A is formed once, where it is read, as (-gamma) J_ij plus 1 on the diagonal:
+  // the same operations, in the same order, as CVODE's SUNMatScaleAddI on a copy of J, so the
+  // factors have the same bits without CVODE's copy and scaling of the whole matrix. Returns false
+  // when A is singular (a zero pivot).
+  bool factor(const double* J) {
+    const Eigen::Map<const Eigen::MatrixXd> jac(J, n_, n_);
+    blocked_ = p_ > 0 && factorBlocked(jac);
     if (blocked_) return true;
     ++full_setups_;
-    full_ = Eigen::Map<const Eigen::MatrixXd>(A, n_, n_);
+    full_ = scale() * jac;
+    addIdentity(full_);
     full_lu_.compute(full_);
     return nonsingular(full_lu_.matrixLU());
   }
@@ -111,6 +129,12 @@ class NewtonSolver {
  private:
   static constexpr double kMinBlockPivot = 0.25;
 
+  // With CVODE's own linear-system function the matrix handed to factor() already is A.
+  double scale() const { return forms_system_ ? -gamma_ : 1.0; }
+  void addIdentity(Eigen::MatrixXd& a) const {
+    if (forms_system_) a.diagonal().array() += 1.0;
+  }
+
   static bool nonsingular(const Eigen::MatrixXd& lu) {
     for (Eigen::Index k = 0; k < lu.rows(); ++k) {
       if (!(lu(k, k) != 0.0) || !std::isfinite(lu(k, k))) return false;
@@ -118,11 +142,14 @@ class NewtonSolver {
     return true;
   }
 
-  bool factorBlocked(const double* A) {
-    const Eigen::Map<const Eigen::MatrixXd> a(A, n_, n_);
+  // A = I - gamma J is formed blockwise as scale() J plus the identity on the diagonal blocks
+  // (addIdentity); the off-diagonal blocks of A have no identity part.
+  bool factorBlocked(const Eigen::Map<const Eigen::MatrixXd>& jac) {
+    const double c = scale();
     // LU of A11 with partial pivoting, skipping the zero entries of the multiplier column and
     // of the pivot row (for a near-identity A11 almost everything is skipped).
-    a11_ = a.topLeftCorner(p_, p_);
+    a11_ = c * jac.topLeftCorner(p_, p_);
+    addIdentity(a11_);
     for (int k = 0; k < p_; ++k) {
       int r = k;
       double best = std::abs(a11_(k, k));
@@ -180,7 +207,7 @@ class NewtonSolver {
     xval_.clear();
     for (int j = 0; j < m_; ++j) {
       xstart_[static_cast<size_t>(j)] = static_cast<int>(xrow_.size());
-      col_ = a.block(0, p_ + j, p_, 1);
+      col_ = c * jac.block(0, p_ + j, p_, 1);
       solveA11(col_.data());
       for (int i = 0; i < p_; ++i) {
         if (col_[i] != 0.0) {
@@ -191,8 +218,9 @@ class NewtonSolver {
     }
     xstart_[static_cast<size_t>(m_)] = static_cast<int>(xrow_.size());
     // S = A22 - A21 X.
-    a21_ = a.bottomLeftCorner(m_, p_);
-    s_ = a.bottomRightCorner(m_, m_);
+    a21_ = c * jac.bottomLeftCorner(m_, p_);
+    s_ = c * jac.bottomRightCorner(m_, m_);
+    addIdentity(s_);
     for (int j = 0; j < m_; ++j) {
       for (int e = xstart_[static_cast<size_t>(j)]; e < xstart_[static_cast<size_t>(j) + 1]; ++e) {
         s_.col(j) -= a21_.col(xrow_[static_cast<size_t>(e)]) * xval_[static_cast<size_t>(e)];
@@ -229,6 +257,8 @@ class NewtonSolver {
   }
 
   int n_, p_, m_;
+  double gamma_ = 0.0;
+  bool forms_system_ = true;
   bool blocked_ = false;
   long full_setups_ = 0;
   Eigen::MatrixXd full_;
@@ -335,6 +365,22 @@ struct CvodeIntegrator::Impl {
                        std::to_string(code) + "): " + (msg ? msg : "");
   }
 
+  // CVODE's linear-system function for the block-elimination solver: where CVODE's own copies its
+  // saved Jacobian into the system matrix and scales it to I - gamma J at every setup, this one
+  // keeps the Jacobian in the system matrix (a new difference-quotient Jacobian when CVODE asks
+  // for one, !jok) and hands gamma to the solver, which forms I - gamma J only where it reads it.
+  static int linearSystem(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, booleantype jok, booleantype* jcur,
+                          realtype gamma, void* user, N_Vector tmp1, N_Vector tmp2, N_Vector tmp3) {
+    Impl& self = *static_cast<Impl*>(user);
+    *jcur = jok ? SUNFALSE : SUNTRUE;
+    if (!jok) {
+      const int flag = cvLsDQJac(t, yv, fy, J, self.mem, tmp1, tmp2, tmp3);
+      if (flag != 0) return flag;
+    }
+    self.newton->setGamma(gamma);
+    return 0;
+  }
+
   void check(int flag, const char* what) {
     if (flag < 0) throw std::runtime_error(std::string("CVODE setup failed in ") + what + " (flag " + std::to_string(flag) + ")");
   }
@@ -384,6 +430,13 @@ CvodeIntegrator::CvodeIntegrator(OdeSystem& system, const CvodeSettings& setting
     m.LS->ops->free = lsFree;
   }
   m.check(CVodeSetLinearSolver(m.mem, m.LS, m.A), "CVodeSetLinearSolver");  // Newton iteration
+  if (m.newton) {
+    if (settings.own_linear_system) {
+      m.check(CVodeSetLinSysFn(m.mem, &Impl::linearSystem), "CVodeSetLinSysFn");
+    } else {
+      m.newton->setFormsSystem(false);
+    }
+  }
   m.check(CVodeSetMaxOrd(m.mem, settings.max_order), "CVodeSetMaxOrd");
   m.check(CVodeSetMaxNumSteps(m.mem, settings.max_steps), "CVodeSetMaxNumSteps");
   if (settings.max_step > 0.0) m.check(CVodeSetMaxStep(m.mem, settings.max_step), "CVodeSetMaxStep");

@@ -5,6 +5,8 @@
 // NewtonSolver): for a system y = [q; u] whose q block is kinematic (CvodeSettings::
 // kinematic_block) by eliminating the q block, otherwise by a dense LU of the whole matrix; or,
 // on request (CvodeSettings::linear_solver), by SUNDIALS' own dense LU (SUNLinSol_Dense).
+// The block-elimination solver forms I - gamma J itself, from CVODE's difference-quotient
+// Jacobian, instead of CVODE's copy and scaling of the whole matrix at every setup.
 // Integration is advanced to a given time with CVodeSetStopTime + CV_NORMAL, so CVODE never
 // steps past a control tick and keeps its history (order, step size, Jacobian) across ticks.
 #pragma once
@@ -49,6 +51,11 @@ struct CvodeSettings {
   int kinematic_block = 0;
   /// DenseLU ignores kinematic_block.
   LinearSolver linear_solver = LinearSolver::BlockElimination;
+  /// BlockElimination only: true (the default) hands the solver CVODE's Jacobian and gamma, and
+  /// the solver forms I - gamma J where it reads it; false lets CVODE copy its saved Jacobian and
+  /// scale it to I - gamma J at every setup. The same bits either way (a test compares them);
+  /// true saves the copy and the scaling of the whole n x n matrix.
+  bool own_linear_system = true;
 };
 
 struct CvodeStats {
