@@ -196,7 +196,7 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
                                         num(o.dual_tolerance) + ", stop_slack_norm " + num(o.stop_slack_norm) +
                                         ", stop_optimality_iterations " + std::to_string(o.stop_optimality_iterations) +
                                         ", stop_total_iterations " + std::to_string(o.stop_total_iterations) +
-                                        (o.split_from_variable != -1 ? ", split_force_coordinates true" : ""));
+                                        ", split_force_coordinates " + (o.split_from_variable != -1 ? "true" : "false"));
   std::string h;
   for (const auto& l : I.lx.hierarchy(I.lx.method)) {
     h += (h.empty() ? "" : " | ") + l.name + ":";

@@ -39,6 +39,14 @@ enum class MultiplierScale {
   One,  ///< lambda_ctrl itself (a sensitivity: 1/dt = 200 times larger second-order term)
 };
 
+/// The controller's solver options unless a case sets them: the solver's defaults, with split
+/// coordinates at the contact forces (Options::kSplitAtControllerForces).
+inline solver::Options defaultSolverOptions() {
+  solver::Options o;
+  o.split_from_variable = solver::Options::kSplitAtControllerForces;
+  return o;
+}
+
 struct ControllerParams {
   /// Name of a registered method (lexdyn/control/method.hpp, findMethod): "bfgs" (LexDynBFGS,
   /// sec. VI-A), "ah" (LexDynAH, sec. VI-B), "gn" (pure Gauss-Newton, Fig. 14), "wls" (the
@@ -82,7 +90,9 @@ struct ControllerParams {
   bool rank_switching = false;
   /// WLS: level-1 violation above this (relative) is a controller failure (the QP is infeasible).
   double wls_infeasibility_tolerance = 1e-6;
-  solver::Options solver;                   ///< e.g. solver::Options::paper(dt)
+  /// e.g. solver::Options::paper(dt). Default: the solver's defaults with split coordinates at
+  /// the contact forces (docs/solver.md, "Split coordinates"; docs/performance.md).
+  solver::Options solver = defaultSolverOptions();
   /// Name of a configured level: the solver's early-stop rules (paper_rules) apply only once it
   /// and the levels above it are optimal ("usually ... the contact constraints", sec. VIII-B;
   /// solver::Options::stop_after_level). Empty: they apply at any iteration.

@@ -176,6 +176,7 @@ detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)),
     velocity_limit[j] = J.velocity_limit;
     torque_limit[j] = J.effort_limit;
     joint_axis_local.push_back(J.axis);
+    joint_axis_unit.push_back(J.axis.normalized());
   }
 
   // Kinematic tree.
@@ -341,6 +342,8 @@ void RobotModel::update(ModelData& data, const Configuration& q, const Eigen::Re
   ModelData::Impl& d = data.impl();
   LEXDYN_ALWAYS_ASSERT(q.joints.size() == m.nj, "update: configuration has the wrong number of joints");
   LEXDYN_ALWAYS_ASSERT(u.size() == m.nv, "update: velocity has the wrong size");
+  // The Simbody state is kept current for the reference operators only; it is realized when one
+  // of them asks (detail::realizedState), not here.
   {
     SimTK::Vector& Q = d.state.updQ();
     if (m.free_flyer) {
@@ -356,33 +359,72 @@ void RobotModel::update(ModelData& data, const Configuration& q, const Eigen::Re
     SimTK::Vector& U = d.state.updU();
     for (int k = 0; k < m.nv; ++k) U[m.dof_u_index[static_cast<size_t>(k)]] = u[k];
   }
-  detail::realizeAndCache(m, d);
+  detail::computeKinematics(m, d, q, u);
 }
 
 namespace detail {
 
-void realizeAndCache(const RobotModelImpl& m, ModelDataImpl& d) {
+const SimTK::State& realizedState(const RobotModelImpl& m, const ModelDataImpl& d) {
   m.system.realize(d.state, SimTK::Stage::Velocity);
+  return d.state;
+}
 
-  for (int b = 0; b < m.nb; ++b) {
-    const SimTK::MobilizedBody& mb = m.matter.getMobilizedBody(m.mobod[static_cast<size_t>(b)]);
-    const SimTK::Transform& X = mb.getBodyTransform(d.state);
-    const SimTK::SpatialVec& V = mb.getBodyVelocity(d.state);
-    const SimTK::SpatialVec& A = m.matter.getTotalCoriolisAcceleration(d.state, m.mobod[static_cast<size_t>(b)]);
+void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configuration& q,
+                       const Eigen::Ref<const Eigen::VectorXd>& u) {
+  // Placements, velocities and velocity-product accelerations (Jdot u) of the bodies, root to
+  // leaves (parents come before their children). The free-flyer's u are the base's angular
+  // velocity and origin velocity in the world frame, so its Jdot u is zero; a joint sits at its
+  // child's origin with its axis fixed in both bodies.
+  if (m.free_flyer) {
+    d.R[0] = q.base_rotation;
+    d.p.col(0) = q.base_position;
+    d.omega.col(0) = u.head<3>();
+    d.v.col(0) = u.segment<3>(3);
+  } else {
+    d.R[0].setIdentity();
+    d.p.col(0).setZero();
+    d.omega.col(0).setZero();
+    d.v.col(0).setZero();
+  }
+  d.alpha_bias.col(0).setZero();
+  d.a_bias.col(0).setZero();
+  const int off = m.free_flyer ? 6 : 0;
+  for (int b = 1; b < m.nb; ++b) {
+    const int j = m.desc.links[static_cast<size_t>(b)].parent_joint;
+    const JointDescription& J = m.desc.joints[static_cast<size_t>(j)];
+    const int P = J.parent_link;
+    const Eigen::Matrix3d& RP = d.R[static_cast<size_t>(P)];
+    const Eigen::Matrix3d RJ = RP * J.origin.linear();
+    const Eigen::Vector3d& axis = m.joint_axis_unit[static_cast<size_t>(j)];
+    const double qj = q.joints[j];
+    const double uj = u[off + j];
+    const Eigen::Vector3d wP = d.omega.col(P);
+    const Eigen::Vector3d a = RJ * axis;  // world axis (the same in the joint and child frames)
     Eigen::Matrix3d& R = d.R[static_cast<size_t>(b)];
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) R(i, j) = X.R().asMat33()(i, j);
-      d.p(i, b) = X.p()[i];
-      d.omega(i, b) = V[0][i];
-      d.v(i, b) = V[1][i];
-      d.alpha_bias(i, b) = A[0][i];
-      d.a_bias(i, b) = A[1][i];
+    Eigen::Vector3d r = RP * J.origin.translation();
+    if (J.type == JointType::Revolute) {
+      R.noalias() = RJ * Eigen::AngleAxisd(qj, axis).toRotationMatrix();
+      d.omega.col(b) = wP + a * uj;
+      d.alpha_bias.col(b) = d.alpha_bias.col(P) + wP.cross(a * uj);
+    } else {
+      R = RJ;
+      r += a * qj;
+      d.omega.col(b) = wP;
+      d.alpha_bias.col(b) = d.alpha_bias.col(P);
     }
-    d.com.col(b) = d.p.col(b) + R * m.desc.links[static_cast<size_t>(b)].com;
+    d.p.col(b) = d.p.col(P) + r;
+    d.v.col(b) = d.v.col(P) + wP.cross(r);
+    d.a_bias.col(b) = d.a_bias.col(P) + d.alpha_bias.col(P).cross(r) + wP.cross(wP.cross(r));
+    if (J.type != JointType::Revolute) {
+      d.v.col(b) += a * uj;
+      d.a_bias.col(b) += 2.0 * wP.cross(a * uj);
+    }
+  }
+  for (int b = 0; b < m.nb; ++b) {
+    d.com.col(b) = d.p.col(b) + d.R[static_cast<size_t>(b)] * m.desc.links[static_cast<size_t>(b)].com;
   }
 
   // Motion subspaces at the world origin: revolute [a; o x a], prismatic [0; a].
-  const int off = m.free_flyer ? 6 : 0;
   if (m.free_flyer) {
     const Eigen::Vector3d o = d.p.col(0);
     for (int k = 0; k < 3; ++k) {
@@ -719,7 +761,7 @@ void gravityBodyForces(const detail::RobotModelImpl& m, const detail::ModelDataI
 void RobotModel::massMatrixReference(const ModelData& data, Eigen::Ref<Eigen::MatrixXd> M) const {
   const Impl& m = *impl_;
   SimTK::Matrix Ms;
-  m.matter.calcM(data.impl().state, Ms);
+  m.matter.calcM(detail::realizedState(m, data.impl()), Ms);
   for (int i = 0; i < m.nv; ++i)
     for (int j = 0; j < m.nv; ++j) M(i, j) = Ms(m.dof_u_index[static_cast<size_t>(i)], m.dof_u_index[static_cast<size_t>(j)]);
 }
@@ -732,7 +774,7 @@ void RobotModel::inverseDynamicsReference(const ModelData& data, const Eigen::Re
   gravityBodyForces(m, d, F);
   SimTK::Vector ud(m.simbody_nu), resid;
   for (int k = 0; k < m.nv; ++k) ud[m.dof_u_index[static_cast<size_t>(k)]] = udot[k];
-  m.matter.calcResidualForceIgnoringConstraints(d.state, SimTK::Vector(), F, ud, resid);
+  m.matter.calcResidualForceIgnoringConstraints(detail::realizedState(m, d), SimTK::Vector(), F, ud, resid);
   for (int k = 0; k < m.nv; ++k) tau[k] = resid[m.dof_u_index[static_cast<size_t>(k)]];
 }
 
@@ -754,7 +796,7 @@ void RobotModel::frameJacobianReference(const ModelData& data, FrameId f, Eigen:
   const Impl& m = *impl_;
   const FrameDescription& F = m.desc.frames[static_cast<size_t>(f)];
   SimTK::Matrix Js;
-  m.matter.calcFrameJacobian(data.impl().state, m.mobod[static_cast<size_t>(F.link)],
+  m.matter.calcFrameJacobian(detail::realizedState(m, data.impl()), m.mobod[static_cast<size_t>(F.link)],
                              toSimTK(F.placement.translation()), Js);
   for (int k = 0; k < m.nv; ++k) {
     const int c = m.dof_u_index[static_cast<size_t>(k)];
@@ -766,7 +808,7 @@ void RobotModel::frameJacobianReference(const ModelData& data, FrameId f, Eigen:
 }
 
 Eigen::Vector3d RobotModel::centerOfMassReference(const ModelData& data) const {
-  return toEigen(impl_->matter.calcSystemMassCenterLocationInGround(data.impl().state));
+  return toEigen(impl_->matter.calcSystemMassCenterLocationInGround(detail::realizedState(*impl_, data.impl())));
 }
 
 }  // namespace lexdyn::model

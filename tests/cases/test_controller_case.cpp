@@ -89,6 +89,10 @@ TEST(ControllerCase, RepositoryCasesLoadWithEveryMethod) {
     EXPECT_GT(e.trajectory.samples(), 100);
   }
   EXPECT_TRUE(trajectory);
+  // Split coordinates are the controller's default: exp1 does not set them, with paper_rules.
+  const CaseSpec exp1 = loadCase(src("cases/exp1.yaml"));
+  EXPECT_EQ(exp1.controller.lexdyn.params.solver.split_from_variable, solver::Options::kSplitAtControllerForces);
+  EXPECT_GT(exp1.controller.lexdyn.params.solver.stop_total_iterations, 0);  // paper_rules kept
 }
 
 TEST(ControllerCase, EveryTaskTypeIsBuiltWithEveryParamsField) {
@@ -118,11 +122,11 @@ TEST(ControllerCase, EveryTaskTypeIsBuiltWithEveryParamsField) {
   s["e_controller"] = lexdynController("bfgs", extra);
   const std::string solverFrom = "  solver: {paper_rules: true}\n";
   s["e_controller"].replace(s["e_controller"].find(solverFrom), solverFrom.size(),
-                            "  solver: {paper_rules: true, last_level_projection: never, split_force_coordinates: true}\n");
+                            "  solver: {paper_rules: true, last_level_projection: never, split_force_coordinates: false}\n");
   const CaseSpec c = loadCase(writeCase(outputDir("controller_case_registry"), s));
   const LexdynSpec& lx = c.controller.lexdyn;
   EXPECT_EQ(lx.params.solver.last_level_projection, solver::Options::LastLevel::Never);
-  EXPECT_EQ(lx.params.solver.split_from_variable, solver::Options::kSplitAtControllerForces);
+  EXPECT_EQ(lx.params.solver.split_from_variable, -1);
   EXPECT_EQ(lx.params.solver.stop_total_iterations, 30);
   auto task = [&](const std::string& n) -> const TaskSpec& { return lx.tasks[static_cast<size_t>(lx.findTask(n))]; };
   EXPECT_EQ(task("jl").paramsAs<tasks::JointLimitsParams>().interaction_fraction, 0.2);

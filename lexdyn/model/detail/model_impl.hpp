@@ -51,11 +51,12 @@ struct RobotModelImpl {
   std::vector<std::string> joint_names;
   Eigen::VectorXd lower, upper, velocity_limit, torque_limit;
   std::vector<Eigen::Vector3d> joint_axis_local;  // per joint, in the child body frame
+  std::vector<Eigen::Vector3d> joint_axis_unit;   // the same, normalised (as Simbody's mobilizers)
   std::vector<std::vector<int>> children;         // per body
 };
 
 struct ModelDataImpl {
-  SimTK::State state;
+  mutable SimTK::State state;  // q and u of the last update; realized on demand (realizedState)
   bool updated = false;
   // Per body (world frame).
   std::vector<Eigen::Matrix3d> R;     // R_world_body
@@ -77,8 +78,12 @@ struct ModelDataImpl {
   SimTK::Vector_<SimTK::SpatialVec> simbody_body_forces;
 };
 
-/// Realizes Velocity and fills the kinematic caches of `d`.
-void realizeAndCache(const RobotModelImpl& m, ModelDataImpl& d);
+/// Fills the kinematic caches of `d` for (q, u) (our own recursion; Simbody is not realized).
+void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configuration& q,
+                       const Eigen::Ref<const Eigen::VectorXd>& u);
+
+/// d.state realized to Velocity (for the Simbody reference operators).
+const SimTK::State& realizedState(const RobotModelImpl& m, const ModelDataImpl& d);
 
 }  // namespace detail
 
