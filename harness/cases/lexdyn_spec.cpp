@@ -54,10 +54,7 @@ void readParams(yaml::StrictMap& pm, control::ControllerParams& p) {
 solver::Options readSolver(yaml::StrictMap& sm, double dt) {
   solver::Options o = control::defaultSolverOptions();
   if (auto v = sm.optional("paper_rules")) {
-    if (v->asBool()) {
-      o = solver::Options::paper(dt);
-      o.split_from_variable = control::defaultSolverOptions().split_from_variable;
-    }
+    if (v->asBool()) o = control::paperSolverOptions(dt);
   }
   auto positiveInt = [](const yaml::Node& n) { return n.asIntIn(1, R::kMaxSolverIterations); };
   auto nonNegativeInt = [](const yaml::Node& n) { return n.asIntIn(0, R::kMaxSolverIterations); };

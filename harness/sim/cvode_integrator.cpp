@@ -32,6 +32,8 @@
 // Jacobian has exactly the increments and bits of CVODE's own (docs/simulator.md, "Integrator").
 extern "C" int cvLsDQJac(realtype t, N_Vector y, N_Vector fy, SUNMatrix Jac, void* cvode_mem, N_Vector tmp1,
                          N_Vector tmp2, N_Vector tmp3);
+static_assert(SUNDIALS_VERSION_MAJOR == 6,
+              "cvLsDQJac's signature and CVODE's linear-system function are those of SUNDIALS 6: check them");
 
 namespace lexdyn::sim {
 
@@ -324,6 +326,7 @@ struct CvodeIntegrator::Impl {
   SUNMatrix A = nullptr;
   SUNLinearSolver LS = nullptr;
   std::unique_ptr<NewtonSolver> newton;
+  bool jacobian_incomplete = false;  // the last difference-quotient Jacobian failed part-way
   void* mem = nullptr;
   double t = 0.0;
   std::string message;       // last failure
@@ -372,10 +375,15 @@ struct CvodeIntegrator::Impl {
   static int linearSystem(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, booleantype jok, booleantype* jcur,
                           realtype gamma, void* user, N_Vector tmp1, N_Vector tmp2, N_Vector tmp3) {
     Impl& self = *static_cast<Impl*>(user);
-    *jcur = jok ? SUNFALSE : SUNTRUE;
-    if (!jok) {
+    // A difference quotient that failed part-way leaves J with columns of two Jacobians (CVODE's
+    // own function would still hold its last saved one): the next setup forms a new one.
+    const bool fresh = !jok || self.jacobian_incomplete;
+    *jcur = fresh ? SUNTRUE : SUNFALSE;
+    if (fresh) {
+      self.jacobian_incomplete = true;
       const int flag = cvLsDQJac(t, yv, fy, J, self.mem, tmp1, tmp2, tmp3);
       if (flag != 0) return flag;
+      self.jacobian_incomplete = false;
     }
     self.newton->setGamma(gamma);
     return 0;

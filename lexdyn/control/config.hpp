@@ -47,6 +47,14 @@ inline solver::Options defaultSolverOptions() {
   return o;
 }
 
+/// solver::Options::paper(dt) (the paper's early-stop rules) with the controller's split
+/// coordinates, as `solver: {paper_rules: true}` in a case.
+inline solver::Options paperSolverOptions(double dt) {
+  solver::Options o = solver::Options::paper(dt);
+  o.split_from_variable = defaultSolverOptions().split_from_variable;
+  return o;
+}
+
 struct ControllerParams {
   /// Name of a registered method (lexdyn/control/method.hpp, findMethod): "bfgs" (LexDynBFGS,
   /// sec. VI-A), "ah" (LexDynAH, sec. VI-B), "gn" (pure Gauss-Newton, Fig. 14), "wls" (the
@@ -90,8 +98,9 @@ struct ControllerParams {
   bool rank_switching = false;
   /// WLS: level-1 violation above this (relative) is a controller failure (the QP is infeasible).
   double wls_infeasibility_tolerance = 1e-6;
-  /// e.g. solver::Options::paper(dt). Default: the solver's defaults with split coordinates at
-  /// the contact forces (docs/solver.md, "Split coordinates"; docs/performance.md).
+  /// Default: the solver's defaults with split coordinates at the contact forces
+  /// (defaultSolverOptions; docs/solver.md, "Split coordinates"); the paper's rules:
+  /// paperSolverOptions(dt).
   solver::Options solver = defaultSolverOptions();
   /// Name of a configured level: the solver's early-stop rules (paper_rules) apply only once it
   /// and the levels above it are optimal ("usually ... the contact constraints", sec. VIII-B;

@@ -175,8 +175,7 @@ detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)),
     upper[j] = J.upper;
     velocity_limit[j] = J.velocity_limit;
     torque_limit[j] = J.effort_limit;
-    joint_axis_local.push_back(J.axis);
-    joint_axis_unit.push_back(J.axis.normalized());
+    joint_axis_local.push_back(J.axis.normalized());
   }
 
   // Kinematic tree.
@@ -328,10 +327,9 @@ ModelData RobotModel::createData() const {
   d->point.setZero(3, m.nv);
   d->composite.assign(static_cast<size_t>(m.nb), Matrix6d::Zero());
   d->wrench.setZero(6, m.nb);
-  d->simbody_u.resize(m.simbody_nu);
-  d->simbody_body_forces.resize(m.matter.getNumBodies());
   ModelData data(std::move(d));
-  // One update so that every lazily allocated Simbody cache exists before the first tick.
+  // One update so that the caches hold a valid state (Simbody's own caches are allocated when a
+  // reference operator first realizes the state).
   const Configuration q0 = neutralConfiguration();
   update(data, q0, Eigen::VectorXd::Zero(m.nv));
   return data;
@@ -395,7 +393,7 @@ void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configur
     const int P = J.parent_link;
     const Eigen::Matrix3d& RP = d.R[static_cast<size_t>(P)];
     const Eigen::Matrix3d RJ = RP * J.origin.linear();
-    const Eigen::Vector3d& axis = m.joint_axis_unit[static_cast<size_t>(j)];
+    const Eigen::Vector3d& axis = m.joint_axis_local[static_cast<size_t>(j)];
     const double qj = q.joints[j];
     const double uj = u[off + j];
     const Eigen::Vector3d wP = d.omega.col(P);

@@ -73,9 +73,10 @@ struct Options {
   /// the velocities), falling back to the plain pivoting when they are not well conditioned; the
   /// reduced variables keep their order; and each level's stage works only on the rows its
   /// active rows reach. A level over velocities only then leaves the force coordinates alone.
-  /// Exact up to rounding either way; it changes the rounding. A case asks for it with
-  /// `solver: {split_force_coordinates: true}`, which the controller turns into its number of
-  /// velocities (kSplitAtControllerForces until then).
+  /// Exact up to rounding either way; it changes the rounding. Off in these defaults; on in the
+  /// controller's (control::defaultSolverOptions: kSplitAtControllerForces, which the controller
+  /// turns into its number of velocities); a case turns it off with
+  /// `solver: {split_force_coordinates: false}`.
   int split_from_variable = -1;
   static constexpr int kSplitAtControllerForces = -2;
   /// How the last general level is factorised. Never: like the others (every earlier stage's

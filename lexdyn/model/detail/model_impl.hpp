@@ -50,13 +50,15 @@ struct RobotModelImpl {
   KinematicTree tree;
   std::vector<std::string> joint_names;
   Eigen::VectorXd lower, upper, velocity_limit, torque_limit;
-  std::vector<Eigen::Vector3d> joint_axis_local;  // per joint, in the child body frame
-  std::vector<Eigen::Vector3d> joint_axis_unit;   // the same, normalised (as Simbody's mobilizers)
+  std::vector<Eigen::Vector3d> joint_axis_local;  // per joint, in the child body frame, normalised
+                                                  // (as Simbody's mobilizers take it)
   std::vector<std::vector<int>> children;         // per body
 };
 
 struct ModelDataImpl {
-  mutable SimTK::State state;  // q and u of the last update; realized on demand (realizedState)
+  // q and u of the last update, realized on demand (realizedState) by the const reference
+  // operators: they write Simbody's cache, so one ModelData is not for concurrent use.
+  mutable SimTK::State state;
   bool updated = false;
   // Per body (world frame).
   std::vector<Eigen::Matrix3d> R;     // R_world_body
@@ -74,8 +76,6 @@ struct ModelDataImpl {
   // Workspaces.
   std::vector<Matrix6d> composite;                 // composite spatial inertia (world origin)
   Eigen::Matrix<double, 6, Eigen::Dynamic> wrench; // subtree wrench (world origin)
-  SimTK::Vector simbody_u;                         // reference operators
-  SimTK::Vector_<SimTK::SpatialVec> simbody_body_forces;
 };
 
 /// Fills the kinematic caches of `d` for (q, u) (our own recursion; Simbody is not realized).
