@@ -10,6 +10,8 @@
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/control/method.hpp"
 #include "lexdyn/hessian/kinematic_hessian.hpp"
+#include "lexdyn/tasks/contact_jacobian.hpp"
+#include "lexdyn/tasks/equation_of_motion.hpp"
 
 namespace lexdyn::control {
 
@@ -59,6 +61,8 @@ struct Controller::Impl {
   Eigen::VectorXd N;
   tasks::TickContext ctx;
   Eigen::MatrixXd Jp;                       // 3 x nv point Jacobian
+  Eigen::MatrixXd JcT;                      // nv x ng, shared by the dynamics tasks (ctx.JcT)
+  bool sharedJcT = false;                   // more than one used dynamics task
   Eigen::Matrix<double, 3, 4> D;
   Eigen::VectorXd genForce;                 // nv
   Command cmd;
@@ -108,6 +112,16 @@ Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&
   N.setZero(nv);
   Jp.setZero(3, nv);
   genForce.setZero(nv);
+  // Jc^T is the same for every dynamics task of a tick (the unactuated and the actuated rows of
+  // eq. 86): computed once when more than one is used.
+  int dynamicsTasks = 0;
+  for (size_t i = 0; i < cfg.tasks.size(); ++i)
+    if (used[i] && dynamic_cast<const tasks::DynamicsTask*>(cfg.tasks[i].get()) != nullptr) ++dynamicsTasks;
+  sharedJcT = dynamicsTasks > 1;
+  if (sharedJcT) {
+    JcT.setZero(nv, layout.ng());
+    ctx.JcT = &JcT;
+  }
   ctx.model = model;
   ctx.data = &data;
   ctx.contacts = &layout;
@@ -328,6 +342,7 @@ const Command& Controller::tick(const RobotState& s) {
   const auto t1 = Clock::now();
   if (I.hws) I.hws->update(*I.model, I.data);
   // 2. Tasks.
+  if (I.sharedJcT) tasks::contactJacobianTranspose(I.ctx, I.Jp, I.JcT);
   for (size_t i = 0; i < I.td.size(); ++i)
     if (I.used[i]) I.cfg.tasks[i]->compute(I.ctx, *I.td[i]);
   I.fillRows();

@@ -20,9 +20,11 @@ void DynamicsTask::writeDynamicsRows(const TickContext& ctx, DynamicsTaskData& d
   const Eigen::MatrixXd& M = *ctx.M;
   const int ng = ctx.contacts->ng();
   LEXDYN_ALWAYS_ASSERT(M.rows() == nv_ && ctx.N->size() == nv_ && d.JcT.cols() == ng, "dynamics rows: sizes");
-  contactJacobianTranspose(ctx, d.Jp, d.JcT);
+  if (ctx.JcT == nullptr) contactJacobianTranspose(ctx, d.Jp, d.JcT);
+  const Eigen::MatrixXd& JcT = ctx.JcT != nullptr ? *ctx.JcT : d.JcT;
+  LEXDYN_ALWAYS_ASSERT(JcT.rows() == nv_ && JcT.cols() == ng, "dynamics rows: shared Jc^T size");
   d.A.leftCols(nv_) = M.middleRows(first_, rows_);  // eq. 86: [M, -Jc^T] (tau substituted out)
-  d.A.rightCols(ng) = -d.JcT.middleRows(first_, rows_);
+  d.A.rightCols(ng) = -JcT.middleRows(first_, rows_);
 }
 
 EquationOfMotionTask::EquationOfMotionTask(std::string name, const model::RobotModel& model)

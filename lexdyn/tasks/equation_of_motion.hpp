@@ -28,8 +28,8 @@ class DynamicsTask : public TaskModel {
 
  protected:
   DynamicsTask(std::string name, const model::RobotModel& model, int first, int rows);
-  /// d.JcT = Jc^T (contact_jacobian.hpp), d.A = the task's rows of [M, -Jc^T] (eq. 86).
-  /// Allocation-free.
+  /// d.A = the task's rows of [M, -Jc^T] (eq. 86), with the tick's shared ctx.JcT or, without
+  /// one, d.JcT = Jc^T computed here (contact_jacobian.hpp). Allocation-free.
   void writeDynamicsRows(const TickContext& ctx, DynamicsTaskData& d) const;
 
   int nv_ = 0, first_ = 0, rows_ = 0;

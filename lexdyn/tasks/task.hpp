@@ -90,6 +90,9 @@ struct TickContext {
   /// Shared per-tick quantities computed once by the controller before the tasks.
   const Eigen::MatrixXd* M = nullptr;     ///< mass matrix (nv x nv)
   const Eigen::VectorXd* N = nullptr;     ///< Coriolis + gravity (nv)
+  /// Jc^T of the active contacts (nv x ng, contactJacobianTranspose), when the controller computed
+  /// it for this tick; null: each dynamics task computes its own.
+  const Eigen::MatrixXd* JcT = nullptr;
   /// Dof axes and subtree CoMs updated at this tick (KinematicHessianWorkspace::update); needed
   /// only by accumulateHessian() of geometric tasks (LexDynAH).
   const hessian::KinematicHessianWorkspace* hessian = nullptr;
