@@ -7,10 +7,14 @@
 
 namespace lexdyn::control::methods {
 
-ReservedRows clearReservedRows(solver::Problem& problem, const SolverLevel& level, int nv) {
+ReservedRows clearReservedRows(solver::Problem& problem, const SolverLevel& level, int nv, int written) {
   solver::Level& pl = problem.level(level.problem_level);
   ReservedRows r{pl.A.middleRows(level.spare_row, nv), pl.lower.segment(level.spare_row, nv), pl.upper.segment(level.spare_row, nv)};
-  r.A.setZero();
+  if (written < 0) {
+    r.A.setZero();
+  } else {
+    r.A.topLeftCorner(written, nv).setZero();
+  }
   r.lower.setConstant(-solver::kInf);
   r.upper.setConstant(solver::kInf);
   return r;
@@ -106,7 +110,10 @@ void VelocityDomainMethod::setup(const MethodSetup& s) {
 
 void VelocityDomainMethod::reset() {
   have_prev_ = false;
-  for (NewtonLevel& a : lv_) std::fill(a.occupied.begin(), a.occupied.end(), 0);
+  for (NewtonLevel& a : lv_) {
+    std::fill(a.occupied.begin(), a.occupied.end(), 0);
+    a.written_rows = -1;
+  }
   resetLevels();
 }
 
@@ -132,7 +139,9 @@ void VelocityDomainMethod::addRows(const MethodTick& tick, solver::Problem& prob
   for (size_t k = 0; k < lv_.size(); ++k) {
     NewtonLevel& a = lv_[k];
     const SolverLevel& L = tick.levels[z(a.level)];
-    ReservedRows spare = clearReservedRows(problem, L, nv);
+    // Only the rows written at the last tick need zeroing (most levels are not augmented).
+    ReservedRows spare = clearReservedRows(problem, L, nv, a.written_rows);
+    a.written_rows = 0;
 
     // Occupied dofs (the I* of eq. 89, sec. VII): the chains of the geometric tasks of this level
     // and earlier ones that constrain the solution (equalities always, inequalities while engaged).
@@ -144,6 +153,7 @@ void VelocityDomainMethod::addRows(const MethodTick& tick, solver::Problem& prob
     // Constant Levenberg-Marquardt damping (eq. 81).
     if (p.damping > 0.0) {
       writeDampingRows(spare, p.damping, &a.occupied);
+      a.written_rows = nv;
       rec.level_augmented[z(L.config_level)] = 1;
       int m = 0;
       for (char o : a.occupied) m += o ? 1 : 0;
@@ -170,6 +180,7 @@ void VelocityDomainMethod::addRows(const MethodTick& tick, solver::Problem& prob
     }
     if (!augment) continue;
     const int rows = factorLevel(k, a, R_);
+    a.written_rows = rows;
     for (int r = 0; r < rows; ++r) {
       spare.A.row(r).head(nv) = R_.row(r);
       const double target = (p.newton_target == NewtonTarget::PreviousVelocity) ? R_.row(r).dot(tick.state.u) : 0.0;  // eq. 62 / 35

@@ -29,8 +29,10 @@ struct ReservedRows {
   Eigen::MatrixXd::RowsBlockXpr A;
   Eigen::VectorXd::SegmentReturnType lower, upper;
 };
-/// Views the level's reserved rows and frees them (0 x in [-inf, inf]).
-ReservedRows clearReservedRows(solver::Problem& problem, const SolverLevel& level, int nv);
+/// Views the level's reserved rows and frees them (0 x in [-inf, inf]). `written` >= 0: only the
+/// first `written` rows' first nv columns can be nonzero (what the caller wrote since the rows
+/// were last cleared), so only they are zeroed; -1: every entry is.
+ReservedRows clearReservedRows(solver::Problem& problem, const SolverLevel& level, int nv, int written = -1);
 /// Levenberg-Marquardt rows mu v = 0 (eq. 50, 81) on the dofs in `mask` (every dof when null),
 /// in order, from the first reserved row.
 void writeDampingRows(ReservedRows& rows, double mu, const std::vector<char>* mask);
@@ -48,6 +50,8 @@ struct NewtonLevel {
   int level = -1;               ///< index into the controller's solver levels
   std::vector<GeomTerm> terms;  ///< geometric tasks of this level and of every earlier level
   std::vector<char> occupied;   ///< the I* of eq. 89, sec. VII (this tick)
+  /// Reserved rows written at the last tick (on the velocity columns only); -1: not known.
+  int written_rows = -1;
 };
 
 /// The Gauss-Newton term of a level's own task rows: the rows of the tasks of `level` with a
