@@ -340,29 +340,31 @@ void RobotModel::update(ModelData& data, const Configuration& q, const Eigen::Re
   ModelData::Impl& d = data.impl();
   LEXDYN_ALWAYS_ASSERT(q.joints.size() == m.nj, "update: configuration has the wrong number of joints");
   LEXDYN_ALWAYS_ASSERT(u.size() == m.nv, "update: velocity has the wrong size");
-  // The Simbody state is kept current for the reference operators only; it is realized when one
-  // of them asks (detail::realizedState), not here.
-  {
-    SimTK::Vector& Q = d.state.updQ();
-    if (m.free_flyer) {
-      const Eigen::Vector3d e = eulerXYZFromRotation(q.base_rotation);
-      for (int k = 0; k < 3; ++k) {
-        Q[m.base_q_index + k] = e[k];
-        Q[m.base_q_index + 3 + k] = q.base_position[k];
-      }
-    }
-    for (int j = 0; j < m.nj; ++j) Q[m.joint_q_index[static_cast<size_t>(j)]] = q.joints[j];
-  }
-  {
-    SimTK::Vector& U = d.state.updU();
-    for (int k = 0; k < m.nv; ++k) U[m.dof_u_index[static_cast<size_t>(k)]] = u[k];
-  }
+  // The Simbody state is for the reference operators only: q and u are kept, and written into it
+  // when one of them asks (detail::realizedState), not here.
+  d.q = q;  // same sizes: no allocation
+  d.u = u;
+  d.state_current = false;
   detail::computeKinematics(m, d, q, u);
 }
 
 namespace detail {
 
 const SimTK::State& realizedState(const RobotModelImpl& m, const ModelDataImpl& d) {
+  if (!d.state_current) {
+    SimTK::Vector& Q = d.state.updQ();
+    if (m.free_flyer) {
+      const Eigen::Vector3d e = eulerXYZFromRotation(d.q.base_rotation);
+      for (int k = 0; k < 3; ++k) {
+        Q[m.base_q_index + k] = e[k];
+        Q[m.base_q_index + 3 + k] = d.q.base_position[k];
+      }
+    }
+    for (int j = 0; j < m.nj; ++j) Q[m.joint_q_index[static_cast<size_t>(j)]] = d.q.joints[j];
+    SimTK::Vector& U = d.state.updU();
+    for (int k = 0; k < m.nv; ++k) U[m.dof_u_index[static_cast<size_t>(k)]] = d.u[k];
+    d.state_current = true;
+  }
   m.system.realize(d.state, SimTK::Stage::Velocity);
   return d.state;
 }
@@ -780,6 +782,7 @@ void RobotModel::forwardDynamicsReference(ModelData& data, const Eigen::Ref<cons
                                           Eigen::Ref<Eigen::VectorXd> udot) const {
   const Impl& m = *impl_;
   ModelData::Impl& d = data.impl();
+  detail::realizedState(m, d);
   m.system.realize(d.state, SimTK::Stage::Dynamics);
   SimTK::Vector_<SimTK::SpatialVec> F;
   gravityBodyForces(m, d, F);

@@ -56,9 +56,12 @@ struct RobotModelImpl {
 };
 
 struct ModelDataImpl {
-  // q and u of the last update, realized on demand (realizedState) by the const reference
-  // operators: they write Simbody's cache, so one ModelData is not for concurrent use.
+  // The Simbody state of q and u, written and realized on demand (realizedState) by the const
+  // reference operators: they write it, so one ModelData is not for concurrent use.
   mutable SimTK::State state;
+  Configuration q;                   // of the last update
+  Eigen::VectorXd u;
+  mutable bool state_current = false;  // `state` holds q and u
   bool updated = false;
   // Per body (world frame).
   std::vector<Eigen::Matrix3d> R;     // R_world_body
