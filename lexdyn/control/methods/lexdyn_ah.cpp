@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "lexdyn/control/methods/detail/velocity_domain.hpp"
+#include "lexdyn/common/error.hpp"
 #include "lexdyn/hessian/higham.hpp"
 
 namespace lexdyn::control::methods {
@@ -25,9 +26,17 @@ class LexDynAh final : public VelocityDomainMethod {
  protected:
   bool newtonRows() const override { return true; }
 
+  // The analytic Hessian is needed only by a level that switches to Newton at this tick (most
+  // do not): prepareLevel() notes what to build it from, factorLevel() builds it.
   void prepareLevel(size_t k, NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda,
                     TickRecord& rec) override {
-    (void)k, (void)rec;
+    (void)k, (void)a, (void)rec;
+    pending_level_ = &L;
+    pending_tick_ = &tick;
+    pending_have_lambda_ = have_lambda;
+  }
+
+  void buildHessian(const NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda) {
     const double dt2 = params_.dt * params_.dt;
     // eq. 21, skipping |lambda| <= rho.
     H_.setZero();
@@ -51,6 +60,10 @@ class LexDynAh final : public VelocityDomainMethod {
 
   int factorLevel(size_t k, NewtonLevel& a, Eigen::MatrixXd& R) override {
     (void)k;
+    LEXDYN_ALWAYS_ASSERT(pending_level_ != nullptr && pending_tick_ != nullptr, "LexDynAH: factorLevel without prepareLevel");
+    buildHessian(a, *pending_level_, *pending_tick_, pending_have_lambda_);
+    pending_level_ = nullptr;
+    pending_tick_ = nullptr;
     const double dt2 = params_.dt * params_.dt;
     // eq. 91: Higham's nearest PSD matrix plus (eps + alpha) I* on the occupied dofs.
     return higham_.regularizeAndFactor(H_, a.occupied, params_.eps_dt2 * dt2 + params_.newton_identity_weight, R, occ_list_);
@@ -59,6 +72,9 @@ class LexDynAh final : public VelocityDomainMethod {
  private:
   Eigen::MatrixXd H_;
   std::vector<int> occ_list_;
+  const SolverLevel* pending_level_ = nullptr;
+  const MethodTick* pending_tick_ = nullptr;
+  bool pending_have_lambda_ = false;
   hessian::HighamRegularizer higham_;
 };
 
