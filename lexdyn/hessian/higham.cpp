@@ -12,6 +12,19 @@ namespace lexdyn::hessian {
 // Symmetric eigendecomposition
 // =============================================================================================
 
+namespace {
+
+// sqrt(x^2 + z^2): a plain square root where the sum of squares can neither overflow nor lose
+// the larger term to underflow (always, at the scale of the Newton rows' Hessians), std::hypot
+// (several times slower, and the QR iteration's main cost with it) otherwise.
+inline double pythag(double x, double z) {
+  const double s = x * x + z * z;
+  if (s > 1e-290 && s < 1e290) return std::sqrt(s);
+  return std::hypot(x, z);
+}
+
+}  // namespace
+
 SymmetricEigenSolver::SymmetricEigenSolver(int capacity) { setup(capacity); }
 
 void SymmetricEigenSolver::setup(int capacity) {
@@ -35,12 +48,9 @@ bool SymmetricEigenSolver::compute(const Eigen::Ref<const Eigen::MatrixXd>& A) {
   if (n == 0) return true;
   auto W = work_.topLeftCorner(n, n);
   auto Z = z_.topLeftCorner(n, n);
-  // Full symmetric copy from the lower triangle.
+  // The lower triangle is all that is read and updated.
   for (int c = 0; c < n; ++c) {
-    for (int r = c; r < n; ++r) {
-      W(r, c) = A(r, c);
-      W(c, r) = A(r, c);
-    }
+    for (int r = c; r < n; ++r) W(r, c) = A(r, c);
   }
 
   // 1. Householder tridiagonalisation W = Q T Q^T, Q = P_0 P_1 ... P_{n-3},
@@ -62,20 +72,26 @@ bool SymmetricEigenSolver::compute(const Eigen::Ref<const Eigen::MatrixXd>& A) {
     tau_[k] = tau;
     e_[k] = alpha;
     // Two-sided update of the trailing block S <- P S P = S - v q^T - q v^T with
-    // p = tau S v, q = p - (tau/2) (p^T v) v.
+    // p = tau S v, q = p - (tau/2) (p^T v) v, on the lower triangle of S only (S symmetric:
+    // S v reads each stored entry for its row and, off the diagonal, for its column).
     auto S = W.bottomRightCorner(L, L);
     auto p = tmp_.head(L);
     for (int r = 0; r < L; ++r) p[r] = 0.0;
     for (int c = 0; c < L; ++c) {
       const double vc = x[c];
-      for (int r = 0; r < L; ++r) p[r] += S(r, c) * vc;
+      double pc = S(c, c) * vc;
+      for (int r = c + 1; r < L; ++r) {
+        p[r] += S(r, c) * vc;
+        pc += S(r, c) * x[r];
+      }
+      p[c] += pc;
     }
     p *= tau;
     const double K = 0.5 * tau * p.dot(x);
     for (int r = 0; r < L; ++r) p[r] -= K * x[r];
     for (int c = 0; c < L; ++c) {
       const double vc = x[c], qc = p[c];
-      for (int r = 0; r < L; ++r) S(r, c) -= x[r] * qc + p[r] * vc;
+      for (int r = c; r < L; ++r) S(r, c) -= x[r] * qc + p[r] * vc;
     }
   }
   for (int k = 0; k < n; ++k) d_[k] = W(k, k);
@@ -116,13 +132,13 @@ bool SymmetricEigenSolver::compute(const Eigen::Ref<const Eigen::MatrixXd>& A) {
     // Wilkinson shift: the eigenvalue of the trailing 2 x 2 block closer to d[h].
     const double delta = 0.5 * (d_[h - 1] - d_[h]);
     const double b = e_[h - 1];
-    const double denom = delta + std::copysign(std::hypot(delta, b), delta);
+    const double denom = delta + std::copysign(pythag(delta, b), delta);
     const double mu = d_[h] - b * b / denom;
     double x = d_[l] - mu;
     double z = e_[l];
     for (int k = l; k < h; ++k) {
       // Rotation G on (k, k+1) with G^T [x; z] = [r; 0], G = [c s; -s c].
-      const double r = std::hypot(x, z);
+      const double r = pythag(x, z);
       double c = 1.0, s = 0.0;
       if (r > 0.0) {
         c = x / r;
@@ -203,43 +219,70 @@ void HighamRegularizer::setup(int n) {
   eig_.setup(n);
   block_.setZero(n, n);
   last_.setZero(n, n);
+  compact_.setZero(n, n);
+  scaled_.setZero(n, n);
+  product_.setZero(n, n);
   index_.assign(static_cast<size_t>(n), 0);
+  nonzero_.assign(static_cast<size_t>(n), 0);
 }
 
-namespace {
-
-// X = V max(Lambda, 0) V^T from a computed decomposition (lower triangle, mirrored: exactly
-// symmetric).
-void clippedReconstruction(const SymmetricEigenSolver& eig, Eigen::Ref<Eigen::MatrixXd> X) {
-  const int k = eig.size();
-  const auto lambda = eig.eigenvalues();
-  const auto V = eig.eigenvectors();
+bool HighamRegularizer::clippedBlock(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X) {
+  const int m = static_cast<int>(B.rows());
+  // A row and column of B that are exactly zero (the lower triangle is read: the row left of
+  // the diagonal and the column from it down) make e_j an eigenvector of eigenvalue 0, which
+  // the clipping removes: they are left out of the eigenproblem (the floating base's
+  // translation in the humanoid's task Hessians, on which no second derivative depends).
+  int p = 0;
+  for (int c = 0; c < m; ++c) {
+    const bool zero = (B.col(c).tail(m - c).array() == 0.0).all() && (B.row(c).head(c).array() == 0.0).all();
+    if (!zero) nonzero_[static_cast<size_t>(p++)] = c;
+  }
+  auto C = compact_.topLeftCorner(p, p);
+  for (int c = 0; c < p; ++c) {
+    const int bc = nonzero_[static_cast<size_t>(c)];
+    for (int r = c; r < p; ++r) C(r, c) = B(nonzero_[static_cast<size_t>(r)], bc);
+  }
+  if (!eig_.compute(C)) return false;
+  const auto lambda = eig_.eigenvalues();
+  const auto V = eig_.eigenvectors();
+  min_eig_ = p > 0 ? lambda[0] : 0.0;
+  if (p < m) min_eig_ = std::min(min_eig_, 0.0);
+  // V max(Lambda, 0) V^T = S S^T with S = V_+ Lambda_+^(1/2): exactly symmetric, positive
+  // semi-definite by construction, and formed column by column (contiguous axpy updates of the
+  // lower triangle).
   int first = 0;
-  while (first < k && !(lambda[first] > 0.0)) ++first;
-  for (int c = 0; c < k; ++c) {
-    for (int r = c; r < k; ++r) {
-      double s = 0.0;
-      for (int l = first; l < k; ++l) s += lambda[l] * V(r, l) * V(c, l);
-      X(r, c) = s;
-      X(c, r) = s;
+  while (first < p && !(lambda[first] > 0.0)) ++first;
+  const int kp = p - first;
+  auto S = scaled_.topLeftCorner(p, kp);
+  for (int l = 0; l < kp; ++l) S.col(l) = V.col(first + l) * std::sqrt(lambda[first + l]);
+  auto Y = product_.topLeftCorner(p, p);
+  for (int c = 0; c < p; ++c) {
+    auto y = Y.col(c).tail(p - c);
+    y.setZero();
+    for (int l = 0; l < kp; ++l) y += S(c, l) * S.col(l).tail(p - c);
+  }
+  X.setZero();
+  for (int c = 0; c < p; ++c) {
+    const int bc = nonzero_[static_cast<size_t>(c)];
+    for (int r = c; r < p; ++r) {
+      const int br = nonzero_[static_cast<size_t>(r)];
+      X(br, bc) = Y(r, c);
+      X(bc, br) = Y(r, c);
     }
   }
+  return true;
 }
-
-}  // namespace
 
 bool HighamRegularizer::nearestPsd(const Eigen::Ref<const Eigen::MatrixXd>& H, Eigen::Ref<Eigen::MatrixXd> X) {
   const int k = static_cast<int>(H.rows());
   LEXDYN_ALWAYS_ASSERT(H.cols() == k && X.rows() == k && X.cols() == k && k <= n_,
                        "HighamRegularizer::nearestPsd: bad sizes");
-  failed_ = !H.allFinite() || !eig_.compute(H);
+  failed_ = !H.allFinite() || !clippedBlock(H, X);
   if (failed_) {
     X.setConstant(std::numeric_limits<double>::quiet_NaN());
     min_eig_ = std::numeric_limits<double>::quiet_NaN();
     return false;
   }
-  min_eig_ = k > 0 ? eig_.eigenvalues()[0] : 0.0;
-  clippedReconstruction(eig_, X);
   return true;
 }
 
@@ -265,15 +308,13 @@ int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixX
   for (int c = 0; c < m; ++c) {
     for (int r = 0; r < m; ++r) Hb(r, c) = H(index_[static_cast<size_t>(r)], index_[static_cast<size_t>(c)]);
   }
-  if (!Hb.allFinite() || !eig_.compute(Hb)) {
+  auto X = last_.topLeftCorner(m, m);
+  if (!Hb.allFinite() || !clippedBlock(Hb, X)) {  // eq. 91 without eps
     failed_ = true;
     m_ = 0;
     min_eig_ = std::numeric_limits<double>::quiet_NaN();
     return 0;
   }
-  min_eig_ = eig_.eigenvalues()[0];
-  auto X = last_.topLeftCorner(m, m);
-  clippedReconstruction(eig_, X);  // eq. 91 without eps
   double max_diag = 0.0;
   for (int i = 0; i < m; ++i) {
     X(i, i) += eps;  // eps I* on the occupied dofs

@@ -6,16 +6,21 @@
 // nearest symmetric positive semi-definite matrix in the Frobenius norm is
 //   H~ = 1/2 (H + P) = V max(Lambda, 0) V^T                                        (eq. 91)
 // at distance ||H - H~||_F = sqrt(sum of the squared negative eigenvalues). lexdyn evaluates the
-// right-hand form (exactly positive semi-definite up to rounding, where 1/2 (H + P) would carry
-// the rounding of the reconstruction of H). Then eps is added on the diagonal of the occupied
-// dofs (the eps I* of eq. 91), and the occupied block is factored H~ + eps I = R^T R.
+// right-hand form as S S^T with S = V_+ Lambda_+^(1/2), the eigenvectors of the positive
+// eigenvalues scaled (exactly symmetric and positive semi-definite by construction, where
+// 1/2 (H + P) would carry the rounding of the reconstruction of H). Rows and columns of H that
+// are exactly zero (a floating base's translation in the task Hessians) are left out of the
+// eigenproblem: they are eigenvectors of eigenvalue 0. Then eps is added on the diagonal of the
+// occupied dofs (the eps I* of eq. 91), and the occupied block is factored H~ + eps I = R^T R.
 //
 // Everything works on the occupied dofs only (the union of the task chains of the level): rows
 // and columns of H outside the mask are ignored. The Hessian of a task function vanishes outside
 // its chain, so nothing is lost when the mask covers every chain that contributed to H.
 //
 // The eigendecomposition is lexdyn's own (Householder tridiagonalisation and the implicit
-// symmetric QR iteration with Wilkinson shifts, Golub & Van Loan sec. 8.3): it works in place in
+// symmetric QR iteration with Wilkinson shifts, Golub & Van Loan sec. 8.3; the reduction updates
+// the lower triangle only, and a rotation's length is a plain square root unless the squares
+// could overflow or underflow): it works in place in
 // storage sized once, for any size up to that capacity, whereas Eigen's SelfAdjointEigenSolver
 // allocates inside compute() (1 allocation for an unchanged size, 5 when the size changes,
 // measured with tests/common/alloc_counter.hpp).
@@ -99,9 +104,13 @@ class HighamRegularizer {
   int n_ = 0, m_ = 0, zero_pivots_ = 0;
   double min_eig_ = 0.0;
   bool failed_ = false;
+  /// X = V max(Lambda, 0) V^T of the symmetric block B (lower triangle read; X may alias B);
+  /// sets min_eig_. False when the QR iteration did not converge.
+  bool clippedBlock(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X);
+
   SymmetricEigenSolver eig_;
-  Eigen::MatrixXd block_, last_;
-  std::vector<int> index_;
+  Eigen::MatrixXd block_, last_, compact_, scaled_, product_;
+  std::vector<int> index_, nonzero_;
 };
 
 }  // namespace lexdyn::hessian

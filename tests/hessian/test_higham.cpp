@@ -50,6 +50,9 @@ std::vector<Eigen::MatrixXd> testMatrices(Rng& rng) {
     for (int k = 0; k < 4; ++k) out.push_back(rng.symmetric(n));
     out.push_back(rng.symmetric(n, 1e-8));  // Hessians scaled by dt^2 are small
     out.push_back(rng.symmetric(n, 1e3));
+    // Far from the Newton rows' scale: the rotations' square roots fall back to std::hypot.
+    out.push_back(rng.symmetric(n, 1e150));
+    out.push_back(rng.symmetric(n, 1e-150));
     Eigen::VectorXd lambda = rng.uniformVector(n);
     for (int i = 0; i < n; i += 3) lambda[i] = 0.0;  // rank deficient
     out.push_back(withEigenvalues(lambda, rng));
@@ -67,6 +70,13 @@ std::vector<Eigen::MatrixXd> testMatrices(Rng& rng) {
   block.topLeftCorner(4, 4) = rng.symmetric(4);
   block.bottomRightCorner(3, 3) = rng.symmetric(3);
   out.push_back(block);
+  // The humanoid's velocity-domain task Hessians: the base translation's rows and columns are
+  // zero (nothing's second derivative involves a translation), the rest couples through the base
+  // rotation; left out of the eigenproblem, they must still give the clipped matrix.
+  Eigen::MatrixXd arrow = rng.symmetric(38, 1e-6);
+  arrow.middleRows(3, 3).setZero();
+  arrow.middleCols(3, 3).setZero();
+  out.push_back(arrow);
   return out;
 }
 
