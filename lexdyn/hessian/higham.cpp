@@ -14,9 +14,10 @@ namespace lexdyn::hessian {
 
 namespace {
 
-// sqrt(x^2 + z^2): a plain square root where the sum of squares can neither overflow nor lose
-// the larger term to underflow (always, at the scale of the Newton rows' Hessians), std::hypot
-// (several times slower, and the QR iteration's main cost with it) otherwise.
+// sqrt(x^2 + z^2) of the QR rotations: a plain square root where the sum of squares can neither
+// overflow nor lose the larger term to underflow (always, at the scale of the Newton rows'
+// Hessians), std::hypot (several times slower, and the QR iteration's main cost with it)
+// otherwise.
 inline double pythag(double x, double z) {
   const double s = x * x + z * z;
   if (s > 1e-290 && s < 1e290) return std::sqrt(s);

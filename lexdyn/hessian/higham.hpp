@@ -7,7 +7,7 @@
 //   H~ = 1/2 (H + P) = V max(Lambda, 0) V^T                                        (eq. 91)
 // at distance ||H - H~||_F = sqrt(sum of the squared negative eigenvalues). lexdyn evaluates the
 // right-hand form as S S^T with S = V_+ Lambda_+^(1/2), the eigenvectors of the positive
-// eigenvalues scaled (exactly symmetric and positive semi-definite by construction, where
+// eigenvalues scaled (exactly symmetric, and positive semi-definite up to rounding, where
 // 1/2 (H + P) would carry the rounding of the reconstruction of H). Rows and columns of H that
 // are exactly zero (a floating base's translation in the task Hessians) are left out of the
 // eigenproblem: they are eigenvectors of eigenvalue 0. Then eps is added on the diagonal of the
@@ -19,8 +19,9 @@
 //
 // The eigendecomposition is lexdyn's own (Householder tridiagonalisation and the implicit
 // symmetric QR iteration with Wilkinson shifts, Golub & Van Loan sec. 8.3; the reduction updates
-// the lower triangle only, and a rotation's length is a plain square root unless the squares
-// could overflow or underflow): it works in place in
+// the lower triangle only, and a QR rotation's length is a plain square root unless its squares
+// could overflow or underflow; the reduction itself is unscaled, for entries between about
+// 1e-150 and 1e150): it works in place in
 // storage sized once, for any size up to that capacity, whereas Eigen's SelfAdjointEigenSolver
 // allocates inside compute() (1 allocation for an unchanged size, 5 when the size changes,
 // measured with tests/common/alloc_counter.hpp).

@@ -215,6 +215,14 @@ TEST(Higham, RegularizeAndFactorOnTheOccupiedDofs) {
     }
     const int m = static_cast<int>(idx.size());
     Eigen::MatrixXd H = rng.symmetric(n);
+    if (trial % 2 == 1 && m >= 3) {
+      // Exactly zero rows of the occupied block (the first, an inner and the last occupied dof),
+      // which are left out of the eigenproblem.
+      for (int a : {0, m / 2, m - 1}) {
+        H.row(idx[static_cast<size_t>(a)]).setZero();
+        H.col(idx[static_cast<size_t>(a)]).setZero();
+      }
+    }
     const double eps = trial % 3 == 0 ? 0.0 : 1e-3;
     Eigen::MatrixXd Ho(m, m);
     for (int a = 0; a < m; ++a)
@@ -232,6 +240,9 @@ TEST(Higham, RegularizeAndFactorOnTheOccupiedDofs) {
     ASSERT_EQ(hr.regularizeAndFactor(H, mask, eps, R, list), m);
     EXPECT_EQ(list, idx);
     EXPECT_LE((hr.lastRegularized() - expected).norm(), 1e-13 * n * (1.0 + Ho.norm()));
+    if (m > 0) {
+      EXPECT_NEAR(hr.lastMinEigenvalue(), minEigenvalue(Ho), 1e-13 * n * (1.0 + Ho.norm())) << "trial " << trial;
+    }
     // R^T R: the regularised block on the occupied dofs, zero elsewhere; rows >= m zero.
     Eigen::MatrixXd full = Eigen::MatrixXd::Zero(n, n);
     for (int a = 0; a < m; ++a)
@@ -250,6 +261,40 @@ TEST(Higham, RegularizeAndFactorOnTheOccupiedDofs) {
       EXPECT_EQ(hr.lastZeroPivots(), 0);
     }
   }
+}
+
+TEST(Higham, ZeroRowsOfAPositiveDefiniteBlockReportEigenvalueZero) {
+  // The rows left out of the eigenproblem are eigenvalue-0 directions: a block that is positive
+  // definite elsewhere has the smallest eigenvalue 0, exactly, and is kept as it is.
+  Rng rng(109);
+  const int n = 7;
+  Eigen::VectorXd lambda(n - 2);
+  lambda << 0.5, 1.0, 2.0, 3.0, 4.0;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+  H.block(1, 1, n - 2, n - 2) = withEigenvalues(lambda, rng);
+  HighamRegularizer hr(n);
+  Eigen::MatrixXd R(n, n);
+  const std::vector<char> all(n, 1);
+  ASSERT_EQ(hr.regularizeAndFactor(H, all, 0.0, R), n);
+  EXPECT_EQ(hr.lastMinEigenvalue(), 0.0);
+  EXPECT_LE((hr.lastRegularized() - H).norm(), 1e-14 * n * H.norm());
+}
+
+TEST(SymmetricEigenSolver, RotationsBelowTheSquaresRange) {
+  // At 1e-170 the squares of a rotation's entries underflow to zero: without std::hypot the QR
+  // iteration would make no progress (no Householder step for 2 x 2, so only the rotations act).
+  Eigen::Matrix2d M;
+  M << 1.0, 0.7, 0.7, -0.4;
+  const double scale = 1e-170;
+  SymmetricEigenSolver es(2);
+  ASSERT_TRUE(es.compute(scale * M));
+  const Eigen::Vector2d ref = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(M).eigenvalues();
+  EXPECT_NEAR(es.eigenvalues()[0] / scale, ref[0], 1e-14);
+  EXPECT_NEAR(es.eigenvalues()[1] / scale, ref[1], 1e-14);
+  HighamRegularizer hr(2);
+  Eigen::MatrixXd X(2, 2);
+  ASSERT_TRUE(hr.nearestPsd(scale * M, X));
+  EXPECT_LE(((X / scale) - clipReference(M)).norm(), 1e-14);
 }
 
 TEST(Higham, IndefiniteHessianWithEpsIsFactored) {

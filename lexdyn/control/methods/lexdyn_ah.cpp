@@ -26,11 +26,23 @@ class LexDynAh final : public VelocityDomainMethod {
  protected:
   bool newtonRows() const override { return true; }
 
+  // What prepareLevel() noted refers to the tick's data: never kept past it.
+  void beginTick(const MethodTick& tick) override {
+    (void)tick;
+    pending_level_ = nullptr;
+    pending_tick_ = nullptr;
+  }
+  void resetLevels() override {
+    pending_level_ = nullptr;
+    pending_tick_ = nullptr;
+  }
+
   // The analytic Hessian is needed only by a level that switches to Newton at this tick (most
   // do not): prepareLevel() notes what to build it from, factorLevel() builds it.
   void prepareLevel(size_t k, NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda,
                     TickRecord& rec) override {
-    (void)k, (void)a, (void)rec;
+    (void)a, (void)rec;
+    pending_k_ = k;
     pending_level_ = &L;
     pending_tick_ = &tick;
     pending_have_lambda_ = have_lambda;
@@ -59,8 +71,8 @@ class LexDynAh final : public VelocityDomainMethod {
   }
 
   int factorLevel(size_t k, NewtonLevel& a, Eigen::MatrixXd& R) override {
-    (void)k;
-    LEXDYN_ALWAYS_ASSERT(pending_level_ != nullptr && pending_tick_ != nullptr, "LexDynAH: factorLevel without prepareLevel");
+    LEXDYN_ALWAYS_ASSERT(pending_level_ != nullptr && pending_tick_ != nullptr && pending_k_ == k,
+                         "LexDynAH: factorLevel without the level's prepareLevel");
     buildHessian(a, *pending_level_, *pending_tick_, pending_have_lambda_);
     pending_level_ = nullptr;
     pending_tick_ = nullptr;
@@ -72,6 +84,7 @@ class LexDynAh final : public VelocityDomainMethod {
  private:
   Eigen::MatrixXd H_;
   std::vector<int> occ_list_;
+  size_t pending_k_ = 0;
   const SolverLevel* pending_level_ = nullptr;
   const MethodTick* pending_tick_ = nullptr;
   bool pending_have_lambda_ = false;

@@ -8,8 +8,9 @@
 //    mu u(k+1) = 0 on the occupied dofs (eq. 81);
 //  - otherwise, for a method with Newton rows (newtonRows()), while the level is switched to
 //    Newton (switchToNewton, eq. 95 on the previous tick's violation): R u(k+1) = 0 (eq. 35) or
-//    R u(k) (eq. 62), R from factorLevel() of the subclass, which keeps its second-order term
-//    up to date in prepareLevel() (BFGS eq. 87-89; analytic Hessian eq. 21, 91);
+//    R u(k) (eq. 62), R from factorLevel() of the subclass; prepareLevel() keeps a running
+//    second-order term up to date at every tick (BFGS eq. 87-89), while a term computed afresh
+//    (the analytic Hessian, eq. 21, 91) is built in factorLevel(), only for a switched level;
 //  - otherwise the rows are free (never active: they cost nothing in the solver).
 // The command is u(k+1), gamma = x_gamma / dt and q(k+1) by eq. 32 or eq. 73-76 (q_mod).
 #pragma once
@@ -84,7 +85,8 @@ class VelocityDomainMethod : public ControlMethod {
   virtual void resetLevels() {}
   /// Once per tick before the levels.
   virtual void beginTick(const MethodTick& tick) { (void)tick; }
-  /// Per level with Newton rows, before switching: brings its second-order term up to date.
+  /// Per level with Newton rows, before switching, at every tick: brings a running second-order
+  /// term up to date (BFGS), or notes what factorLevel() will build it from (analytic Hessian).
   /// `have_lambda`: the previous tick's multipliers are there (multipliers()).
   virtual void prepareLevel(size_t k, NewtonLevel& level, const SolverLevel& sl, const MethodTick& tick, bool have_lambda,
                             TickRecord& rec) {
