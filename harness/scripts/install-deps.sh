@@ -2,6 +2,8 @@
 # Installs every Debian package lexdyn needs. Idempotent: only missing packages are
 # installed, and apt is not touched at all when nothing is missing.
 set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
+case "${1:-}" in -h | --help) lexdyn_help ""; exit 0 ;; esac
 
 PACKAGES=(
   build-essential cmake ccache pkg-config

@@ -8,23 +8,15 @@
 # committed (damping rows) and with damping 0.
 # Output: OUT/<case>.<method>.<reading>.a<alpha>/{trace.csv,summary.json,log.txt}, OUT/table.md.
 set -uo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 BUILD="$ROOT/build"
 OUT="$ROOT/out/second-order"
 JOBS=2
 ALPHAS="1e-4 0"
 ONLY=""
-while getopts "b:o:j:a:r:" opt; do
-  case "$opt" in
-    b) BUILD="$OPTARG" ;;
-    o) OUT="$OPTARG" ;;
-    j) JOBS="$OPTARG" ;;
-    a) ALPHAS="$OPTARG" ;;
-    r) ONLY="$OPTARG" ;;
-    *) exit 2 ;;
-  esac
-done
-shift $((OPTIND - 1))
+lexdyn_options "[-b BUILD] [-o OUT] [-j JOBS] [-a \"ALPHAS\"] [-r \"METHOD:READING ...\"] [CASE ...]" \
+  b=BUILD o=OUT j=JOBS a=ALPHAS r=ONLY -- "$@"
+set -- ${LEXDYN_OPERANDS[@]+"${LEXDYN_OPERANDS[@]}"}
 CASES=("$@")
 [ ${#CASES[@]} -eq 0 ] && CASES=(exp1 exp2 exp3 pointmass-damping)
 HARNESS="$BUILD/bin/lexdyn-harness"

@@ -35,4 +35,20 @@ expect "bench-sim.sh -n x" 2 "$?"
 expect "bench-solver.sh -r 0" 2 "$?"
 "$ROOT/harness/scripts/bench-solver.sh" abc > /dev/null 2>&1
 expect "bench-solver.sh abc" 2 "$?"
+"$ROOT/harness/scripts/second-order-runs.sh" -x > /dev/null 2>&1
+expect "second-order-runs.sh -x" 2 "$?"
+# --help and -h: the usage line and the script's header comment (its first line checked), exit 0.
+# (timeout: without the option, build.sh, test.sh and main.sh would start building.)
+for script in bench-sim bench-solver bench-sweep sim-accuracy full-runs golden-update fuzz second-order-runs \
+  exp1 build test main install-deps; do
+  for flag in --help -h; do
+    out="$(timeout 30 "$ROOT/harness/scripts/$script.sh" $flag 2>&1)"
+    expect "$script.sh $flag" 0 "$?"
+    first="$(sed -n '2s/^# //p' "$ROOT/harness/scripts/$script.sh")"
+    case "$out" in
+      "usage: "*"$script.sh"*"$first"*) ;;
+      *) echo "FAIL: $script.sh $flag: expected the usage line and the header ('$first'), found: ${out:0:200}"; fail=1 ;;
+    esac
+  done
+done
 exit $fail

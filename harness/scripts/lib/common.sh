@@ -6,9 +6,10 @@ source "$ROOT/harness/scripts/exit-codes.sh"
 
 # lexdyn_options USAGE LETTER=VARIABLE ... -- "$@": reads the options -LETTER VALUE into their
 # variables (the ones not given keep their defaults); an unknown option or one without its value
-# prints "usage: SCRIPT USAGE" and exits 2. The operands are left in LEXDYN_OPERANDS.
+# prints "usage: SCRIPT USAGE" and exits 2. -h or --help prints the usage line and the script's
+# header comment and exits 0. The operands are left in LEXDYN_OPERANDS.
 lexdyn_options() {
-  local usage="$1" spec="" opt OPTIND=1
+  local usage="$1" spec="" opt OPTIND=1 a
   local -A variable=()
   shift
   while [ "$1" != "--" ]; do
@@ -17,11 +18,25 @@ lexdyn_options() {
     shift
   done
   shift
+  for a in "$@"; do
+    case "$a" in
+      -h | --help) lexdyn_help "$usage"; exit 0 ;;
+      --) break ;;
+    esac
+  done
   while getopts "$spec" opt; do
     [ "$opt" != "?" ] || { echo "usage: $0 $usage" >&2; exit 2; }
     printf -v "${variable[$opt]}" '%s' "$OPTARG"
   done
   LEXDYN_OPERANDS=("${@:OPTIND}")
+}
+
+# lexdyn_help USAGE: "usage: SCRIPT USAGE", then the script's header comment (the comment lines
+# after the #! line, up to the first line that is not a comment).
+lexdyn_help() {
+  echo "usage: $0 $1"
+  echo
+  sed -n '2,${/^#/!q;s/^# \{0,1\}//;p}' "$0"
 }
 
 # lexdyn_positive_count PREFIX WHAT VALUE: exits 2 with "PREFIX: expected a positive number of
