@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <functional>
 #include <string>
@@ -72,6 +73,14 @@ struct Term {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0)) {
+    std::printf(
+        "usage: bench_hessian [REPEATS]\n\nTimings of the kinematic Hessians, Higham's regularisation, the eigensolvers and\n"
+        "the BFGS update on the humanoid (docs/performance.md, \"Hessians\"). Each line's timed calls run\n"
+        "REPEATS times (default 3, at most 100): the minimum of the repeats' medians, the pooled median,\n"
+        "p99 and maximum of the single calls.\n");
+    return 0;
+  }
   if (argc > 1) {
     char* end = nullptr;
     const long v = std::strtol(argv[1], &end, 10);
