@@ -3,7 +3,6 @@
 #include <cmath>
 
 #include "lexdyn/control/methods/detail/velocity_domain.hpp"
-#include "lexdyn/common/error.hpp"
 #include "lexdyn/hessian/higham.hpp"
 
 namespace lexdyn::control::methods {
@@ -26,28 +25,7 @@ class LexDynAh final : public VelocityDomainMethod {
  protected:
   bool newtonRows() const override { return true; }
 
-  // What prepareLevel() noted refers to the tick's data: never kept past it.
-  void beginTick(const MethodTick& tick) override {
-    (void)tick;
-    pending_level_ = nullptr;
-    pending_tick_ = nullptr;
-  }
-  void resetLevels() override {
-    pending_level_ = nullptr;
-    pending_tick_ = nullptr;
-  }
-
-  // The analytic Hessian is needed only by a level that switches to Newton at this tick (most
-  // do not): prepareLevel() notes what to build it from, factorLevel() builds it.
-  void prepareLevel(size_t k, NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda,
-                    TickRecord& rec) override {
-    (void)a, (void)rec;
-    pending_k_ = k;
-    pending_level_ = &L;
-    pending_tick_ = &tick;
-    pending_have_lambda_ = have_lambda;
-  }
-
+  // eq. 21 for the level, built only when it switches to Newton at this tick (most do not).
   void buildHessian(const NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda) {
     const double dt2 = params_.dt * params_.dt;
     // eq. 21, skipping |lambda| <= rho.
@@ -70,24 +48,16 @@ class LexDynAh final : public VelocityDomainMethod {
     return params_.eps_dt2 * dt2 + params_.newton_identity_weight;
   }
 
-  int factorLevel(size_t k, NewtonLevel& a, Eigen::MatrixXd& R) override {
-    LEXDYN_ALWAYS_ASSERT(pending_level_ != nullptr && pending_tick_ != nullptr && pending_k_ == k,
-                         "LexDynAH: factorLevel without the level's prepareLevel");
-    buildHessian(a, *pending_level_, *pending_tick_, pending_have_lambda_);
-    pending_level_ = nullptr;
-    pending_tick_ = nullptr;
-    const double dt2 = params_.dt * params_.dt;
+  int factorLevel(size_t k, NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda,
+                  Eigen::MatrixXd& R) override {
+    buildHessian(a, L, tick, have_lambda);
     // eq. 91: Higham's nearest PSD matrix plus (eps + alpha) I* on the occupied dofs.
-    return higham_.regularizeAndFactor(H_, a.occupied, params_.eps_dt2 * dt2 + params_.newton_identity_weight, R, occ_list_);
+    return higham_.regularizeAndFactor(H_, a.occupied, identityDiagonal(k), R, occ_list_);
   }
 
  private:
   Eigen::MatrixXd H_;
   std::vector<int> occ_list_;
-  size_t pending_k_ = 0;
-  const SolverLevel* pending_level_ = nullptr;
-  const MethodTick* pending_tick_ = nullptr;
-  bool pending_have_lambda_ = false;
   hessian::HighamRegularizer higham_;
 };
 

@@ -118,8 +118,9 @@ class LexDynBfgs final : public VelocityDomainMethod {
     return params_.newton_identity_weight + (qn_[k]->lastFactorRegularized() ? qn_[k]->options().eps : 0.0);
   }
 
-  int factorLevel(size_t k, NewtonLevel& level, Eigen::MatrixXd& R) override {
-    (void)level;
+  int factorLevel(size_t k, NewtonLevel& level, const SolverLevel& sl, const MethodTick& tick, bool have_lambda,
+                  Eigen::MatrixXd& R) override {
+    (void)level, (void)sl, (void)tick, (void)have_lambda;
     return qn_[k]->factor(R);  // eq. 35: R^T R = B (+ alpha I*) on the occupied block
   }
 

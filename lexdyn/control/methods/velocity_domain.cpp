@@ -165,7 +165,8 @@ void VelocityDomainMethod::addRows(const MethodTick& tick, solver::Problem& prob
     if (!newtonRows()) continue;
 
     // The second-order term of the level, with the multipliers of the previous solve.
-    prepareLevel(k, a, L, tick, tick.have_last && have_prev_, rec);
+    const bool have_lambda = tick.have_last && have_prev_;
+    prepareLevel(k, a, L, tick, have_lambda, rec);
 
     // Switching (eq. 95) on the previous tick's task-row violation of this level.
     bool augment = false;
@@ -179,7 +180,7 @@ void VelocityDomainMethod::addRows(const MethodTick& tick, solver::Problem& prob
       augment = switchToNewton(o, p.dt, p.nu_dt2, p.rank_switching);
     }
     if (!augment) continue;
-    const int rows = factorLevel(k, a, R_);
+    const int rows = factorLevel(k, a, L, tick, have_lambda, R_);
     a.written_rows = rows;
     for (int r = 0; r < rows; ++r) {
       spare.A.row(r).head(nv) = R_.row(r);

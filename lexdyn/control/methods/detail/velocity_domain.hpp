@@ -86,15 +86,18 @@ class VelocityDomainMethod : public ControlMethod {
   /// Once per tick before the levels.
   virtual void beginTick(const MethodTick& tick) { (void)tick; }
   /// Per level with Newton rows, before switching, at every tick: brings a running second-order
-  /// term up to date (BFGS), or notes what factorLevel() will build it from (analytic Hessian).
-  /// `have_lambda`: the previous tick's multipliers are there (multipliers()).
+  /// term up to date (BFGS). `have_lambda`: the previous tick's multipliers are there
+  /// (multipliers()).
   virtual void prepareLevel(size_t k, NewtonLevel& level, const SolverLevel& sl, const MethodTick& tick, bool have_lambda,
                             TickRecord& rec) {
     (void)k, (void)level, (void)sl, (void)tick, (void)have_lambda, (void)rec;
   }
-  /// Per augmented level: R (rows x nv, R^T R the level's Hessian on its occupied dofs); returns rows.
-  virtual int factorLevel(size_t k, NewtonLevel& level, Eigen::MatrixXd& R) {
-    (void)k, (void)level, (void)R;
+  /// Per augmented level, after prepareLevel() with the same arguments: R (rows x nv, R^T R the
+  /// level's Hessian on its occupied dofs); returns rows. A second-order term computed afresh
+  /// (the analytic Hessian) is built here, only for the levels that need it.
+  virtual int factorLevel(size_t k, NewtonLevel& level, const SolverLevel& sl, const MethodTick& tick, bool have_lambda,
+                          Eigen::MatrixXd& R) {
+    (void)k, (void)level, (void)sl, (void)tick, (void)have_lambda, (void)R;
     return 0;
   }
   virtual void storePrevious(const MethodTick& tick) { (void)tick; }
