@@ -248,9 +248,9 @@ bool HighamRegularizer::clippedBlock(const Eigen::Ref<const Eigen::MatrixXd>& B,
   const auto V = eig_.eigenvectors();
   min_eig_ = p > 0 ? lambda[0] : 0.0;
   if (p < m) min_eig_ = std::min(min_eig_, 0.0);
-  // V max(Lambda, 0) V^T = S S^T with S = V_+ Lambda_+^(1/2): exactly symmetric, positive
-  // semi-definite by construction, and formed column by column (contiguous axpy updates of the
-  // lower triangle).
+  // V max(Lambda, 0) V^T = S S^T with S = V_+ Lambda_+^(1/2): exactly symmetric (the lower
+  // triangle is mirrored), positive semi-definite up to rounding, and formed column by column
+  // (contiguous axpy updates of the lower triangle).
   int first = 0;
   while (first < p && !(lambda[first] > 0.0)) ++first;
   const int kp = p - first;
