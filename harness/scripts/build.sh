@@ -2,7 +2,7 @@
 # Configures (Release) and builds lexdyn into build/. Usage: build.sh [extra cmake args]
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
-case "${1:-}" in -h | --help) lexdyn_help "[extra cmake args]"; exit 0 ;; esac
+lexdyn_help_option "[extra cmake args]" "$@"
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 cd "$ROOT"
 JOBS="${LEXDYN_JOBS:-$(nproc)}"

@@ -3,7 +3,7 @@
 # installed, and apt is not touched at all when nothing is missing.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
-case "${1:-}" in -h | --help) lexdyn_help ""; exit 0 ;; esac
+lexdyn_help_option "" "$@"
 
 PACKAGES=(
   build-essential cmake ccache pkg-config

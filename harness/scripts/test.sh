@@ -2,7 +2,7 @@
 # Sets up, builds and runs the whole test suite with ctest (what CI runs).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
-case "${1:-}" in -h | --help) lexdyn_help "[extra ctest args]"; exit 0 ;; esac
+lexdyn_help_option "[extra ctest args]" "$@"
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 cd "$ROOT"
 harness/scripts/install-deps.sh

@@ -9,7 +9,7 @@ source "$ROOT/harness/scripts/exit-codes.sh"
 # prints "usage: SCRIPT USAGE" and exits 2. -h or --help prints the usage line and the script's
 # header comment and exits 0. The operands are left in LEXDYN_OPERANDS.
 lexdyn_options() {
-  local usage="$1" spec="" opt OPTIND=1 a
+  local usage="$1" spec="" opt OPTIND=1
   local -A variable=()
   shift
   while [ "$1" != "--" ]; do
@@ -18,12 +18,7 @@ lexdyn_options() {
     shift
   done
   shift
-  for a in "$@"; do
-    case "$a" in
-      -h | --help) lexdyn_help "$usage"; exit 0 ;;
-      --) break ;;
-    esac
-  done
+  lexdyn_help_option "$usage" "$@"
   while getopts "$spec" opt; do
     [ "$opt" != "?" ] || { echo "usage: $0 $usage" >&2; exit 2; }
     printf -v "${variable[$opt]}" '%s' "$OPTARG"
@@ -37,6 +32,19 @@ lexdyn_help() {
   echo "usage: $0 $1"
   echo
   sed -n '2,${/^#/!q;s/^# \{0,1\}//;p}' "$0"
+}
+
+# lexdyn_help_option USAGE "$@": with -h or --help among the arguments (before a --), prints
+# lexdyn_help USAGE and exits 0.
+lexdyn_help_option() {
+  local usage="$1" a
+  shift
+  for a in "$@"; do
+    case "$a" in
+      -h | --help) lexdyn_help "$usage"; exit 0 ;;
+      --) return 0 ;;
+    esac
+  done
 }
 
 # lexdyn_positive_count PREFIX WHAT VALUE: exits 2 with "PREFIX: expected a positive number of
