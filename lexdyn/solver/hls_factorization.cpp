@@ -110,6 +110,8 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   snapCol_.assign(z(L), std::vector<int>(z(mTot_), -1));
   snapGids_.assign(z(L), {});
   snapValid_.assign(z(L), 0);
+  snapStore_.assign(z(L), 0);
+  for (int k = 0; k < L; ++k) snapStore_[z(k)] = k;
   for (int k = 1; k < L; ++k) {
     int later = 0;
     for (int j = k; j < L; ++j) later += m_[z(j)];
@@ -457,7 +459,7 @@ void HlsFactorization::relayout(int c) {
       tmpGid_[z(p)] = gid;
       if (old >= 0 && sCol >= 0) {
         S.col(p).head(c0) = W_.col(old).head(c0);
-        S.col(p).segment(c0, nr_ - c0) = snap_[z(c)].col(sCol).head(nr_ - c0);
+        S.col(p).segment(c0, nr_ - c0) = snap_[z(snapStore_[z(c)])].col(sCol).head(nr_ - c0);
         if (elim_) SB.col(p).head(m0_) = WB_.col(old).head(m0_);
         colNorm_(p) = 0.0;  // marks a restored column
       } else {
@@ -525,7 +527,7 @@ void HlsFactorization::relayout(int c) {
   }
 }
 
-void HlsFactorization::saveSnapshot(int k) {
+void HlsFactorization::saveSnapshot(int k, int shareWith) {
   const int L = levelCount();
   auto& sc = snapCol_[z(k)];
   for (int gid : snapGids_[z(k)]) sc[z(gid)] = -1;
@@ -536,7 +538,9 @@ void HlsFactorization::saveSnapshot(int k) {
     if (j != deferred_) cnt += act_[z(j)];  // a projected level restores from its raw rows
   const int c0 = col0_[z(k)];
   const int d = nr_ - c0;
-  if (cnt > 0 && d > 0) snap_[z(k)].block(0, 0, d, cnt) = W_.block(c0, s, d, cnt);
+  // Shared: the same columns, rows and entries as snapshot shareWith (in its storage).
+  snapStore_[z(k)] = shareWith >= 0 ? snapStore_[z(shareWith)] : k;
+  if (shareWith < 0 && cnt > 0 && d > 0) snap_[z(k)].block(0, 0, d, cnt) = W_.block(c0, s, d, cnt);
   for (int p = 0; p < cnt; ++p) {
     const int gid = colGid_[z(s + p)];
     sc[z(gid)] = p;
@@ -779,13 +783,20 @@ void HlsFactorization::factorize(double rankTol) {
   lastRestart_ = dirtyFrom_;
   if (c < L) {
     relayout(c);
+    // The last snapshot taken in this pass while no stage has had active rows since: such a
+    // stage changes nothing, so the next snapshot would hold the same columns with the same
+    // entries, and shares its storage instead of copying them again (levels that are rarely
+    // active, such as torque limits, trust region and collisions, follow one another).
+    int untouchedSince = -1;
     for (int k = c; k < L; ++k) {
       if (k == deferred_) {
         projectDeferredLevel(k);
       } else if (k > 0 && !static_[z(k)]) {
-        saveSnapshot(k);
+        saveSnapshot(k, untouchedSince);
+        untouchedSince = k;
       }
       factorLevel(k, rankTol);
+      if (act_[z(k)] > 0) untouchedSince = -1;
       ++stages_;
     }
   }

@@ -117,7 +117,9 @@ class HlsFactorization {
   /// col <- Q_{<stages} col.
   void applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
   void relayout(int c);
-  void saveSnapshot(int k);
+  /// shareWith >= 0: a snapshot taken earlier in this factorisation, with only stages without
+  /// active rows since (the same columns and entries): its storage is shared, not copied.
+  void saveSnapshot(int k, int shareWith);
   void swapColumns(int a, int b);
   void factorLevel(int k, double rankTol);
   void projectDeferredLevel(int k);
@@ -176,6 +178,7 @@ class HlsFactorization {
   std::vector<std::vector<int>> snapCol_;   // [k][gid] -> snapshot column or -1
   std::vector<std::vector<int>> snapGids_;  // [k] gids present in snapshot k
   std::vector<char> snapValid_;
+  std::vector<int> snapStore_;  // [k] whose storage (snap_) snapshot k's columns are in
 
   // Rank-deficient levels: L = R^T (m x r) = V [U; 0], stored Householder-style.
   std::vector<Eigen::MatrixXd> left_;
