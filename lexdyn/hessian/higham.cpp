@@ -116,14 +116,24 @@ bool SymmetricEigenSolver::compute(const Eigen::Ref<const Eigen::MatrixXd>& A) {
 
   // 3. Implicit symmetric QR steps with Wilkinson shifts on the tridiagonal (d, e), the
   //    rotations accumulated into Z (Golub & Van Loan, algorithm 8.3.3).
+  //    An off-diagonal entry is deflated when it is below the rounding level of the whole
+  //    matrix (eps ||T||, the accuracy the tridiagonalisation leaves every eigenvalue with), not
+  //    of its two neighbours on the diagonal: a cluster of eigenvalues near zero (the task
+  //    Hessians' null directions) then deflates without sweeps that cannot improve it.
   const double eps = std::numeric_limits<double>::epsilon();
   const double tiny = std::numeric_limits<double>::min();
+  double tnorm = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double row = std::abs(d_[i]) + (i + 1 < n ? std::abs(e_[i]) : 0.0) + (i > 0 ? std::abs(e_[i - 1]) : 0.0);
+    tnorm = std::max(tnorm, row);
+  }
+  const double deflate = eps * tnorm;
   int h = n - 1;
   const int max_iterations = 30 * n;
   while (h > 0) {
     for (int i = 0; i < h; ++i) {
       const double ae = std::abs(e_[i]);
-      if (ae <= eps * (std::abs(d_[i]) + std::abs(d_[i + 1])) || ae <= tiny) e_[i] = 0.0;
+      if (ae <= deflate || ae <= tiny) e_[i] = 0.0;
     }
     while (h > 0 && e_[h - 1] == 0.0) --h;
     if (h == 0) break;
@@ -227,7 +237,7 @@ void HighamRegularizer::setup(int n) {
   nonzero_.assign(static_cast<size_t>(n), 0);
 }
 
-bool HighamRegularizer::clippedBlock(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X) {
+int HighamRegularizer::decomposeNonzeroPart(const Eigen::Ref<const Eigen::MatrixXd>& B) {
   const int m = static_cast<int>(B.rows());
   // A row and column of B that are exactly zero (the lower triangle is read: the row left of
   // the diagonal and the column from it down) make e_j an eigenvector of eigenvalue 0, which
@@ -243,11 +253,17 @@ bool HighamRegularizer::clippedBlock(const Eigen::Ref<const Eigen::MatrixXd>& B,
     const int bc = nonzero_[static_cast<size_t>(c)];
     for (int r = c; r < p; ++r) C(r, c) = B(nonzero_[static_cast<size_t>(r)], bc);
   }
-  if (!eig_.compute(C)) return false;
+  if (!eig_.compute(C)) return -1;
+  min_eig_ = p > 0 ? eig_.eigenvalues()[0] : 0.0;
+  if (p < m) min_eig_ = std::min(min_eig_, 0.0);
+  return p;
+}
+
+bool HighamRegularizer::clippedBlock(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X) {
+  const int p = decomposeNonzeroPart(B);
+  if (p < 0) return false;
   const auto lambda = eig_.eigenvalues();
   const auto V = eig_.eigenvectors();
-  min_eig_ = p > 0 ? lambda[0] : 0.0;
-  if (p < m) min_eig_ = std::min(min_eig_, 0.0);
   // V max(Lambda, 0) V^T = S S^T with S = V_+ Lambda_+^(1/2): exactly symmetric (the lower
   // triangle is mirrored), positive semi-definite up to rounding, and formed column by column
   // (contiguous axpy updates of the lower triangle).
@@ -328,6 +344,56 @@ int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixX
   for (int r = 0; r < m; ++r) {
     for (int c = r; c < m; ++c) R(r, index_[static_cast<size_t>(c)]) = Hb(r, c);
   }
+  return m;
+}
+
+int HighamRegularizer::regularizedRows(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied,
+                                       double eps, Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list) {
+  LEXDYN_ALWAYS_ASSERT(H.rows() == n_ && H.cols() == n_, "regularizedRows: H must be n x n");
+  LEXDYN_ALWAYS_ASSERT(static_cast<int>(occupied.size()) == n_, "regularizedRows: mask must have n entries");
+  LEXDYN_ALWAYS_ASSERT(R.cols() == n_, "regularizedRows: R must have n columns");
+  LEXDYN_ALWAYS_ASSERT(eps >= 0.0, "regularizedRows: eps must be >= 0");
+  LEXDYN_ALWAYS_ASSERT(occupied_list.capacity() >= static_cast<size_t>(n_),
+                       "regularizedRows: reserve n entries in occupied_list (no allocation per tick)");
+  int m = 0;
+  for (int i = 0; i < n_; ++i) {
+    if (occupied[static_cast<size_t>(i)]) index_[static_cast<size_t>(m++)] = i;
+  }
+  LEXDYN_ALWAYS_ASSERT(R.rows() >= m, "regularizedRows: R has fewer rows than occupied dofs");
+  m_ = 0;  // lastRegularized() is not formed here
+  R.setZero();
+  zero_pivots_ = 0;
+  min_eig_ = 0.0;
+  failed_ = false;
+  occupied_list.clear();
+  if (m == 0) return 0;
+  auto Hb = block_.topLeftCorner(m, m);
+  for (int c = 0; c < m; ++c) {
+    for (int r = 0; r < m; ++r) Hb(r, c) = H(index_[static_cast<size_t>(r)], index_[static_cast<size_t>(c)]);
+  }
+  const int p = Hb.allFinite() ? decomposeNonzeroPart(Hb) : -1;  // eq. 91
+  if (p < 0) {
+    failed_ = true;
+    min_eig_ = std::numeric_limits<double>::quiet_NaN();
+    return 0;
+  }
+  // The zero rows and columns: eigenvalue 0, unit vectors.
+  int row = 0;
+  const double root_eps = std::sqrt(eps);
+  for (int c = 0, q = 0; c < m; ++c) {
+    if (q < p && nonzero_[static_cast<size_t>(q)] == c) {
+      ++q;
+      continue;
+    }
+    R(row++, index_[static_cast<size_t>(c)]) = root_eps;
+  }
+  const auto lambda = eig_.eigenvalues();
+  const auto V = eig_.eigenvectors();
+  for (int l = 0; l < p; ++l, ++row) {
+    const double w = std::sqrt(std::max(lambda[l], 0.0) + eps);
+    for (int c = 0; c < p; ++c) R(row, index_[static_cast<size_t>(nonzero_[static_cast<size_t>(c)])]) = w * V(c, l);
+  }
+  for (int k = 0; k < m; ++k) occupied_list.push_back(index_[static_cast<size_t>(k)]);
   return m;
 }
 

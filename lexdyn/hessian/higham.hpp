@@ -91,6 +91,17 @@ class HighamRegularizer {
   int regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied,
                           double eps, Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list);
 
+  /// Newton rows of a level from the eigendecomposition instead of a Cholesky factor: with
+  /// H_o = V Lambda V^T (eigenvalues of the occupied block, exactly zero rows and columns taking
+  /// the unit vectors of eigenvalue 0), row l of R is sqrt(max(lambda_l, 0) + eps) v_l^T scattered
+  /// to the occupied columns, so R^T R = V (max(Lambda, 0) + eps I) V^T = H~_o, the matrix that
+  /// regularizeAndFactor factorises, without forming it or its Cholesky factor. The rows are
+  /// dense, in ascending order of lambda (the zero rows' unit vectors first). Rows m ..
+  /// R.rows()-1 are zeroed; returns m and lists the occupied dofs as regularizeAndFactor does.
+  /// lastRegularized() and lastZeroPivots() are not set (0 rows of it are formed).
+  int regularizedRows(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied, double eps,
+                      Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list);
+
   /// Occupied block of the last regularizeAndFactor before factorisation (H~_o, m x m), and the
   /// number of semi-definite pivots of its Cholesky factor (0 when eps > 0 in practice).
   Eigen::Block<const Eigen::MatrixXd> lastRegularized() const { return last_.topLeftCorner(m_, m_); }
@@ -108,6 +119,10 @@ class HighamRegularizer {
   /// X = V max(Lambda, 0) V^T of the symmetric block B (lower triangle read; X may alias B);
   /// sets min_eig_. False when the QR iteration did not converge.
   bool clippedBlock(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X);
+  /// Lists the rows and columns of the symmetric block B that are not exactly zero in nonzero_
+  /// (lower triangle read), copies that part's lower triangle into compact_ and decomposes it
+  /// (eig_); sets min_eig_. Returns the count, or -1 when the QR iteration did not converge.
+  int decomposeNonzeroPart(const Eigen::Ref<const Eigen::MatrixXd>& B);
 
   SymmetricEigenSolver eig_;
   Eigen::MatrixXd block_, last_, compact_, scaled_, product_;

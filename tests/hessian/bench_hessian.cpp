@@ -183,9 +183,18 @@ int main(int argc, char** argv) {
   report("Higham + eps + Cholesky, level 4, " + std::to_string(std::count(occupied[0].begin(), occupied[0].end(), 1)) +
              " occupied dofs",
          2000, [&] { higham.regularizeAndFactor(H[0], occupied[0], eps, R); });
+  std::vector<int> occList;
+  occList.reserve(static_cast<size_t>(nv));
+  report("Higham + eps as eigen-rows (LexDynAH), level 9, 38 occupied dofs", 2000, [&] {
+    higham.regularizedRows(H[4], occupied[4], eps, R, occList);
+  });
   report("all 5 levels: Hessians + Higham + Cholesky", 1000, [&] {
     allHessians();
     for (size_t l = 0; l < levels.size(); ++l) higham.regularizeAndFactor(H[l], occupied[l], eps, R);
+  });
+  report("all 5 levels: Hessians + Higham + eps as eigen-rows", 1000, [&] {
+    allHessians();
+    for (size_t l = 0; l < levels.size(); ++l) higham.regularizedRows(H[l], occupied[l], eps, R, occList);
   });
   {
     hessian::SymmetricEigenSolver es(nv);

@@ -74,6 +74,7 @@ TEST(HessianAllocation, RegularizeFactorAndEigenAllocateNothing) {
   for (const auto& mask : masks) {
     rows += hr.regularizeAndFactor(H, mask, 1e-6, R);
     rows += hr.regularizeAndFactor(H, mask, 0.0, R, list);
+    rows += hr.regularizedRows(H, mask, 1e-6, R, list);
   }
   for (int k : {38, 10, 25, 1}) {
     hr.nearestPsd(H.topLeftCorner(k, k), X.topLeftCorner(k, k));

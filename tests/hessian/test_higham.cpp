@@ -260,7 +260,67 @@ TEST(Higham, RegularizeAndFactorOnTheOccupiedDofs) {
     if (eps > 0.0) {
       EXPECT_EQ(hr.lastZeroPivots(), 0);
     }
+    // The eigen-rows (LexDynAH's Newton rows): the same R^T R from dense rows, the same
+    // occupied list and smallest eigenvalue, nothing outside the occupied columns and rows.
+    Eigen::MatrixXd E = Eigen::MatrixXd::Constant(n, n, 7.0);
+    std::vector<int> list2;
+    list2.reserve(n);
+    ASSERT_EQ(hr.regularizedRows(H, mask, eps, E, list2), m) << "trial " << trial;
+    EXPECT_EQ(list2, idx);
+    EXPECT_FALSE(hr.lastFailed());
+    if (m > 0) {
+      EXPECT_NEAR(hr.lastMinEigenvalue(), minEigenvalue(Ho), 1e-13 * n * (1.0 + Ho.norm())) << "trial " << trial;
+    }
+    EXPECT_LE((E.transpose() * E - full).norm(), 1e-12 * n * (1.0 + Ho.norm())) << "trial " << trial;
+    EXPECT_EQ(E.bottomRows(n - m).cwiseAbs().maxCoeff(), 0.0);
+    for (int i = 0; i < n; ++i) {
+      if (!mask[static_cast<size_t>(i)]) {
+        EXPECT_EQ(E.col(i).cwiseAbs().maxCoeff(), 0.0);
+      }
+    }
   }
+}
+
+TEST(Higham, EigenRowsOfAnIndefiniteHessian) {
+  // Row l is sqrt(max(lambda_l, 0) + eps) v_l^T: the negative curvature is clipped to eps, and
+  // the rows are orthogonal with the eigenvalues' square roots as norms, in ascending order.
+  Rng rng(110);
+  const int n = 6;
+  Eigen::VectorXd lambda(n);
+  lambda << -2.0, -0.5, 0.0, 0.3, 1.0, 4.0;
+  const Eigen::MatrixXd H = withEigenvalues(lambda, rng);
+  HighamRegularizer hr(n);
+  Eigen::MatrixXd R(n, n);
+  std::vector<int> list;
+  list.reserve(n);
+  const double eps = 1e-6;
+  ASSERT_EQ(hr.regularizedRows(H, std::vector<char>(n, 1), eps, R, list), n);
+  EXPECT_NEAR(hr.lastMinEigenvalue(), -2.0, 1e-12);
+  Eigen::VectorXd want(n);
+  want << eps, eps, eps, 0.3 + eps, 1.0 + eps, 4.0 + eps;
+  const Eigen::MatrixXd RRt = R * R.transpose();
+  for (int i = 0; i < n; ++i) {
+    EXPECT_NEAR(RRt(i, i), want(i), 1e-12) << i;
+    for (int j = 0; j < i; ++j) EXPECT_NEAR(RRt(i, j), 0.0, 1e-12) << i << " " << j;
+  }
+  // Zero rows and columns of the block come first, as sqrt(eps) on their dof.
+  Eigen::MatrixXd Hz = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  Hz.bottomRightCorner(n, n) = H;
+  HighamRegularizer hz(n + 1);
+  Eigen::MatrixXd Rz(n + 1, n + 1);
+  list.reserve(n + 1);
+  ASSERT_EQ(hz.regularizedRows(Hz, std::vector<char>(n + 1, 1), eps, Rz, list), n + 1);
+  EXPECT_EQ(Rz(0, 0), std::sqrt(eps));
+  EXPECT_EQ(Rz.row(0).tail(n).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(Rz.col(0).tail(n).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LE((Rz.bottomRightCorner(n, n).transpose() * Rz.bottomRightCorner(n, n) - R.transpose() * R).norm(), 1e-12);
+  // A non-finite occupied block gives no rows.
+  Eigen::MatrixXd Hn = H;
+  Hn(1, 2) = Hn(2, 1) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(hr.regularizedRows(Hn, std::vector<char>(n, 1), eps, R, list), 0);
+  EXPECT_TRUE(hr.lastFailed());
+  EXPECT_EQ(R.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_TRUE(list.empty());
 }
 
 TEST(Higham, ZeroRowsOfAPositiveDefiniteBlockReportEigenvalueZero) {

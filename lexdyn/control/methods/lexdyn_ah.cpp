@@ -51,8 +51,9 @@ class LexDynAh final : public VelocityDomainMethod {
   int factorLevel(size_t k, NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda,
                   Eigen::MatrixXd& R) override {
     buildHessian(a, L, tick, have_lambda);
-    // eq. 91: Higham's nearest PSD matrix plus (eps + alpha) I* on the occupied dofs.
-    return higham_.regularizeAndFactor(H_, a.occupied, identityDiagonal(k), R, occ_list_);
+    // eq. 91: Higham's nearest PSD matrix plus (eps + alpha) I* on the occupied dofs, as rows
+    // sqrt(max(lambda, 0) + eps + alpha) v^T of its eigendecomposition (R^T R is that matrix).
+    return higham_.regularizedRows(H_, a.occupied, identityDiagonal(k), R, occ_list_);
   }
 
  private:
