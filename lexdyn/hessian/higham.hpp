@@ -1,5 +1,7 @@
 // Nearest positive semi-definite matrix (Higham 1988; paper sec. VI-B, eq. 91-92) and the
-// Cholesky factor of the occupied block that becomes the Newton rows R of a level (eq. 35).
+// Newton rows R of a level (eq. 35) with R^T R the regularised occupied block: its Cholesky
+// factor (regularizeAndFactor: BFGS's fallback, SR1) or rows from its eigendecomposition
+// (regularizedRows: LexDynAH).
 //
 // For a symmetric H with eigendecomposition H = V Lambda V^T, the polar decomposition is
 // H = U P with P = V |Lambda| V^T (the SVD H = U Sigma V^T has Sigma = |Lambda|), and Higham's
@@ -11,7 +13,9 @@
 // 1/2 (H + P) would carry the rounding of the reconstruction of H). Rows and columns of H that
 // are exactly zero (a floating base's translation in the task Hessians) are left out of the
 // eigenproblem: they are eigenvectors of eigenvalue 0. Then eps is added on the diagonal of the
-// occupied dofs (the eps I* of eq. 91), and the occupied block is factored H~ + eps I = R^T R.
+// occupied dofs (the eps I* of eq. 91), and the occupied block is factored H~ + eps I = R^T R
+// (regularizeAndFactor), or R is taken as rows sqrt(max(lambda, 0) + eps) v^T without forming
+// H~ (regularizedRows).
 //
 // Everything works on the occupied dofs only (the union of the task chains of the level): rows
 // and columns of H outside the mask are ignored. The Hessian of a task function vanishes outside
@@ -95,10 +99,11 @@ class HighamRegularizer {
   /// H_o = V Lambda V^T (eigenvalues of the occupied block, exactly zero rows and columns taking
   /// the unit vectors of eigenvalue 0), row l of R is sqrt(max(lambda_l, 0) + eps) v_l^T scattered
   /// to the occupied columns, so R^T R = V (max(Lambda, 0) + eps I) V^T = H~_o, the matrix that
-  /// regularizeAndFactor factorises, without forming it or its Cholesky factor. The rows are
-  /// dense, in ascending order of lambda (the zero rows' unit vectors first). Rows m ..
-  /// R.rows()-1 are zeroed; returns m and lists the occupied dofs as regularizeAndFactor does.
-  /// lastRegularized() and lastZeroPivots() are not set (0 rows of it are formed).
+  /// regularizeAndFactor factorises, without forming it or its Cholesky factor. Row order: first
+  /// sqrt(eps) e_j for the exactly zero rows and columns, then one row per eigenpair of the rest in
+  /// ascending order of lambda. Rows m .. R.rows()-1 are zeroed; returns m and lists the occupied
+  /// dofs as regularizeAndFactor does. lastMinEigenvalue() and lastFailed() are set as there;
+  /// lastRegularized() becomes an empty block and lastZeroPivots() 0 (nothing is factorised).
   int regularizedRows(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied, double eps,
                       Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list);
 
