@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "lexdyn/common/error.hpp"
 
@@ -303,35 +304,52 @@ bool HighamRegularizer::nearestPsd(const Eigen::Ref<const Eigen::MatrixXd>& H, E
   return true;
 }
 
-int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H,
-                                           const std::vector<char>& occupied, double eps,
-                                           Eigen::Ref<Eigen::MatrixXd> R) {
-  LEXDYN_ALWAYS_ASSERT(H.rows() == n_ && H.cols() == n_, "regularizeAndFactor: H must be n x n");
-  LEXDYN_ALWAYS_ASSERT(static_cast<int>(occupied.size()) == n_, "regularizeAndFactor: mask must have n entries");
-  LEXDYN_ALWAYS_ASSERT(R.cols() == n_, "regularizeAndFactor: R must have n columns");
-  LEXDYN_ALWAYS_ASSERT(eps >= 0.0, "regularizeAndFactor: eps must be >= 0");
+int HighamRegularizer::gatherOccupied(const char* caller, const Eigen::Ref<const Eigen::MatrixXd>& H,
+                                      const std::vector<char>& occupied, double eps, Eigen::Ref<Eigen::MatrixXd> R) {
+  // (the messages are built only when a check fails: nothing is allocated per call)
+  LEXDYN_ALWAYS_ASSERT(H.rows() == n_ && H.cols() == n_, std::string(caller) + ": H must be n x n");
+  LEXDYN_ALWAYS_ASSERT(static_cast<int>(occupied.size()) == n_, std::string(caller) + ": mask must have n entries");
+  LEXDYN_ALWAYS_ASSERT(R.cols() == n_, std::string(caller) + ": R must have n columns");
+  LEXDYN_ALWAYS_ASSERT(eps >= 0.0, std::string(caller) + ": eps must be >= 0");
   int m = 0;
   for (int i = 0; i < n_; ++i) {
     if (occupied[static_cast<size_t>(i)]) index_[static_cast<size_t>(m++)] = i;
   }
-  LEXDYN_ALWAYS_ASSERT(R.rows() >= m, "regularizeAndFactor: R has fewer rows than occupied dofs");
+  LEXDYN_ALWAYS_ASSERT(R.rows() >= m, std::string(caller) + ": R has fewer rows than occupied dofs");
   m_ = m;
   R.setZero();
   zero_pivots_ = 0;
   min_eig_ = 0.0;
   failed_ = false;
-  if (m == 0) return 0;
   auto Hb = block_.topLeftCorner(m, m);
   for (int c = 0; c < m; ++c) {
     for (int r = 0; r < m; ++r) Hb(r, c) = H(index_[static_cast<size_t>(r)], index_[static_cast<size_t>(c)]);
   }
+  return m;
+}
+
+int HighamRegularizer::failed() {
+  failed_ = true;
+  m_ = 0;
+  min_eig_ = std::numeric_limits<double>::quiet_NaN();
+  return 0;
+}
+
+void HighamRegularizer::listOccupied(const char* caller, std::vector<int>& occupied_list, int m) const {
+  LEXDYN_ALWAYS_ASSERT(occupied_list.capacity() >= static_cast<size_t>(n_),
+                       std::string(caller) + ": reserve n entries in occupied_list (no allocation per tick)");
+  occupied_list.clear();  // (empty when the block was not finite)
+  for (int k = 0; k < m; ++k) occupied_list.push_back(index_[static_cast<size_t>(k)]);
+}
+
+int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H,
+                                           const std::vector<char>& occupied, double eps,
+                                           Eigen::Ref<Eigen::MatrixXd> R) {
+  const int m = gatherOccupied("regularizeAndFactor", H, occupied, eps, R);
+  if (m == 0) return 0;
+  auto Hb = block_.topLeftCorner(m, m);
   auto X = last_.topLeftCorner(m, m);
-  if (!Hb.allFinite() || !clippedBlock(Hb, X)) {  // eq. 91 without eps
-    failed_ = true;
-    m_ = 0;
-    min_eig_ = std::numeric_limits<double>::quiet_NaN();
-    return 0;
-  }
+  if (!Hb.allFinite() || !clippedBlock(Hb, X)) return failed();  // eq. 91 without eps
   double max_diag = 0.0;
   for (int i = 0; i < m; ++i) {
     X(i, i) += eps;  // eps I* on the occupied dofs
@@ -349,34 +367,13 @@ int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixX
 
 int HighamRegularizer::regularizedRows(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied,
                                        double eps, Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list) {
-  LEXDYN_ALWAYS_ASSERT(H.rows() == n_ && H.cols() == n_, "regularizedRows: H must be n x n");
-  LEXDYN_ALWAYS_ASSERT(static_cast<int>(occupied.size()) == n_, "regularizedRows: mask must have n entries");
-  LEXDYN_ALWAYS_ASSERT(R.cols() == n_, "regularizedRows: R must have n columns");
-  LEXDYN_ALWAYS_ASSERT(eps >= 0.0, "regularizedRows: eps must be >= 0");
-  LEXDYN_ALWAYS_ASSERT(occupied_list.capacity() >= static_cast<size_t>(n_),
-                       "regularizedRows: reserve n entries in occupied_list (no allocation per tick)");
-  int m = 0;
-  for (int i = 0; i < n_; ++i) {
-    if (occupied[static_cast<size_t>(i)]) index_[static_cast<size_t>(m++)] = i;
-  }
-  LEXDYN_ALWAYS_ASSERT(R.rows() >= m, "regularizedRows: R has fewer rows than occupied dofs");
+  const int m = gatherOccupied("regularizedRows", H, occupied, eps, R);
   m_ = 0;  // lastRegularized() is not formed here
-  R.setZero();
-  zero_pivots_ = 0;
-  min_eig_ = 0.0;
-  failed_ = false;
-  occupied_list.clear();
+  listOccupied("regularizedRows", occupied_list, 0);
   if (m == 0) return 0;
   auto Hb = block_.topLeftCorner(m, m);
-  for (int c = 0; c < m; ++c) {
-    for (int r = 0; r < m; ++r) Hb(r, c) = H(index_[static_cast<size_t>(r)], index_[static_cast<size_t>(c)]);
-  }
   const int p = Hb.allFinite() ? decomposeNonzeroPart(Hb) : -1;  // eq. 91
-  if (p < 0) {
-    failed_ = true;
-    min_eig_ = std::numeric_limits<double>::quiet_NaN();
-    return 0;
-  }
+  if (p < 0) return failed();
   // The zero rows and columns: eigenvalue 0, unit vectors.
   int row = 0;
   const double root_eps = std::sqrt(eps);
@@ -393,18 +390,15 @@ int HighamRegularizer::regularizedRows(const Eigen::Ref<const Eigen::MatrixXd>& 
     const double w = std::sqrt(std::max(lambda[l], 0.0) + eps);
     for (int c = 0; c < p; ++c) R(row, index_[static_cast<size_t>(nonzero_[static_cast<size_t>(c)])]) = w * V(c, l);
   }
-  for (int k = 0; k < m; ++k) occupied_list.push_back(index_[static_cast<size_t>(k)]);
+  listOccupied("regularizedRows", occupied_list, m);
   return m;
 }
 
 int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H,
                                            const std::vector<char>& occupied, double eps,
                                            Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list) {
-  LEXDYN_ALWAYS_ASSERT(occupied_list.capacity() >= static_cast<size_t>(n_),
-                       "regularizeAndFactor: reserve n entries in occupied_list (no allocation per tick)");
   const int m = regularizeAndFactor(H, occupied, eps, R);
-  occupied_list.clear();  // (empty when the block was not finite)
-  for (int k = 0; k < m; ++k) occupied_list.push_back(index_[static_cast<size_t>(k)]);
+  listOccupied("regularizeAndFactor", occupied_list, m);
   return m;
 }
 

@@ -124,6 +124,15 @@ class HighamRegularizer {
   /// X = V max(Lambda, 0) V^T of the symmetric block B (lower triangle read; X may alias B);
   /// sets min_eig_. False when the QR iteration did not converge.
   bool clippedBlock(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::Ref<Eigen::MatrixXd> X);
+  /// The common start of regularizeAndFactor and regularizedRows (`caller` names it in the
+  /// argument checks): lists the occupied dofs in index_, zeroes R, resets the diagnostics, copies
+  /// the occupied block of H into block_ and returns its size m (m_ = m).
+  int gatherOccupied(const char* caller, const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied,
+                     double eps, Eigen::Ref<Eigen::MatrixXd> R);
+  /// A non-finite block (or an eigenproblem that did not converge): no rows; returns 0.
+  int failed();
+  /// occupied_list = the first m occupied dofs (capacity >= size(): no allocation).
+  void listOccupied(const char* caller, std::vector<int>& occupied_list, int m) const;
   /// Lists the rows and columns of the symmetric block B that are not exactly zero in nonzero_
   /// (lower triangle read), copies that part's lower triangle into compact_ and decomposes it
   /// (eig_); sets min_eig_. Returns the count, or -1 when the QR iteration did not converge.
