@@ -44,6 +44,17 @@ Eigen::MatrixXd withEigenvalues(const Eigen::VectorXd& lambda, Rng& rng) {
   return 0.5 * (A + A.transpose());
 }
 
+/// The eigenvalues of an indefinite Hessian (two negative curvature directions), the typical
+/// input of eq. 91, and what eq. 91 makes of them: max(lambda, 0) + eps.
+Eigen::VectorXd indefiniteSpectrum() {
+  Eigen::VectorXd lambda(6);
+  lambda << -2.0, -0.5, 0.0, 0.3, 1.0, 4.0;
+  return lambda;
+}
+Eigen::VectorXd clippedPlusEps(const Eigen::VectorXd& lambda, double eps) {
+  return (lambda.cwiseMax(0.0).array() + eps).matrix();
+}
+
 std::vector<Eigen::MatrixXd> testMatrices(Rng& rng) {
   std::vector<Eigen::MatrixXd> out;
   for (int n : {1, 2, 3, 4, 7, 12, 20, 38}) {
@@ -285,9 +296,8 @@ TEST(Higham, EigenRowsOfAnIndefiniteHessian) {
   // Row l is sqrt(max(lambda_l, 0) + eps) v_l^T: the negative curvature is clipped to eps, and
   // the rows are orthogonal with the eigenvalues' square roots as norms, in ascending order.
   Rng rng(110);
-  const int n = 6;
-  Eigen::VectorXd lambda(n);
-  lambda << -2.0, -0.5, 0.0, 0.3, 1.0, 4.0;
+  const Eigen::VectorXd lambda = indefiniteSpectrum();
+  const int n = static_cast<int>(lambda.size());
   const Eigen::MatrixXd H = withEigenvalues(lambda, rng);
   HighamRegularizer hr(n);
   Eigen::MatrixXd R(n, n);
@@ -296,8 +306,7 @@ TEST(Higham, EigenRowsOfAnIndefiniteHessian) {
   const double eps = 1e-6;
   ASSERT_EQ(hr.regularizedRows(H, std::vector<char>(n, 1), eps, R, list), n);
   EXPECT_NEAR(hr.lastMinEigenvalue(), -2.0, 1e-12);
-  Eigen::VectorXd want(n);
-  want << eps, eps, eps, 0.3 + eps, 1.0 + eps, 4.0 + eps;
+  const Eigen::VectorXd want = clippedPlusEps(lambda, eps);
   const Eigen::MatrixXd RRt = R * R.transpose();
   for (int i = 0; i < n; ++i) {
     EXPECT_NEAR(RRt(i, i), want(i), 1e-12) << i;
@@ -406,9 +415,8 @@ TEST(SymmetricEigenSolver, RotationsBelowTheSquaresRange) {
 TEST(Higham, IndefiniteHessianWithEpsIsFactored) {
   // An indefinite Hessian (a negative curvature direction), the typical input of eq. 91.
   Rng rng(108);
-  const int n = 6;
-  Eigen::VectorXd lambda(n);
-  lambda << -2.0, -0.5, 0.0, 0.3, 1.0, 4.0;
+  const Eigen::VectorXd lambda = indefiniteSpectrum();
+  const int n = static_cast<int>(lambda.size());
   const Eigen::MatrixXd H = withEigenvalues(lambda, rng);
   HighamRegularizer hr(n);
   Eigen::MatrixXd R(n, n);
@@ -417,9 +425,7 @@ TEST(Higham, IndefiniteHessianWithEpsIsFactored) {
   ASSERT_EQ(hr.regularizeAndFactor(H, all, eps, R), n);
   EXPECT_NEAR(hr.lastMinEigenvalue(), -2.0, 1e-12);
   const Eigen::VectorXd got = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(R.transpose() * R).eigenvalues();
-  Eigen::VectorXd want(n);
-  want << eps, eps, eps, 0.3 + eps, 1.0 + eps, 4.0 + eps;
-  EXPECT_LE((got - want).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LE((got - clippedPlusEps(lambda, eps)).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_TRUE(R.isUpperTriangular(0.0));
 }
 
