@@ -3,7 +3,6 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 case "${1:-}" in -h | --help) lexdyn_help "[options of exp1.sh]"; "$ROOT/harness/scripts/exp1.sh" --help; exit 0 ;; esac
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 cd "$ROOT"
 harness/scripts/install-deps.sh
 harness/scripts/build.sh
