@@ -270,6 +270,11 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
       i.linear_solver = v->asEnum({"block_elimination", "dense_lu"}) == "dense_lu" ? sim::LinearSolver::DenseLU
                                                                                   : sim::LinearSolver::BlockElimination;
     }
+    if (auto v = im.optional("jacobian")) {
+      i.jacobian = v->asEnum({"difference_quotient", "applied_forces"}) == "applied_forces"
+                       ? sim::IntegratorJacobian::AppliedForces
+                       : sim::IntegratorJacobian::DifferenceQuotient;
+    }
     im.finish();
   }
   m.finish();

@@ -194,7 +194,10 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
   init += "; at rest: net force " + num(rest.net_force_N) + " N, net moment " + num(rest.net_moment_Nm) +
           " N m, largest joint imbalance " + num(rest.joint_residual_Nm) + " N m";
   md.emplace_back("initial_state", init);
-  md.emplace_back("integrator", "SUNDIALS CVODE BDF, Newton, dense difference-quotient Jacobian; rtol " +
+  const bool dq_jacobian = s.integrator.jacobian == sim::IntegratorJacobian::DifferenceQuotient;
+  md.emplace_back("integrator", std::string("SUNDIALS CVODE BDF, Newton, ") +
+                                    (dq_jacobian ? "dense difference-quotient Jacobian" : "Jacobian of the applied forces") +
+                                    "; rtol " +
                                     num(s.integrator.rtol) + ", atol_position " + num(s.integrator.atol_position) +
                                     ", atol_velocity " + num(s.integrator.atol_velocity) + ", max_order " +
                                     std::to_string(s.integrator.max_order) + ", max_steps_per_tick " +

@@ -4,8 +4,10 @@
 # cases' method comparisons (OUT_DIR/<case>.compare.txt) and prints a table (OUT_DIR/table.txt).
 # docs/cases.md, "Commands". Takes minutes (the experiments are 40-120 s of simulated time each).
 #
-# Usage: harness/scripts/full-runs.sh [-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [ID ...]
+# Usage: harness/scripts/full-runs.sh [-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [-s PATH=VALUE] [ID ...]
 #   ID: CASE.METHOD or CASE (see `lexdyn-harness golden list`); none: all of the manifest.
+#   -s: an override of every run (`run --set`, docs/cases.md "Overrides"), e.g.
+#       sim.integrator.jacobian=difference_quotient.
 #   defaults: build/, out/full-runs, 2 jobs, golden/manifest.yaml.
 # Exit codes (harness/scripts/exit-codes.sh): the worst of the runs and comparisons (130/143
 # interrupted, 2 bad input, 3 a run stopped early or wrote no summary, 1 a check or comparison
@@ -17,7 +19,8 @@ BUILD="$ROOT/build"
 OUT="$ROOT/out/full-runs"
 JOBS=2
 MANIFEST="$ROOT/golden/manifest.yaml"
-lexdyn_options "[-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [ID ...]" b=BUILD o=OUT j=JOBS m=MANIFEST -- "$@"
+SET=""
+lexdyn_options "[-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [-s PATH=VALUE] [ID ...]" b=BUILD o=OUT j=JOBS m=MANIFEST s=SET -- "$@"
 lexdyn_harness full-runs " (cmake --build $BUILD)"
 mkdir -p "$OUT"
 lexdyn_golden_list "$MANIFEST" "${LEXDYN_OPERANDS[@]}" > "$OUT/runs.txt"   # ID CASE_FILE METHOD
@@ -26,6 +29,7 @@ run_one() {
   local id="$1" case_file="$2" method="$3" dir="$OUT/$1"
   local args=(run "$case_file" --out "$dir" --quiet)
   [ "$method" != "-" ] && args+=(--method "$method")
+  [ -z "$SET" ] || args+=(--set "$SET")
   mkdir -p "$dir"
   echo "[full-runs] start $id" >&2
   local code=0
@@ -34,7 +38,7 @@ run_one() {
   echo "[full-runs] done  $id (exit $code): $(head -1 "$dir/log.txt")" >&2
 }
 export -f run_one
-export HARNESS OUT
+export HARNESS OUT SET
 xargs -P "$JOBS" -L 1 bash -c 'run_one "$0" "$1" "$2"' < "$OUT/runs.txt"
 
 # The method comparisons of the cases that have some, on the traces just written.

@@ -15,21 +15,23 @@
 #
 # Options for the runs under test (the reference run always uses the default settings):
 #   -s SOLVER   sim.integrator.linear_solver: block_elimination | dense_lu
+#   -J JACOBIAN sim.integrator.jacobian: difference_quotient | applied_forces
 #   -a ATOL     sim.integrator.atol_velocity
 #   -d S        stop every run (the reference too) at S seconds (run --duration)
 #   -j J        runs at a time (default 1)
 #   -o DIR      keep the runs in DIR (default: a temporary directory, removed at the end)
 #
 # Usage: harness/scripts/sim-accuracy.sh [-b BUILD_DIR] [-p N [-k STEP] [--check]] [-s SOLVER]
-#          [-a ATOL] [-d S] [-j J] [-o DIR] [case.yaml ...]
+#          [-J JACOBIAN] [-a ATOL] [-d S] [-j J] [-o DIR] [case.yaml ...]
 #        (defaults: build/, cases/stand.yaml cases/squat_sway.yaml)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
-USAGE="[-b BUILD_DIR] [-p N [-k STEP] [--check]] [-s SOLVER] [-a ATOL] [-d S] [-j J] [-o DIR] [case.yaml ...]"
+USAGE="[-b BUILD_DIR] [-p N [-k STEP] [--check]] [-s SOLVER] [-J JACOBIAN] [-a ATOL] [-d S] [-j J] [-o DIR] [case.yaml ...]"
 BUILD="$ROOT/build"
 NPERT=0
 STEP=0.01
 SOLVER=""
+JACOBIAN=""
 ATOLV=""
 DURATION=""
 JOBS=1
@@ -39,12 +41,13 @@ args=()
 for a in "$@"; do
   if [ "$a" = "--check" ]; then CHECK=1; else args+=("$a"); fi
 done
-lexdyn_options "$USAGE" b=BUILD p=NPERT k=STEP s=SOLVER a=ATOLV d=DURATION j=JOBS o=KEEP -- ${args[@]+"${args[@]}"}
+lexdyn_options "$USAGE" b=BUILD p=NPERT k=STEP s=SOLVER J=JACOBIAN a=ATOLV d=DURATION j=JOBS o=KEEP -- ${args[@]+"${args[@]}"}
 usage_error() { echo "sim-accuracy: $1" >&2; echo "usage: $0 $USAGE" >&2; exit 2; }
 [[ "$NPERT" =~ ^[0-9]+$ ]] || usage_error "-p expects a count, found '$NPERT'"
 [[ "$STEP" =~ ^[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?$ ]] || usage_error "-k expects a relative step, found '$STEP'"
 [[ "$JOBS" =~ ^[1-9][0-9]*$ ]] || usage_error "-j expects a positive count, found '$JOBS'"
 case "$SOLVER" in ""|block_elimination|dense_lu) ;; *) usage_error "-s expects block_elimination or dense_lu, found '$SOLVER'" ;; esac
+case "$JACOBIAN" in ""|difference_quotient|applied_forces) ;; *) usage_error "-J expects difference_quotient or applied_forces, found '$JACOBIAN'" ;; esac
 [ "$CHECK" = 0 ] || [ "$NPERT" -ge 1 ] || usage_error "--check needs -p N"
 lexdyn_cases ${LEXDYN_OPERANDS[@]+"${LEXDYN_OPERANDS[@]}"}
 lexdyn_harness sim-accuracy
@@ -60,6 +63,7 @@ fi
 # Overrides of the runs under test, and the options of every run.
 SETS=()
 [ -z "$SOLVER" ] || SETS+=(--set "sim.integrator.linear_solver=$SOLVER")
+[ -z "$JACOBIAN" ] || SETS+=(--set "sim.integrator.jacobian=$JACOBIAN")
 [ -z "$ATOLV" ] || SETS+=(--set "sim.integrator.atol_velocity=$ATOLV")
 RUNOPTS=(--quiet)
 [ -z "$DURATION" ] || RUNOPTS+=(--duration "$DURATION")

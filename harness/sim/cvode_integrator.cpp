@@ -303,6 +303,18 @@ const char* toString(LinearSolver s) {
   return "unknown";
 }
 
+void OdeSystem::jacobian(double, const double*, const double*, double*) {
+  throw std::logic_error("this system provides no Jacobian: integrate it with difference quotients");
+}
+
+const char* toString(JacobianSource s) {
+  switch (s) {
+    case JacobianSource::DifferenceQuotient: return "difference_quotient";
+    case JacobianSource::System: return "system";
+  }
+  return "unknown";
+}
+
 const char* toString(CvodeStatus s) {
   switch (s) {
     case CvodeStatus::Success: return "success";
@@ -362,6 +374,32 @@ struct CvodeIntegrator::Impl {
     return 0;
   }
 
+  // The system's Jacobian into the dense matrix J. A throwing jacobian() stops the integration as
+  // a throwing rhs() does; a non-finite entry is recoverable (CVODE retries with a smaller step).
+  int systemJacobian(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J) {
+    double* data = SUNDenseMatrix_Data(J);
+    try {
+      system.jacobian(t, N_VGetArrayPointer(yv), N_VGetArrayPointer(fy), data);
+    } catch (const std::exception& e) {
+      rhs_error = std::string("Jacobian: ") + e.what();
+      return -1;
+    } catch (...) {
+      rhs_error = "unknown exception in the Jacobian";
+      return -1;
+    }
+    const long entries = static_cast<long>(n) * n;
+    for (long i = 0; i < entries; ++i) {
+      if (!std::isfinite(data[i])) return 1;
+    }
+    return 0;
+  }
+
+  // CVODE's Jacobian function (CVodeSetJacFn), for the solvers that let CVODE form I - gamma J.
+  static int jacobianCallback(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user, N_Vector, N_Vector,
+                              N_Vector) {
+    return static_cast<Impl*>(user)->systemJacobian(t, yv, fy, J);
+  }
+
   static void errorHandler(int code, const char* module, const char* function, char* msg, void* user) {
     Impl& self = *static_cast<Impl*>(user);
     self.cvode_error = std::string(module ? module : "CVODE") + "::" + (function ? function : "?") + " (" +
@@ -381,7 +419,8 @@ struct CvodeIntegrator::Impl {
     *jcur = fresh ? SUNTRUE : SUNFALSE;
     if (fresh) {
       self.jacobian_incomplete = true;
-      const int flag = cvLsDQJac(t, yv, fy, J, self.mem, tmp1, tmp2, tmp3);
+      const int flag = self.settings.jacobian == JacobianSource::System ? self.systemJacobian(t, yv, fy, J)
+                                                                        : cvLsDQJac(t, yv, fy, J, self.mem, tmp1, tmp2, tmp3);
       if (flag != 0) return flag;
       self.jacobian_incomplete = false;
     }
@@ -438,12 +477,14 @@ CvodeIntegrator::CvodeIntegrator(OdeSystem& system, const CvodeSettings& setting
     m.LS->ops->free = lsFree;
   }
   m.check(CVodeSetLinearSolver(m.mem, m.LS, m.A), "CVodeSetLinearSolver");  // Newton iteration
-  if (m.newton) {
-    if (settings.own_linear_system) {
-      m.check(CVodeSetLinSysFn(m.mem, &Impl::linearSystem), "CVodeSetLinSysFn");
-    } else {
-      m.newton->setFormsSystem(false);
-    }
+  const bool own_linear_system = m.newton && settings.own_linear_system;
+  if (own_linear_system) {
+    m.check(CVodeSetLinSysFn(m.mem, &Impl::linearSystem), "CVodeSetLinSysFn");
+  } else if (m.newton) {
+    m.newton->setFormsSystem(false);
+  }
+  if (!own_linear_system && settings.jacobian == JacobianSource::System) {
+    m.check(CVodeSetJacFn(m.mem, &Impl::jacobianCallback), "CVodeSetJacFn");
   }
   m.check(CVodeSetMaxOrd(m.mem, settings.max_order), "CVodeSetMaxOrd");
   m.check(CVodeSetMaxNumSteps(m.mem, settings.max_steps), "CVodeSetMaxNumSteps");
@@ -482,6 +523,9 @@ CvodeStatus CvodeIntegrator::advance(double t_out, double* y_out) {
     case CV_REPTD_RHSFUNC_ERR:
     case CV_UNREC_RHSFUNC_ERR:
     case CV_FIRST_RHSFUNC_ERR: s = CvodeStatus::RhsFailure; break;
+    case CV_LSETUP_FAIL:  // a throwing OdeSystem::jacobian() fails the setup
+      if (!m.rhs_error.empty()) s = CvodeStatus::RhsFailure;
+      break;
     default: break;
   }
   m.message = std::string("CVODE stopped at t = ") + std::to_string(t_reached) + " s (" + toString(s) + ")";

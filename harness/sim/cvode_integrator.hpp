@@ -1,6 +1,7 @@
 // The one adapter to SUNDIALS CVODE (the only file that includes SUNDIALS headers is
 // cvode_integrator.cpp). Integrates ydot = f(t, y) with BDF and a Newton nonlinear solver whose
-// dense Jacobian CVODE approximates by difference quotients. The Newton systems
+// dense Jacobian CVODE approximates by difference quotients (or the system provides,
+// CvodeSettings::jacobian). The Newton systems
 // (I - gamma J) x = b are solved by our own direct linear solver (cvode_integrator.cpp,
 // NewtonSolver): for a system y = [q; u] whose q block is kinematic (CvodeSettings::
 // kinematic_block) by eliminating the q block, otherwise by a dense LU of the whole matrix; or,
@@ -24,7 +25,23 @@ class OdeSystem {
   virtual ~OdeSystem() = default;
   virtual int size() const = 0;
   virtual void rhs(double t, const double* y, double* ydot) = 0;
+  /// The Jacobian d ydot / d y at (t, y) (n x n, column-major; fy = rhs(t, y)), used with
+  /// CvodeSettings::jacobian = JacobianSource::System. It may be an approximation: CVODE's
+  /// error test, not the Jacobian, decides the accuracy; a poorer Jacobian only makes the Newton
+  /// iterations converge more slowly. It may throw, as rhs() may (CvodeStatus::RhsFailure, with
+  /// the exception's message). The default throws: a system
+  /// without one must be integrated with difference quotients.
+  virtual void jacobian(double t, const double* y, const double* fy, double* J);
 };
+
+/// Where the Jacobian of CVODE's Newton matrix comes from.
+enum class JacobianSource {
+  DifferenceQuotient,  ///< CVODE's difference quotients: n right-hand sides per Jacobian (the default)
+  System               ///< OdeSystem::jacobian
+};
+
+const char* toString(JacobianSource s);  ///< "difference_quotient" | "system"
+
 
 /// Who solves the Newton systems (I - gamma J) x = b.
 enum class LinearSolver {
@@ -56,12 +73,13 @@ struct CvodeSettings {
   /// scale it to I - gamma J at every setup. The same bits either way (a test compares them);
   /// true saves the copy and the scaling of the whole n x n matrix.
   bool own_linear_system = true;
+  JacobianSource jacobian = JacobianSource::DifferenceQuotient;
 };
 
 struct CvodeStats {
   long steps = 0;
   long rhs_evals = 0;           ///< by the integrator (not counting the Jacobian's)
-  long jac_evals = 0;           ///< dense difference-quotient Jacobians
+  long jac_evals = 0;           ///< Jacobians (difference quotients or the system's)
   long jac_rhs_evals = 0;       ///< rhs evaluations spent on those Jacobians
   long nonlin_iters = 0;
   long nonlin_conv_fails = 0;

@@ -170,6 +170,9 @@ struct MultibodyState::Impl {
   // Applied forces (Simbody's numbering) and the forward-dynamics outputs.
   SimTK::Vector mobility_forces, udot;
   SimTK::Vector_<SimTK::SpatialVec> body_forces, body_accelerations;
+  // Workspaces of the Jacobian queries.
+  SimTK::Matrix jacobian, matrix;
+  SimTK::Vector speeds, rates;
 };
 
 Multibody::Multibody(model::RobotDescription description) : impl_(std::make_unique<Impl>(std::move(description))) {}
@@ -359,6 +362,49 @@ void Multibody::netForce(MultibodyState& st, double* f) const {
   // residual = M udot + C(q, u) - applied forces.
   m.matter.calcResidualForceIgnoringConstraints(s.state, s.mobility_forces, s.body_forces, zero_udot, residual);
   for (int k = 0; k < m.nv; ++k) f[k] = -residual[m.u_index[static_cast<size_t>(k)]];
+}
+
+// =============================================================================================
+// For the integrator's Jacobian
+// =============================================================================================
+void Multibody::pointJacobian(MultibodyState& st, int body, const Eigen::Vector3d& r_body, Eigen::Ref<Eigen::MatrixXd> J) const {
+  const Impl& m = *impl_;
+  LEXDYN_ALWAYS_ASSERT(J.rows() == 6 && J.cols() == m.nv, "pointJacobian: J must be 6 x nv");
+  SimTK::Matrix& Js = st.impl_->jacobian;  // 6 x nu, rows [angular; linear]
+  m.matter.calcFrameJacobian(st.impl_->state, m.mobod[static_cast<size_t>(body)], vec3(r_body), Js);
+  for (int k = 0; k < m.nv; ++k) {
+    const int c = m.u_index[static_cast<size_t>(k)];
+    for (int i = 0; i < 3; ++i) {
+      J(i, k) = Js(3 + i, c);
+      J(3 + i, k) = Js(i, c);
+    }
+  }
+}
+
+void Multibody::inverseMassMatrix(MultibodyState& st, Eigen::Ref<Eigen::MatrixXd> Minv) const {
+  const Impl& m = *impl_;
+  LEXDYN_ALWAYS_ASSERT(Minv.rows() == m.nv && Minv.cols() == m.nv, "inverseMassMatrix: Minv must be nv x nv");
+  SimTK::Matrix& Ms = st.impl_->matrix;
+  m.matter.calcMInv(st.impl_->state, Ms);
+  for (int j = 0; j < m.nv; ++j) {
+    const int c = m.u_index[static_cast<size_t>(j)];
+    for (int i = 0; i < m.nv; ++i) Minv(i, j) = Ms(m.u_index[static_cast<size_t>(i)], c);
+  }
+}
+
+void Multibody::rateMatrix(MultibodyState& st, Eigen::Ref<Eigen::MatrixXd> N) const {
+  const Impl& m = *impl_;
+  LEXDYN_ALWAYS_ASSERT(N.rows() == m.nq && N.cols() == m.nv, "rateMatrix: N must be nq x nv");
+  MultibodyState::Impl& s = *st.impl_;
+  s.speeds.resize(m.nv);
+  s.speeds = 0.0;
+  for (int j = 0; j < m.nv; ++j) {
+    const int c = m.u_index[static_cast<size_t>(j)];
+    s.speeds[c] = 1.0;
+    m.matter.multiplyByN(s.state, false, s.speeds, s.rates);
+    s.speeds[c] = 0.0;
+    for (int i = 0; i < m.nq; ++i) N(i, j) = s.rates[m.q_index[static_cast<size_t>(i)]];
+  }
 }
 
 // =============================================================================================

@@ -112,6 +112,15 @@ class Multibody {
   /// zero exactly at a static equilibrium.
   void netForce(MultibodyState& s, double* f) const;
 
+  // ----- for the integrator's Jacobian (docs/simulator.md, "Integrator") -------------------
+  /// Jacobian (6 x nv, world, rows [linear; angular]) of the point r_body (body frame) of a
+  /// body: its velocity and the body's angular velocity are J u. calcFrameJacobian.
+  void pointJacobian(MultibodyState& s, int body, const Eigen::Vector3d& r_body, Eigen::Ref<Eigen::MatrixXd> J) const;
+  /// M(q)^-1 (nv x nv): calcMInv.
+  void inverseMassMatrix(MultibodyState& s, Eigen::Ref<Eigen::MatrixXd> Minv) const;
+  /// N(q) (nq x nv) of qdot = N(q) u: multiplyByN, one column per speed.
+  void rateMatrix(MultibodyState& s, Eigen::Ref<Eigen::MatrixXd> N) const;
+
   // ----- Simbody's operators at the state (allocate; for verification) ---------------------
   /// Joint-space inertia matrix (nv x nv), calcM.
   void massMatrix(const MultibodyState& s, Eigen::Ref<Eigen::MatrixXd> M) const;

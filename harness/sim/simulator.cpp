@@ -208,6 +208,86 @@ struct Simulator::Impl final : public OdeSystem {
     }
   }
 
+  // Workspaces of jacobian().
+  Eigen::MatrixXd jac_point, jac_Ku, jac_Kq, jac_N, jac_Ninv, jac_Minv, jac_dq;
+
+  // IntegratorJacobian::AppliedForces: with G(q, u) the generalized applied forces and the
+  // dynamics udot = M(q)^-1 (G - C(q, u)), qdot = N(q) u,
+  //   d qdot / d q = 0,  d qdot / d u = N,
+  //   d udot / d q = M^-1 (dG/dx) N^-1,  d udot / d u = M^-1 dG/du,
+  // where x is the displacement that the speeds integrate (dx = N^-1 dq). dG/dx and dG/du hold
+  // the stiffness and damping of the contact points (J^T dF/dp J, J^T dF/dv J with the point's
+  // Jacobian J), of the grasp bushings and of the unsaturated servos. Left out: the derivatives
+  // of N, M, gravity, the Coriolis terms and of J itself. They are small beside the stiff
+  // forces over one step; CVODE's error test decides the accuracy either way.
+  void jacobian(double t, const double* yy, const double*, double* out) override {
+    const double* q = yy;
+    const double* uu = yy + nqc;
+    model.setState(data, q, uu);
+    const BodyKinematics& d = data.bodies();
+    jac_Ku.setZero(nv, nv);
+    jac_Kq.setZero(nv, nv);
+    jac_point.resize(6, nv);
+    // Ground contact: F(p, v) of evaluateForces, differentiated.
+    const ContactSettings& c = settings.contact;
+    for (const PointInfo& P : points) {
+      const Eigen::Vector3d r = d.R[static_cast<size_t>(P.body)] * P.r_body;
+      const double pen = c.ground_height_m - (d.p(2, P.body) + r.z());
+      if (!(pen > 0.0)) continue;
+      const Eigen::Vector3d v = d.v.col(P.body) + d.omega.col(P.body).cross(r);
+      const double kp = c.stiffness * std::pow(pen, c.exponent);
+      const double fn = kp * (1.0 - c.dissipation_s_per_m * v.z());
+      if (!(fn > 0.0)) continue;
+      const double dfn_dpz = -c.stiffness * c.exponent * std::pow(pen, c.exponent - 1.0) * (1.0 - c.dissipation_s_per_m * v.z());
+      const double dfn_dvz = -kp * c.dissipation_s_per_m;
+      const double w = std::sqrt(v.x() * v.x() + v.y() * v.y() + c.slip_velocity_m_per_s * c.slip_velocity_m_per_s);
+      // dF/dfn: friction scales with fn.
+      const Eigen::Vector3d dF_dfn(-mu * v.x() / w, -mu * v.y() / w, 1.0);
+      Eigen::Matrix3d dF_dp = Eigen::Matrix3d::Zero();
+      dF_dp.col(2) = dF_dfn * dfn_dpz;
+      Eigen::Matrix3d dF_dv = Eigen::Matrix3d::Zero();
+      const Eigen::Vector2d vt(v.x(), v.y());
+      dF_dv.topLeftCorner<2, 2>() = (-mu * fn / w) * (Eigen::Matrix2d::Identity() - vt * vt.transpose() / (w * w));
+      dF_dv.col(2) += dF_dfn * dfn_dvz;
+      model.pointJacobian(data, P.body, P.r_body, jac_point);
+      const auto Jl = jac_point.topRows<3>();
+      jac_Kq.noalias() += Jl.transpose() * (dF_dp * Jl);
+      jac_Ku.noalias() += Jl.transpose() * (dF_dv * Jl);
+    }
+    // Grasp bushings: F = -k (p - p0) - d v, T = -k_r rot_err - d_r omega (rot_err taken as the
+    // rotation's displacement).
+    for (const GraspState& G : grasps) {
+      if (!G.active) continue;
+      const GraspSettings& gs = G.settings;
+      model.pointJacobian(data, G.body, G.X_body_frame.translation(), jac_point);
+      const auto Jl = jac_point.topRows<3>();
+      const auto Ja = jac_point.bottomRows<3>();
+      jac_Kq.noalias() -= gs.stiffness_N_per_m * Jl.transpose() * Jl + gs.rot_stiffness_Nm_per_rad * Ja.transpose() * Ja;
+      jac_Ku.noalias() -= gs.damping_Ns_per_m * Jl.transpose() * Jl + gs.rot_damping_Nms_per_rad * Ja.transpose() * Ja;
+    }
+    // Servos below their torque limit.
+    const Eigen::VectorXd& tau_max = model.jointTorqueLimits();
+    for (int j = 0; j < nj; ++j) {
+      double q_ref = 0.0, qd_ref = 0.0, tau_ff = 0.0;
+      setpoint(t, j, q_ref, qd_ref, tau_ff);
+      const double tau = settings.servo.kp[j] * (q_ref - q[off + j]) + settings.servo.kd[j] * (qd_ref - uu[off + j]) + tau_ff;
+      if (!(std::abs(tau) < tau_max[j])) continue;  // clamped: no change with q or u
+      jac_Kq(off + j, off + j) -= settings.servo.kp[j];
+      jac_Ku(off + j, off + j) -= settings.servo.kd[j];
+    }
+    jac_N.resize(nqc, nv);
+    model.rateMatrix(data, jac_N);
+    jac_Ninv = jac_N.partialPivLu().inverse();
+    jac_Minv.resize(nv, nv);
+    model.inverseMassMatrix(data, jac_Minv);
+    Eigen::Map<Eigen::MatrixXd> J(out, ny, ny);
+    J.setZero();
+    J.topRightCorner(nqc, nv) = jac_N;
+    jac_dq.noalias() = jac_Kq * jac_Ninv;
+    J.bottomLeftCorner(nv, nqc).noalias() = jac_Minv * jac_dq;
+    J.bottomRightCorner(nv, nv).noalias() = jac_Minv * jac_Ku;
+  }
+
   void rhs(double t, const double* yy, double* ydot) override {
     const double* q = yy;
     const double* uu = yy + nqc;
@@ -271,6 +351,14 @@ struct Simulator::Impl final : public OdeSystem {
     }
   }
 };
+
+const char* toString(IntegratorJacobian j) {
+  switch (j) {
+    case IntegratorJacobian::DifferenceQuotient: return "difference_quotient";
+    case IntegratorJacobian::AppliedForces: return "applied_forces";
+  }
+  return "unknown";
+}
 
 Simulator::Simulator(const std::string& urdf_path, const std::string& data_path, SimulatorSettings settings)
     : Simulator(model::loadRobotDescription(urdf_path, data_path), std::move(settings)) {}
@@ -355,6 +443,10 @@ Simulator::Simulator(model::RobotDescription description, SimulatorSettings sett
   cs.max_step = is.max_step_s;
   cs.kinematic_block = s.nqc;  // q = [Euler angles, base position, joints]: qdot = N(q) u
   cs.linear_solver = is.linear_solver;
+  if (is.jacobian == IntegratorJacobian::AppliedForces) {
+    if (s.nqc != s.nv) throw InputError(where, "integrator: the applied_forces Jacobian needs as many coordinates as speeds");
+    cs.jacobian = JacobianSource::System;
+  }
   s.cvode = std::make_unique<CvodeIntegrator>(s, cs);
 }
 

@@ -62,6 +62,15 @@ struct GraspSettings {
   bool initially_active = false;
 };
 
+/// The Jacobian of CVODE's Newton matrix (docs/simulator.md, "Integrator").
+enum class IntegratorJacobian {
+  DifferenceQuotient,  ///< CVODE's difference quotients: one right-hand side per state component
+  AppliedForces        ///< the derivatives of the contact, grasp and servo forces mapped by M(q)^-1,
+                       ///< and N(q) for the coordinates' rates; no right-hand side (an approximation)
+};
+
+const char* toString(IntegratorJacobian j);  ///< "difference_quotient" | "applied_forces"
+
 struct IntegratorSettings {
   double rtol = 1e-4;
   double atol_position = 1e-6;  ///< rad or m (Euler angles, base position, joint positions)
@@ -72,6 +81,7 @@ struct IntegratorSettings {
   /// Solver of CVODE's Newton systems: our block elimination of the kinematic block, or
   /// SUNDIALS' dense LU of the whole matrix (for comparisons; docs/simulator.md, "Integrator").
   LinearSolver linear_solver = LinearSolver::BlockElimination;
+  IntegratorJacobian jacobian = IntegratorJacobian::DifferenceQuotient;
 };
 
 struct SimulatorSettings {

@@ -91,6 +91,11 @@ TEST(CaseFile, WrongTypesAreErrors) {
   EXPECT_TRUE(containsAll(errorOf(s), {"case.yaml:", "sim.integrator.linear_solver", "expected one of {block_elimination, dense_lu}",
                                        "found 'sparse_lu'"}))
       << errorOf(s);
+  s = minimalCase();
+  s["f_sim"] += "  integrator: {jacobian: analytic}\n";
+  EXPECT_TRUE(containsAll(errorOf(s), {"case.yaml:", "sim.integrator.jacobian",
+                                       "expected one of {difference_quotient, applied_forces}", "found 'analytic'"}))
+      << errorOf(s);
 }
 
 TEST(CaseFile, IntegratorLinearSolver) {
@@ -99,6 +104,15 @@ TEST(CaseFile, IntegratorLinearSolver) {
     auto s = minimalCase();
     s["f_sim"] += std::string("  integrator: {linear_solver: ") + v + "}\n";
     EXPECT_STREQ(sim::toString(loadCase(writeCase(outputDir("case_file_linear_solver"), s)).sim.integrator.linear_solver), v);
+  }
+}
+
+TEST(CaseFile, IntegratorJacobian) {
+  EXPECT_EQ(loadCase(src("cases/stand.yaml")).sim.integrator.jacobian, sim::IntegratorJacobian::DifferenceQuotient);
+  for (const char* v : {"difference_quotient", "applied_forces"}) {
+    auto s = minimalCase();
+    s["f_sim"] += std::string("  integrator: {jacobian: ") + v + "}\n";
+    EXPECT_STREQ(sim::toString(loadCase(writeCase(outputDir("case_file_jacobian"), s)).sim.integrator.jacobian), v);
   }
 }
 

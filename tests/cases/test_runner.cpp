@@ -139,6 +139,25 @@ TEST(Runner, RerunsAreBitIdentical) {
   EXPECT_EQ(a.integrator.rhs_evals, b.integrator.rhs_evals);
 }
 
+// The largest differences between two traces of one case: joint positions, joint torques, WAIST
+// position.
+struct TraceDifference {
+  double q = 0.0, tau = 0.0, waist = 0.0;
+};
+TraceDifference largestDifference(const checks::TraceTable& a, const checks::TraceTable& b) {
+  TraceDifference d;
+  EXPECT_EQ(a.names, b.names);
+  EXPECT_EQ(a.rows.size(), b.rows.size());
+  if (a.names != b.names || a.rows.size() != b.rows.size()) return {1e300, 1e300, 1e300};
+  for (size_t c = 0; c < a.names.size(); ++c) {
+    const std::string& n = a.names[c];
+    double* worst = n.rfind("q.", 0) == 0 ? &d.q : n.rfind("tau.", 0) == 0 ? &d.tau : n.rfind("frame.WAIST.", 0) == 0 ? &d.waist : nullptr;
+    if (!worst) continue;
+    for (size_t k = 0; k < a.rows.size(); ++k) *worst = std::max(*worst, std::abs(a.rows[k][c] - b.rows[k][c]));
+  }
+  return d;
+}
+
 // sim.integrator.linear_solver: SUNDIALS' dense LU and our block elimination solve the same
 // Newton systems, so the runs differ by rounding only, amplified by the integrator at its
 // tolerances and by the stiff friction to the size of the integrator's own error against a tight
@@ -155,21 +174,46 @@ TEST(Runner, TheTwoNewtonSystemSolversAgree) {
   EXPECT_EQ(b.integrator.lin_full_setups, 0);
   const checks::TraceTable ta = checks::readTrace(base + "/block/trace.csv");
   const checks::TraceTable tb = checks::readTrace(base + "/dense/trace.csv");
-  ASSERT_EQ(ta.names, tb.names);
-  ASSERT_EQ(ta.rows.size(), tb.rows.size());
   EXPECT_EQ(checks::findMetadata(ta.metadata, "integrator")->find("linear_solver"), std::string::npos);
   EXPECT_NE(checks::findMetadata(tb.metadata, "integrator")->find("linear_solver dense_lu"), std::string::npos);
-  double dq = 0.0, dtau = 0.0, dwaist = 0.0;
-  for (size_t c = 0; c < ta.names.size(); ++c) {
-    const std::string& n = ta.names[c];
-    double* worst = n.rfind("q.", 0) == 0 ? &dq : n.rfind("tau.", 0) == 0 ? &dtau : n.rfind("frame.WAIST.", 0) == 0 ? &dwaist : nullptr;
-    if (!worst) continue;
-    for (size_t k = 0; k < ta.rows.size(); ++k) *worst = std::max(*worst, std::abs(ta.rows[k][c] - tb.rows[k][c]));
-  }
-  EXPECT_LT(dq, 1e-4) << "joint positions";  // 2.4e-5 rad
-  EXPECT_LT(dtau, 5.0) << "joint torques";   // 1.7 N m, at the friction transient of t = 0.32 s
-  EXPECT_LT(dwaist, 1e-4) << "WAIST position";  // 1.2e-5 m
-  EXPECT_GT(dq + dtau, 0.0);  // really two different solvers
+  const TraceDifference d = largestDifference(ta, tb);
+  EXPECT_LT(d.q, 1e-4) << "joint positions";  // 2.4e-5 rad
+  EXPECT_LT(d.tau, 5.0) << "joint torques";   // 1.7 N m, at the friction transient of t = 0.32 s
+  EXPECT_LT(d.waist, 1e-4) << "WAIST position";  // 1.2e-5 m
+  EXPECT_GT(d.q + d.tau, 0.0);  // really two different solvers
+}
+
+// sim.integrator.jacobian: the Jacobian of the applied forces instead of CVODE's difference
+// quotients. The runs differ by the integrator's rounding (limits as above), no right-hand side
+// is spent on Jacobians, and the integrator's work does not grow: a wrong stiffness or damping
+// (a sign, a missing contact term) makes the Newton iterations fail and CVODE take many more
+// steps. 2 s of squat_sway: the friction transient at 0.32 s and the squat.
+TEST(Runner, TheAppliedForcesJacobianAgreesWithoutDifferenceQuotients) {
+  const std::string base = outputDir("runner_jacobian");
+  CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 2.0, base));
+  ASSERT_EQ(spec.sim.integrator.jacobian, sim::IntegratorJacobian::DifferenceQuotient);  // the default
+  const RunSummary a = run(spec, base + "/dq");
+  spec.sim.integrator.jacobian = sim::IntegratorJacobian::AppliedForces;
+  const RunSummary b = run(spec, base + "/forces");
+  ASSERT_EQ(a.status, "completed");
+  ASSERT_EQ(b.status, "completed");
+  EXPECT_GT(a.integrator.jac_rhs_evals, 0);
+  EXPECT_EQ(b.integrator.jac_rhs_evals, 0);
+  EXPECT_GT(b.integrator.jac_evals, 0);
+  // 665 / 715 steps, 821 / 883 right-hand sides, 16 / 7 convergence failures here; a flipped
+  // friction damping or no servo damping gives 10^5-10^6 steps.
+  EXPECT_LE(b.integrator.steps, a.integrator.steps + a.integrator.steps / 5);
+  EXPECT_LE(b.integrator.nonlin_conv_fails, a.integrator.nonlin_conv_fails + 10);
+  EXPECT_LE(b.integrator.rhs_evals, a.integrator.rhs_evals + a.integrator.rhs_evals / 5);
+  const checks::TraceTable ta = checks::readTrace(base + "/dq/trace.csv");
+  const checks::TraceTable tb = checks::readTrace(base + "/forces/trace.csv");
+  EXPECT_NE(checks::findMetadata(ta.metadata, "integrator")->find("difference-quotient Jacobian"), std::string::npos);
+  EXPECT_NE(checks::findMetadata(tb.metadata, "integrator")->find("Jacobian of the applied forces"), std::string::npos);
+  const TraceDifference d = largestDifference(ta, tb);
+  EXPECT_LT(d.q, 1e-4) << "joint positions";    // 3.0e-5 rad
+  EXPECT_LT(d.tau, 5.0) << "joint torques";      // 1.6 N m
+  EXPECT_LT(d.waist, 1e-4) << "WAIST position";  // 1.7e-5 m
+  EXPECT_GT(d.q + d.tau, 0.0);
 }
 
 TEST(Runner, IntegratorFailureKeepsTheTraceAndReportsTheStatus) {
