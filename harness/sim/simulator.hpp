@@ -81,7 +81,7 @@ struct IntegratorSettings {
   /// Solver of CVODE's Newton systems: our block elimination of the kinematic block, or
   /// SUNDIALS' dense LU of the whole matrix (for comparisons; docs/simulator.md, "Integrator").
   LinearSolver linear_solver = LinearSolver::BlockElimination;
-  IntegratorJacobian jacobian = IntegratorJacobian::DifferenceQuotient;
+  IntegratorJacobian jacobian = IntegratorJacobian::AppliedForces;
 };
 
 struct SimulatorSettings {

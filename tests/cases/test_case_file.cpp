@@ -108,7 +108,7 @@ TEST(CaseFile, IntegratorLinearSolver) {
 }
 
 TEST(CaseFile, IntegratorJacobian) {
-  EXPECT_EQ(loadCase(src("cases/stand.yaml")).sim.integrator.jacobian, sim::IntegratorJacobian::DifferenceQuotient);
+  EXPECT_EQ(loadCase(src("cases/stand.yaml")).sim.integrator.jacobian, sim::IntegratorJacobian::AppliedForces);
   for (const char* v : {"difference_quotient", "applied_forces"}) {
     auto s = minimalCase();
     s["f_sim"] += std::string("  integrator: {jacobian: ") + v + "}\n";

@@ -191,7 +191,8 @@ TEST(Runner, TheTwoNewtonSystemSolversAgree) {
 TEST(Runner, TheAppliedForcesJacobianAgreesWithoutDifferenceQuotients) {
   const std::string base = outputDir("runner_jacobian");
   CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 2.0, base));
-  ASSERT_EQ(spec.sim.integrator.jacobian, sim::IntegratorJacobian::DifferenceQuotient);  // the default
+  ASSERT_EQ(spec.sim.integrator.jacobian, sim::IntegratorJacobian::AppliedForces);  // the default
+  spec.sim.integrator.jacobian = sim::IntegratorJacobian::DifferenceQuotient;
   const RunSummary a = run(spec, base + "/dq");
   spec.sim.integrator.jacobian = sim::IntegratorJacobian::AppliedForces;
   const RunSummary b = run(spec, base + "/forces");
