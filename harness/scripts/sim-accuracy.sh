@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Integrator accuracy at a case's own tolerances (docs/simulator.md, "Integrator"): runs each
 # case as written and again with a tight reference integrator (rtol 1e-8, atol_position 1e-10,
-# atol_velocity 1e-8, steps of at most 0.2 ms), then prints the largest differences between the
-# two traces over the run: WAIST position, joint positions, joint torques, vertical force of
+# atol_velocity 1e-8, steps of at most 0.2 ms, difference-quotient Jacobian), then prints the
+# largest differences between the two traces over the run: WAIST position, joint positions, joint torques, vertical force of
 # each foot, horizontal force at the foot sensors (also after t = 2 s).
 #
 # With -p N, each case is also run at N relative tolerances spread around its own one,
@@ -13,7 +13,8 @@
 # rounding; the median over the perturbations is the one to compare. --check (with -p) exits 1
 # when a median exceeds its documented bound (harness/scripts/lib/sim_accuracy.py, BOUNDS).
 #
-# Options for the runs under test (the reference run always uses the default settings):
+# Options for the runs under test (the reference run always uses the settings above, with CVODE's
+# difference-quotient Jacobian: independent of the applied forces' Jacobian, the default, under test):
 #   -s SOLVER   sim.integrator.linear_solver: block_elimination | dense_lu
 #   -J JACOBIAN sim.integrator.jacobian: difference_quotient | applied_forces
 #   -a ATOL     sim.integrator.atol_velocity
@@ -97,7 +98,7 @@ for c in "${CASES[@]}"; do
 import os, re, sys
 src, dst = sys.argv[1], sys.argv[2]
 base = os.path.dirname(os.path.abspath(src))
-ref = "  integrator: {rtol: 1.0e-8, atol_position: 1.0e-10, atol_velocity: 1.0e-8, max_step_s: 2.0e-4}\n"
+ref = "  integrator: {rtol: 1.0e-8, atol_position: 1.0e-10, atol_velocity: 1.0e-8, max_step_s: 2.0e-4, jacobian: difference_quotient}\n"
 out, skip, placed = [], False, False
 for line in open(src):
     m = re.match(r"^(\s*)(urdf|data):\s*(\S+)\s*$", line)

@@ -40,7 +40,8 @@ namespace lexdyn::sim {
 namespace {
 
 // The direct solver of CVODE's Newton systems A x = b, A = I - gamma J (n x n), from CVODE's
-// difference-quotient Jacobian J (column-major, kept in CVODE's system matrix) and gamma.
+// Jacobian J (difference quotients or the system's; column-major, kept in CVODE's system matrix)
+// and gamma.
 //
 // With a kinematic block of size p (y = [q; u], q the first p components) A is split as
 //   [A11 A12]   A11 = I - gamma dqdot/dq   (p x p: identity but for the rows whose rates
@@ -338,7 +339,7 @@ struct CvodeIntegrator::Impl {
   SUNMatrix A = nullptr;
   SUNLinearSolver LS = nullptr;
   std::unique_ptr<NewtonSolver> newton;
-  bool jacobian_incomplete = false;  // the last difference-quotient Jacobian failed part-way
+  bool jacobian_incomplete = false;  // the last Jacobian failed part-way (or had non-finite entries)
   void* mem = nullptr;
   double t = 0.0;
   std::string message;       // last failure
@@ -408,12 +409,13 @@ struct CvodeIntegrator::Impl {
 
   // CVODE's linear-system function for the block-elimination solver: where CVODE's own copies its
   // saved Jacobian into the system matrix and scales it to I - gamma J at every setup, this one
-  // keeps the Jacobian in the system matrix (a new difference-quotient Jacobian when CVODE asks
-  // for one, !jok) and hands gamma to the solver, which forms I - gamma J only where it reads it.
+  // keeps the Jacobian in the system matrix (a new one, difference quotients or the system's,
+  // when CVODE asks for one, !jok) and hands gamma to the solver, which forms I - gamma J only
+  // where it reads it.
   static int linearSystem(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, booleantype jok, booleantype* jcur,
                           realtype gamma, void* user, N_Vector tmp1, N_Vector tmp2, N_Vector tmp3) {
     Impl& self = *static_cast<Impl*>(user);
-    // A difference quotient that failed part-way leaves J with columns of two Jacobians (CVODE's
+    // A Jacobian that failed part-way leaves J with columns of two Jacobians (CVODE's
     // own function would still hold its last saved one): the next setup forms a new one.
     const bool fresh = !jok || self.jacobian_incomplete;
     *jcur = fresh ? SUNTRUE : SUNFALSE;
@@ -523,7 +525,7 @@ CvodeStatus CvodeIntegrator::advance(double t_out, double* y_out) {
     case CV_REPTD_RHSFUNC_ERR:
     case CV_UNREC_RHSFUNC_ERR:
     case CV_FIRST_RHSFUNC_ERR: s = CvodeStatus::RhsFailure; break;
-    case CV_LSETUP_FAIL:  // a throwing OdeSystem::jacobian() fails the setup
+    case CV_LSETUP_FAIL:  // a throwing OdeSystem::jacobian(), or rhs() within a difference quotient
       if (!m.rhs_error.empty()) s = CvodeStatus::RhsFailure;
       break;
     default: break;

@@ -25,7 +25,8 @@ class OdeSystem {
   virtual ~OdeSystem() = default;
   virtual int size() const = 0;
   virtual void rhs(double t, const double* y, double* ydot) = 0;
-  /// The Jacobian d ydot / d y at (t, y) (n x n, column-major; fy = rhs(t, y)), used with
+  /// The Jacobian d ydot / d y at (t, y) (n x n, column-major, every entry written: J may hold
+  /// the previous Jacobian; fy = rhs(t, y), may be null outside CVODE), used with
   /// CvodeSettings::jacobian = JacobianSource::System. It may be an approximation: CVODE's
   /// error test, not the Jacobian, decides the accuracy; a poorer Jacobian only makes the Newton
   /// iterations converge more slowly. It may throw, as rhs() may (CvodeStatus::RhsFailure, with

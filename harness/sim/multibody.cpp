@@ -81,6 +81,20 @@ struct Multibody::Impl {
   std::vector<SimTK::MobilizedBodyIndex> mobod;  // per body
   // Simbody's numbering: q[k] of ours is Simbody's q[q_index[k]], u[k] is u[u_index[k]].
   std::vector<int> q_index, u_index;
+
+  // J (6 x nv, rows [linear; angular], our u order) of the point r_body of a body, through
+  // Simbody's calcFrameJacobian into Js (6 x nu, rows [angular; linear]).
+  void frameJacobianOf(const SimTK::State& state, int body, const Eigen::Vector3d& r_body, SimTK::Matrix& Js,
+                       Eigen::Ref<Eigen::MatrixXd> J) const {
+    matter.calcFrameJacobian(state, mobod[static_cast<size_t>(body)], vec3(r_body), Js);
+    for (int k = 0; k < nv; ++k) {
+      const int c = u_index[static_cast<size_t>(k)];
+      for (int i = 0; i < 3; ++i) {
+        J(i, k) = Js(3 + i, c);
+        J(3 + i, k) = Js(i, c);
+      }
+    }
+  }
 };
 
 Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(system) {
@@ -370,15 +384,7 @@ void Multibody::netForce(MultibodyState& st, double* f) const {
 void Multibody::pointJacobian(MultibodyState& st, int body, const Eigen::Vector3d& r_body, Eigen::Ref<Eigen::MatrixXd> J) const {
   const Impl& m = *impl_;
   LEXDYN_ALWAYS_ASSERT(J.rows() == 6 && J.cols() == m.nv, "pointJacobian: J must be 6 x nv");
-  SimTK::Matrix& Js = st.impl_->jacobian;  // 6 x nu, rows [angular; linear]
-  m.matter.calcFrameJacobian(st.impl_->state, m.mobod[static_cast<size_t>(body)], vec3(r_body), Js);
-  for (int k = 0; k < m.nv; ++k) {
-    const int c = m.u_index[static_cast<size_t>(k)];
-    for (int i = 0; i < 3; ++i) {
-      J(i, k) = Js(3 + i, c);
-      J(3 + i, k) = Js(i, c);
-    }
-  }
+  m.frameJacobianOf(st.impl_->state, body, r_body, st.impl_->jacobian, J);
 }
 
 void Multibody::inverseMassMatrix(MultibodyState& st, Eigen::Ref<Eigen::MatrixXd> Minv) const {
@@ -443,15 +449,8 @@ void Multibody::frameJacobian(const MultibodyState& st, model::FrameId f, Eigen:
   const Impl& m = *impl_;
   LEXDYN_ALWAYS_ASSERT(J.rows() == 6 && J.cols() == m.nv, "frameJacobian: J must be 6 x nv");
   const model::FrameDescription& F = m.desc.frames.at(static_cast<size_t>(f));
-  SimTK::Matrix Js;  // 6 x nu, rows [angular; linear]
-  m.matter.calcFrameJacobian(st.impl_->state, m.mobod[static_cast<size_t>(F.link)], vec3(F.placement.translation()), Js);
-  for (int k = 0; k < m.nv; ++k) {
-    const int c = m.u_index[static_cast<size_t>(k)];
-    for (int i = 0; i < 3; ++i) {
-      J(i, k) = Js(3 + i, c);
-      J(3 + i, k) = Js(i, c);
-    }
-  }
+  SimTK::Matrix Js;
+  m.frameJacobianOf(st.impl_->state, F.link, F.placement.translation(), Js, J);
 }
 
 Eigen::Vector3d Multibody::systemCenterOfMass(const MultibodyState& st) const {

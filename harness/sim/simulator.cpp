@@ -265,7 +265,8 @@ struct Simulator::Impl final : public OdeSystem {
       jac_Kq.noalias() -= gs.stiffness_N_per_m * Jl.transpose() * Jl + gs.rot_stiffness_Nm_per_rad * Ja.transpose() * Ja;
       jac_Ku.noalias() -= gs.damping_Ns_per_m * Jl.transpose() * Jl + gs.rot_damping_Nms_per_rad * Ja.transpose() * Ja;
     }
-    // Servos below their torque limit.
+    // Servos below their torque limit (on the diagonal of dG/dx: the joints' block of N is the
+    // identity, joint rates = joint speeds).
     const Eigen::VectorXd& tau_max = model.jointTorqueLimits();
     for (int j = 0; j < nj; ++j) {
       double q_ref = 0.0, qd_ref = 0.0, tau_ff = 0.0;
@@ -777,6 +778,22 @@ CvodeStats Simulator::integratorStats() const {
   return s;
 }
 int Simulator::stateSize() const { return impl_->ny; }
+
+std::vector<double> Simulator::integratedState() const { return impl_->y; }
+
+void Simulator::rightHandSide(double t, const std::vector<double>& y, std::vector<double>& ydot) {
+  Impl& s = *impl_;
+  LEXDYN_ALWAYS_ASSERT(static_cast<int>(y.size()) == s.ny, "rightHandSide: y must have stateSize() entries");
+  ydot.resize(static_cast<size_t>(s.ny));
+  s.rhs(t, y.data(), ydot.data());
+}
+
+void Simulator::appliedForcesJacobian(double t, const std::vector<double>& y, Eigen::MatrixXd& J) {
+  Impl& s = *impl_;
+  LEXDYN_ALWAYS_ASSERT(static_cast<int>(y.size()) == s.ny, "appliedForcesJacobian: y must have stateSize() entries");
+  J.resize(s.ny, s.ny);
+  s.jacobian(t, y.data(), nullptr, J.data());
+}
 long Simulator::integratorRestarts() const { return impl_->restarts; }
 
 }  // namespace lexdyn::sim

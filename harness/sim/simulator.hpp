@@ -232,6 +232,14 @@ class Simulator {
   /// Number of integrator restarts (at discontinuities: step set-points, grasp switches).
   long integratorRestarts() const;
 
+  // ----- the integrator's view, for verification (docs/simulator.md, "Integrator") ---------
+  /// The integrated state y (stateSize(): Euler angles, base position, joints; then u).
+  std::vector<double> integratedState() const;
+  /// ydot = f(t, y), at the current servo set-points.
+  void rightHandSide(double t, const std::vector<double>& y, std::vector<double>& ydot);
+  /// The Jacobian of the applied forces at (t, y) (IntegratorJacobian::AppliedForces; n x n).
+  void appliedForcesJacobian(double t, const std::vector<double>& y, Eigen::MatrixXd& J);
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
