@@ -158,6 +158,26 @@ TraceDifference largestDifference(const checks::TraceTable& a, const checks::Tra
   return d;
 }
 
+// Runs `spec` into base/<first>, then `spec` changed by `change` into base/<second>, and reads
+// both traces back.
+struct TwoRuns {
+  RunSummary a, b;
+  checks::TraceTable ta, tb;
+};
+template <class Change>
+TwoRuns runTwoWays(CaseSpec spec, const std::string& base, const std::string& first, const std::string& second,
+                   Change change) {
+  TwoRuns r;
+  r.a = run(spec, base + "/" + first);
+  change(spec);
+  r.b = run(spec, base + "/" + second);
+  if (r.a.status == "completed" && r.b.status == "completed") {
+    r.ta = checks::readTrace(base + "/" + first + "/trace.csv");
+    r.tb = checks::readTrace(base + "/" + second + "/trace.csv");
+  }
+  return r;
+}
+
 // sim.integrator.linear_solver: SUNDIALS' dense LU and our block elimination solve the same
 // Newton systems, so the runs differ by rounding only, amplified by the integrator at its
 // tolerances and by the stiff friction to the size of the integrator's own error against a tight
@@ -166,17 +186,14 @@ TEST(Runner, TheTwoNewtonSystemSolversAgree) {
   const std::string base = outputDir("runner_linear_solver");
   CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 0.5, base));
   ASSERT_EQ(spec.sim.integrator.linear_solver, sim::LinearSolver::BlockElimination);  // the default
-  const RunSummary a = run(spec, base + "/block");
-  spec.sim.integrator.linear_solver = sim::LinearSolver::DenseLU;
-  const RunSummary b = run(spec, base + "/dense");
-  ASSERT_EQ(a.status, "completed");
-  ASSERT_EQ(b.status, "completed");
-  EXPECT_EQ(b.integrator.lin_full_setups, 0);
-  const checks::TraceTable ta = checks::readTrace(base + "/block/trace.csv");
-  const checks::TraceTable tb = checks::readTrace(base + "/dense/trace.csv");
-  EXPECT_EQ(checks::findMetadata(ta.metadata, "integrator")->find("linear_solver"), std::string::npos);
-  EXPECT_NE(checks::findMetadata(tb.metadata, "integrator")->find("linear_solver dense_lu"), std::string::npos);
-  const TraceDifference d = largestDifference(ta, tb);
+  const TwoRuns r = runTwoWays(spec, base, "block", "dense",
+                               [](CaseSpec& s) { s.sim.integrator.linear_solver = sim::LinearSolver::DenseLU; });
+  ASSERT_EQ(r.a.status, "completed");
+  ASSERT_EQ(r.b.status, "completed");
+  EXPECT_EQ(r.b.integrator.lin_full_setups, 0);
+  EXPECT_EQ(checks::findMetadata(r.ta.metadata, "integrator")->find("linear_solver"), std::string::npos);
+  EXPECT_NE(checks::findMetadata(r.tb.metadata, "integrator")->find("linear_solver dense_lu"), std::string::npos);
+  const TraceDifference d = largestDifference(r.ta, r.tb);
   EXPECT_LT(d.q, 1e-4) << "joint positions";  // 2.4e-5 rad
   EXPECT_LT(d.tau, 5.0) << "joint torques";   // 1.7 N m, at the friction transient of t = 0.32 s
   EXPECT_LT(d.waist, 1e-4) << "WAIST position";  // 1.2e-5 m
@@ -186,17 +203,19 @@ TEST(Runner, TheTwoNewtonSystemSolversAgree) {
 // sim.integrator.jacobian: the Jacobian of the applied forces instead of CVODE's difference
 // quotients. The runs differ by the integrator's rounding (limits as above), no right-hand side
 // is spent on Jacobians, and the integrator's other work grows by at most 20 %: a wrong friction
-// or servo damping makes the Newton iterations fail and CVODE take many more steps. 2 s of squat_sway: the friction transient at 0.32 s and the squat.
+// or servo damping makes the Newton iterations fail and CVODE take many more steps. 2 s of
+// squat_sway: the friction transient at 0.32 s and the squat.
 TEST(Runner, TheAppliedForcesJacobianAgreesWithoutDifferenceQuotients) {
   const std::string base = outputDir("runner_jacobian");
   CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 2.0, base));
   ASSERT_EQ(spec.sim.integrator.jacobian, sim::IntegratorJacobian::AppliedForces);  // the default
   spec.sim.integrator.jacobian = sim::IntegratorJacobian::DifferenceQuotient;
-  const RunSummary a = run(spec, base + "/dq");
-  spec.sim.integrator.jacobian = sim::IntegratorJacobian::AppliedForces;
-  const RunSummary b = run(spec, base + "/forces");
-  ASSERT_EQ(a.status, "completed");
-  ASSERT_EQ(b.status, "completed");
+  const TwoRuns r = runTwoWays(spec, base, "dq", "forces",
+                               [](CaseSpec& s) { s.sim.integrator.jacobian = sim::IntegratorJacobian::AppliedForces; });
+  ASSERT_EQ(r.a.status, "completed");
+  ASSERT_EQ(r.b.status, "completed");
+  const RunSummary& a = r.a;
+  const RunSummary& b = r.b;
   EXPECT_GT(a.integrator.jac_rhs_evals, 0);
   EXPECT_EQ(b.integrator.jac_rhs_evals, 0);
   EXPECT_GT(b.integrator.jac_evals, 0);
@@ -205,11 +224,9 @@ TEST(Runner, TheAppliedForcesJacobianAgreesWithoutDifferenceQuotients) {
   EXPECT_LE(b.integrator.steps, a.integrator.steps + a.integrator.steps / 5);
   EXPECT_LE(b.integrator.nonlin_conv_fails, a.integrator.nonlin_conv_fails + 10);
   EXPECT_LE(b.integrator.rhs_evals, a.integrator.rhs_evals + a.integrator.rhs_evals / 5);
-  const checks::TraceTable ta = checks::readTrace(base + "/dq/trace.csv");
-  const checks::TraceTable tb = checks::readTrace(base + "/forces/trace.csv");
-  EXPECT_NE(checks::findMetadata(ta.metadata, "integrator")->find("difference-quotient Jacobian"), std::string::npos);
-  EXPECT_NE(checks::findMetadata(tb.metadata, "integrator")->find("Jacobian of the applied forces"), std::string::npos);
-  const TraceDifference d = largestDifference(ta, tb);
+  EXPECT_NE(checks::findMetadata(r.ta.metadata, "integrator")->find("difference-quotient Jacobian"), std::string::npos);
+  EXPECT_NE(checks::findMetadata(r.tb.metadata, "integrator")->find("Jacobian of the applied forces"), std::string::npos);
+  const TraceDifference d = largestDifference(r.ta, r.tb);
   EXPECT_LT(d.q, 1e-4) << "joint positions";    // 3.0e-5 rad
   EXPECT_LT(d.tau, 5.0) << "joint torques";      // 1.6 N m
   EXPECT_LT(d.waist, 1e-4) << "WAIST position";  // 1.7e-5 m
