@@ -135,6 +135,22 @@ struct Simulator::Impl final : public OdeSystem {
     }
   }
 
+  // Servo torque of joint j at (t, q, u), before its torque limit.
+  double servoTorque(double t, int j, const double* q, const double* uu) const {
+    double q_ref = 0.0, qd_ref = 0.0, tau_ff = 0.0;
+    setpoint(t, j, q_ref, qd_ref, tau_ff);
+    return settings.servo.kp[j] * (q_ref - q[off + j]) + settings.servo.kd[j] * (qd_ref - uu[off + j]) + tau_ff;
+  }
+
+  // A contact point at the state of `d`: its lever arm r from its body's origin, its position p
+  // and velocity v (world).
+  static void pointState(const BodyKinematics& d, const PointInfo& P, Eigen::Vector3d& r, Eigen::Vector3d& p,
+                         Eigen::Vector3d& v) {
+    r = d.R[static_cast<size_t>(P.body)] * P.r_body;
+    p = d.p.col(P.body) + r;
+    v = d.v.col(P.body) + d.omega.col(P.body).cross(r);
+  }
+
   // All applied forces at (t, q, u) with `d` updated at that state. With `record`, the contact
   // point states, grasp wrenches and servo torques are stored as observations.
   void evaluateForces(MultibodyState& md, double t, const double* q, const double* uu, bool record) {
@@ -150,9 +166,8 @@ struct Simulator::Impl final : public OdeSystem {
     const ContactSettings& c = settings.contact;
     for (size_t i = 0; i < points.size(); ++i) {
       const PointInfo& P = points[i];
-      const Eigen::Vector3d r = d.R[static_cast<size_t>(P.body)] * P.r_body;
-      const Eigen::Vector3d p = d.p.col(P.body) + r;
-      const Eigen::Vector3d v = d.v.col(P.body) + d.omega.col(P.body).cross(r);
+      Eigen::Vector3d r, p, v;
+      pointState(d, P, r, p, v);
       Eigen::Vector3d F = Eigen::Vector3d::Zero();
       const double pen = c.ground_height_m - p.z();
       if (pen > 0.0) {
@@ -197,12 +212,7 @@ struct Simulator::Impl final : public OdeSystem {
     // Joint servos.
     const Eigen::VectorXd& tau_max = model.jointTorqueLimits();
     for (int j = 0; j < nj; ++j) {
-      double q_ref = 0.0, qd_ref = 0.0, tau_ff = 0.0;
-      setpoint(t, j, q_ref, qd_ref, tau_ff);
-      const double qj = q[off + j];
-      const double qdj = uu[off + j];
-      double tau = settings.servo.kp[j] * (q_ref - qj) + settings.servo.kd[j] * (qd_ref - qdj) + tau_ff;
-      tau = std::clamp(tau, -tau_max[j], tau_max[j]);
+      const double tau = std::clamp(servoTorque(t, j, q, uu), -tau_max[j], tau_max[j]);
       model.setJointForce(md, j, tau);
       if (record) tau_work[j] = tau;
     }
@@ -231,10 +241,10 @@ struct Simulator::Impl final : public OdeSystem {
     // Ground contact: F(p, v) of evaluateForces, differentiated.
     const ContactSettings& c = settings.contact;
     for (const PointInfo& P : points) {
-      const Eigen::Vector3d r = d.R[static_cast<size_t>(P.body)] * P.r_body;
-      const double pen = c.ground_height_m - (d.p(2, P.body) + r.z());
+      Eigen::Vector3d r, p, v;
+      pointState(d, P, r, p, v);
+      const double pen = c.ground_height_m - p.z();
       if (!(pen > 0.0)) continue;
-      const Eigen::Vector3d v = d.v.col(P.body) + d.omega.col(P.body).cross(r);
       const double kp = c.stiffness * std::pow(pen, c.exponent);
       const double fn = kp * (1.0 - c.dissipation_s_per_m * v.z());
       if (!(fn > 0.0)) continue;
@@ -269,10 +279,7 @@ struct Simulator::Impl final : public OdeSystem {
     // identity, joint rates = joint speeds).
     const Eigen::VectorXd& tau_max = model.jointTorqueLimits();
     for (int j = 0; j < nj; ++j) {
-      double q_ref = 0.0, qd_ref = 0.0, tau_ff = 0.0;
-      setpoint(t, j, q_ref, qd_ref, tau_ff);
-      const double tau = settings.servo.kp[j] * (q_ref - q[off + j]) + settings.servo.kd[j] * (qd_ref - uu[off + j]) + tau_ff;
-      if (!(std::abs(tau) < tau_max[j])) continue;  // clamped: no change with q or u
+      if (!(std::abs(servoTorque(t, j, q, uu)) < tau_max[j])) continue;  // clamped: no change with q or u
       jac_Kq(off + j, off + j) -= settings.servo.kp[j];
       jac_Ku(off + j, off + j) -= settings.servo.kd[j];
     }
