@@ -12,6 +12,7 @@
 // channels the same way.
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <iosfwd>
 #include <string>
@@ -68,6 +69,13 @@ class TraceWriter {
   long rows_ = 0;
   std::vector<char> buffer_;
   std::vector<char> line_;  ///< one row, formatted before a single fwrite
+  /// Per channel: the bits of its value in the previous row and their text.
+  struct LastValue {
+    std::uint64_t bits = 0;
+    unsigned char length = 0;  ///< 0: no previous row
+    char text[24] = {};  ///< the longest shortest form of a double has 24 characters
+  };
+  std::vector<LastValue> last_;
 };
 
 /// A trace read back into memory.

@@ -12,10 +12,13 @@
 
 #include <gtest/gtest.h>
 
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <string>
+#include <vector>
 
 namespace lexdyn::checks {
 namespace {
@@ -68,6 +71,44 @@ TEST(Trace, RoundTripIsBitExactAndRenamedOnFinish) {
     for (int j = 0; j < 3; ++j) EXPECT_EQ(t.rows[static_cast<size_t>(i)][static_cast<size_t>(j)], rows[i][j]);
   ASSERT_NE(findMetadata(t.metadata, "case"), nullptr);
   EXPECT_EQ(*findMetadata(t.metadata, "case"), "unit test");
+}
+
+// The writer reuses a channel's text when its value keeps the same bits from one row to the
+// next: every line must still be each value's own shortest form, whether repeated, changed by
+// the sign of a zero only, or not a number.
+TEST(Trace, RepeatedValuesAreWrittenAsTheirOwnShortestForm) {
+  const std::string dir = tempDir("trace_repeats");
+  TraceSchema schema;
+  for (const char* name : {"a", "b", "c", "d"}) schema.add(name);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<std::vector<double>> rows = {{0.0, 1.5, nan, -2.2250738585072014e-308},
+                                                 {0.0, 1.5, nan, -2.2250738585072014e-308},
+                                                 {-0.0, 1.5000000000000002, 1.0, 1e+22},
+                                                 {-0.0, 1.5, 1.0, 100000.0},
+                                                 {0.0, 1.5, nan, 100000.0}};
+  const std::string path = dir + "/trace.csv";
+  {
+    TraceWriter w(path, schema, {}, 1);
+    for (const auto& r : rows) w.write(r.data());
+    w.finish();
+  }
+  std::ifstream in(path);
+  std::string line;
+  std::vector<std::string> data;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] != '#') data.push_back(line);
+  }
+  ASSERT_EQ(data.size(), rows.size() + 1);  // the names, then the rows
+  for (size_t i = 0; i < rows.size(); ++i) {
+    std::string expected;
+    for (size_t j = 0; j < rows[i].size(); ++j) {
+      char buf[32];
+      const auto r = std::to_chars(buf, buf + sizeof buf, rows[i][j]);
+      expected += std::string(buf, r.ptr) + (j + 1 < rows[i].size() ? "," : "");
+    }
+    EXPECT_EQ(data[i + 1], expected) << "row " << i;
+  }
+  EXPECT_EQ(data[4], "-0,1.5,1,1e+05");
 }
 
 TEST(Trace, UnfinishedWriterLeavesThePartialFileWithFlushedRows) {
