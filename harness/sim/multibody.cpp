@@ -79,6 +79,7 @@ struct Multibody::Impl {
   SimTK::SimbodyMatterSubsystem matter;
   SimTK::State default_state;                     // Euler angles on, realized to Model
   std::vector<SimTK::MobilizedBodyIndex> mobod;  // per body
+  std::vector<const SimTK::MobilizedBody*> mobody;  // per body, looked up once
   // Simbody's numbering: q[k] of ours is Simbody's q[q_index[k]], u[k] is u[u_index[k]].
   std::vector<int> q_index, u_index;
 
@@ -138,6 +139,7 @@ Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(sy
     mobod[static_cast<size_t>(J.child_link)] = index;
   }
   system.realizeTopology();
+  for (const SimTK::MobilizedBodyIndex i : mobod) mobody.push_back(&matter.getMobilizedBody(i));
   default_state = system.getDefaultState();
   matter.setUseEulerAngles(default_state, true);  // Free: q = body-fixed X-Y-Z angles, then position
   system.realizeModel(default_state);
@@ -279,25 +281,26 @@ void Multibody::setState(MultibodyState& st, const double* q, const double* u) c
   // invalidates Simbody's Position (Velocity) stage and everything computed from it, such as
   // the articulated-body inertias, which depend on q only. The difference-quotient Jacobian
   // changes u alone in half of its evaluations.
+  // Through the vectors' contiguous storage: Simbody's element access is out of line.
   auto same = [](const SimTK::Vector& V, const std::vector<int>& index, const double* x, int n) {
+    const double* v = V.getContiguousScalarData();
     for (int k = 0; k < n; ++k) {
-      const double v = V[index[static_cast<size_t>(k)]];
-      if (std::memcmp(&v, &x[k], sizeof(double)) != 0) return false;
+      if (std::memcmp(&v[index[static_cast<size_t>(k)]], &x[k], sizeof(double)) != 0) return false;
     }
     return true;
   };
   if (!same(s.state.getQ(), m.q_index, q, m.nq)) {
-    SimTK::Vector& Q = s.state.updQ();
+    double* Q = s.state.updQ().updContiguousScalarData();
     for (int k = 0; k < m.nq; ++k) Q[m.q_index[static_cast<size_t>(k)]] = q[k];
   }
   if (!same(s.state.getU(), m.u_index, u, m.nv)) {
-    SimTK::Vector& U = s.state.updU();
+    double* U = s.state.updU().updContiguousScalarData();
     for (int k = 0; k < m.nv; ++k) U[m.u_index[static_cast<size_t>(k)]] = u[k];
   }
   m.system.realize(s.state, SimTK::Stage::Velocity);
   BodyKinematics& K = s.bodies;
   for (int b = 0; b < m.nb; ++b) {
-    const SimTK::MobilizedBody& mb = m.matter.getMobilizedBody(m.mobod[static_cast<size_t>(b)]);
+    const SimTK::MobilizedBody& mb = *m.mobody[static_cast<size_t>(b)];
     const SimTK::Transform& X = mb.getBodyTransform(s.state);
     const SimTK::SpatialVec& V = mb.getBodyVelocity(s.state);  // [omega; v of the origin], Ground
     Eigen::Matrix3d& R = K.R[static_cast<size_t>(b)];
@@ -365,7 +368,8 @@ void Multibody::accelerations(MultibodyState& st, double* udot) const {
   MultibodyState::Impl& s = *st.impl_;
   m.system.realize(s.state, SimTK::Stage::Dynamics);
   m.matter.calcAccelerationIgnoringConstraints(s.state, s.mobility_forces, s.body_forces, s.udot, s.body_accelerations);
-  for (int k = 0; k < m.nv; ++k) udot[k] = s.udot[m.u_index[static_cast<size_t>(k)]];
+  const double* ud = s.udot.getContiguousScalarData();
+  for (int k = 0; k < m.nv; ++k) udot[k] = ud[m.u_index[static_cast<size_t>(k)]];
 }
 
 void Multibody::netForce(MultibodyState& st, double* f) const {
