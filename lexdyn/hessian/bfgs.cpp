@@ -26,9 +26,27 @@ void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J,
                            J.cols() == y.size(),
                        "accumulateGradientChange: sizes differ");
   // eq. 88: y_l = grad L_l(k) - grad L_l(k-1) = sum_i (J_i - J_i(k-1))^T lambda_{i,l}
-  for (Eigen::Index c = 0; c < J.cols(); ++c) {
+  // Each column's sum runs over the rows in order; four columns at a time, so that four
+  // independent sums overlap instead of each add waiting for the previous one.
+  const Eigen::Index n = J.cols(), rows = J.rows();
+  Eigen::Index c = 0;
+  for (; c + 4 <= n; c += 4) {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      const double l = lambda[r];
+      s0 += (J(r, c) - J_prev(r, c)) * l;
+      s1 += (J(r, c + 1) - J_prev(r, c + 1)) * l;
+      s2 += (J(r, c + 2) - J_prev(r, c + 2)) * l;
+      s3 += (J(r, c + 3) - J_prev(r, c + 3)) * l;
+    }
+    y[c] += s0;
+    y[c + 1] += s1;
+    y[c + 2] += s2;
+    y[c + 3] += s3;
+  }
+  for (; c < n; ++c) {
     double s = 0.0;
-    for (Eigen::Index r = 0; r < J.rows(); ++r) s += (J(r, c) - J_prev(r, c)) * lambda[r];
+    for (Eigen::Index r = 0; r < rows; ++r) s += (J(r, c) - J_prev(r, c)) * lambda[r];
     y[c] += s;
   }
 }
@@ -38,9 +56,26 @@ void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
                                 const Eigen::Ref<const Eigen::VectorXd>& lambda_prev, Eigen::Ref<Eigen::VectorXd> y) {
   LEXDYN_ALWAYS_ASSERT(J_prev.rows() == lambda.size() && lambda.size() == lambda_prev.size() && J_prev.cols() == y.size(),
                        "accumulateMultiplierChange: sizes differ");
-  for (Eigen::Index c = 0; c < J_prev.cols(); ++c) {
+  // As accumulateGradientChange: each column's sum in row order, four columns at a time.
+  const Eigen::Index n = J_prev.cols(), rows = J_prev.rows();
+  Eigen::Index c = 0;
+  for (; c + 4 <= n; c += 4) {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      const double dl = lambda[r] - lambda_prev[r];
+      s0 += J_prev(r, c) * dl;
+      s1 += J_prev(r, c + 1) * dl;
+      s2 += J_prev(r, c + 2) * dl;
+      s3 += J_prev(r, c + 3) * dl;
+    }
+    y[c] += s0;
+    y[c + 1] += s1;
+    y[c + 2] += s2;
+    y[c + 3] += s3;
+  }
+  for (; c < n; ++c) {
     double s = 0.0;
-    for (Eigen::Index r = 0; r < J_prev.rows(); ++r) s += J_prev(r, c) * (lambda[r] - lambda_prev[r]);
+    for (Eigen::Index r = 0; r < rows; ++r) s += J_prev(r, c) * (lambda[r] - lambda_prev[r]);
     y[c] += s;
   }
 }
@@ -203,7 +238,27 @@ int QuasiNewtonMatrix::pack(const Eigen::Ref<const Eigen::VectorXd>& s, const Ei
     s_[a] = s[i];
     y_[a] = y[i];
   }
-  for (int a = 0; a < m; ++a) {
+  // B s on the occupied block: each entry's sum in column order, four rows at a time (four
+  // independent sums overlap).
+  int a = 0;
+  for (; a + 4 <= m; a += 4) {
+    const Eigen::Index i0 = index_[static_cast<size_t>(a)], i1 = index_[static_cast<size_t>(a + 1)];
+    const Eigen::Index i2 = index_[static_cast<size_t>(a + 2)], i3 = index_[static_cast<size_t>(a + 3)];
+    double v0 = 0.0, v1 = 0.0, v2 = 0.0, v3 = 0.0;
+    for (int b = 0; b < m; ++b) {
+      const double* col = B_.col(index_[static_cast<size_t>(b)]).data();
+      const double sb = s_[b];
+      v0 += col[i0] * sb;
+      v1 += col[i1] * sb;
+      v2 += col[i2] * sb;
+      v3 += col[i3] * sb;
+    }
+    Bs_[a] = v0;
+    Bs_[a + 1] = v1;
+    Bs_[a + 2] = v2;
+    Bs_[a + 3] = v3;
+  }
+  for (; a < m; ++a) {
     double v = 0.0;
     for (int b = 0; b < m; ++b) v += B_(index_[static_cast<size_t>(a)], index_[static_cast<size_t>(b)]) * s_[b];
     Bs_[a] = v;
