@@ -83,6 +83,9 @@ struct Multibody::Impl {
   // Simbody's numbering: q[k] of ours is Simbody's q[q_index[k]], u[k] is u[u_index[k]].
   std::vector<int> q_index, u_index;
 
+  void writeCoordinates(SimTK::State& state, const double* q, const double* u) const;
+  void copyBodies(const SimTK::State& state, const SimTK::SpatialVec* V, BodyKinematics& K) const;
+
   // J (6 x nv, rows [linear; angular], our u order) of the point r_body of a body, through
   // Simbody's calcFrameJacobian into Js (6 x nu, rows [angular; linear]).
   void frameJacobianOf(const SimTK::State& state, int body, const Eigen::Vector3d& r_body, SimTK::Matrix& Js,
@@ -186,6 +189,7 @@ struct MultibodyState::Impl {
   // Applied forces (Simbody's numbering) and the forward-dynamics outputs.
   SimTK::Vector mobility_forces, udot;
   SimTK::Vector_<SimTK::SpatialVec> body_forces, body_accelerations;
+  SimTK::Vector_<SimTK::SpatialVec> body_velocities;  // J u of setKinematicState
   // Workspaces of the Jacobian queries.
   SimTK::Matrix jacobian, matrix;
   SimTK::Vector speeds, rates;
@@ -267,6 +271,7 @@ MultibodyState Multibody::createState() const {
   s->udot.resize(m.nv);
   s->body_forces.resize(m.matter.getNumBodies());
   s->body_accelerations.resize(m.matter.getNumBodies());
+  s->body_velocities.resize(m.matter.getNumBodies());
   MultibodyState out(std::move(s));
   // One realization at the neutral state, so that Simbody's lazily allocated caches exist.
   const std::vector<double> zero(static_cast<size_t>(m.nq + m.nv), 0.0);
@@ -274,13 +279,11 @@ MultibodyState Multibody::createState() const {
   return out;
 }
 
-void Multibody::setState(MultibodyState& st, const double* q, const double* u) const {
-  const Impl& m = *impl_;
-  MultibodyState::Impl& s = *st.impl_;
-  // q or u are written only when they differ (bit for bit) from the state's: writing them
-  // invalidates Simbody's Position (Velocity) stage and everything computed from it, such as
-  // the articulated-body inertias, which depend on q only. The difference-quotient Jacobian
-  // changes u alone in half of its evaluations.
+// Writes q and u into the Simbody state, each only when it differs (bit for bit) from the
+// state's: writing them invalidates Simbody's Position (Velocity) stage and everything computed
+// from it, such as the articulated-body inertias, which depend on q only. The
+// difference-quotient Jacobian changes u alone in half of its evaluations.
+void Multibody::Impl::writeCoordinates(SimTK::State& state, const double* q, const double* u) const {
   // Through the vectors' contiguous storage: Simbody's element access is out of line.
   auto same = [](const SimTK::Vector& V, const std::vector<int>& index, const double* x, int n) {
     const double* v = V.getContiguousScalarData();
@@ -289,29 +292,52 @@ void Multibody::setState(MultibodyState& st, const double* q, const double* u) c
     }
     return true;
   };
-  if (!same(s.state.getQ(), m.q_index, q, m.nq)) {
-    double* Q = s.state.updQ().updContiguousScalarData();
-    for (int k = 0; k < m.nq; ++k) Q[m.q_index[static_cast<size_t>(k)]] = q[k];
+  if (!same(state.getQ(), q_index, q, nq)) {
+    double* Q = state.updQ().updContiguousScalarData();
+    for (int k = 0; k < nq; ++k) Q[q_index[static_cast<size_t>(k)]] = q[k];
   }
-  if (!same(s.state.getU(), m.u_index, u, m.nv)) {
-    double* U = s.state.updU().updContiguousScalarData();
-    for (int k = 0; k < m.nv; ++k) U[m.u_index[static_cast<size_t>(k)]] = u[k];
+  if (!same(state.getU(), u_index, u, nv)) {
+    double* U = state.updU().updContiguousScalarData();
+    for (int k = 0; k < nv; ++k) U[u_index[static_cast<size_t>(k)]] = u[k];
   }
-  m.system.realize(s.state, SimTK::Stage::Velocity);
-  BodyKinematics& K = s.bodies;
-  for (int b = 0; b < m.nb; ++b) {
-    const SimTK::MobilizedBody& mb = *m.mobody[static_cast<size_t>(b)];
-    const SimTK::Transform& X = mb.getBodyTransform(s.state);
-    const SimTK::SpatialVec& V = mb.getBodyVelocity(s.state);  // [omega; v of the origin], Ground
+}
+
+// The body kinematics from a state realized through Position at least; the spatial velocities
+// [omega; v of the origin] (Ground) from `V` (indexed by mobilized body), or from the state's
+// Velocity stage when V is null.
+void Multibody::Impl::copyBodies(const SimTK::State& state, const SimTK::SpatialVec* V, BodyKinematics& K) const {
+  for (int b = 0; b < nb; ++b) {
+    const SimTK::MobilizedBody& mb = *mobody[static_cast<size_t>(b)];
+    const SimTK::Transform& X = mb.getBodyTransform(state);
+    const SimTK::SpatialVec& Vb = V ? V[mobod[static_cast<size_t>(b)]] : mb.getBodyVelocity(state);
     Eigen::Matrix3d& R = K.R[static_cast<size_t>(b)];
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) R(r, c) = X.R().asMat33()(r, c);
       K.p(r, b) = X.p()[r];
-      K.omega(r, b) = V[0][r];
-      K.v(r, b) = V[1][r];
+      K.omega(r, b) = Vb[0][r];
+      K.v(r, b) = Vb[1][r];
     }
-    K.com.col(b) = K.p.col(b) + R * m.desc.links[static_cast<size_t>(b)].com;
+    K.com.col(b) = K.p.col(b) + R * desc.links[static_cast<size_t>(b)].com;
   }
+}
+
+void Multibody::setState(MultibodyState& st, const double* q, const double* u) const {
+  const Impl& m = *impl_;
+  MultibodyState::Impl& s = *st.impl_;
+  m.writeCoordinates(s.state, q, u);
+  m.system.realize(s.state, SimTK::Stage::Velocity);
+  m.copyBodies(s.state, nullptr, s.bodies);
+}
+
+void Multibody::setKinematicState(MultibodyState& st, const double* q, const double* u) const {
+  const Impl& m = *impl_;
+  MultibodyState::Impl& s = *st.impl_;
+  m.writeCoordinates(s.state, q, u);
+  m.system.realize(s.state, SimTK::Stage::Position);
+  // J u gives each body's spatial velocity with the same operations, in the same order, as the
+  // Velocity stage's (checked bit for bit by test_simulator).
+  m.matter.multiplyBySystemJacobian(s.state, s.state.getU(), s.body_velocities);
+  m.copyBodies(s.state, &s.body_velocities[0], s.bodies);
 }
 
 void Multibody::coordinateRates(const MultibodyState& st, double* qdot) const {

@@ -328,7 +328,7 @@ struct Simulator::Impl final : public OdeSystem {
   void observe(double t) {
     const double* q = y.data();
     const double* uu = y.data() + nqc;
-    model.setState(observed, q, uu);
+    model.setKinematicState(observed, q, uu);  // positions and body velocities are all it reads
     evaluateForces(observed, t, q, uu, true);
     model.configuration(q, config);
     for (int i = 0; i < nv; ++i) u[i] = uu[i];

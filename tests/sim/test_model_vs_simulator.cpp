@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -157,6 +158,40 @@ TEST(ModelVsSimulator, MergedFixedJoints) { crossCheck("tests/data/model", "merg
 
 // The cross-check can fail: a simulator built from a description whose joint axis is flipped
 // (the kind of conversion bug it guards against) disagrees with the controller's model.
+// setKinematicState realizes Simbody's state through Position only and takes the body
+// velocities from the system Jacobian: its body kinematics must be setState's to the bit (the
+// simulator's observations use it, and traces must not change).
+void expectKinematicStateIsSetStates(const std::string& dir, const std::string& name, unsigned seed) {
+  const Multibody simu(model::loadRobotDescription(src(dir + "/" + name + ".urdf"), src(dir + "/" + name + ".yaml")));
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  MultibodyState full = simu.createState(), kinematic = simu.createState();
+  std::vector<double> q(static_cast<size_t>(simu.nq())), u(static_cast<size_t>(simu.nv()));
+  auto same = [](const double* a, const double* b, size_t n) { return std::memcmp(a, b, n * sizeof(double)) == 0; };
+  for (int n = 0; n < 50; ++n) {
+    for (double& x : q) x = uniform(rng);
+    for (double& x : u) x = 3.0 * uniform(rng);
+    simu.setState(full, q.data(), u.data());
+    simu.setKinematicState(kinematic, q.data(), u.data());
+    const BodyKinematics &a = full.bodies(), &b = kinematic.bodies();
+    for (int k = 0; k < simu.numBodies(); ++k) {
+      EXPECT_TRUE(same(a.R[static_cast<size_t>(k)].data(), b.R[static_cast<size_t>(k)].data(), 9)) << name << " body " << k;
+    }
+    const size_t m = 3 * static_cast<size_t>(simu.numBodies());
+    EXPECT_TRUE(same(a.p.data(), b.p.data(), m)) << name << " state " << n;
+    EXPECT_TRUE(same(a.com.data(), b.com.data(), m)) << name << " state " << n;
+    EXPECT_TRUE(same(a.omega.data(), b.omega.data(), m)) << name << " state " << n;
+    EXPECT_TRUE(same(a.v.data(), b.v.data(), m)) << name << " state " << n;
+    ASSERT_GT(a.omega.cwiseAbs().maxCoeff() + a.v.cwiseAbs().maxCoeff(), 0.01);  // not all zero
+  }
+}
+
+TEST(Multibody, KinematicStateHasSetStatesBodiesToTheBit) {
+  expectKinematicStateIsSetStates("models/hrp2kai_like", "hrp2kai_like", 12101);
+  expectKinematicStateIsSetStates("models/arm_7dof", "arm_7dof", 12102);
+  expectKinematicStateIsSetStates("tests/data/model", "merged", 12103);
+}
+
 TEST(ModelVsSimulator, SeesAFlippedJointAxis) {
   const std::string urdf = src("models/arm_7dof/arm_7dof.urdf"), data = src("models/arm_7dof/arm_7dof.yaml");
   const model::RobotModel ctrl = model::RobotModel::fromFiles(urdf, data);
