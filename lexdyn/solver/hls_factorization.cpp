@@ -45,6 +45,10 @@ int singleNonzero(const double* v, int n) {
   return at;
 }
 
+// Rows of the widest micro-kernel of Eigen's matrix product for doubles (gebp's mr): a product
+// over a multiple of it of leading rows sums each of them in the same order as a longer one.
+constexpr int kProductRows = Eigen::internal::gebp_traits<double, double>::mr;
+
 // Below this many reflectors, trailing updates apply them one by one (see factorLevel).
 constexpr int kDirectReflectors = LEXDYN_DIRECT_REFLECTORS;
 
@@ -739,9 +743,28 @@ void HlsFactorization::projectDeferredLevel(int k) {
     if (allSingle) W_.col(s + j).segment(c0, d) = (RawP_(at, j) * Z.row(at).transpose()).array() + 0.0;
   }
   if (allSingle) return;
-  auto P = P_.block(0, 0, d, m);
-  P.noalias() = Z.transpose() * RawP_.block(0, 0, nr_, m);
-  W_.block(c0, s, d, m) = P;
+  // Z's columns from t on are unit vectors (at or below `reach`): row i of Z^T A is then row
+  // c0 + i of A, + 0, to the bit in any order of summation (every other term is an exact zero,
+  // and the product's sum starts at +0). Only the first t rows need the product. Eigen's kernel
+  // sums a row's terms in an order that depends on which of its micro-kernels takes the row, so
+  // the product keeps the rows of its widest micro-kernel that hold the first t rows (a multiple
+  // of kProductRows, all inside that micro-kernel's part of the full product): the same bits as
+  // the full product (test_solver, ProductOfLeadingColumnsKeepsTheFullProductsBits).
+  const int t = std::clamp(reach - c0, 0, d);
+  const int lead = (t + kProductRows - 1) / kProductRows * kProductRows;
+  const bool shortcut = t == 0 || (m >= 2 && lead <= d / kProductRows * kProductRows);
+  if (!shortcut) {
+    auto P = P_.block(0, 0, d, m);
+    P.noalias() = Z.transpose() * RawP_.block(0, 0, nr_, m);
+    W_.block(c0, s, d, m) = P;
+    return;
+  }
+  if (lead > 0) {
+    auto P = P_.block(0, 0, lead, m);
+    P.noalias() = Z.leftCols(lead).transpose() * RawP_.block(0, 0, nr_, m);
+    W_.block(c0, s, lead, m) = P;
+  }
+  W_.block(c0 + lead, s, d - lead, m) = RawP_.block(c0 + lead, 0, d - lead, m).array() + 0.0;
 }
 
 void HlsFactorization::factorize(double rankTol) {

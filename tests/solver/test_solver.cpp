@@ -317,6 +317,48 @@ TEST(Solver, ProductWithSingleNonzeroColumnsIsAScaledRow) {
   }
 }
 
+// The premise of the projected level's unit columns (HlsFactorization::projectDeferredLevel):
+// with Z's columns from t on unit vectors (column i at row c0 + i), Z^T A equals, bit for bit and
+// signed zeros included, the product over Z's first `lead` columns (t rounded up to a multiple of
+// the widest micro-kernel's rows, gebp's mr, and within that micro-kernel's part of the full
+// product) followed by rows c0 + i of A + 0.
+TEST(Solver, ProductOfLeadingColumnsKeepsTheFullProductsBits) {
+  constexpr int mr = Eigen::internal::gebp_traits<double, double>::mr;
+  std::mt19937_64 rng(92);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int nr = 10 + static_cast<int>(rng() % 70);
+    const int c0 = static_cast<int>(rng() % static_cast<std::uint64_t>(nr - 1));
+    const int d = nr - c0, m = 2 + static_cast<int>(rng() % 40);
+    const int t = static_cast<int>(rng() % static_cast<std::uint64_t>(d + 1));
+    const int lead = (t + mr - 1) / mr * mr;
+    if (t > 0 && lead > d / mr * mr) continue;  // projectDeferredLevel multiplies in full then
+    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(nr, d), A(nr, m);
+    for (int j = 0; j < d; ++j) {
+      if (j < t) {
+        for (int i = 0; i < nr; ++i) Z(i, j) = (rng() % 4 == 0) ? 0.0 : u(rng);
+      } else {
+        Z(c0 + j, j) = 1.0;
+      }
+    }
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < nr; ++i) {
+        const std::uint64_t r = rng() % 8;
+        A(i, j) = r == 0 ? 0.0 : r == 1 ? -0.0 : u(rng) * std::pow(10.0, static_cast<int>(rng() % 9) - 4);
+      }
+    Eigen::MatrixXd full(d, m), parts(d, m);
+    full.noalias() = Z.transpose() * A;
+    if (lead > 0) parts.topRows(lead).noalias() = Z.leftCols(lead).transpose() * A;
+    parts.bottomRows(d - lead) = A.bottomRows(d - lead).array() + 0.0;
+    for (int j = 0; j < m; ++j)
+      ASSERT_EQ(std::memcmp(full.col(j).data(), parts.col(j).data(), sizeof(double) * static_cast<size_t>(d)), 0)
+          << "trial " << trial << " nr " << nr << " c0 " << c0 << " t " << t << " m " << m << " column " << j;
+    ++checked;
+  }
+  EXPECT_GE(checked, 200);
+}
+
 // Split coordinates (Options::split_from_variable): a first level of equalities over all the
 // variables, eliminated with its basic variables taken from the second half when they are well
 // conditioned, later levels over the first half, the second half or both, and a last level over
