@@ -750,9 +750,13 @@ void HlsFactorization::projectDeferredLevel(int k) {
   // the product keeps the rows of its widest micro-kernel that hold the first t rows (a multiple
   // of kProductRows, all inside that micro-kernel's part of the full product): the same bits as
   // the full product (test_solver, ProductOfLeadingColumnsKeepsTheFullProductsBits).
+  // (Both products must be Eigen's matrix-product kernel: not its coefficient-wise product for
+  // small sizes, whose sum does not start at +0, nor the matrix-vector product of m = 1.)
   const int t = std::clamp(reach - c0, 0, d);
   const int lead = (t + kProductRows - 1) / kProductRows * kProductRows;
-  const bool shortcut = t == 0 || (m >= 2 && lead <= d / kProductRows * kProductRows);
+  const bool shortcut = nr_ + d + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD &&
+                        (t == 0 || (m >= 2 && lead <= d / kProductRows * kProductRows &&
+                                    nr_ + lead + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD));
   if (!shortcut) {
     auto P = P_.block(0, 0, d, m);
     P.noalias() = Z.transpose() * RawP_.block(0, 0, nr_, m);

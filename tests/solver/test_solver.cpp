@@ -327,13 +327,16 @@ TEST(Solver, ProductOfLeadingColumnsKeepsTheFullProductsBits) {
   std::mt19937_64 rng(92);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int checked = 0;
-  for (int trial = 0; trial < 400; ++trial) {
-    const int nr = 10 + static_cast<int>(rng() % 70);
+  for (int trial = 0; trial < 600; ++trial) {
+    const int nr = 4 + static_cast<int>(rng() % 76);
     const int c0 = static_cast<int>(rng() % static_cast<std::uint64_t>(nr - 1));
-    const int d = nr - c0, m = 2 + static_cast<int>(rng() % 40);
+    const int d = nr - c0, m = 1 + static_cast<int>(rng() % 41);
     const int t = static_cast<int>(rng() % static_cast<std::uint64_t>(d + 1));
     const int lead = (t + mr - 1) / mr * mr;
-    if (t > 0 && lead > d / mr * mr) continue;  // projectDeferredLevel multiplies in full then
+    // The cases projectDeferredLevel takes (otherwise it multiplies in full).
+    const bool taken = nr + d + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD &&
+                       (t == 0 || (m >= 2 && lead <= d / mr * mr && nr + lead + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD));
+    if (!taken) continue;
     Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(nr, d), A(nr, m);
     for (int j = 0; j < d; ++j) {
       if (j < t) {
