@@ -72,6 +72,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
 
   A_.assign(z(L), nullptr);
   gatherIdx_.assign(z(2 * std::max(mTot_, 1)), 0);
+  gatherOff_.assign(z(std::max(n, 1)), 0);
   static_.assign(z(L), 0);
   rowNorm_ = Eigen::VectorXd::Zero(std::max(mTot_, 1));
   freeVar_.resize(z(n));
@@ -375,20 +376,22 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Ei
     qs[cnt] = q;
     rows[cnt++] = tmpGid_[z(q)] - off;
   }
-  const Eigen::Index ldS = S.outerStride();
-  for (int f = 0; f < nr_; ++f) {
-    const double* col = A.data() + static_cast<Eigen::Index>(elim_ ? varPerm_[z(m0_ + f)] : freeVar_[z(f)]) * lda;
-    double* dst = S.data() + f;
-    for (int c = 0; c < cnt; ++c) dst[qs[c] * ldS] = col[rows[c]];
+  // Row by row: each scratch column is written contiguously, reading the row across A's columns
+  // at the reduced (then basic) variables' offsets.
+  Eigen::Index* vo = gatherOff_.data();
+  for (int f = 0; f < nr_; ++f) vo[f] = static_cast<Eigen::Index>(elim_ ? varPerm_[z(m0_ + f)] : freeVar_[z(f)]) * lda;
+  if (elim_)
+    for (int i = 0; i < m0_; ++i) vo[nr_ + i] = static_cast<Eigen::Index>(varPerm_[z(i)]) * lda;
+  const Eigen::Index ldS = S.outerStride(), ldB = SB.outerStride();
+  for (int c = 0; c < cnt; ++c) {
+    const double* row = A.data() + rows[c];
+    double* dst = S.data() + qs[c] * ldS;
+    for (int f = 0; f < nr_; ++f) dst[f] = row[vo[f]];
+    if (!elim_) continue;
+    double* dstB = SB.data() + qs[c] * ldB;
+    for (int i = 0; i < m0_; ++i) dstB[i] = row[vo[nr_ + i]];
+    sparseB_[z(qs[c])] = singleNonzero(dstB, m0_);
   }
-  if (!elim_) return;
-  const Eigen::Index ldB = SB.outerStride();
-  for (int i = 0; i < m0_; ++i) {
-    const double* col = A.data() + static_cast<Eigen::Index>(varPerm_[z(i)]) * lda;
-    double* dst = SB.data() + i;
-    for (int c = 0; c < cnt; ++c) dst[qs[c] * ldB] = col[rows[c]];
-  }
-  for (int c = 0; c < cnt; ++c) sparseB_[z(qs[c])] = singleNonzero(SB.col(qs[c]).data(), m0_);
 }
 
 void HlsFactorization::applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int stages) const {

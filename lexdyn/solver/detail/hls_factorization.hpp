@@ -132,6 +132,7 @@ class HlsFactorization {
   std::vector<int> m_, rowOff_, levelOf_;
   std::vector<const Eigen::MatrixXd*> A_;
   std::vector<int> gatherIdx_;
+  std::vector<Eigen::Index> gatherOff_;  ///< gatherLevel: column offsets in A of the variables
   std::vector<char> static_;
   Eigen::VectorXd rowNorm_;
   std::vector<int> freeVar_;
