@@ -19,6 +19,36 @@ void addOnChain(const std::vector<char>& chain, double value, Eigen::Ref<Eigen::
   }
 }
 
+namespace {
+
+// y[c] += sum over r of term(r, c), each column's sum over the rows in order from +0. Four
+// columns at a time, so that four independent sums overlap instead of each add waiting for the
+// previous one; the bits are those of one column at a time.
+template <class Term>
+void addColumnSums(Eigen::Index rows, Eigen::Index cols, const Term& term, Eigen::Ref<Eigen::VectorXd> y) {
+  Eigen::Index c = 0;
+  for (; c + 4 <= cols; c += 4) {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      s0 += term(r, c);
+      s1 += term(r, c + 1);
+      s2 += term(r, c + 2);
+      s3 += term(r, c + 3);
+    }
+    y[c] += s0;
+    y[c + 1] += s1;
+    y[c + 2] += s2;
+    y[c + 3] += s3;
+  }
+  for (; c < cols; ++c) {
+    double s = 0.0;
+    for (Eigen::Index r = 0; r < rows; ++r) s += term(r, c);
+    y[c] += s;
+  }
+}
+
+}  // namespace
+
 void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J,
                               const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
                               const Eigen::Ref<const Eigen::VectorXd>& lambda, Eigen::Ref<Eigen::VectorXd> y) {
@@ -26,29 +56,8 @@ void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J,
                            J.cols() == y.size(),
                        "accumulateGradientChange: sizes differ");
   // eq. 88: y_l = grad L_l(k) - grad L_l(k-1) = sum_i (J_i - J_i(k-1))^T lambda_{i,l}
-  // Each column's sum runs over the rows in order; four columns at a time, so that four
-  // independent sums overlap instead of each add waiting for the previous one.
-  const Eigen::Index n = J.cols(), rows = J.rows();
-  Eigen::Index c = 0;
-  for (; c + 4 <= n; c += 4) {
-    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-    for (Eigen::Index r = 0; r < rows; ++r) {
-      const double l = lambda[r];
-      s0 += (J(r, c) - J_prev(r, c)) * l;
-      s1 += (J(r, c + 1) - J_prev(r, c + 1)) * l;
-      s2 += (J(r, c + 2) - J_prev(r, c + 2)) * l;
-      s3 += (J(r, c + 3) - J_prev(r, c + 3)) * l;
-    }
-    y[c] += s0;
-    y[c + 1] += s1;
-    y[c + 2] += s2;
-    y[c + 3] += s3;
-  }
-  for (; c < n; ++c) {
-    double s = 0.0;
-    for (Eigen::Index r = 0; r < rows; ++r) s += (J(r, c) - J_prev(r, c)) * lambda[r];
-    y[c] += s;
-  }
+  addColumnSums(
+      J.rows(), J.cols(), [&](Eigen::Index r, Eigen::Index c) { return (J(r, c) - J_prev(r, c)) * lambda[r]; }, y);
 }
 
 void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
@@ -56,28 +65,9 @@ void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
                                 const Eigen::Ref<const Eigen::VectorXd>& lambda_prev, Eigen::Ref<Eigen::VectorXd> y) {
   LEXDYN_ALWAYS_ASSERT(J_prev.rows() == lambda.size() && lambda.size() == lambda_prev.size() && J_prev.cols() == y.size(),
                        "accumulateMultiplierChange: sizes differ");
-  // As accumulateGradientChange: each column's sum in row order, four columns at a time.
-  const Eigen::Index n = J_prev.cols(), rows = J_prev.rows();
-  Eigen::Index c = 0;
-  for (; c + 4 <= n; c += 4) {
-    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-    for (Eigen::Index r = 0; r < rows; ++r) {
-      const double dl = lambda[r] - lambda_prev[r];
-      s0 += J_prev(r, c) * dl;
-      s1 += J_prev(r, c + 1) * dl;
-      s2 += J_prev(r, c + 2) * dl;
-      s3 += J_prev(r, c + 3) * dl;
-    }
-    y[c] += s0;
-    y[c + 1] += s1;
-    y[c + 2] += s2;
-    y[c + 3] += s3;
-  }
-  for (; c < n; ++c) {
-    double s = 0.0;
-    for (Eigen::Index r = 0; r < rows; ++r) s += J_prev(r, c) * (lambda[r] - lambda_prev[r]);
-    y[c] += s;
-  }
+  addColumnSums(
+      J_prev.rows(), J_prev.cols(), [&](Eigen::Index r, Eigen::Index c) { return J_prev(r, c) * (lambda[r] - lambda_prev[r]); },
+      y);
 }
 
 int choleskyOfOccupied(const Eigen::Ref<const Eigen::MatrixXd>& B, const std::vector<char>& occupied,
