@@ -49,6 +49,19 @@ int singleNonzero(const double* v, int n) {
 // over a multiple of it of leading rows sums each of them in the same order as a longer one.
 constexpr int kProductRows = Eigen::internal::gebp_traits<double, double>::mr;
 
+}  // namespace
+
+// Both products must be Eigen's matrix-product kernel: not its coefficient-wise product for small
+// sizes, whose sum does not start at +0, nor the matrix-vector product of m = 1.
+int HlsFactorization::unitColumnProductRows(int nr, int d, int m, int t) {
+  const int lead = (t + kProductRows - 1) / kProductRows * kProductRows;
+  const bool ok = m >= 2 && nr + d + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD &&
+                  (t == 0 || (lead <= d / kProductRows * kProductRows && nr + lead + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD));
+  return ok ? lead : -1;
+}
+
+namespace {
+
 // Below this many reflectors, trailing updates apply them one by one (see factorLevel).
 constexpr int kDirectReflectors = LEXDYN_DIRECT_REFLECTORS;
 
@@ -362,8 +375,7 @@ bool HlsFactorization::updateElimination() {
 }
 
 // Loads the active rows of level j found at scratch columns [p0, p1) marked as loaded (colNorm_ == 1):
-// reduced coordinates into S, basic part into SB. Reads the column-major data one variable
-// (column) at a time; the few destination columns stay in L1 across variables.
+// reduced coordinates into S, basic part into SB, one row at a time.
 void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Eigen::MatrixXd& SB) {
   const Eigen::MatrixXd& A = *A_[z(j)];
   const Eigen::Index lda = A.rows();
@@ -753,14 +765,8 @@ void HlsFactorization::projectDeferredLevel(int k) {
   // the product keeps the rows of its widest micro-kernel that hold the first t rows (a multiple
   // of kProductRows, all inside that micro-kernel's part of the full product): the same bits as
   // the full product (test_solver, ProductOfLeadingColumnsKeepsTheFullProductsBits).
-  // (Both products must be Eigen's matrix-product kernel: not its coefficient-wise product for
-  // small sizes, whose sum does not start at +0, nor the matrix-vector product of m = 1.)
-  const int t = std::clamp(reach - c0, 0, d);
-  const int lead = (t + kProductRows - 1) / kProductRows * kProductRows;
-  const bool shortcut = nr_ + d + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD &&
-                        (t == 0 || (m >= 2 && lead <= d / kProductRows * kProductRows &&
-                                    nr_ + lead + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD));
-  if (!shortcut) {
+  const int lead = unitColumnProductRows(nr_, d, m, std::clamp(reach - c0, 0, d));
+  if (lead < 0) {
     auto P = P_.block(0, 0, d, m);
     P.noalias() = Z.transpose() * RawP_.block(0, 0, nr_, m);
     W_.block(c0, s, d, m) = P;

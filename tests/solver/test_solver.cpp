@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "lexdyn/common/error.hpp"
+#include "lexdyn/solver/detail/hls_factorization.hpp"
 #include "lexdyn/solver/problem.hpp"
 #include "lexdyn/solver/solver.hpp"
 #include "reference.hpp"
@@ -319,9 +320,10 @@ TEST(Solver, ProductWithSingleNonzeroColumnsIsAScaledRow) {
 
 // The premise of the projected level's unit columns (HlsFactorization::projectDeferredLevel):
 // with Z's columns from t on unit vectors (column i at row c0 + i), Z^T A equals, bit for bit and
-// signed zeros included, the product over Z's first `lead` columns (t rounded up to a multiple of
-// the widest micro-kernel's rows, gebp's mr, and within that micro-kernel's part of the full
-// product) followed by rows c0 + i of A + 0.
+// signed zeros included, the product over Z's first `lead` columns followed by rows c0 + i of
+// A + 0, for every case where unitColumnProductRows (the solver's own decision) gives a lead: t
+// rounded up to a multiple of the widest micro-kernel's rows (gebp's mr), within that
+// micro-kernel's part of the full product.
 TEST(Solver, ProductOfLeadingColumnsKeepsTheFullProductsBits) {
   constexpr int mr = Eigen::internal::gebp_traits<double, double>::mr;
   std::mt19937_64 rng(92);
@@ -332,11 +334,11 @@ TEST(Solver, ProductOfLeadingColumnsKeepsTheFullProductsBits) {
     const int c0 = static_cast<int>(rng() % static_cast<std::uint64_t>(nr - 1));
     const int d = nr - c0, m = 1 + static_cast<int>(rng() % 41);
     const int t = static_cast<int>(rng() % static_cast<std::uint64_t>(d + 1));
-    const int lead = (t + mr - 1) / mr * mr;
     // The cases projectDeferredLevel takes (otherwise it multiplies in full).
-    const bool taken = nr + d + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD &&
-                       (t == 0 || (m >= 2 && lead <= d / mr * mr && nr + lead + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD));
-    if (!taken) continue;
+    const int lead = HlsFactorization::unitColumnProductRows(nr, d, m, t);
+    if (lead < 0) continue;
+    EXPECT_EQ(lead % mr, 0);
+    EXPECT_GE(lead, t);
     Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(nr, d), A(nr, m);
     for (int j = 0; j < d; ++j) {
       if (j < t) {

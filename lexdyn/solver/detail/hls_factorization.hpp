@@ -30,6 +30,11 @@ namespace lexdyn::solver {
 
 class HlsFactorization {
  public:
+  /// The projected level's product Z^T A (Z: nr x d, A: nr x m) when Z's columns from t on are
+  /// unit vectors (column i at row nr - d + i): how many leading rows the matrix product computes
+  /// (the others are rows of A + 0, the same bits), or -1 when it computes them all.
+  static int unitColumnProductRows(int nr, int d, int m, int t);
+
   /// n: variables; rowsPerLevel: rows of each general level. Rows are addressed by a global id
   /// gid = rowOffset(level) + row, and vectors b / res / mu are indexed by gid.
   void setup(int n, const std::vector<int>& rowsPerLevel);
