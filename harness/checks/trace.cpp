@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <system_error>
 #include <limits>
 #include <unordered_set>
 
@@ -85,6 +86,7 @@ void TraceWriter::write(const double* row) {
     std::memcpy(&bits, &row[i], sizeof bits);
     if (c.length == 0 || bits != c.bits) {
       const std::to_chars_result r = std::to_chars(c.text, c.text + sizeof c.text, row[i]);
+      LEXDYN_ALWAYS_ASSERT(r.ec == std::errc{}, "TraceWriter: a value's text is longer than 24 characters");
       c.length = static_cast<unsigned char>(r.ptr - c.text);
       c.bits = bits;
     }

@@ -335,13 +335,18 @@ void Multibody::setKinematicState(MultibodyState& st, const double* q, const dou
   m.writeCoordinates(s.state, q, u);
   m.system.realize(s.state, SimTK::Stage::Position);
   // J u gives each body's spatial velocity with the same operations, in the same order, as the
-  // Velocity stage's (checked bit for bit by test_simulator).
+  // Velocity stage's (checked bit for bit by test_model_vs_simulator with the Simbody it is
+  // built with).
   m.matter.multiplyBySystemJacobian(s.state, s.state.getU(), s.body_velocities);
   m.copyBodies(s.state, &s.body_velocities[0], s.bodies);
 }
 
 void Multibody::coordinateRates(const MultibodyState& st, double* qdot) const {
   const Impl& m = *impl_;
+  // qdot is a Velocity-stage result: a state set by setKinematicState has none (Simbody checks
+  // this in its debug builds only).
+  LEXDYN_ALWAYS_ASSERT(st.impl_->state.getSystemStage() >= SimTK::Stage::Velocity,
+                       "coordinateRates: the state is not realized through Velocity (set it with setState)");
   const SimTK::Vector& QD = st.impl_->state.getQDot();
   for (int k = 0; k < m.nq; ++k) qdot[k] = QD[m.q_index[static_cast<size_t>(k)]];
 }
@@ -463,7 +468,7 @@ void Multibody::biasForces(const MultibodyState& st, Eigen::Ref<Eigen::VectorXd>
   SimTK::Vector_<SimTK::SpatialVec> gravity(m.matter.getNumBodies(), SimTK::SpatialVec(SimTK::Vec3(0), SimTK::Vec3(0)));
   for (int b = 0; b < m.nb; ++b) {
     const model::LinkDescription& L = m.desc.links[static_cast<size_t>(b)];
-    const SimTK::MobilizedBody& mb = m.matter.getMobilizedBody(m.mobod[static_cast<size_t>(b)]);
+    const SimTK::MobilizedBody& mb = *m.mobody[static_cast<size_t>(b)];
     // m g at the centre of mass: Simbody's station of the CoM, re-expressed in Ground.
     const SimTK::Vec3 r = mb.expressVectorInGroundFrame(state, vec3(L.com));
     const SimTK::Vec3 f = L.mass * vec3(m.desc.gravity);

@@ -94,7 +94,7 @@ class Multibody {
   /// As setState, with the same body kinematics to the bit, but Simbody's state realized through
   /// Position only: the body velocities come from the system Jacobian (J u) instead of the
   /// Velocity stage, whose velocity-dependent dynamics terms are not computed. For observations;
-  /// accelerations(), netForce() and biasForces() need setState.
+  /// coordinateRates(), accelerations(), netForce() and biasForces() need setState.
   void setKinematicState(MultibodyState& s, const double* q, const double* u) const;
   /// qdot = N(q) u at the state (Euler-angle rates, base velocity, joint rates), nq entries.
   void coordinateRates(const MultibodyState& s, double* qdot) const;

@@ -218,7 +218,9 @@ class Simulator {
   const model::Configuration& configuration() const;
   const Eigen::VectorXd& velocity() const;
   const std::vector<ContactPoint>& contactPoints() const;
-  /// The simulator's state at time() (for model().framePlacement(data(), f), centerOfMass, ...).
+  /// The simulator's state at time() (for model().framePlacement(data(), f), centerOfMass, the
+  /// body kinematics). Each tick sets it with Multibody::setKinematicState: realized through
+  /// Simbody's Position stage only, so not for coordinateRates(), netForce() or biasForces().
   const MultibodyState& data() const;
   /// Commanded servo set-point at time() (end of the last period).
   const Eigen::VectorXd& commandedPosition() const;

@@ -156,8 +156,6 @@ TEST(ModelVsSimulator, Pendulum) { crossCheck("tests/data/model", "pendulum", 12
 TEST(ModelVsSimulator, FreeBody) { crossCheck("tests/data/model", "free_body", 12006, 100); }
 TEST(ModelVsSimulator, MergedFixedJoints) { crossCheck("tests/data/model", "merged", 12007, 100); }
 
-// The cross-check can fail: a simulator built from a description whose joint axis is flipped
-// (the kind of conversion bug it guards against) disagrees with the controller's model.
 // setKinematicState realizes Simbody's state through Position only and takes the body
 // velocities from the system Jacobian: its body kinematics must be setState's to the bit (the
 // simulator's observations use it, and traces must not change).
@@ -192,6 +190,8 @@ TEST(Multibody, KinematicStateHasSetStatesBodiesToTheBit) {
   expectKinematicStateIsSetStates("tests/data/model", "merged", 12103);
 }
 
+// The cross-check can fail: a simulator built from a description whose joint axis is flipped
+// (the kind of conversion bug it guards against) disagrees with the controller's model.
 TEST(ModelVsSimulator, SeesAFlippedJointAxis) {
   const std::string urdf = src("models/arm_7dof/arm_7dof.urdf"), data = src("models/arm_7dof/arm_7dof.yaml");
   const model::RobotModel ctrl = model::RobotModel::fromFiles(urdf, data);
