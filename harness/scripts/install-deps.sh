@@ -16,6 +16,8 @@ PACKAGES=(
   slurm-wlm munge
   # The nightly report (docs/report.md): its scripts, its 3D replay and its browser test.
   python3-yaml python3-pil libjs-three chromium
+  # Instruction profiles of a run (harness/scripts/profile-tick.sh, docs/performance.md).
+  valgrind
 )
 
 missing=()
