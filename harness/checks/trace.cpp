@@ -42,6 +42,8 @@ TraceWriter::TraceWriter(const std::string& path, TraceSchema schema, const Trac
   file_ = std::fopen(partial_.c_str(), "wb");
   if (!file_) throw InputError(partial_, std::string("cannot open for writing: ") + std::strerror(errno));
   buffer_.resize(1 << 16);
+  line_.resize(static_cast<size_t>(schema_.size()) * 32);
+  last_.assign(static_cast<size_t>(schema_.size()), LastValue{});
   std::setvbuf(file_, buffer_.data(), _IOFBF, buffer_.size());
   for (const auto& kv : metadata) {
     std::string v = kv.second;
@@ -75,10 +77,6 @@ void TraceWriter::write(const double* row) {
   // A value with the same bits as the channel's value in the previous row (about a quarter of
   // a humanoid trace's values: flags, counters, zeros, held targets) reuses that row's text.
   const int n = schema_.size();
-  line_.resize(static_cast<size_t>(n) * 32);
-  if (last_.size() != static_cast<size_t>(n)) {
-    last_.assign(static_cast<size_t>(n), LastValue{});
-  }
   char* p = line_.data();
   for (int i = 0; i < n; ++i) {
     LastValue& c = last_[static_cast<size_t>(i)];

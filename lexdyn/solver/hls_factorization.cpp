@@ -49,6 +49,9 @@ int singleNonzero(const double* v, int n) {
 // over a multiple of it of leading rows sums each of them in the same order as a longer one.
 constexpr int kProductRows = Eigen::internal::gebp_traits<double, double>::mr;
 
+// Below this many reflectors, trailing updates apply them one by one (see factorLevel).
+constexpr int kDirectReflectors = LEXDYN_DIRECT_REFLECTORS;
+
 }  // namespace
 
 // Both products must be Eigen's matrix-product kernel: not its coefficient-wise product for small
@@ -59,13 +62,6 @@ int HlsFactorization::unitColumnProductRows(int nr, int d, int m, int t) {
                   (t == 0 || (lead <= d / kProductRows * kProductRows && nr + lead + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD));
   return ok ? lead : -1;
 }
-
-namespace {
-
-// Below this many reflectors, trailing updates apply them one by one (see factorLevel).
-constexpr int kDirectReflectors = LEXDYN_DIRECT_REFLECTORS;
-
-}  // namespace
 
 void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   n_ = n;
