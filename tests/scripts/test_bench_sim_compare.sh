@@ -2,16 +2,8 @@
 # bench-sim.sh -B: two builds' runs alternate, each build's figures are printed with the
 # differences of the minima, and the traces are compared. Usage: test_bench_sim_compare.sh BUILD_DIR
 set -u
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$(dirname "${BASH_SOURCE[0]}")/test_lib.sh"
 BUILD="$1"
-TMP="$(mktemp -d)"
-trap 'rm -rf "$TMP"' EXIT
-fail=0
-check() {  # check WHAT CONDITION...
-  local what="$1"
-  shift
-  if "$@"; then echo "ok: $what"; else echo "FAIL: $what"; fail=1; fi
-}
 CASE="$ROOT/cases/pointmass-damping.yaml"
 
 # The same build twice: identical traces.

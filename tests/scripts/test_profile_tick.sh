@@ -4,16 +4,8 @@
 # without a controller gives a zero controller; bad input exits 2, a run without a summary 3.
 # Usage: test_profile_tick.sh BUILD_DIR
 set -u
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+source "$(dirname "${BASH_SOURCE[0]}")/test_lib.sh"
 BUILD="$1"
-TMP="$(mktemp -d)"
-trap 'rm -rf "$TMP"' EXIT
-fail=0
-check() {  # check WHAT CONDITION...
-  local what="$1"
-  shift
-  if "$@"; then echo "ok: $what"; else echo "FAIL: $what"; fail=1; fi
-}
 # value PART FILE: the instructions per tick (thousands) of the table's line for PART.
 value() { grep -F -- "$1" "$2" | grep ' k ' | head -1 | awk '{for (i = 1; i <= NF; ++i) if ($(i + 1) == "k") { print $i; exit }}'; }
 positive() { awk -v v="$1" 'BEGIN { exit !(v > 0) }'; }
