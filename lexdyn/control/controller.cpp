@@ -62,6 +62,7 @@ struct Controller::Impl {
   tasks::TickContext ctx;
   Eigen::MatrixXd Jp;                       // 3 x nv point Jacobian
   Eigen::MatrixXd JcT;                      // nv x ng, shared by the dynamics tasks (ctx.JcT)
+  std::vector<Eigen::MatrixXd> pointJ;      // with JcT: each contact point's 3 x nv Jacobian of the tick
   bool sharedJcT = false;                   // more than one used dynamics task
   Eigen::Matrix<double, 3, 4> D;
   Eigen::VectorXd genForce;                 // nv
@@ -121,6 +122,7 @@ Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&
   if (sharedJcT) {
     JcT.setZero(nv, layout.ng());
     ctx.JcT = &JcT;
+    pointJ.assign(static_cast<size_t>(layout.ng() / 4), Eigen::MatrixXd::Zero(3, nv));
   }
   ctx.model = model;
   ctx.data = &data;
@@ -302,8 +304,11 @@ void Controller::Impl::finishTick(const RobotState& s) {
     tasks::ContactLayout::generators(X.linear(), cs.normal_in_frame, cs.friction, D);
     for (size_t pt = 0; pt < cs.points.size(); ++pt) {
       const Eigen::Vector3d f = D * cmd.gamma.segment(layout.offset(c) + 4 * static_cast<int>(pt), 4);
-      model->pointJacobian(data, cs.frame, cs.points[pt], Jp);
-      genForce.noalias() -= Jp.transpose() * f;
+      // The point's Jacobian of this tick, from the tasks' Jc^T when it was computed there.
+      const Eigen::MatrixXd* J = &Jp;
+      if (sharedJcT) J = &pointJ[static_cast<size_t>(layout.offset(c) / 4) + pt];
+      else model->pointJacobian(data, cs.frame, cs.points[pt], Jp);
+      genForce.noalias() -= J->transpose() * f;
       const Eigen::Vector3d pw = X * cs.points[pt];
       rec.contact_wrench.col(c).head<3>() += f;
       rec.contact_wrench.col(c).tail<3>() += (pw - X.translation()).cross(f);
@@ -342,7 +347,7 @@ const Command& Controller::tick(const RobotState& s) {
   const auto t1 = Clock::now();
   if (I.hws) I.hws->update(*I.model, I.data);
   // 2. Tasks.
-  if (I.sharedJcT) tasks::contactJacobianTranspose(I.ctx, I.Jp, I.JcT);
+  if (I.sharedJcT) tasks::contactJacobianTranspose(I.ctx, I.Jp, I.JcT, &I.pointJ);
   for (size_t i = 0; i < I.td.size(); ++i)
     if (I.used[i]) I.cfg.tasks[i]->compute(I.ctx, *I.td[i]);
   I.fillRows();

@@ -26,7 +26,6 @@ class LexDynBfgs final : public VelocityDomainMethod {
       J_prev_.resize(config_->tasks.size());
       for (size_t t = 0; t < config_->tasks.size(); ++t)
         if (config_->tasks[t]->geometric()) J_prev_[t].setZero(config_->tasks[t]->rows(), nv_);
-      task_mask_.assign(z(nv_), 0);
       guard_.setup(nv_);
     }
     const double dt2 = params_.dt * params_.dt;
@@ -78,10 +77,7 @@ class LexDynBfgs final : public VelocityDomainMethod {
           e2 += t * t;
         }
         const double v = std::max(p.zeta_dt2 * dt2, 0.5 * dt2 * e2);
-        std::fill(task_mask_.begin(), task_mask_.end(), 0);
-        config_->tasks[z(g.task)]->chainDofs(*model_, task_mask_);
-        for (int i = 0; i < nv_; ++i)
-          if (task_mask_[z(i)]) rhs_(i) += v;
+        for (int i : g.chain) rhs_(i) += v;
       }
       B.initialize(rhs_);
       initialized_[k] = 1;
@@ -152,7 +148,6 @@ class LexDynBfgs final : public VelocityDomainMethod {
   std::vector<Eigen::MatrixXd> J_prev_;                           // per task (geometric tasks only)
   model::Configuration q_prev_;
   Eigen::VectorXd u_prev_, s_, y_, rhs_, acc_;
-  std::vector<char> task_mask_;
   hessian::SignChangeGuard guard_;
 };
 

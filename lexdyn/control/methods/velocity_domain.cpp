@@ -92,6 +92,10 @@ void VelocityDomainMethod::setup(const MethodSetup& s) {
       g.lambda_row = stack_off_[z(L.problem_level)] + sl.row;
       g.rows = tm.rows();
       g.equality = tm.kind() == tasks::TaskKind::Equality;
+      std::vector<char> mask(z(nv_), 0);
+      tm.chainDofs(s.model, mask);
+      for (int i = 0; i < nv_; ++i)
+        if (mask[z(i)]) g.chain.push_back(i);
       acc.push_back(g);
     }
     if (!L.augmentable) continue;
@@ -147,7 +151,8 @@ void VelocityDomainMethod::addRows(const MethodTick& tick, solver::Problem& prob
     // and earlier ones that constrain the solution (equalities always, inequalities while engaged).
     std::fill(a.occupied.begin(), a.occupied.end(), 0);
     for (const GeomTerm& g : a.terms) {
-      if (engaged(g, *tick.td[z(g.task)])) config_->tasks[z(g.task)]->chainDofs(*model_, a.occupied);
+      if (engaged(g, *tick.td[z(g.task)]))
+        for (int i : g.chain) a.occupied[z(i)] = 1;
     }
 
     // Constant Levenberg-Marquardt damping (eq. 81).

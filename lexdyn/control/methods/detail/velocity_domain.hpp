@@ -44,6 +44,7 @@ struct GeomTerm {
   int lambda_row = -1;  ///< first row of the task in the stacked rows of Result::lambda
   int rows = 0;
   bool equality = true;
+  std::vector<int> chain;  ///< the task's chain dofs (TaskModel::chainDofs: they depend on the model only)
 };
 
 /// A level with reserved rows.
