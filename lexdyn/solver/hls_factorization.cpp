@@ -48,6 +48,8 @@ int singleNonzero(const double* v, int n) {
 // Rows of the widest micro-kernel of Eigen's matrix product for doubles (gebp's mr): a product
 // over a multiple of it of leading rows sums each of them in the same order as a longer one.
 constexpr int kProductRows = Eigen::internal::gebp_traits<double, double>::mr;
+// Columns of its widest micro-kernel (gebp's nr): the panels of the right-hand side.
+constexpr int kProductCols = Eigen::internal::gebp_traits<double, double>::nr;
 
 // Below this many reflectors, trailing updates apply them one by one (see factorLevel).
 constexpr int kDirectReflectors = LEXDYN_DIRECT_REFLECTORS;
@@ -61,6 +63,54 @@ int HlsFactorization::unitColumnProductRows(int nr, int d, int m, int t) {
   const bool ok = m >= 2 && nr + d + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD &&
                   (t == 0 || (lead <= d / kProductRows * kProductRows && nr + lead + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD));
   return ok ? lead : -1;
+}
+
+int HlsFactorization::blockReflectorUpdate(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXd>& T,
+                                           Eigen::Ref<Eigen::MatrixXd> C, Eigen::Ref<Eigen::MatrixXd> Y,
+                                           Eigen::Ref<Eigen::MatrixXd> Y2) {
+  const int d = static_cast<int>(C.rows()), r = static_cast<int>(V.cols()), n = static_cast<int>(C.cols());
+  // A part of a product stays in the matrix-product kernel when it has at least two columns
+  // (one column would go to the matrix-vector product) and is not small enough for Eigen's
+  // coefficient-wise product; the whole product must be in the kernel too.
+  const auto inKernel = [&](int cols) { return cols >= 2 && d + r + cols >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD; };
+  const auto zeroGroup = [&](int g) {
+    for (int j = g * kProductCols; j < (g + 1) * kProductCols; ++j)
+      for (int i = 0; i < d; ++i)
+        if (C(i, j) != 0.0) return false;
+    return true;
+  };
+  // f(first column, columns) for each run of columns between the zero groups.
+  const auto forRuns = [&](auto&& f) {
+    int start = 0;
+    for (int g = 0; g < n / kProductCols; ++g) {
+      if (!zeroGroup(g)) continue;
+      const int b = g * kProductCols;
+      if (b > start) f(start, b - start);
+      start = b + kProductCols;
+    }
+    if (start < n) f(start, n - start);
+  };
+  bool skip = d >= 2 && r >= 2 && inKernel(n);
+  int kept = 0;
+  if (skip) {
+    forRuns([&](int, int cols) {
+      skip = skip && inKernel(cols);
+      kept += cols;
+    });
+  }
+  if (!skip || kept == n) {
+    Y.noalias() = V.transpose() * C;
+    Y2.noalias() = T.transpose().triangularView<Eigen::Lower>() * Y;
+    C.noalias() -= V * Y2;
+    return n;
+  }
+  // V^T C of a zero column is +0 (the kernel's sums start from +0). The triangular product's
+  // order of summation depends on its number of columns, so it always takes all of them.
+  Y.setZero();
+  forRuns([&](int b, int cols) { Y.middleCols(b, cols).noalias() = V.transpose() * C.middleCols(b, cols); });
+  Y2.noalias() = T.transpose().triangularView<Eigen::Lower>() * Y;
+  forRuns([&](int b, int cols) { C.middleCols(b, cols).noalias() -= V * Y2.middleCols(b, cols); });
+  return kept;
 }
 
 void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
@@ -690,11 +740,7 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
           T.col(i).head(i) = -ti * out;
         }
       }
-      auto Y = Y_.block(0, 0, r, rest);
-      auto Y2 = Y2_.block(0, 0, r, rest);
-      Y.noalias() = V.transpose() * C;
-      Y2.noalias() = T.transpose().triangularView<Eigen::Lower>() * Y;
-      C.noalias() -= V * Y2;
+      blockReflectorUpdate(V, T, C, Y_.block(0, 0, r, rest), Y2_.block(0, 0, r, rest));
     }
   }
 

@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <random>
+#include <cstdint>
 #include <cstring>
 
 #include "lexdyn/common/error.hpp"
@@ -362,6 +363,48 @@ TEST(Solver, ProductOfLeadingColumnsKeepsTheFullProductsBits) {
     ++checked;
   }
   EXPECT_GE(checked, 200);
+}
+
+// The premise of HlsFactorization::blockReflectorUpdate: leaving out groups of exactly zero
+// columns (signed zeros among them) keeps every bit of the full compact-WY update C - V T^T V^T C,
+// for the columns left out and for the others. Fails when the groups are not the kernel's panels
+// (nr columns counted from the first) or when a part falls to the matrix-vector or the
+// coefficient-wise product.
+TEST(Solver, BlockReflectorUpdateSkippingZeroColumnsKeepsTheBits) {
+  constexpr int nr = Eigen::internal::gebp_traits<double, double>::nr;
+  std::mt19937_64 rng(93);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int skipped = 0;
+  for (int trial = 0; trial < 800; ++trial) {
+    const int r = 2 + static_cast<int>(rng() % 23);
+    const int d = r + static_cast<int>(rng() % 30), n = 1 + static_cast<int>(rng() % 70);
+    Eigen::MatrixXd V = Eigen::MatrixXd::Zero(d, r), T = Eigen::MatrixXd::Zero(r, r), C(d, n);
+    for (int j = 0; j < r; ++j) {
+      V(j, j) = 1.0;
+      for (int i = j + 1; i < d; ++i) V(i, j) = (rng() % 5 == 0) ? 0.0 : u(rng);
+      for (int i = 0; i <= j; ++i) T(i, j) = u(rng);
+    }
+    for (int j = 0; j < n; ++j) {
+      // Zero columns in runs that need not match the panels: some groups are whole, some not.
+      const bool zero = (j / 3 + trial) % 3 == 0 || (j / nr + trial) % 4 == 1;
+      for (int i = 0; i < d; ++i) {
+        const std::uint64_t k = rng() % 6;
+        C(i, j) = (zero || k == 0) ? ((rng() % 2) ? 0.0 : -0.0) : u(rng) * std::pow(10.0, static_cast<int>(k) - 3);
+      }
+    }
+    Eigen::MatrixXd full = C, Y(r, n), Y2(r, n);
+    Y.noalias() = V.transpose() * full;
+    Y2.noalias() = T.transpose().triangularView<Eigen::Lower>() * Y;
+    full.noalias() -= V * Y2;
+    Eigen::MatrixXd parts = C, Yp(r, n), Y2p(r, n);
+    const int kept = HlsFactorization::blockReflectorUpdate(V, T, parts, Yp, Y2p);
+    if (kept < n) ++skipped;
+    EXPECT_EQ((n - kept) % nr, 0);
+    for (int j = 0; j < n; ++j)
+      ASSERT_EQ(std::memcmp(full.col(j).data(), parts.col(j).data(), sizeof(double) * static_cast<size_t>(d)), 0)
+          << "trial " << trial << " d " << d << " r " << r << " n " << n << " kept " << kept << " column " << j;
+  }
+  EXPECT_GE(skipped, 300);
 }
 
 // Split coordinates (Options::split_from_variable): a first level of equalities over all the

@@ -34,6 +34,15 @@ class HlsFactorization {
   /// unit vectors (column i at row nr - d + i): how many leading rows the matrix product computes
   /// (the others are rows of A + 0, the same bits), or -1 when it computes them all.
   static int unitColumnProductRows(int nr, int d, int m, int t);
+  /// A stage's trailing update in compact-WY form, C <- C - V (T^T (V^T C)) (V: d x r, T: r x r
+  /// upper triangular, C: d x n; Y and Y2: r x n scratch). Whole groups of gebp's nr columns
+  /// (counted from C's first column) that are exactly zero are left out when the rest can still
+  /// go through Eigen's matrix-product kernel: such columns come out unchanged from the full
+  /// update (every term is +-0, the kernel sums from +0, and c - (+0) is c, signed zeros
+  /// included), and the other columns keep their places in the kernel's panels, hence its order
+  /// of summation. Every bit is that of the full update. Returns the columns multiplied.
+  static int blockReflectorUpdate(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXd>& T,
+                                  Eigen::Ref<Eigen::MatrixXd> C, Eigen::Ref<Eigen::MatrixXd> Y, Eigen::Ref<Eigen::MatrixXd> Y2);
 
   /// n: variables; rowsPerLevel: rows of each general level. Rows are addressed by a global id
   /// gid = rowOffset(level) + row, and vectors b / res / mu are indexed by gid.
