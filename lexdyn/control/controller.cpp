@@ -64,6 +64,7 @@ struct Controller::Impl {
   Eigen::MatrixXd JcT;                      // nv x ng, shared by the dynamics tasks (ctx.JcT)
   std::vector<Eigen::MatrixXd> pointJ;      // with JcT: each contact point's 3 x nv Jacobian of the tick
   bool sharedJcT = false;                   // more than one used dynamics task
+  bool firstFill = true;                    // fillRows has not run yet (it checks velocity-only rows then)
   Eigen::Matrix<double, 3, 4> D;
   Eigen::VectorXd genForce;                 // nv
   Command cmd;
@@ -208,6 +209,11 @@ void Controller::Impl::buildLevels() {
     }
     lv.problem_level = problem.addLevel(name, Eigen::MatrixXd::Zero(rows, nx), Eigen::VectorXd::Constant(rows, -solver::kInf),
                                         Eigen::VectorXd::Constant(rows, solver::kInf));
+    // Velocity-only task rows and the method's reserved rows (written on the velocity columns):
+    // the solver multiplies the first nv columns only.
+    bool velocityOnly = true;
+    for (const TaskSlot& s : lv.slots) velocityOnly = velocityOnly && s.velocity_only;
+    if (velocityOnly) problem.setLevelColumns(lv.problem_level, nv);
     levels.push_back(std::move(lv));
   };
   for (size_t l = 0; l < cfg.levels.size(); ++l) {
@@ -226,6 +232,7 @@ void Controller::Impl::buildLevels() {
       slot.task = t;
       slot.row = target.task_rows;
       slot.scale = meth.rowScale(ls, l, k);
+      slot.velocity_only = tm.velocityOnly();
       target.slots.push_back(slot);
       target.task_rows += tm.rows();
       if (tm.geometric()) target.augmentable = true;
@@ -276,17 +283,29 @@ void Controller::Impl::fillRows() {
     for (const TaskSlot& s : lv.slots) {
       const tasks::TaskData& d = *td[z(s.task)];
       const int m = static_cast<int>(d.lower.size());
+      // Velocity-only rows: the problem's columns past nv stay zero and only the velocity columns
+      // are copied. The task's own are checked at the first copy (in debug builds at every one).
+#ifdef NDEBUG
+      const bool check = s.velocity_only && firstFill;
+#else
+      const bool check = s.velocity_only;
+#endif
+      if (check)
+        LEXDYN_ALWAYS_ASSERT((d.A.rightCols(nx - nv).array() == 0.0).all(),
+                             "task \"" + cfg.tasks[z(s.task)]->name() + "\" declares velocity-only rows but writes other columns");
+      const int cols = s.velocity_only ? nv : nx;
       if (s.scale == 1.0) {
-        pl.A.middleRows(s.row, m) = d.A;
+        pl.A.middleRows(s.row, m).leftCols(cols) = d.A.leftCols(cols);
         pl.lower.segment(s.row, m) = d.lower;
         pl.upper.segment(s.row, m) = d.upper;
       } else {
-        pl.A.middleRows(s.row, m) = s.scale * d.A;
+        pl.A.middleRows(s.row, m).leftCols(cols) = s.scale * d.A.leftCols(cols);
         pl.lower.segment(s.row, m) = s.scale * d.lower;
         pl.upper.segment(s.row, m) = s.scale * d.upper;
       }
     }
   }
+  firstFill = false;
 }
 
 void Controller::Impl::finishTick(const RobotState& s) {

@@ -34,6 +34,7 @@ struct TaskSlot {
   int task = -1;
   int row = 0;         ///< first row in the solver level
   double scale = 1.0;  ///< ControlMethod::rowScale (sqrt(weight) on the WLS objective level)
+  bool velocity_only = false;  ///< TaskModel::velocityOnly(): A is zero past its first nv columns
 };
 
 /// How the controller's tasks map onto one of the solver's general levels.

@@ -41,6 +41,14 @@ int Problem::addLevel(std::string name, Eigen::MatrixXd A, Eigen::VectorXd lower
   return levelCount() - 1;
 }
 
+void Problem::setLevelColumns(int i, int columns) {
+  Level& l = level(i);
+  if (l.kind != LevelKind::General) throw InputError("problem: level \"" + l.name + "\"", "columns are declared for general levels only");
+  if (columns < -1 || columns > n_)
+    throw InputError("problem: level \"" + l.name + "\"", "declared columns " + std::to_string(columns) + " outside -1 .. " + std::to_string(n_));
+  l.columns = columns;
+}
+
 int Problem::addBoundsLevel(std::string name, std::vector<int> variable, Eigen::VectorXd coefficient,
                             Eigen::VectorXd lower, Eigen::VectorXd upper) {
   if (!levels_.empty()) {
@@ -79,6 +87,12 @@ void Problem::validate(const std::string& source) const {
           if (!std::isfinite(lv.A(r, c))) {
             std::ostringstream os;
             os << "A[" << r << "][" << c << "] is " << lv.A(r, c) << ", expected a finite number";
+            throw InputError(where + ".A[" + std::to_string(r) + "]", os.str());
+          }
+          if (lv.columns >= 0 && c >= lv.columns && lv.A(r, c) != 0.0) {
+            std::ostringstream os;
+            os << "A[" << r << "][" << c << "] is " << lv.A(r, c) << ", but the level declares its nonzero entries in its first "
+               << lv.columns << " columns";
             throw InputError(where + ".A[" + std::to_string(r) + "]", os.str());
           }
         }

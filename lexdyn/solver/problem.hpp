@@ -30,6 +30,10 @@ struct Level {
   // Bounds level only: row r reads coefficient[r] * x[variable[r]].
   std::vector<int> variable;
   Eigen::VectorXd coefficient;
+  /// General: A's nonzero entries lie in its first `columns` columns (-1: anywhere). A caller
+  /// that knows (the controller's velocity-only task rows) sets it with Problem::setLevelColumns;
+  /// the solver then leaves the other columns out of its products A x (the same bits).
+  int columns = -1;
 
   int rows() const { return static_cast<int>(lower.size()); }
 };
@@ -58,6 +62,10 @@ class Problem {
     checkIndex("Problem::level", i, static_cast<long>(levels_.size()));
     return levels_[static_cast<size_t>(i)];
   }
+
+  /// Declares that general level i's A is zero past its first `columns` columns (-1: no
+  /// declaration). Throws lexdyn::InputError for a bounds level or a count outside 0 .. n.
+  void setLevelColumns(int i, int columns);
 
   /// Checks sizes, bounds order (lower <= upper), finite A and finite-or-infinite bounds
   /// (no NaN), and the bounds-level rules. Throws lexdyn::InputError naming `source`, the level

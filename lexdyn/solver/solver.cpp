@@ -424,7 +424,18 @@ void Solver::Impl::computeAx(const Eigen::VectorXd& xx, Eigen::VectorXd& outv) c
   for (int kf = 0; kf < lg; ++kf) {
     const int off = fact.rowOffset(kf);
     const int m = rowsOf[static_cast<size_t>(kf + first)];
-    if (m > 0) outv.segment(off, m).noalias() = A(kf) * xx;
+    if (m == 0) continue;
+    // A level declared zero past its first c columns (Level::columns) multiplies those only.
+    // Eigen's matrix-vector product sums each row over the columns in order (in one block of
+    // columns below 128 of them) from +0 and adds the sum to a zeroed result, so the terms left
+    // out, exact zeros at the end, change no bit (DeclaredLeadingColumnsKeepEveryBit; it fails
+    // without the limit of 128).
+    const int c = prob->level(kf + first).columns;
+    if (c >= 1 && c < n && n < 128) {
+      outv.segment(off, m).noalias() = A(kf).leftCols(c) * xx.head(c);
+    } else {
+      outv.segment(off, m).noalias() = A(kf) * xx;
+    }
   }
 }
 

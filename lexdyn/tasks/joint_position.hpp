@@ -22,6 +22,7 @@ class JointTrackingTask : public TrackingTask {
   std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
   /// Allocation-free.
   void compute(const TickContext& ctx, TaskData& d) const override;
+  bool velocityOnly() const override { return true; }
 
   const std::vector<int>& joints() const { return joints_; }  ///< model joint indices
 

@@ -143,6 +143,10 @@ class TaskModel {
   /// True when the rows come from a non-linear geometric task function f(q) whose Hessian
   /// enters the hierarchical Hessian (Newton augmentation, paper sec. VI).
   virtual bool geometric() const { return false; }
+  /// True when the rows read the velocity (or acceleration) variables only: A's columns past
+  /// the first nv are zero at every tick. Geometric tasks write A = [J, 0]. The controller then
+  /// copies and multiplies only those columns of the rows (checked on the first copy).
+  virtual bool velocityOnly() const { return geometric(); }
   /// Domains the task supports.
   virtual bool supports(Domain d) const { return d == Domain::Velocity; }
   /// True for rows that can always be met exactly whatever earlier levels impose (the equation

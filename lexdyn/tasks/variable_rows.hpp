@@ -12,6 +12,7 @@ class VelocityRowsTask : public TaskModel {
  public:
   int rows() const override { return nv_; }
   bool supports(Domain d) const override { return d == Domain::Velocity; }
+  bool velocityOnly() const override { return true; }
   std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
 
  protected:

@@ -57,6 +57,53 @@ TEST(ControllerHumanoid, EveryMethodReachesTowardsTheHandTargets) {
   }
 }
 
+// TaskModel::velocityOnly(): the rows of such tasks are zero past the nv velocity columns at
+// every tick (the controller copies and the solver multiplies only those), and the problem's
+// levels made of such rows (and of the reserved rows) declare it, the others do not.
+TEST(ControllerHumanoid, VelocityOnlyRowsHoldAndTheirLevelsDeclareThem) {
+  const model::RobotModel m = test::loadHumanoid();
+  for (const std::string method : {"bfgs", "ah", "gn", "wls"}) {
+    Controller c(m, test::exp1Config(m, method, 1.0));
+    RobotState s = test::halfSitting(m);
+    c.reset(s);
+    const int nv = m.nv(), nx = c.problem().variables();
+    ASSERT_GT(nx, nv);
+    int declared = 0, undeclared = 0;
+    for (int l = 0; l < c.problem().levelCount(); ++l) {
+      const solver::Level& lv = c.problem().level(l);
+      if (lv.kind != solver::LevelKind::General) continue;
+      EXPECT_TRUE(lv.columns == nv || lv.columns == -1) << method << " level " << lv.name;
+      (lv.columns == nv ? declared : undeclared)++;
+    }
+    // LexDyn: trust, collisions, contacts, CoM, hands and minimum velocity. WLS's two levels both
+    // read the contact forces (the hard level's dynamics, the objective's minimum wrench).
+    EXPECT_GE(declared, method == "wls" ? 0 : 6) << method;
+    EXPECT_GE(undeclared, 1) << method;  // the equation of motion reads the contact forces
+    int checked = 0;
+    for (int k = 0; k < 300; ++k) {
+      if (k == 150) c.setTaskTarget(c.taskIndex("right_hand"), Eigen::Vector3d(0.4, -2.0, 2.0));  // out of reach
+      const Command& cmd = c.tick(s);
+      ASSERT_TRUE(cmd.ok()) << method;
+      for (int i = 0; i < static_cast<int>(c.config().tasks.size()); ++i) {
+        if (!c.config().tasks[static_cast<size_t>(i)]->velocityOnly()) continue;
+        const Eigen::MatrixXd& A = c.taskData(i).A;
+        ASSERT_TRUE((A.rightCols(nx - nv).array() == 0.0).all()) << method << " task " << c.config().tasks[static_cast<size_t>(i)]->name();
+        ++checked;
+      }
+      for (int l = 0; l < c.problem().levelCount(); ++l) {
+        const solver::Level& lv = c.problem().level(l);
+        if (lv.columns == nv) {
+          ASSERT_TRUE((lv.A.rightCols(nx - nv).array() == 0.0).all()) << method << " level " << lv.name;
+        }
+      }
+      s.q = cmd.q;
+      s.u = cmd.u;
+      s.time += 0.005;
+    }
+    EXPECT_GE(checked, 300 * 5) << method;
+  }
+}
+
 TEST(ControllerHumanoid, TickAllocatesNothing) {
   const model::RobotModel m = test::loadHumanoid();
   for (const std::string method : {"bfgs", "ah", "gn", "wls"}) {

@@ -407,6 +407,69 @@ TEST(Solver, BlockReflectorUpdateSkippingZeroColumnsKeepsTheBits) {
   EXPECT_GE(skipped, 300);
 }
 
+// Level::columns: a level declared zero past its first c columns gives the same bits as the same
+// problem without the declaration (the solver leaves those columns out of its products A x),
+// cold and warm-started; a declaration contradicted by the matrix is an input error naming the
+// entry, and a count outside -1 .. n or on a bounds level is refused.
+TEST(Solver, DeclaredLeadingColumnsKeepEveryBit) {
+  GenOptions g;
+  int declared = 0;
+  for (std::uint64_t seed = 300; seed < 420; ++seed) {
+    g.n = 4 + static_cast<int>((seed * 7) % 150);  // beyond 128 columns too
+    g.levels = 2 + static_cast<int>(seed % 4);
+    g.maxRows = 2 + static_cast<int>(seed % 7);
+    Problem plain = randomProblem(seed, g);
+    std::mt19937_64 rng(seed);
+    // Some general levels lose their trailing columns (signed zeros), then declare them.
+    std::vector<int> cols(static_cast<size_t>(plain.levelCount()), -1);
+    for (int l = 0; l < plain.levelCount(); ++l) {
+      Level& lv = plain.level(l);
+      if (lv.kind != LevelKind::General || rng() % 3 == 0) continue;
+      const int c = 1 + static_cast<int>(rng() % static_cast<std::uint64_t>(g.n - 1));
+      for (int j = c; j < g.n; ++j)
+        for (int r = 0; r < lv.rows(); ++r) lv.A(r, j) = (rng() % 2) ? 0.0 : -0.0;
+      cols[static_cast<size_t>(l)] = c;
+    }
+    Problem withColumns = plain;
+    for (int l = 0; l < plain.levelCount(); ++l)
+      if (cols[static_cast<size_t>(l)] >= 0) {
+        withColumns.setLevelColumns(l, cols[static_cast<size_t>(l)]);
+        ++declared;
+      }
+    Solver a, b;
+    const Result& ra = solveOnce(a, plain);
+    const Result& rb = solveOnce(b, withColumns);
+    const auto same = [](const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
+      return u.size() == v.size() && std::memcmp(u.data(), v.data(), sizeof(double) * static_cast<size_t>(u.size())) == 0;
+    };
+    ASSERT_TRUE(same(ra.x, rb.x)) << "seed " << seed;
+    ASSERT_TRUE(same(ra.violation_norm, rb.violation_norm)) << "seed " << seed;
+    EXPECT_EQ(ra.iterations, rb.iterations) << "seed " << seed;
+    // Warm-started from the answer of a perturbed problem.
+    Problem plain2 = plain, withColumns2 = withColumns;
+    for (int l = 0; l < plain.levelCount(); ++l) {
+      if (plain.level(l).kind != LevelKind::General) continue;
+      plain2.level(l).lower.array() -= 0.125;
+      withColumns2.level(l).lower.array() -= 0.125;
+    }
+    const Result& wa = a.solve(plain2, ra.active, ra.x);
+    const Result& wb = b.solve(withColumns2, rb.active, rb.x);
+    ASSERT_TRUE(same(wa.x, wb.x)) << "seed " << seed << " (warm)";
+  }
+  EXPECT_GE(declared, 100);
+
+  Problem p(3);
+  p.addBoundsLevel("box", {0}, Eigen::VectorXd::Ones(1), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Ones(1));
+  p.addLevel("rows", mat(2, 3, {1, 2, 0, 3, 0, 0.5}), vec({0, 0}), vec({1, 1}));
+  EXPECT_THROW(p.setLevelColumns(0, 1), InputError);
+  EXPECT_THROW(p.setLevelColumns(1, 4), InputError);
+  EXPECT_THROW(p.setLevelColumns(1, -2), InputError);
+  p.setLevelColumns(1, 2);
+  EXPECT_TRUE(lexdyn::testing::containsAll(lexdyn::testing::inputErrorOf([&] { p.validate("test"); }), {"A[1][2] is 0.5", "first 2 columns"}));
+  p.level(1).A(1, 2) = -0.0;
+  EXPECT_NO_THROW(p.validate("test"));
+}
+
 // Split coordinates (Options::split_from_variable): a first level of equalities over all the
 // variables, eliminated with its basic variables taken from the second half when they are well
 // conditioned, later levels over the first half, the second half or both, and a last level over
