@@ -196,7 +196,8 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
                                         num(o.dual_tolerance) + ", stop_slack_norm " + num(o.stop_slack_norm) +
                                         ", stop_optimality_iterations " + std::to_string(o.stop_optimality_iterations) +
                                         ", stop_total_iterations " + std::to_string(o.stop_total_iterations) +
-                                        ", split_force_coordinates " + (o.split_from_variable != -1 ? "true" : "false"));
+                                        ", split_force_coordinates " + (o.split_from_variable != -1 ? "true" : "false") +
+                                        ", spanning_stages " + (o.spanning_stages ? "true" : "false"));
   std::string h;
   for (const auto& l : I.lx.hierarchy(I.lx.method)) {
     h += (h.empty() ? "" : " | ") + l.name + ":";

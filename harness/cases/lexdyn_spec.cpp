@@ -78,6 +78,7 @@ solver::Options readSolver(yaml::StrictMap& sm, double dt) {
   if (auto v = sm.optional("split_force_coordinates")) {
     o.split_from_variable = v->asBool() ? solver::Options::kSplitAtControllerForces : -1;
   }
+  if (auto v = sm.optional("spanning_stages")) o.spanning_stages = v->asBool();
   if (auto v = sm.optional("last_level_projection")) {
     const std::string mode = v->asString();
     if (mode == "auto") {

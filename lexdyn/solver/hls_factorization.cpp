@@ -6,6 +6,10 @@
 #include <cmath>
 #include <limits>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 #include "lexdyn/common/error.hpp"
 
 #ifndef LEXDYN_DIRECT_REFLECTORS
@@ -53,6 +57,9 @@ constexpr int kProductCols = Eigen::internal::gebp_traits<double, double>::nr;
 
 // Below this many reflectors, trailing updates apply them one by one (see factorLevel).
 constexpr int kDirectReflectors = LEXDYN_DIRECT_REFLECTORS;
+
+// Spanning stages: the smallest pivot accepted, relative to the level's largest row norm.
+constexpr double kSpanningPivot = 1e-6;
 
 }  // namespace
 
@@ -130,6 +137,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
     for (int r = 0; r < m_[z(k)]; ++r) levelOf_[z(rowOff_[z(k)] + r)] = k;
 
   A_.assign(z(L), nullptr);
+  cols_.assign(z(L), -1);
   gatherIdx_.assign(z(2 * std::max(mTot_, 1)), 0);
   gatherOff_.assign(z(std::max(n, 1)), 0);
   static_.assign(z(L), 0);
@@ -185,12 +193,17 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
 
   left_.resize(z(L));
   leftTau_.resize(z(L));
+  span_.assign(z(L), 0);
+  refl_.assign(z(L), 0);
+  spanPerm_.assign(z(L), {});
+  unitRow_.assign(z(mTot_), 0);
   int maxLevelRows = 1;
   for (int k = 0; k < L; ++k) {
     const int mk = std::max(m_[z(k)], 1);
     maxLevelRows = std::max(maxLevelRows, mk);
     left_[z(k)].setZero(mk, std::min(mk, nn));
     leftTau_[z(k)].setZero(mk);
+    spanPerm_[z(k)].assign(z(std::min(mk, nn)), 0);
   }
 
   const int mLast = L > 0 ? std::max(m_[z(L - 1)], 1) : 1;
@@ -215,6 +228,14 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   work2_.setZero(std::max({n, mTot_, 1}));
   g_.setZero(nn);
   t_.setZero(maxLevelRows);
+  ratio_.setZero(maxLevelRows);
+  spanNorm_.setZero(nn);
+  spanRef_.setZero(nn);
+  spanOrder_.assign(z(maxLevelRows), 0);
+  spanWhere_.assign(z(maxLevelRows), 0);
+  spanAt_.assign(z(maxLevelRows), 0);
+  pivotRow_.setZero(maxLevelRows);
+  recompute_.assign(z(maxLevelRows), 0);
   u_.setZero(maxLevelRows);
   elim_ = false;
   m0_ = 0;
@@ -223,14 +244,27 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   lastRestart_ = 0;
 }
 
+void HlsFactorization::rowNorms(const Eigen::MatrixXd& A, int columns, Eigen::Ref<Eigen::VectorXd> rn) {
+  const int n = static_cast<int>(A.cols());
+  // The full sum adds column 0, then columns 1..4, 5..8, ... as groups through column
+  // ((n - 1) & ~3), then the rest one by one (Eigen's packetwise_redux_impl): 4 q + 1 leading
+  // columns (q groups), when there are that many, are summed in the same groups.
+  int lead = n;
+  if (columns >= 1 && columns < n) lead = std::min(4 * ((columns - 1 + 3) / 4) + 1, n);
+  // Column-wise accumulation: contiguous reads of the column-major matrix.
+  if (lead < n) {
+    rn = A.leftCols(lead).cwiseAbs2().rowwise().sum().cwiseSqrt();
+  } else {
+    rn = A.cwiseAbs2().rowwise().sum().cwiseSqrt();
+  }
+}
+
 void HlsFactorization::computeRowNorms() {
   elimDataValid_ = false;  // new data: the elimination is recomputed
   for (int k = 0; k < levelCount(); ++k) {
     const Eigen::MatrixXd& A = *A_[z(k)];
     if (A.rows() == 0) continue;
-    // Column-wise accumulation: contiguous reads of the column-major matrix.
-    auto rn = rowNorm_.segment(rowOff_[z(k)], A.rows());
-    rn = A.cwiseAbs2().rowwise().sum().cwiseSqrt();
+    rowNorms(A, cols_[z(k)], rowNorm_.segment(rowOff_[z(k)], A.rows()));
   }
 }
 
@@ -441,14 +475,27 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Ei
   if (elim_)
     for (int i = 0; i < m0_; ++i) vo[nr_ + i] = static_cast<Eigen::Index>(varPerm_[z(i)]) * lda;
   const Eigen::Index ldS = S.outerStride(), ldB = SB.outerStride();
+  // A level declared zero past its first columns: the other variables' entries are zeros, not
+  // read (each read is a cache line of its own in the column-major matrix).
+  const Eigen::Index limit = cols_[z(j)] >= 0 ? static_cast<Eigen::Index>(cols_[z(j)]) * lda : A.size();
   for (int c = 0; c < cnt; ++c) {
     const double* row = A.data() + rows[c];
     double* dst = S.data() + qs[c] * ldS;
-    for (int f = 0; f < nr_; ++f) dst[f] = row[vo[f]];
-    if (!elim_) continue;
+    for (int f = 0; f < nr_; ++f) dst[f] = vo[f] < limit ? row[vo[f]] : 0.0;
+    // Spanning stages: rows that read at most one free variable (a row on a fixed variable reads
+    // none), counted over the reduced and the basic variables together.
+    const int single = spanAllowed_ ? singleNonzero(dst, nr_) : -2;
+    if (!elim_) {
+      if (spanAllowed_) unitRow_[z(off + rows[c])] = single != -2 ? 1 : 0;
+      continue;
+    }
     double* dstB = SB.data() + qs[c] * ldB;
-    for (int i = 0; i < m0_; ++i) dstB[i] = row[vo[nr_ + i]];
+    for (int i = 0; i < m0_; ++i) dstB[i] = vo[nr_ + i] < limit ? row[vo[nr_ + i]] : 0.0;
     sparseB_[z(qs[c])] = singleNonzero(dstB, m0_);
+    if (spanAllowed_) {
+      const int basic = sparseB_[z(qs[c])];
+      unitRow_[z(off + rows[c])] = (single == -1 && basic != -2) || (single >= 0 && basic == -1) ? 1 : 0;
+    }
   }
 }
 
@@ -456,7 +503,7 @@ void HlsFactorization::applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int
   for (int k = firstStage_; k < stages; ++k) {
     const int c0 = col0_[z(k)];
     const int s = start_[z(k)];
-    for (int i = 0; i < rank_[z(k)]; ++i) {
+    for (int i = 0; i < refl_[z(k)]; ++i) {
       const int len = stageEnd_[z(k)] - c0 - i;
       applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), col.segment(c0 + i, len));
     }
@@ -467,7 +514,7 @@ void HlsFactorization::applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int 
   for (int k = stages - 1; k >= firstStage_; --k) {
     const int c0 = col0_[z(k)];
     const int s = start_[z(k)];
-    for (int i = rank_[z(k)] - 1; i >= 0; --i) {
+    for (int i = refl_[z(k)] - 1; i >= 0; --i) {
       const int len = stageEnd_[z(k)] - c0 - i;
       applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), col.segment(c0 + i, len));
     }
@@ -614,9 +661,9 @@ void HlsFactorization::saveSnapshot(int k, int shareWith) {
   snapValid_[z(k)] = 1;
 }
 
-void HlsFactorization::swapColumns(int a, int b) {
+void HlsFactorization::swapColumns(int a, int b, int rows) {
   if (a == b) return;
-  W_.col(a).head(nr_).swap(W_.col(b).head(nr_));
+  W_.col(a).head(rows).swap(W_.col(b).head(rows));
   if (elim_) WB_.col(a).head(m0_).swap(WB_.col(b).head(m0_));
   if (deferred_ >= 0 && levelOf_[z(colGid_[z(a)])] == deferred_) {
     const int s = start_[z(deferred_)];
@@ -631,6 +678,57 @@ void HlsFactorization::swapColumns(int a, int b) {
   colGid_[z(b)] = ga;
   pos_[z(gb)] = a;
   pos_[z(ga)] = b;
+}
+
+// The column norms' downdate after a reflector (LAPACK xLAQP2), for cnt columns: with w the
+// column's entry in the reflector's row, nrm *= sqrt(max(0, (1 + t) (1 - t))), t = |w| / nrm,
+// unless the downdated norm has lost too much to cancellation (then recompute[q] is set and the
+// caller computes it again). ratio = nrm / orig (0 when orig is 0). A zero norm stays zero. Two
+// columns at a time where SSE2 is there: the same correctly rounded operations as one at a time,
+// so the same bits, but the divisions and square roots of two columns overlap.
+void HlsFactorization::downdateNorms(int cnt, const double* w, double* nrm, const double* ref, const double* orig,
+                                     double* ratio, char* recompute) {
+  static const double kSqrtEps = std::sqrt(std::numeric_limits<double>::epsilon());
+  int q = 0;
+#ifdef __SSE2__
+  const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0), eps = _mm_set1_pd(kSqrtEps);
+  const __m128d absMask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+  for (; q + 2 <= cnt; q += 2) {
+    const __m128d n = _mm_loadu_pd(nrm + q);
+    const __m128d t = _mm_div_pd(_mm_and_pd(_mm_loadu_pd(w + q), absMask), n);
+    // std::max(0.0, x) is x when 0 < x, else 0 (NaN included): maxpd(x, 0) returns its second
+    // operand unless x > 0.
+    const __m128d temp = _mm_max_pd(_mm_mul_pd(_mm_add_pd(one, t), _mm_sub_pd(one, t)), zero);
+    const __m128d rr = _mm_div_pd(n, _mm_loadu_pd(ref + q));
+    const __m128d again = _mm_cmple_pd(_mm_mul_pd(_mm_mul_pd(temp, rr), rr), eps);
+    const __m128d nonzero = _mm_cmpneq_pd(n, zero);
+    const __m128d scaled = _mm_mul_pd(n, _mm_sqrt_pd(temp));
+    // Zero norms keep 0; the others are scaled (those to recompute are overwritten by the caller).
+    const __m128d out = _mm_or_pd(_mm_and_pd(nonzero, scaled), _mm_andnot_pd(nonzero, n));
+    _mm_storeu_pd(nrm + q, out);
+    const int mask = _mm_movemask_pd(_mm_and_pd(nonzero, again));
+    recompute[q] = static_cast<char>(mask & 1);
+    recompute[q + 1] = static_cast<char>((mask >> 1) & 1);
+    const __m128d o = _mm_loadu_pd(orig + q);
+    const __m128d pos = _mm_cmpgt_pd(o, zero);
+    _mm_storeu_pd(ratio + q, _mm_and_pd(pos, _mm_div_pd(out, o)));
+  }
+#endif
+  for (; q < cnt; ++q) {
+    recompute[q] = 0;
+    double& n = nrm[q];
+    if (n != 0.0) {
+      double temp = std::abs(w[q]) / n;
+      temp = std::max(0.0, (1.0 + temp) * (1.0 - temp));
+      const double rr = n / ref[q];
+      if (temp * rr * rr <= kSqrtEps) {
+        recompute[q] = 1;
+      } else {
+        n *= std::sqrt(temp);
+      }
+    }
+    ratio[q] = orig[q] > 0.0 ? n / orig[q] : 0.0;
+  }
 }
 
 void HlsFactorization::factorLevel(int k, double rankTol) {
@@ -655,7 +753,18 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   }
   stageEnd_[z(k)] = e;
   const int d = e - c0;
-  static const double kSqrtEps = std::sqrt(std::numeric_limits<double>::epsilon());
+  span_[z(k)] = 0;
+  if (spanAllowed_ && d > 0 && m >= d) {
+    bool unit = true;
+    for (int j = 0; j < m && unit; ++j) unit = unitRow_[z(colGid_[z(s + j)])] != 0;
+    if (unit && factorSpanning(k, d)) {
+      span_[z(k)] = 1;
+      rank_[z(k)] = d;
+      refl_[z(k)] = 0;
+      col0_[z(k + 1)] = c0 + d;
+      return;
+    }
+  }
 
   for (int j = 0; j < m; ++j) {
     const double nr = (d > 0) ? W_.col(s + j).segment(c0, d).norm() : 0.0;
@@ -664,47 +773,57 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
     colOrig_(s + j) = rowNorm_(colGid_[z(s + j)]);
   }
 
+  // Pivot ratios: projected norm relative to the original row norm (0 for a zero row).
+  double* ratio = ratio_.data();
+  for (int j = 0; j < m; ++j) {
+    const double orig = colOrig_(s + j);
+    ratio[j] = orig > 0.0 ? colNorm_(s + j) / orig : 0.0;
+  }
   int r = 0;
   const int maxRank = std::min(m, d);
   while (r < maxRank) {
-    // Pivot: largest projected norm relative to the original row norm (ties: lowest index).
+    // Pivot: largest ratio (ties: lowest index).
     int best = -1;
     double bestRatio = 0.0;
     for (int j = r; j < m; ++j) {
-      const double orig = colOrig_(s + j);
-      const double ratio = orig > 0.0 ? colNorm_(s + j) / orig : 0.0;
-      if (ratio > bestRatio) {
-        bestRatio = ratio;
+      if (ratio[j] > bestRatio) {
+        bestRatio = ratio[j];
         best = j;
       }
     }
     if (best < 0 || bestRatio <= rankTol) break;
-    swapColumns(s + r, s + best);
+    swapColumns(s + r, s + best, e);
+    std::swap(ratio[r], ratio[best]);
     auto x = W_.col(s + r).segment(c0 + r, d - r);
     double tau = 0.0, beta = 0.0;
     x.makeHouseholderInPlace(tau, beta);
     x(0) = beta;
     tau_(s + r) = tau;
     const auto ess = W_.col(s + r).segment(c0 + r + 1, d - r - 1);
+    double* top = pivotRow_.data();
     for (int j = r + 1; j < m; ++j) {
       applyReflector(ess, tau, W_.col(s + j).segment(c0 + r, d - r));
-      // Norm downdate with recomputation on cancellation (LAPACK xLAQP2).
+      top[j] = W_(c0 + r, s + j);
+    }
+    // Norm downdates of the remaining columns and their new ratios, all columns at once.
+    const int first = r + 1;
+    const int cnt = m - first;
+    downdateNorms(cnt, top + first, colNorm_.data() + s + first, colNormRef_.data() + s + first, colOrig_.data() + s + first,
+                  ratio + first, recompute_.data());
+    for (int q = 0; q < cnt; ++q) {
+      if (!recompute_[z(q)]) continue;
+      // Cancellation: the norm of the column's remaining rows, computed again (LAPACK xLAQP2).
+      const int j = first + q;
       double& nrm = colNorm_(s + j);
-      if (nrm != 0.0) {
-        double temp = std::abs(W_(c0 + r, s + j)) / nrm;
-        temp = std::max(0.0, (1.0 + temp) * (1.0 - temp));
-        const double ratio = nrm / colNormRef_(s + j);
-        if (temp * ratio * ratio <= kSqrtEps) {
-          nrm = (d - r - 1 > 0) ? W_.col(s + j).segment(c0 + r + 1, d - r - 1).norm() : 0.0;
-          colNormRef_(s + j) = nrm;
-        } else {
-          nrm *= std::sqrt(temp);
-        }
-      }
+      nrm = (d - r - 1 > 0) ? W_.col(s + j).segment(c0 + r + 1, d - r - 1).norm() : 0.0;
+      colNormRef_(s + j) = nrm;
+      const double orig = colOrig_(s + j);
+      ratio[j] = orig > 0.0 ? nrm / orig : 0.0;
     }
     ++r;
   }
   rank_[z(k)] = r;
+  refl_[z(k)] = r;
   col0_[z(k + 1)] = c0 + r;
 
   // Trailing update of the later levels' columns: C <- Q_k^T C (compact WY, blocked).
@@ -761,6 +880,92 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   }
 }
 
+bool HlsFactorization::factorSpanning(int k, int d) {
+  const int s = start_[z(k)];
+  const int m = act_[z(k)];
+  const int c0 = col0_[z(k)];
+  static const double kSqrtEps = std::sqrt(std::numeric_limits<double>::epsilon());
+  // The level's largest original row norm sets the scale of the pivots' test.
+  double scale = 0.0;
+  for (int j = 0; j < m; ++j) scale = std::max(scale, rowNorm_(colGid_[z(s + j)]));
+  const double tol = kSpanningPivot * scale;
+  // Rows that read none of the stage's coordinates (a fixed variable's, say) go last: no reflector
+  // then mixes them with the others, so that their residual stays theirs alone and the others'
+  // are exact where the standard factorisation has them exact.
+  int* order = spanOrder_.data();
+  int nonzero = 0;
+  for (int j = 0; j < m; ++j)
+    if (!W_.col(s + j).segment(c0, d).isZero(0.0)) order[nonzero++] = j;
+  if (nonzero < d) return false;
+  for (int j = 0, q = nonzero; j < m; ++j)
+    if (W_.col(s + j).segment(c0, d).isZero(0.0)) order[q++] = j;
+  auto Lm = left_[z(k)].block(0, 0, m, d);
+  for (int i = 0; i < d; ++i)
+    for (int q = 0; q < m; ++q) Lm(q, i) = W_(c0 + i, s + order[q]);
+  auto& perm = spanPerm_[z(k)];
+  for (int i = 0; i < d; ++i) {
+    perm[z(i)] = i;
+    spanNorm_(i) = spanRef_(i) = Lm.col(i).norm();
+  }
+  auto& lt = leftTau_[z(k)];
+  for (int i = 0; i < d; ++i) {
+    // Pivot: the coordinate of largest remaining norm (ties: lowest index).
+    int best = i;
+    for (int c = i + 1; c < d; ++c)
+      if (spanNorm_(c) > spanNorm_(best)) best = c;
+    if (!(spanNorm_(best) > tol)) return false;
+    if (best != i) {
+      Lm.col(i).swap(Lm.col(best));
+      std::swap(spanNorm_(i), spanNorm_(best));
+      std::swap(spanRef_(i), spanRef_(best));
+      std::swap(perm[z(i)], perm[z(best)]);
+    }
+    auto x = Lm.col(i).segment(i, m - i);
+    double tau = 0.0, beta = 0.0;
+    x.makeHouseholderInPlace(tau, beta);
+    x(0) = beta;
+    lt(i) = tau;
+    if (!(std::abs(beta) > tol)) return false;
+    const auto ess = Lm.col(i).segment(i + 1, m - i - 1);
+    for (int c = i + 1; c < d; ++c) {
+      applyReflector(ess, tau, Lm.col(c).segment(i, m - i));
+      double& nrm = spanNorm_(c);
+      if (nrm == 0.0) continue;
+      double temp = std::abs(Lm(i, c)) / nrm;
+      temp = std::max(0.0, (1.0 + temp) * (1.0 - temp));
+      const double rr = nrm / spanRef_(c);
+      if (temp * rr * rr <= kSqrtEps) {
+        nrm = (m - i - 1 > 0) ? Lm.col(c).segment(i + 1, m - i - 1).norm() : 0.0;
+        spanRef_(c) = nrm;
+      } else {
+        nrm *= std::sqrt(temp);
+      }
+    }
+  }
+  // The stage's columns in the order of Lm's rows (where[j]: the column now holding the original
+  // column j; at[p]: the original column at position p).
+  int* where = spanWhere_.data();
+  int* at = spanAt_.data();
+  for (int j = 0; j < m; ++j) where[j] = at[j] = j;
+  for (int q = 0; q < m; ++q) {
+    const int p = where[order[q]];
+    if (p == q) continue;
+    swapColumns(s + q, s + p, c0 + d);
+    const int a = at[q];
+    at[q] = order[q];
+    at[p] = a;
+    where[a] = p;
+    where[order[q]] = q;
+  }
+  return true;
+}
+
+int HlsFactorization::spanningStages() const {
+  int n = 0;
+  for (int k = firstStage_; k < levelCount(); ++k) n += span_[z(k)];
+  return n;
+}
+
 // Projected level k (the last): keeps its raw rows in column order (RawP_) for solve() and
 // multipliers(), and writes their projection Z^T a onto the null space of the earlier levels,
 // Z = Q_{<k} [0; I], into rows c0.. of its columns; factorLevel then factorises them as usual.
@@ -780,7 +985,7 @@ void HlsFactorization::projectDeferredLevel(int k) {
   // bit: each would add exact zeros. It is not multiplied through them.
   int reach = 0;
   for (int j = firstStage_; j < k; ++j)
-    if (rank_[z(j)] > 0) reach = std::max(reach, stageEnd_[z(j)]);
+    if (refl_[z(j)] > 0) reach = std::max(reach, stageEnd_[z(j)]);
   for (int i = 0; i < d; ++i) {
     Z(c0 + i, i) = 1.0;
     if (c0 + i < reach) applyEarlierStagesQ(Z.col(i), k);
@@ -844,6 +1049,8 @@ void HlsFactorization::factorize(double rankTol) {
       firstStage_ = 1;
       nr_ = nf_ - m0_;
       rank_[0] = m0_;
+      refl_[0] = 0;
+      span_[0] = 0;
       act_[0] = m0_;
       start_[0] = 0;
       col0_[0] = 0;
@@ -914,7 +1121,7 @@ void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen
     } else if (c0 > 0) {
       t.noalias() -= W_.block(0, s, c0, m).transpose() * y.head(c0);
     }
-    if (r == m) {
+    if (r == m && !span_[z(k)]) {
       W_.block(c0, s, r, r).triangularView<Eigen::Upper>().transpose().solveInPlace(t);
       y.segment(c0, r) = t;
       for (int j = 0; j < m; ++j) res(colGid_[z(s + j)]) = 0.0;
@@ -925,7 +1132,13 @@ void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen
       if (r > 0) {
         auto seg = t.head(r);
         Lm.topLeftCorner(r, r).triangularView<Eigen::Upper>().solveInPlace(seg);
-        y.segment(c0, r) = seg;
+        if (span_[z(k)]) {
+          // A spanning stage's unknowns are its coordinates in their pivoted order.
+          const auto& perm = spanPerm_[z(k)];
+          for (int i = 0; i < r; ++i) y(c0 + perm[z(i)]) = seg(i);
+        } else {
+          y.segment(c0, r) = seg;
+        }
       }
       auto w = u_.head(m);
       w.head(r).setZero();
@@ -984,7 +1197,7 @@ void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref
     const auto [m, s, c0, r] = stage(j);
     if (m == 0) continue;
     auto u = u_.head(m);
-    if (r == m) {
+    if (r == m && !span_[z(j)]) {
       u = -G.segment(c0, r);
       W_.block(c0, s, r, r).triangularView<Eigen::Upper>().solveInPlace(u);
     } else {
@@ -993,7 +1206,12 @@ void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref
       u.setZero();
       if (r > 0) {
         auto top = u.head(r);
-        top = -G.segment(c0, r);
+        if (span_[z(j)]) {
+          const auto& perm = spanPerm_[z(j)];
+          for (int i = 0; i < r; ++i) top(i) = -G(c0 + perm[z(i)]);
+        } else {
+          top = -G.segment(c0, r);
+        }
         Lm.topLeftCorner(r, r).triangularView<Eigen::Upper>().transpose().solveInPlace(top);
       }
       for (int i = r - 1; i >= 0; --i) applyReflector(Lm.col(i).segment(i + 1, m - i - 1), lt(i), u.segment(i, m - i));

@@ -294,7 +294,7 @@ bool Solver::Impl::scanNonFinite(const Problem& problem) {
 
 void Solver::Impl::loadData(const Problem& problem) {
   prob = &problem;
-  for (int kf = 0; kf < lg; ++kf) fact.setLevelMatrix(kf, &problem.level(kf + first).A);
+  for (int kf = 0; kf < lg; ++kf) fact.setLevelMatrix(kf, &problem.level(kf + first).A, problem.level(kf + first).columns);
   fact.computeRowNorms();
   if (M > 0) rowNorm.head(M) = fact.rowNorms().head(M);
   for (int kf = 0; kf < lg; ++kf) {
@@ -311,6 +311,7 @@ void Solver::Impl::loadData(const Problem& problem) {
   }
   fact.setElimination(opt.eliminate_first_level && allEq, opt.elimination_tolerance);
   fact.setSplit(opt.split_from_variable);
+  fact.setSpanning(opt.spanning_stages);
   fact.setLastLevelMode(opt.last_level_projection == Options::LastLevel::Never    ? HlsFactorization::LastLevel::Standard
                         : opt.last_level_projection == Options::LastLevel::Always ? HlsFactorization::LastLevel::Projected
                                                                                   : HlsFactorization::LastLevel::Auto);
@@ -832,6 +833,7 @@ void Solver::Impl::finish() {
   out.x = x;
   out.last_level_projected = fact.lastLevelProjected();
   out.split_applied = fact.splitApplied();
+  out.spanning_stages = fact.spanningStages();
   // True violations at the final x (Ax is kept up to date along the steps).
   if (hasBounds) {
     const Level& lv = problem.level(0);

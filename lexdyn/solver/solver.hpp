@@ -86,6 +86,15 @@ struct Options {
   /// many variables, where this saves most of the trailing updates). Exact either way.
   enum class LastLevel { Auto, Never, Always };
   LastLevel last_level_projection = LastLevel::Auto;
+  /// Spanning stages. A level whose active rows each read one variable (a regularisation level
+  /// such as x_j = 0 over a set of variables) and that spans every coordinate left to its stage
+  /// (its rows determine them all: nothing is left for later levels there) is solved by one
+  /// column-pivoted QR of its projected rows (the least-squares problem of the stage) instead of
+  /// a rank-revealing QR of their transpose followed by a second, left QR, and its stage applies
+  /// no reflectors to later levels. Accepted only when every pivot exceeds 1e-6 of the level's
+  /// largest row norm (else the level is factorised as any other). Exact up to rounding either
+  /// way; it changes the rounding.
+  bool spanning_stages = false;
   /// Hard cap on active-set iterations (equality sub-problems solved).
   int max_iterations = 1000;
   /// After this many consecutive zero-length steps, ties are broken by smallest index (Bland).
@@ -158,6 +167,8 @@ struct Result {
   bool last_level_projected = false;
   /// The last factorisation's elimination took its basic variables from split_from_variable on.
   bool split_applied = false;
+  /// Stages of the last factorisation solved as spanning stages (Options::spanning_stages).
+  int spanning_stages = 0;
   int bad_level = -1, bad_row = -1;  ///< NonFiniteInput location
 };
 

@@ -313,6 +313,10 @@ struct GenOptions {
   /// it is meant to be, and an exact (rational) reference agrees with the solver's rank
   /// decisions. Off: the rounded products are nearly, not exactly, dependent.
   bool dyadic = false;
+  /// Probability that a level's rows each read a single variable (a regularisation level such
+  /// as x_j = c; duplicates and conflicts may still bring other rows). 0 draws nothing more, so
+  /// that the problems of every seed stay those of the sweeps before this option.
+  double pUnitLevel = 0.0;
 };
 
 inline Problem randomProblem(std::uint64_t seed, const GenOptions& o) {
@@ -356,6 +360,14 @@ inline Problem randomProblem(std::uint64_t seed, const GenOptions& o) {
       for (int i = 0; i < k; ++i)
         for (int j = 0; j < o.n; ++j) C(i, j) = u(rng);
       A = B * C;
+    }
+    if (o.pUnitLevel > 0.0 && coin(o.pUnitLevel)) {
+      for (int r = 0; r < m; ++r) {
+        const int c = rnd(0, o.n - 1);
+        const double v = (coin(0.5) ? 1.0 : -1.0) * (0.25 + u01(rng));
+        A.row(r).setZero();
+        A(r, c) = v;
+      }
     }
     Eigen::VectorXd lo(m), up(m);
     for (int r = 0; r < m; ++r) {

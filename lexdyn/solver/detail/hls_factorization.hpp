@@ -48,8 +48,18 @@ class HlsFactorization {
   /// gid = rowOffset(level) + row, and vectors b / res / mu are indexed by gid.
   void setup(int n, const std::vector<int>& rowsPerLevel);
 
-  /// Sets the original rows of general level k (pointer kept; must outlive the calls).
-  void setLevelMatrix(int k, const Eigen::MatrixXd* A) { A_[static_cast<size_t>(k)] = A; }
+  /// Sets the original rows of general level k (pointer kept; must outlive the calls), with the
+  /// count of leading columns that hold its nonzero entries (Level::columns; -1: all of them).
+  void setLevelMatrix(int k, const Eigen::MatrixXd* A, int columns = -1) {
+    A_[static_cast<size_t>(k)] = A;
+    cols_[static_cast<size_t>(k)] = columns;
+  }
+  /// rn = the Euclidean norms of the rows of A, whose entries past its first `columns` columns
+  /// are zero (-1: no such knowledge). The same bits as over every column: Eigen sums a row's
+  /// squares from the first column on in groups of four after the first, so the sum over the
+  /// leading 4 q + 1 columns that hold the nonzero ones and lie within the full sum's groups adds
+  /// the same terms in the same order, and the full sum only adds exact zeros after them.
+  static void rowNorms(const Eigen::MatrixXd& A, int columns, Eigen::Ref<Eigen::VectorXd> rn);
   /// Recomputes the original row norms (call after the row data changed).
   void computeRowNorms();
   const Eigen::VectorXd& rowNorms() const { return rowNorm_; }
@@ -62,6 +72,10 @@ class HlsFactorization {
   }
   /// Split coordinates from variable `from` on (-1: off; Options::split_from_variable).
   void setSplit(int from) { split_ = from; }
+  /// Spanning stages (Options::spanning_stages).
+  void setSpanning(bool allowed) { spanAllowed_ = allowed; }
+  /// Stages of the last factorisation solved as spanning stages.
+  int spanningStages() const;
   /// True when the last elimination took its basic variables from the split's preferred ones.
   bool splitApplied() const { return elim_ && splitApplied_; }
   /// How the last level is factorised. Standard: like every other level (each earlier stage's
@@ -134,8 +148,15 @@ class HlsFactorization {
   /// shareWith >= 0: a snapshot taken earlier in this factorisation, with only stages without
   /// active rows since (the same columns and entries): its storage is shared, not copied.
   void saveSnapshot(int k, int shareWith);
-  void swapColumns(int a, int b);
+  /// Swaps columns a and b of the layout; W_'s entries in their first `rows` rows only (the
+  /// stage's rows below are zero in both).
+  void swapColumns(int a, int b, int rows);
+  static void downdateNorms(int cnt, const double* w, double* nrm, const double* ref, const double* orig, double* ratio,
+                            char* recompute);
   void factorLevel(int k, double rankTol);
+  /// Stage k (rows c0 .. c0 + d of its m >= d columns) as a spanning stage: the column-pivoted QR
+  /// of its rows B^T (m x d) into left_[k]; false (nothing changed) when a pivot is too small.
+  bool factorSpanning(int k, int d);
   void projectDeferredLevel(int k);
   void decideDeferral();
 
@@ -145,6 +166,7 @@ class HlsFactorization {
   int mTot_ = 0;
   std::vector<int> m_, rowOff_, levelOf_;
   std::vector<const Eigen::MatrixXd*> A_;
+  std::vector<int> cols_;  ///< per level: leading columns that hold the nonzero entries (-1: all)
   std::vector<int> gatherIdx_;
   std::vector<Eigen::Index> gatherOff_;  ///< gatherLevel: column offsets in A of the variables
   std::vector<char> static_;
@@ -179,6 +201,16 @@ class HlsFactorization {
   Eigen::MatrixXd W_;
   std::vector<int> start_, act_, col0_, rank_;
   std::vector<int> stageEnd_;  // stage k works on rows col0_[k] .. stageEnd_[k] (nr_ unless split)
+  // Spanning stages: span_[k] set when stage k is one (then it stores no reflectors in W_: its
+  // columns keep the rows B of the stage's coordinates, and left_[k] holds the QR of B^T with the
+  // coordinate order spanPerm_[k]); refl_[k] reflectors stored in W_ (rank_[k], or 0).
+  bool spanAllowed_ = false;
+  std::vector<char> span_;
+  std::vector<int> refl_;
+  std::vector<std::vector<int>> spanPerm_;
+  std::vector<char> unitRow_;  // per gid: the row's original entries have a single nonzero
+  Eigen::VectorXd spanNorm_, spanRef_;  // factorSpanning: column norms (current, at the last recomputation)
+  std::vector<int> spanOrder_, spanWhere_, spanAt_;  // factorSpanning: the stage's column order
   // Stage k of that layout: m active columns from physical column s, its rows from c0, rank r.
   struct Stage {
     int m, s, c0, r;
@@ -202,6 +234,8 @@ class HlsFactorization {
   // Workspaces.
   Eigen::MatrixXd S_, SB_, Vw_, T_, Y_, Y2_;
   Eigen::VectorXd work_, work2_, g_, t_, u_;
+  Eigen::VectorXd ratio_, pivotRow_;  // factorLevel: pivot ratios, the reflector row's entries
+  std::vector<char> recompute_;       // factorLevel: norms to compute again
   std::vector<int> tmpGid_;   // relayout: gid of each scratch column
   std::vector<int> sparseB_;  // per loaded column: -2 dense basic part, -1 zero, else its one index
 
