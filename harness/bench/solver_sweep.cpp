@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
   int maxN = 12, maxLevels = 7, maxRows = 8;
   long exactEvery = 0;
   int maxIterations = Options{}.max_iterations;
-  bool spanning = false;
+  bool spanning = false, lazy = false;
   double unitLevels = 0.0;
   bool brute = false;
   std::string writeDir;
@@ -87,6 +87,7 @@ int main(int argc, char** argv) {
   app.add_option("--max-iterations", maxIterations, "the solver's hard iteration cap (default 1000)")->check(CLI::Range(1, 1000000));
   app.add_option("--write-failures", writeDir, "write each failing problem to DIR/problem-SEED.json");
   app.add_flag("--spanning-stages", spanning, "solve with Options::spanning_stages (docs/solver.md)");
+  app.add_flag("--lazy-snapshots", lazy, "solve with Options::lazy_snapshots (docs/solver.md)");
   app.add_option("--unit-levels", unitLevels, "probability that a level is made of single-variable rows, in [0, 1]")
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--brute-force", brute, "compare tiny problems (<= 9 rows) with active-set enumeration");
@@ -113,10 +114,11 @@ int main(int argc, char** argv) {
   const std::string options = " --max-variables " + std::to_string(maxN) + " --max-levels " + std::to_string(maxLevels) +
                               " --max-rows " + std::to_string(maxRows) + (brute ? " --brute-force" : "") +
                               (maxIterations != Options{}.max_iterations ? " --max-iterations " + std::to_string(maxIterations) : "") +
-                              (spanning ? " --spanning-stages" : "") + (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "");
+                              (spanning ? " --spanning-stages" : "") + (lazy ? " --lazy-snapshots" : "") + (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "");
   Options solverOptions;
   solverOptions.max_iterations = maxIterations;
   solverOptions.spanning_stages = spanning;
+  solverOptions.lazy_snapshots = lazy;
   long done = 0, solved = 0, failures = 0, capHits = 0, nonFinite = 0, kktFlagged = 0, exactChecked = 0, exactCleared = 0,
        exactConfirmed = 0, exactUndecided = 0, disagreements = 0, bruteChecked = 0, held = 0, cycles = 0, iters = 0, maxIt = 0;
   const auto t0 = std::chrono::steady_clock::now();

@@ -79,6 +79,7 @@ solver::Options readSolver(yaml::StrictMap& sm, double dt) {
     o.split_from_variable = v->asBool() ? solver::Options::kSplitAtControllerForces : -1;
   }
   if (auto v = sm.optional("spanning_stages")) o.spanning_stages = v->asBool();
+  if (auto v = sm.optional("lazy_snapshots")) o.lazy_snapshots = v->asBool();
   if (auto v = sm.optional("last_level_projection")) {
     const std::string mode = v->asString();
     if (mode == "auto") {

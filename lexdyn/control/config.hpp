@@ -40,18 +40,25 @@ enum class MultiplierScale {
 };
 
 /// The controller's solver options unless a case sets them: the solver's defaults, with split
-/// coordinates at the contact forces (Options::kSplitAtControllerForces).
+/// coordinates at the contact forces (Options::kSplitAtControllerForces), spanning stages (its
+/// minimum-velocity and minimum-wrench levels) and lazy snapshots (nearly every tick is a solve
+/// of one iteration from the warm start).
 inline solver::Options defaultSolverOptions() {
   solver::Options o;
   o.split_from_variable = solver::Options::kSplitAtControllerForces;
+  o.spanning_stages = true;
+  o.lazy_snapshots = true;
   return o;
 }
 
-/// solver::Options::paper(dt) (the paper's early-stop rules) with the controller's split
-/// coordinates, as `solver: {paper_rules: true}` in a case.
+/// solver::Options::paper(dt) (the paper's early-stop rules) with the controller's other
+/// defaults (defaultSolverOptions), as `solver: {paper_rules: true}` in a case.
 inline solver::Options paperSolverOptions(double dt) {
   solver::Options o = solver::Options::paper(dt);
-  o.split_from_variable = defaultSolverOptions().split_from_variable;
+  const solver::Options d = defaultSolverOptions();
+  o.split_from_variable = d.split_from_variable;
+  o.spanning_stages = d.spanning_stages;
+  o.lazy_snapshots = d.lazy_snapshots;
   return o;
 }
 

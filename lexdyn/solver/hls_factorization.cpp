@@ -306,6 +306,7 @@ void HlsFactorization::clearActive() {
     active_[z(k)].clear();
   }
   invalidateAll();
+  snapshotsOn_ = !lazy_;
 }
 
 int HlsFactorization::totalRank() const {
@@ -1033,8 +1034,16 @@ void HlsFactorization::factorize(double rankTol) {
     lastRestart_ = L;
     return;
   }
+  // A restart needs the snapshots of its level; without them (lazy snapshots, first pass), the
+  // factorisation starts over, saving them this time.
+  if (dirtyFrom_ > 0 && !haveSnapshots_) {
+    dirtyFrom_ = 0;
+    snapshotsOn_ = true;
+  }
   int c = dirtyFrom_;
   if (c == 0) {
+    haveSnapshots_ = snapshotsOn_;
+    snapshotsOn_ = true;
     for (int q = 0; q < static_cast<int>(colGid_.size()); ++q) {
       const int gid = colGid_[z(q)];
       if (gid >= 0) pos_[z(gid)] = -1;
@@ -1076,7 +1085,7 @@ void HlsFactorization::factorize(double rankTol) {
     for (int k = c; k < L; ++k) {
       if (k == deferred_) {
         projectDeferredLevel(k);
-      } else if (k > 0 && !static_[z(k)]) {
+      } else if (k > 0 && !static_[z(k)] && haveSnapshots_) {
         saveSnapshot(k, untouchedSince);
         untouchedSince = k;
       }

@@ -312,6 +312,7 @@ void Solver::Impl::loadData(const Problem& problem) {
   fact.setElimination(opt.eliminate_first_level && allEq, opt.elimination_tolerance);
   fact.setSplit(opt.split_from_variable);
   fact.setSpanning(opt.spanning_stages);
+  fact.setLazySnapshots(opt.lazy_snapshots);
   fact.setLastLevelMode(opt.last_level_projection == Options::LastLevel::Never    ? HlsFactorization::LastLevel::Standard
                         : opt.last_level_projection == Options::LastLevel::Always ? HlsFactorization::LastLevel::Projected
                                                                                   : HlsFactorization::LastLevel::Auto);

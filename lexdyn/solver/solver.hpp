@@ -95,6 +95,14 @@ struct Options {
   /// largest row norm (else the level is factorised as any other). Exact up to rounding either
   /// way; it changes the rounding.
   bool spanning_stages = false;
+  /// Lazy snapshots. A solve whose warm start is already optimal (most controller ticks)
+  /// factorises once and never restarts, so the copies of the later levels' rows saved before
+  /// each stage for restarts are not needed. With this option the first factorisation of a solve
+  /// saves none; the first restart of the solve factorises from the first level again, saving
+  /// them, and later restarts use them. The same bits on solves of one iteration; on the others,
+  /// the restarted stages' rows are transformed as in a full factorisation rather than restored
+  /// (rounding), and Result::factorizations counts the full factorisation.
+  bool lazy_snapshots = false;
   /// Hard cap on active-set iterations (equality sub-problems solved).
   int max_iterations = 1000;
   /// After this many consecutive zero-length steps, ties are broken by smallest index (Bland).

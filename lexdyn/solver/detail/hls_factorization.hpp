@@ -74,6 +74,10 @@ class HlsFactorization {
   void setSplit(int from) { split_ = from; }
   /// Spanning stages (Options::spanning_stages).
   void setSpanning(bool allowed) { spanAllowed_ = allowed; }
+  /// Lazy snapshots (Options::lazy_snapshots): the first factorisation after clearActive() saves
+  /// no restart snapshots; a later restart at a level c > 0 then factorises from the first level
+  /// again, saving them.
+  void setLazySnapshots(bool lazy) { lazy_ = lazy; }
   /// Stages of the last factorisation solved as spanning stages.
   int spanningStages() const;
   /// True when the last elimination took its basic variables from the split's preferred ones.
@@ -249,6 +253,9 @@ class HlsFactorization {
   Eigen::VectorXd zvec_;
 
   bool fullLayout_ = false;  // the next relayout follows a full reset
+  bool lazy_ = false;          // Options::lazy_snapshots
+  bool snapshotsOn_ = true;    // the next full factorisation saves restart snapshots
+  bool haveSnapshots_ = false; // the current layout's stages saved theirs
   int dirtyFrom_ = 0;
   int lastRestart_ = 0;
   long stages_ = 0;
