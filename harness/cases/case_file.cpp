@@ -714,7 +714,24 @@ CaseSpec loadCase(const std::string& path, const std::vector<Override>& override
     d.schema.keys = recorder.paths();
   }
   d.root = yaml::loadFile(path).raw();  // a second tree (YAML::Clone would drop the line numbers)
-  for (const Override& o : overrides) d.canonical.push_back(doc::set(d.root, o.path, doc::parseValue(o), d.schema, o.label).canonical);
+  for (const Override& o : overrides) {
+    const YAML::Node value = doc::parseValue(o);
+    try {
+      d.canonical.push_back(doc::set(d.root, o.path, value, d.schema, o.label).canonical);
+    } catch (const InputError&) {
+      // An earlier override may have created the section this one sets a key in (say
+      // controller.solver, absent from the file): the keys the readers accept there are recorded
+      // on the document as the overrides so far left it, and the override is tried again.
+      yaml::KeyRecorder recorder;
+      try {
+        parseCase(yaml::Node(d.root, path, ""), path);
+      } catch (const InputError&) {
+      }
+      for (const std::string& k : recorder.paths())
+        if (std::find(d.schema.keys.begin(), d.schema.keys.end(), k) == d.schema.keys.end()) d.schema.keys.push_back(k);
+      d.canonical.push_back(doc::set(d.root, o.path, value, d.schema, o.label).canonical);
+    }
+  }
   try {
     CaseSpec c = parseCase(yaml::Node(d.root, path, ""), path);
     c.overrides = overrides;

@@ -72,6 +72,21 @@ TEST(CaseOverrides, ValidKeysTheFileLeavesOutCanBeSet) {
   EXPECT_TRUE(c.controller.lexdyn.params.sr1);
 }
 
+// Overrides in a section that an earlier override created (the point mass's case has no
+// controller.solver): each key is checked against the keys read there, a misspelt one still names
+// the nearest valid paths.
+TEST(CaseOverrides, SeveralKeysOfASectionAnOverrideCreated) {
+  const CaseSpec c = withSets("cases/pointmass-damping.yaml",
+                              {"controller.solver.spanning_stages=false", "controller.solver.lazy_snapshots=false",
+                               "controller.solver.max_iterations=77"});
+  EXPECT_FALSE(c.controller.lexdyn.params.solver.spanning_stages);
+  EXPECT_FALSE(c.controller.lexdyn.params.solver.lazy_snapshots);
+  EXPECT_EQ(c.controller.lexdyn.params.solver.max_iterations, 77);
+  EXPECT_TRUE(containsAll(errorOf("cases/pointmass-damping.yaml",
+                                  {"controller.solver.spanning_stages=false", "controller.solver.lazy_snapshotz=false"}),
+                          {"no key 'lazy_snapshotz'", "nearest valid paths: controller.solver.lazy_snapshots"}));
+}
+
 TEST(CaseOverrides, AWrongPathNamesTheNearestValidPaths) {
   EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"controller.tasks.right_hand.gainz.kp=1"}),
                           {"--set controller.tasks.right_hand.gainz.kp=1", "no key 'gainz'",
