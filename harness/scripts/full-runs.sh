@@ -4,11 +4,10 @@
 # cases' method comparisons (OUT_DIR/<case>.compare.txt) and prints a table (OUT_DIR/table.txt).
 # docs/cases.md, "Commands". Takes minutes (the experiments are 40-120 s of simulated time each).
 #
-# Usage: harness/scripts/full-runs.sh [-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [-s PATH=VALUE] [ID ...]
+# Usage: harness/scripts/full-runs.sh [-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [-s PATH=VALUE]... [ID ...]
 #   ID: CASE.METHOD or CASE (see `lexdyn-harness golden list`); none: all of the manifest.
-#   -s: overrides of every run (`run --set`, docs/cases.md "Overrides"), separated by spaces, e.g.
-#       sim.integrator.jacobian=difference_quotient or "controller.solver.spanning_stages=false
-#       controller.solver.lazy_snapshots=false".
+#   -s: an override of every run (`run --set`, docs/cases.md "Overrides"), e.g.
+#       sim.integrator.jacobian=difference_quotient; repeat -s for several.
 #   defaults: build/, out/full-runs, 2 jobs, golden/manifest.yaml.
 # Exit codes (harness/scripts/exit-codes.sh): the worst of the runs and comparisons (130/143
 # interrupted, 2 bad input, 3 a run stopped early or wrote no summary, 1 a check or comparison
@@ -21,7 +20,7 @@ OUT="$ROOT/out/full-runs"
 JOBS=2
 MANIFEST="$ROOT/golden/manifest.yaml"
 SET=""
-lexdyn_options "[-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [-s "PATH=VALUE ..."] [ID ...]" b=BUILD o=OUT j=JOBS m=MANIFEST s=SET -- "$@"
+lexdyn_options "[-b BUILD_DIR] [-o OUT_DIR] [-j JOBS] [-m MANIFEST] [-s PATH=VALUE]... [ID ...]" b=BUILD o=OUT j=JOBS m=MANIFEST s=SET+ -- "$@"
 lexdyn_harness full-runs " (cmake --build $BUILD)"
 mkdir -p "$OUT"
 lexdyn_golden_list "$MANIFEST" "${LEXDYN_OPERANDS[@]}" > "$OUT/runs.txt"   # ID CASE_FILE METHOD
@@ -30,9 +29,10 @@ run_one() {
   local id="$1" case_file="$2" method="$3" dir="$OUT/$1"
   local args=(run "$case_file" --out "$dir" --quiet)
   [ "$method" != "-" ] && args+=(--method "$method")
-  local kv sets=()
-  read -ra sets <<< "$SET"
-  for kv in "${sets[@]}"; do args+=(--set "$kv"); done
+  local kv
+  while IFS= read -r kv; do
+    [ -z "$kv" ] || args+=(--set "$kv")
+  done <<< "$SET"
   mkdir -p "$dir"
   echo "[full-runs] start $id" >&2
   local code=0

@@ -58,8 +58,10 @@ constexpr int kProductCols = Eigen::internal::gebp_traits<double, double>::nr;
 // Below this many reflectors, trailing updates apply them one by one (see factorLevel).
 constexpr int kDirectReflectors = LEXDYN_DIRECT_REFLECTORS;
 
-// Spanning stages: the smallest pivot accepted, relative to the level's largest row norm.
+// Spanning stages: the smallest pivot accepted, relative to the level's largest row norm times
+// the square root of its row count, and at least kSpanningMargin times the rank tolerance.
 constexpr double kSpanningPivot = 1e-6;
+constexpr double kSpanningMargin = 1e3;
 
 }  // namespace
 
@@ -758,7 +760,7 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   if (spanAllowed_ && d > 0 && m >= d) {
     bool unit = true;
     for (int j = 0; j < m && unit; ++j) unit = unitRow_[z(colGid_[z(s + j)])] != 0;
-    if (unit && factorSpanning(k, d)) {
+    if (unit && factorSpanning(k, d, rankTol)) {
       span_[z(k)] = 1;
       rank_[z(k)] = d;
       refl_[z(k)] = 0;
@@ -881,15 +883,19 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   }
 }
 
-bool HlsFactorization::factorSpanning(int k, int d) {
+bool HlsFactorization::factorSpanning(int k, int d, double rankTol) {
   const int s = start_[z(k)];
   const int m = act_[z(k)];
   const int c0 = col0_[z(k)];
   static const double kSqrtEps = std::sqrt(std::numeric_limits<double>::epsilon());
-  // The level's largest original row norm sets the scale of the pivots' test.
+  // The pivots' test. The standard factorisation finds the stage's full rank d when, in every
+  // direction of its coordinates, some row's component exceeds rankTol times that row's norm;
+  // the level's rows reach every direction with at least sigma_min(B) / sqrt(m). The pivots of
+  // a column-pivoted QR estimate sigma_min(B), so they must exceed rankTol sqrt(m) times the
+  // level's largest row norm by a wide margin (kSpanningMargin), and at least kSpanningPivot.
   double scale = 0.0;
   for (int j = 0; j < m; ++j) scale = std::max(scale, rowNorm_(colGid_[z(s + j)]));
-  const double tol = kSpanningPivot * scale;
+  const double tol = std::max(kSpanningPivot, kSpanningMargin * rankTol) * std::sqrt(static_cast<double>(m)) * scale;
   // Rows that read none of the stage's coordinates (a fixed variable's, say) go last: no reflector
   // then mixes them with the others, so that their residual stays theirs alone and the others'
   // are exact where the standard factorisation has them exact.

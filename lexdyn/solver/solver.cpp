@@ -294,6 +294,15 @@ bool Solver::Impl::scanNonFinite(const Problem& problem) {
 
 void Solver::Impl::loadData(const Problem& problem) {
   prob = &problem;
+#ifndef NDEBUG
+  // Level::columns is the caller's promise (validate() checks it at setup): a debug build checks
+  // it at every solve, a release build reads nothing past the declared columns.
+  for (int kf = 0; kf < lg; ++kf) {
+    const Level& lv = problem.level(kf + first);
+    LEXDYN_ALWAYS_ASSERT(lv.columns < 0 || (lv.A.rightCols(n - lv.columns).array() == 0.0).all(),
+                         "level \"" + lv.name + "\" has nonzero entries past its declared columns");
+  }
+#endif
   for (int kf = 0; kf < lg; ++kf) fact.setLevelMatrix(kf, &problem.level(kf + first).A, problem.level(kf + first).columns);
   fact.computeRowNorms();
   if (M > 0) rowNorm.head(M) = fact.rowNorms().head(M);

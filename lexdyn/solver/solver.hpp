@@ -91,9 +91,10 @@ struct Options {
   /// (its rows determine them all: nothing is left for later levels there) is solved by one
   /// column-pivoted QR of its projected rows (the least-squares problem of the stage) instead of
   /// a rank-revealing QR of their transpose followed by a second, left QR, and its stage applies
-  /// no reflectors to later levels. Accepted only when every pivot exceeds 1e-6 of the level's
-  /// largest row norm (else the level is factorised as any other). Exact up to rounding either
-  /// way; it changes the rounding.
+  /// no reflectors to later levels. Accepted only when every pivot exceeds
+  /// max(1e-6, 1e3 rank_tolerance) sqrt(rows) times the level's largest row norm (else the level
+  /// is factorised as any other), so that both ways decide the rank alike; the answers then agree
+  /// up to rounding. It changes the rounding.
   bool spanning_stages = false;
   /// Lazy snapshots. A solve whose warm start is already optimal (most controller ticks)
   /// factorises once and never restarts, so the copies of the later levels' rows saved before

@@ -1,20 +1,21 @@
 #!/usr/bin/env bash
-# full-runs.sh -s: several overrides, separated by spaces, reach every run (its summary's
-# overrides and its trace's solver options). Usage: test_full_runs_overrides.sh BUILD_DIR
+# full-runs.sh -s, repeated: every override reaches every run, a value with spaces whole (its
+# summary's overrides and its trace's solver options). Usage: test_full_runs_overrides.sh BUILD_DIR
 set -u
 source "$(dirname "${BASH_SOURCE[0]}")/test_lib.sh"
 BUILD="$1"
 
 "$ROOT/harness/scripts/full-runs.sh" -b "$BUILD" -o "$TMP/runs" -j 1 \
-  -s "controller.solver.spanning_stages=false controller.solver.lazy_snapshots=false" pointmass-damping.bfgs > "$TMP/out.txt" 2>&1
+  -s "controller.solver={spanning_stages: false, lazy_snapshots: false}" -s controller.solver.max_iterations=77 \
+  pointmass-damping.bfgs > "$TMP/out.txt" 2>&1
 code=$?
 cat "$TMP/out.txt"
 check "exit 0" [ "$code" -eq 0 ]
 SUMMARY="$TMP/runs/pointmass-damping.bfgs/summary.json"
-check "first override in the summary" grep -q '"controller.solver.spanning_stages"' "$SUMMARY"
-check "second override in the summary" grep -q '"controller.solver.lazy_snapshots"' "$SUMMARY"
+check "first override in the summary" grep -q '"controller.solver"' "$SUMMARY"
+check "second override in the summary" grep -q '"controller.solver.max_iterations"' "$SUMMARY"
 check "both in the trace's solver options" \
-  grep -q '^# solver_options: .*spanning_stages false, lazy_snapshots false' "$TMP/runs/pointmass-damping.bfgs/trace.csv"
+  grep -q '^# solver_options: max_iterations 77, .*spanning_stages false, lazy_snapshots false' "$TMP/runs/pointmass-damping.bfgs/trace.csv"
 # Without -s the controller's defaults.
 "$ROOT/harness/scripts/full-runs.sh" -b "$BUILD" -o "$TMP/plain" -j 1 pointmass-damping.bfgs > /dev/null 2>&1
 check "defaults without -s" \

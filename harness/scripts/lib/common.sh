@@ -5,7 +5,8 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 source "$ROOT/harness/scripts/exit-codes.sh"
 
 # lexdyn_options USAGE LETTER=VARIABLE ... -- "$@": reads the options -LETTER VALUE into their
-# variables (the ones not given keep their defaults); an unknown option or one without its value
+# variables (the ones not given keep their defaults); LETTER=VARIABLE+ collects every value of a
+# repeated option, each followed by a newline. An unknown option or one without its value
 # prints "usage: SCRIPT USAGE" and exits 2. -h or --help prints the usage line and the script's
 # header comment and exits 0. The operands are left in LEXDYN_OPERANDS.
 lexdyn_options() {
@@ -21,7 +22,13 @@ lexdyn_options() {
   lexdyn_help_option "$usage" "$@"
   while getopts "$spec" opt; do
     [ "$opt" != "?" ] || { echo "usage: $0 $usage" >&2; exit 2; }
-    printf -v "${variable[$opt]}" '%s' "$OPTARG"
+    local name="${variable[$opt]}"
+    if [ "${name%+}" != "$name" ]; then
+      name="${name%+}"
+      printf -v "$name" '%s%s\n' "${!name}" "$OPTARG"
+    else
+      printf -v "$name" '%s' "$OPTARG"
+    fi
   done
   LEXDYN_OPERANDS=("${@:OPTIND}")
 }

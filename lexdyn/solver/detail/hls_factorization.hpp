@@ -159,8 +159,9 @@ class HlsFactorization {
                             char* recompute);
   void factorLevel(int k, double rankTol);
   /// Stage k (rows c0 .. c0 + d of its m >= d columns) as a spanning stage: the column-pivoted QR
-  /// of its rows B^T (m x d) into left_[k]; false (nothing changed) when a pivot is too small.
-  bool factorSpanning(int k, int d);
+  /// of its rows B^T (m x d) into left_[k]; false (the stage's columns unchanged) when a pivot is
+  /// too small for rankTol.
+  bool factorSpanning(int k, int d, double rankTol);
   void projectDeferredLevel(int k);
   void decideDeferral();
 
