@@ -551,6 +551,29 @@ TEST(Solver, RowNormsOverDeclaredColumnsKeepEveryBit) {
   EXPECT_GE(cut, 500);
 }
 
+// The start of the split-coordinate and spanning-stage hierarchies: n variables in two halves,
+// bounds on a few variables of both (their activation during a solve changes the free set: the
+// elimination is then updated, keeping the reduced variables' order), then a first level of 1 to
+// 3 equalities (by the seed) over all of them, whose first half pivots unless disfavoured.
+Problem twoHalvesStart(std::uint64_t seed, std::mt19937_64& rng, int n) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int half = n / 2;
+  Problem p(n);
+  {
+    std::vector<int> vars = {0, half - 1, half, n - 1};
+    Eigen::VectorXd c = Eigen::VectorXd::Ones(4), lo = Eigen::VectorXd::Constant(4, -0.05), hi = Eigen::VectorXd::Constant(4, 0.05);
+    p.addBoundsLevel("box", vars, c, lo, hi);
+  }
+  const int m0 = 1 + static_cast<int>(seed % 3);
+  Eigen::MatrixXd E(m0, n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < m0; ++i) E(i, j) = (j < half ? 10.0 : 1.0) * u(rng);
+  Eigen::VectorXd e(m0);
+  for (int i = 0; i < m0; ++i) e(i) = u(rng);
+  p.addLevel("eq", E, e, e);
+  return p;
+}
+
 // Options::spanning_stages: levels of single-variable rows (x_j = c over a set of variables, some
 // scaled, some inequalities, some duplicated) that span what is left to them are solved by one
 // QR; the answers, violations and multipliers are the standard factorisation's to rounding, with
@@ -563,19 +586,7 @@ TEST(Solver, SpanningStagesGiveTheStandardAnswer) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     const int n = 8 + static_cast<int>(seed % 9), half = n / 2;
-    Problem p(n);
-    {
-      std::vector<int> vars = {0, half - 1, half, n - 1};
-      Eigen::VectorXd c = Eigen::VectorXd::Ones(4), lo = Eigen::VectorXd::Constant(4, -0.05), hi = Eigen::VectorXd::Constant(4, 0.05);
-      p.addBoundsLevel("box", vars, c, lo, hi);
-    }
-    const int m0 = 1 + static_cast<int>(seed % 3);
-    Eigen::MatrixXd E(m0, n);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < m0; ++i) E(i, j) = (j < half ? 10.0 : 1.0) * u(rng);
-    Eigen::VectorXd e(m0);
-    for (int i = 0; i < m0; ++i) e(i) = u(rng);
-    p.addLevel("eq", E, e, e);
+    Problem p = twoHalvesStart(seed, rng, n);
     for (int l = 0; l < 1 + static_cast<int>(seed % 3); ++l) {
       const int rows = 1 + static_cast<int>(rng() % 3);
       Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, n);
@@ -709,21 +720,7 @@ TEST(Solver, SplitCoordinatesGiveThePlainAnswer) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     const int n = 8 + static_cast<int>(seed % 9), half = n / 2;
-    Problem p(n);
-    // Bounds on a few variables of both halves: their activation during the solve changes the
-    // free set (the elimination is then updated, keeping the reduced variables' order).
-    {
-      std::vector<int> vars = {0, half - 1, half, n - 1};
-      Eigen::VectorXd c = Eigen::VectorXd::Ones(4), lo = Eigen::VectorXd::Constant(4, -0.05), hi = Eigen::VectorXd::Constant(4, 0.05);
-      p.addBoundsLevel("box", vars, c, lo, hi);
-    }
-    const int m0 = 1 + static_cast<int>(seed % 3);
-    Eigen::MatrixXd E(m0, n);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < m0; ++i) E(i, j) = (j < half ? 10.0 : 1.0) * u(rng);  // the first half pivots unless disfavoured
-    Eigen::VectorXd e(m0);
-    for (int i = 0; i < m0; ++i) e(i) = u(rng);
-    p.addLevel("eq", E, e, e);
+    Problem p = twoHalvesStart(seed, rng, n);
     for (int l = 0; l < 3 + static_cast<int>(seed % 3); ++l) {
       const int rows = 1 + static_cast<int>(rng() % 4);
       const int part = static_cast<int>(rng() % 3);  // 0: first half, 1: second half, 2: all
