@@ -49,6 +49,9 @@ int singleNonzero(const double* v, int n) {
   return at;
 }
 
+// A column's pivot ratio: its projected norm relative to its row's own norm (0 for a zero row).
+inline double pivotRatio(double nrm, double orig) { return orig > 0.0 ? nrm / orig : 0.0; }
+
 // Rows of the widest micro-kernel of Eigen's matrix product for doubles (gebp's mr): a product
 // over a multiple of it of leading rows sums each of them in the same order as a longer one.
 constexpr int kProductRows = Eigen::internal::gebp_traits<double, double>::mr;
@@ -686,7 +689,7 @@ void HlsFactorization::swapColumns(int a, int b, int rows) {
 // The column norms' downdate after a reflector (LAPACK xLAQP2), for cnt columns: with w the
 // column's entry in the reflector's row, nrm *= sqrt(max(0, (1 + t) (1 - t))), t = |w| / nrm,
 // unless the downdated norm has lost too much to cancellation (then recompute[q] is set and the
-// caller computes it again). ratio = nrm / orig (0 when orig is 0). A zero norm stays zero. Two
+// caller computes it again). With orig, ratio = pivotRatio(nrm, orig). A zero norm stays zero. Two
 // columns at a time where SSE2 is there: the same correctly rounded operations as one at a time,
 // so the same bits, but the divisions and square roots of two columns overlap.
 void HlsFactorization::downdateNorms(int cnt, const double* w, double* nrm, const double* ref, const double* orig,
@@ -712,6 +715,7 @@ void HlsFactorization::downdateNorms(int cnt, const double* w, double* nrm, cons
     const int mask = _mm_movemask_pd(_mm_and_pd(nonzero, again));
     recompute[q] = static_cast<char>(mask & 1);
     recompute[q + 1] = static_cast<char>((mask >> 1) & 1);
+    if (orig == nullptr) continue;
     const __m128d o = _mm_loadu_pd(orig + q);
     const __m128d pos = _mm_cmpgt_pd(o, zero);
     _mm_storeu_pd(ratio + q, _mm_and_pd(pos, _mm_div_pd(out, o)));
@@ -730,7 +734,7 @@ void HlsFactorization::downdateNorms(int cnt, const double* w, double* nrm, cons
         n *= std::sqrt(temp);
       }
     }
-    ratio[q] = orig[q] > 0.0 ? n / orig[q] : 0.0;
+    if (orig != nullptr) ratio[q] = pivotRatio(n, orig[q]);
   }
 }
 
@@ -778,10 +782,7 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
 
   // Pivot ratios: projected norm relative to the original row norm (0 for a zero row).
   double* ratio = ratio_.data();
-  for (int j = 0; j < m; ++j) {
-    const double orig = colOrig_(s + j);
-    ratio[j] = orig > 0.0 ? colNorm_(s + j) / orig : 0.0;
-  }
+  for (int j = 0; j < m; ++j) ratio[j] = pivotRatio(colNorm_(s + j), colOrig_(s + j));
   int r = 0;
   const int maxRank = std::min(m, d);
   while (r < maxRank) {
@@ -820,8 +821,7 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
       double& nrm = colNorm_(s + j);
       nrm = (d - r - 1 > 0) ? W_.col(s + j).segment(c0 + r + 1, d - r - 1).norm() : 0.0;
       colNormRef_(s + j) = nrm;
-      const double orig = colOrig_(s + j);
-      ratio[j] = orig > 0.0 ? nrm / orig : 0.0;
+      ratio[j] = pivotRatio(nrm, colOrig_(s + j));
     }
     ++r;
   }
@@ -887,7 +887,6 @@ bool HlsFactorization::factorSpanning(int k, int d, double rankTol) {
   const int s = start_[z(k)];
   const int m = act_[z(k)];
   const int c0 = col0_[z(k)];
-  static const double kSqrtEps = std::sqrt(std::numeric_limits<double>::epsilon());
   // The pivots' test. The standard factorisation finds the stage's full rank d when, in every
   // direction of its coordinates, some row's component exceeds rankTol times that row's norm;
   // the level's rows reach every direction with at least sigma_min(B) / sqrt(m). The pivots of
@@ -900,12 +899,17 @@ bool HlsFactorization::factorSpanning(int k, int d, double rankTol) {
   // then mixes them with the others, so that their residual stays theirs alone and the others'
   // are exact where the standard factorisation has them exact.
   int* order = spanOrder_.data();
-  int nonzero = 0;
-  for (int j = 0; j < m; ++j)
-    if (!W_.col(s + j).segment(c0, d).isZero(0.0)) order[nonzero++] = j;
+  int* zeros = spanAt_.data();  // (reset below, after the QR)
+  int nonzero = 0, zero = 0;
+  for (int j = 0; j < m; ++j) {
+    if (W_.col(s + j).segment(c0, d).isZero(0.0)) {
+      zeros[zero++] = j;
+    } else {
+      order[nonzero++] = j;
+    }
+  }
   if (nonzero < d) return false;
-  for (int j = 0, q = nonzero; j < m; ++j)
-    if (W_.col(s + j).segment(c0, d).isZero(0.0)) order[q++] = j;
+  std::copy(zeros, zeros + zero, order + nonzero);
   auto Lm = left_[z(k)].block(0, 0, m, d);
   for (int i = 0; i < d; ++i)
     for (int q = 0; q < m; ++q) Lm(q, i) = W_(c0 + i, s + order[q]);
@@ -934,19 +938,18 @@ bool HlsFactorization::factorSpanning(int k, int d, double rankTol) {
     lt(i) = tau;
     if (!(std::abs(beta) > tol)) return false;
     const auto ess = Lm.col(i).segment(i + 1, m - i - 1);
+    double* top = pivotRow_.data();
     for (int c = i + 1; c < d; ++c) {
       applyReflector(ess, tau, Lm.col(c).segment(i, m - i));
-      double& nrm = spanNorm_(c);
-      if (nrm == 0.0) continue;
-      double temp = std::abs(Lm(i, c)) / nrm;
-      temp = std::max(0.0, (1.0 + temp) * (1.0 - temp));
-      const double rr = nrm / spanRef_(c);
-      if (temp * rr * rr <= kSqrtEps) {
-        nrm = (m - i - 1 > 0) ? Lm.col(c).segment(i + 1, m - i - 1).norm() : 0.0;
-        spanRef_(c) = nrm;
-      } else {
-        nrm *= std::sqrt(temp);
-      }
+      top[c] = Lm(i, c);
+    }
+    const int first = i + 1;
+    downdateNorms(d - first, top + first, spanNorm_.data() + first, spanRef_.data() + first, nullptr, nullptr,
+                  recompute_.data());
+    for (int q = 0; q < d - first; ++q) {
+      if (!recompute_[z(q)]) continue;
+      const int c = first + q;
+      spanNorm_(c) = spanRef_(c) = (m - i - 1 > 0) ? Lm.col(c).segment(i + 1, m - i - 1).norm() : 0.0;
     }
   }
   // The stage's columns in the order of Lm's rows (where[j]: the column now holding the original

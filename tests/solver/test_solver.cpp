@@ -574,6 +574,24 @@ Problem twoHalvesStart(std::uint64_t seed, std::mt19937_64& rng, int n) {
   return p;
 }
 
+// A level of `rows` random rows over the first half of the variables, the second half or all of
+// them, each an equality or an inequality.
+void addHalvesLevel(Problem& p, std::mt19937_64& rng, int rows, const std::string& name) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = p.variables(), half = n / 2;
+  const int part = static_cast<int>(rng() % 3);  // 0: first half, 1: second half, 2: all
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, n);
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < n; ++j)
+      if (part == 2 || (part == 0) == (j < half)) A(i, j) = u(rng);
+  Eigen::VectorXd lo(rows), hi(rows);
+  for (int i = 0; i < rows; ++i) {
+    lo(i) = u(rng);
+    hi(i) = (rng() % 2) ? lo(i) : lo(i) + 0.5;  // equalities and inequalities
+  }
+  p.addLevel(name, A, lo, hi);
+}
+
 // Options::spanning_stages: levels of single-variable rows (x_j = c over a set of variables, some
 // scaled, some inequalities, some duplicated) that span what is left to them are solved by one
 // QR; the answers, violations and multipliers are the standard factorisation's to rounding, with
@@ -587,20 +605,8 @@ TEST(Solver, SpanningStagesGiveTheStandardAnswer) {
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     const int n = 8 + static_cast<int>(seed % 9), half = n / 2;
     Problem p = twoHalvesStart(seed, rng, n);
-    for (int l = 0; l < 1 + static_cast<int>(seed % 3); ++l) {
-      const int rows = 1 + static_cast<int>(rng() % 3);
-      Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, n);
-      const int part = static_cast<int>(rng() % 3);  // 0: first half, 1: second half, 2: all
-      for (int i = 0; i < rows; ++i)
-        for (int j = 0; j < n; ++j)
-          if (part == 2 || (part == 0) == (j < half)) A(i, j) = u(rng);
-      Eigen::VectorXd lo(rows), hi(rows);
-      for (int i = 0; i < rows; ++i) {
-        lo(i) = u(rng);
-        hi(i) = (rng() % 2) ? lo(i) : lo(i) + 0.5;
-      }
-      p.addLevel("t" + std::to_string(l), A, lo, hi);
-    }
+    for (int l = 0; l < 1 + static_cast<int>(seed % 3); ++l)
+      addHalvesLevel(p, rng, 1 + static_cast<int>(rng() % 3), "t" + std::to_string(l));
     // Single-variable rows: over the first half (all of it, or some of it), then over the second
     // half, each row scaled; a duplicated row now and then; targets zero or not; some inequalities.
     const auto unitLevel = [&](const std::string& name, int from, int to, bool some) {
@@ -721,20 +727,8 @@ TEST(Solver, SplitCoordinatesGiveThePlainAnswer) {
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     const int n = 8 + static_cast<int>(seed % 9), half = n / 2;
     Problem p = twoHalvesStart(seed, rng, n);
-    for (int l = 0; l < 3 + static_cast<int>(seed % 3); ++l) {
-      const int rows = 1 + static_cast<int>(rng() % 4);
-      const int part = static_cast<int>(rng() % 3);  // 0: first half, 1: second half, 2: all
-      Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, n);
-      for (int i = 0; i < rows; ++i)
-        for (int j = 0; j < n; ++j)
-          if (part == 2 || (part == 0) == (j < half)) A(i, j) = u(rng);
-      Eigen::VectorXd lo(rows), hi(rows);
-      for (int i = 0; i < rows; ++i) {
-        lo(i) = u(rng);
-        hi(i) = (rng() % 2) ? lo(i) : lo(i) + 0.5;  // equalities and inequalities
-      }
-      p.addLevel("l" + std::to_string(l), A, lo, hi);
-    }
+    for (int l = 0; l < 3 + static_cast<int>(seed % 3); ++l)
+      addHalvesLevel(p, rng, 1 + static_cast<int>(rng() % 4), "l" + std::to_string(l));
     appendMinNorm(p);
     Options split;
     split.split_from_variable = half;

@@ -155,6 +155,8 @@ class HlsFactorization {
   /// Swaps columns a and b of the layout; W_'s entries in their first `rows` rows only (the
   /// stage's rows below are zero in both).
   void swapColumns(int a, int b, int rows);
+  /// The column-pivoted QRs' norm downdates after a reflector (orig and ratio may be null: no
+  /// pivot ratios).
   static void downdateNorms(int cnt, const double* w, double* nrm, const double* ref, const double* orig, double* ratio,
                             char* recompute);
   void factorLevel(int k, double rankTol);
