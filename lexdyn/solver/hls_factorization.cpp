@@ -49,6 +49,21 @@ int singleNonzero(const double* v, int n) {
   return at;
 }
 
+// dst[f] = row[off[f]] for f < n where off[f] < limit, 0 past it (a declared zero, not read),
+// and what singleNonzero(dst, n) returns. The nonzeros are counted without a branch on each
+// value (whether a row's entry is zero follows no pattern the branch predictor could learn).
+int gatherClassified(const double* row, const Eigen::Index* off, int n, Eigen::Index limit, double* dst) {
+  int count = 0, at = -1;
+  for (int f = 0; f < n; ++f) {
+    const double v = off[f] < limit ? row[off[f]] : 0.0;
+    dst[f] = v;
+    const bool nonzero = !(v == 0.0);
+    count += nonzero ? 1 : 0;
+    at = nonzero ? f : at;
+  }
+  return count == 0 ? -1 : (count == 1 ? at : -2);
+}
+
 // A column's pivot ratio: its projected norm relative to its row's own norm (0 for a zero row).
 inline double pivotRatio(double nrm, double orig) { return orig > 0.0 ? nrm / orig : 0.0; }
 
@@ -487,17 +502,16 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Ei
   for (int c = 0; c < cnt; ++c) {
     const double* row = A.data() + rows[c];
     double* dst = S.data() + qs[c] * ldS;
-    for (int f = 0; f < nr_; ++f) dst[f] = vo[f] < limit ? row[vo[f]] : 0.0;
     // Spanning stages: rows that read at most one free variable (a row on a fixed variable reads
     // none), counted over the reduced and the basic variables together.
-    const int single = spanAllowed_ ? singleNonzero(dst, nr_) : -2;
+    const int nonzeros = gatherClassified(row, vo, nr_, limit, dst);
+    const int single = spanAllowed_ ? nonzeros : -2;
     if (!elim_) {
       if (spanAllowed_) unitRow_[z(off + rows[c])] = single != -2 ? 1 : 0;
       continue;
     }
     double* dstB = SB.data() + qs[c] * ldB;
-    for (int i = 0; i < m0_; ++i) dstB[i] = vo[nr_ + i] < limit ? row[vo[nr_ + i]] : 0.0;
-    sparseB_[z(qs[c])] = singleNonzero(dstB, m0_);
+    sparseB_[z(qs[c])] = gatherClassified(row, vo + nr_, m0_, limit, dstB);
     if (spanAllowed_) {
       const int basic = sparseB_[z(qs[c])];
       unitRow_[z(off + rows[c])] = (single == -1 && basic != -2) || (single >= 0 && basic == -1) ? 1 : 0;
