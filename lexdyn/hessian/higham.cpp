@@ -196,22 +196,48 @@ bool SymmetricEigenSolver::compute(const Eigen::Ref<const Eigen::MatrixXd>& A) {
 int choleskyUpperInPlace(Eigen::Ref<Eigen::MatrixXd> A, int m, double pivot_tolerance) {
   LEXDYN_ALWAYS_ASSERT(m >= 0 && m <= A.rows() && m <= A.cols(), "choleskyUpperInPlace: bad size");
   int zero_pivots = 0;
+  const Eigen::Index ld = A.outerStride();
+  double* a = A.data();
   for (int k = 0; k < m; ++k) {
-    double dkk = A(k, k);
-    for (int i = 0; i < k; ++i) dkk -= A(i, k) * A(i, k);
+    double* ck = a + k * ld;  // column k: U(0 .. k-1, k) above the pivot
+    double dkk = ck[k];
+    for (int i = 0; i < k; ++i) dkk -= ck[i] * ck[i];
     if (!(dkk > pivot_tolerance)) {
       ++zero_pivots;
-      for (int j = k; j < m; ++j) A(k, j) = 0.0;
+      for (int j = k; j < m; ++j) a[k + j * ld] = 0.0;
     } else {
       const double ukk = std::sqrt(dkk);
-      A(k, k) = ukk;
-      for (int j = k + 1; j < m; ++j) {
-        double s = A(k, j);
-        for (int i = 0; i < k; ++i) s -= A(i, k) * A(i, j);
-        A(k, j) = s / ukk;
+      ck[k] = ukk;
+      // Row k of U: U(k, j) = (A(k, j) - sum_i U(i, k) U(i, j)) / U(k, k), each sum in the order
+      // of i. Four columns at a time: four independent sums overlap (the same operations in the
+      // same order as one column at a time, so the same bits).
+      int j = k + 1;
+      for (; j + 4 <= m; j += 4) {
+        double* c0 = a + j * ld;
+        double* c1 = c0 + ld;
+        double* c2 = c1 + ld;
+        double* c3 = c2 + ld;
+        double s0 = c0[k], s1 = c1[k], s2 = c2[k], s3 = c3[k];
+        for (int i = 0; i < k; ++i) {
+          const double u = ck[i];
+          s0 -= u * c0[i];
+          s1 -= u * c1[i];
+          s2 -= u * c2[i];
+          s3 -= u * c3[i];
+        }
+        c0[k] = s0 / ukk;
+        c1[k] = s1 / ukk;
+        c2[k] = s2 / ukk;
+        c3[k] = s3 / ukk;
+      }
+      for (; j < m; ++j) {
+        double* cj = a + j * ld;
+        double sj = cj[k];
+        for (int i = 0; i < k; ++i) sj -= ck[i] * cj[i];
+        cj[k] = sj / ukk;
       }
     }
-    for (int i = k + 1; i < m; ++i) A(i, k) = 0.0;
+    for (int i = k + 1; i < m; ++i) ck[i] = 0.0;
   }
   return zero_pivots;
 }
