@@ -79,7 +79,28 @@ bool SymmetricEigenSolver::compute(const Eigen::Ref<const Eigen::MatrixXd>& A) {
     auto S = W.bottomRightCorner(L, L);
     auto p = tmp_.head(L);
     for (int r = 0; r < L; ++r) p[r] = 0.0;
-    for (int c = 0; c < L; ++c) {
+    // Two columns at a time: p[r] receives column c's term, then column c+1's, and each column's
+    // sum runs in the order of r, as one column at a time would (the same bits); the two sums are
+    // independent chains that overlap.
+    int c = 0;
+    for (; c + 1 < L; c += 2) {
+      const double v0 = x[c], v1 = x[c + 1];
+      const double* s0 = &S(0, c);
+      const double* s1 = &S(0, c + 1);
+      double pc0 = s0[c] * v0;
+      p[c + 1] += s0[c + 1] * v0;  // row c+1: column c's term only (column c+1 starts on its diagonal)
+      pc0 += s0[c + 1] * x[c + 1];
+      double pc1 = s1[c + 1] * v1;
+      for (int r = c + 2; r < L; ++r) {
+        const double a0 = s0[r], a1 = s1[r], xr = x[r];
+        p[r] = (p[r] + a0 * v0) + a1 * v1;
+        pc0 += a0 * xr;
+        pc1 += a1 * xr;
+      }
+      p[c] += pc0;
+      p[c + 1] += pc1;
+    }
+    for (; c < L; ++c) {
       const double vc = x[c];
       double pc = S(c, c) * vc;
       for (int r = c + 1; r < L; ++r) {
