@@ -25,6 +25,15 @@ inline double pythag(double x, double z) {
   return std::hypot(x, z);
 }
 
+// [a b] <- [a b] G for two columns a, b of n entries, G = [c s; -s c].
+inline void rotateColumns(double* a, double* b, int n, double c, double s) {
+  for (int row = 0; row < n; ++row) {
+    const double x = a[row], y = b[row];
+    a[row] = c * x - s * y;
+    b[row] = s * x + c * y;
+  }
+}
+
 }  // namespace
 
 SymmetricEigenSolver::SymmetricEigenSolver(int capacity) { setup(capacity); }
@@ -169,6 +178,8 @@ bool SymmetricEigenSolver::compute(const Eigen::Ref<const Eigen::MatrixXd>& A) {
     const double mu = d_[h] - b * b / denom;
     double x = d_[l] - mu;
     double z = e_[l];
+    int pk = -1;  // the rotation not yet applied to Z: columns (pk, pk + 1), cosine pc, sine ps
+    double pc = 1.0, ps = 0.0;
     for (int k = l; k < h; ++k) {
       // Rotation G on (k, k+1) with G^T [x; z] = [r; 0], G = [c s; -s c].
       const double r = pythag(x, z);
@@ -188,12 +199,15 @@ bool SymmetricEigenSolver::compute(const Eigen::Ref<const Eigen::MatrixXd>& A) {
         e_[k + 1] = c * e_[k + 1];
         x = e_[k];
       }
-      for (int row = 0; row < n; ++row) {
-        const double zk = Z(row, k), zk1 = Z(row, k + 1);
-        Z(row, k) = c * zk - s * zk1;
-        Z(row, k + 1) = s * zk + c * zk1;
-      }
+      // The previous rotation goes into Z now, after this one's scalar recurrence: the two are
+      // independent, and the recurrence (a chain of square roots and divisions) starts first.
+      // Each rotation still reaches Z in order, so Z takes the same bits.
+      if (pk >= 0) rotateColumns(&Z(0, pk), &Z(0, pk + 1), n, pc, ps);
+      pk = k;
+      pc = c;
+      ps = s;
     }
+    if (pk >= 0) rotateColumns(&Z(0, pk), &Z(0, pk + 1), n, pc, ps);
   }
 
   // 4. Ascending order (selection sort, swapping eigenvector columns).
