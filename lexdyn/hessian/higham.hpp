@@ -25,7 +25,9 @@
 // symmetric QR iteration with Wilkinson shifts, Golub & Van Loan sec. 8.3; the reduction updates
 // the lower triangle only, and a QR rotation's length is a plain square root unless its squares
 // could overflow or underflow; the reduction itself is unscaled, for entries between about
-// 1e-150 and 1e150): it works in place in
+// 1e-150 and 1e150; the reduction's products run two columns at a time and each QR rotation
+// reaches the eigenvectors one rotation late, so that independent chains of operations overlap,
+// in the same order per entry): it works in place in
 // storage sized once, for any size up to that capacity, whereas Eigen's SelfAdjointEigenSolver
 // allocates inside compute() (1 allocation for an unchanged size, 5 when the size changes,
 // measured with tests/common/alloc_counter.hpp).
