@@ -44,25 +44,6 @@ constexpr int kExitPass = 0, kExitFailed = 1, kExitBadInput = 2, kExitInternal =
 std::atomic<int> g_signal{0};
 extern "C" void onSignal(int s) { g_signal.store(s); }
 
-/// The generator options of problem `seed`, from its own stream (independent of the other
-/// problems of the sweep, so that one problem reruns alone).
-test::GenOptions optionsFor(std::uint64_t seed, int maxN, int maxLevels, int maxRows) {
-  std::mt19937_64 meta(seed ^ 0x9e3779b97f4a7c15ULL);
-  test::GenOptions g;
-  g.n = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxN));
-  g.levels = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxLevels));
-  g.maxRows = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxRows));
-  g.inequalities = meta() % 4 != 0;
-  g.boundsLevel = meta() % 2;
-  const double pr[] = {0.0, 0.3, 0.8}, pd[] = {0.0, 0.2, 0.5}, pz[] = {0.0, 0.1}, pe[] = {0.1, 0.4, 0.9};
-  g.pRankDeficient = pr[meta() % 3];
-  g.pDuplicate = pd[meta() % 3];
-  g.pConflict = pd[meta() % 3];
-  g.pZeroRow = pz[meta() % 2];
-  g.pEquality = pe[meta() % 3];
-  g.dyadic = true;  // exactly representable rank deficiency: the exact reference applies
-  return g;
-}
 
 }  // namespace
 
@@ -73,7 +54,7 @@ int main(int argc, char** argv) {
   int maxN = 12, maxLevels = 7, maxRows = 8;
   long exactEvery = 0;
   int maxIterations = Options{}.max_iterations;
-  bool spanning = false, lazy = false;
+  bool spanning = false, lazy = false, suffix = false;
   double unitLevels = 0.0;
   bool brute = false;
   std::string writeDir;
@@ -88,6 +69,7 @@ int main(int argc, char** argv) {
   app.add_option("--write-failures", writeDir, "write each failing problem to DIR/problem-SEED.json");
   app.add_flag("--spanning-stages", spanning, "solve with Options::spanning_stages (docs/solver.md)");
   app.add_flag("--lazy-snapshots", lazy, "solve with Options::lazy_snapshots (docs/solver.md)");
+  app.add_flag("--unit-suffix", suffix, "solve with Options::project_unit_suffix (docs/solver.md)");
   app.add_option("--unit-levels", unitLevels, "probability that a level is made of single-variable rows, in [0, 1]")
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--brute-force", brute, "compare tiny problems (<= 9 rows) with active-set enumeration");
@@ -114,11 +96,12 @@ int main(int argc, char** argv) {
   const std::string options = " --max-variables " + std::to_string(maxN) + " --max-levels " + std::to_string(maxLevels) +
                               " --max-rows " + std::to_string(maxRows) + (brute ? " --brute-force" : "") +
                               (maxIterations != Options{}.max_iterations ? " --max-iterations " + std::to_string(maxIterations) : "") +
-                              (spanning ? " --spanning-stages" : "") + (lazy ? " --lazy-snapshots" : "") + (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "");
+                              (spanning ? " --spanning-stages" : "") + (lazy ? " --lazy-snapshots" : "") + (suffix ? " --unit-suffix" : "") + (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "");
   Options solverOptions;
   solverOptions.max_iterations = maxIterations;
   solverOptions.spanning_stages = spanning;
   solverOptions.lazy_snapshots = lazy;
+  solverOptions.project_unit_suffix = suffix;
   long done = 0, solved = 0, failures = 0, capHits = 0, nonFinite = 0, kktFlagged = 0, exactChecked = 0, exactCleared = 0,
        exactConfirmed = 0, exactUndecided = 0, disagreements = 0, bruteChecked = 0, held = 0, cycles = 0, iters = 0, maxIt = 0;
   const auto t0 = std::chrono::steady_clock::now();
@@ -126,7 +109,7 @@ int main(int argc, char** argv) {
     for (long c = 0; c < cases; ++c) {
       if (g_signal.load()) break;
       const std::uint64_t s = seed + static_cast<std::uint64_t>(c);
-      test::GenOptions g = optionsFor(s, maxN, maxLevels, maxRows);
+      test::GenOptions g = test::sweepOptions(s, maxN, maxLevels, maxRows);
       g.pUnitLevel = unitLevels;
       const Problem p = test::randomProblem(s, g);
       ++done;

@@ -193,7 +193,7 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
 int main(int argc, char** argv) {
   CLI::App app{"lexdyn-solve: hierarchical least-squares solver (docs/solver.md)"};
   std::vector<std::string> files;
-  bool bench = false, details = false, noBounds = false, warmOnly = false, spanning = false, lazy = false;
+  bool bench = false, details = false, noBounds = false, warmOnly = false, spanning = false, lazy = false, suffix = false;
   int maxIterations = 1000, repeats = 1, options_split = -1;
   double paperDt = 0.0;
   app.add_flag("--bench", bench, "treat the files as consecutive ticks and print timing statistics");
@@ -203,6 +203,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1000000));
   app.add_flag("--spanning-stages", spanning, "solve single-variable-row levels that span their stage by one QR (docs/solver.md)");
   app.add_flag("--lazy-snapshots", lazy, "save restart snapshots only once a solve restarts (docs/solver.md)");
+  app.add_flag("--unit-suffix", suffix, "project the level before a projected last level too when its rows are unit rows (docs/solver.md)");
   app.add_flag("--details", details, "also print the active set, ranks and per-row violations");
   app.add_flag("--no-bounds-level", noBounds, "do not treat a first level of single-variable rows as bounds");
   app.add_option("--max-iterations", maxIterations, "hard cap on active-set iterations")->check(CLI::Range(1, 1000000));
@@ -225,6 +226,7 @@ int main(int argc, char** argv) {
   options.split_from_variable = options_split;
   options.spanning_stages = spanning;
   options.lazy_snapshots = lazy;
+  options.project_unit_suffix = suffix;
   try {
     if (!bench && (app.count("--repeats") || warmOnly)) {
       std::fprintf(stderr, "lexdyn-solve: error: --repeats and --warm-only need --bench\n");

@@ -41,13 +41,15 @@ enum class MultiplierScale {
 
 /// The controller's solver options unless a case sets them: the solver's defaults, with split
 /// coordinates at the contact forces (Options::kSplitAtControllerForces), spanning stages (its
-/// minimum-velocity and minimum-wrench levels) and lazy snapshots (nearly every tick is a solve
-/// of one iteration from the warm start).
+/// minimum-velocity and minimum-wrench levels), lazy snapshots (nearly every tick is a solve
+/// of one iteration from the warm start) and the projected unit suffix (the minimum-velocity
+/// level below a level of Newton rows).
 inline solver::Options defaultSolverOptions() {
   solver::Options o;
   o.split_from_variable = solver::Options::kSplitAtControllerForces;
   o.spanning_stages = true;
   o.lazy_snapshots = true;
+  o.project_unit_suffix = true;
   return o;
 }
 
@@ -59,6 +61,7 @@ inline solver::Options paperSolverOptions(double dt) {
   o.split_from_variable = d.split_from_variable;
   o.spanning_stages = d.spanning_stages;
   o.lazy_snapshots = d.lazy_snapshots;
+  o.project_unit_suffix = d.project_unit_suffix;
   return o;
 }
 

@@ -226,15 +226,19 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
     spanPerm_[z(k)].assign(z(std::min(mk, nn)), 0);
   }
 
+  // Projected levels: the last, and with a projected unit suffix the one before it.
   const int mLast = L > 0 ? std::max(m_[z(L - 1)], 1) : 1;
-  Raw_.setZero(nn, mLast);
-  RawB_.setZero(m0max, mLast);
-  RawP_.setZero(nn, mLast);
-  P_.setZero(nn, mLast);
+  const int mBefore = L > 1 ? m_[z(L - 2)] : 0;
+  const int mProj = mLast + mBefore;
+  Raw_.setZero(nn, mProj);
+  RawB_.setZero(m0max, mProj);
+  RawP_.setZero(nn, mProj);
+  P_.setZero(nn, std::max(mLast, mBefore));
   Z_.setZero(nn, nn);
-  rawHave_.assign(z(mLast), 0);
+  rawHave_.assign(z(mProj), 0);
   zvec_.setZero(nn);
   deferred_ = -1;
+  deferFrom_ = -1;
 
   S_.setZero(nn, colsW);
   sparseB_.assign(z(colsW), -2);
@@ -541,18 +545,48 @@ void HlsFactorization::applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int 
   }
 }
 
+bool HlsFactorization::projectionPays(int k) const {
+  // Projection pays when the level has more active rows than the null space left for it
+  // (estimated with full-rank earlier levels).
+  int earlier = 0;
+  for (int j = firstStage_; j < k; ++j) earlier += static_cast<int>(active_[z(j)].size());
+  return static_cast<int>(active_[z(k)].size()) > std::max(nr_ - earlier, 0);
+}
+
+bool HlsFactorization::unitRowsOnReduced(int k) const {
+  const Eigen::MatrixXd& A = *A_[z(k)];
+  const int cols = cols_[z(k)] >= 0 ? cols_[z(k)] : static_cast<int>(A.cols());
+  for (int gid : active_[z(k)]) {
+    const int row = gid - rowOff_[z(k)];
+    int at = -1;
+    for (int c = 0; c < cols; ++c) {
+      if (A(row, c) == 0.0) continue;
+      if (at >= 0) return false;
+      at = c;
+    }
+    // On a basic variable the elimination would spread the row over the reduced ones; on a
+    // variable fixed by its bound it reads none of them (a zero row).
+    if (at < 0) continue;
+    if (elim_)
+      for (int i = 0; i < m0_; ++i)
+        if (varPerm_[z(i)] == at) return false;
+  }
+  return !active_[z(k)].empty();
+}
+
 void HlsFactorization::decideDeferral() {
   deferred_ = -1;
+  deferFrom_ = -1;
   const int k = levelCount() - 1;
   if (lastMode_ == LastLevel::Standard || k <= firstStage_) return;
-  if (lastMode_ == LastLevel::Auto) {
-    // Projection pays when the level has more active rows than the null space left for it
-    // (estimated with full-rank earlier levels).
-    int earlier = 0;
-    for (int j = firstStage_; j < k; ++j) earlier += static_cast<int>(active_[z(j)].size());
-    if (static_cast<int>(active_[z(k)].size()) <= std::max(nr_ - earlier, 0)) return;
-  }
+  if (lastMode_ == LastLevel::Auto && !projectionPays(k)) return;
   deferred_ = k;
+  deferFrom_ = k;
+  // Projected unit suffix: the level before the last too, when its rows are unit rows on
+  // reduced variables (x_j = 0, say) and projection pays for it as well. Its rows then take no
+  // earlier stage's reflectors; when the earlier levels leave it only coordinates that no
+  // earlier stage reached, its projection costs copies of exact zeros.
+  if (unitSuffix_ && k - 1 > firstStage_ && projectionPays(k - 1) && unitRowsOnReduced(k - 1)) deferFrom_ = k - 1;
 }
 
 void HlsFactorization::relayout(int c) {
@@ -571,9 +605,9 @@ void HlsFactorization::relayout(int c) {
     const int p0 = p;
     int freshHere = 0;
     for (int gid : active_[z(j)]) {
-      if (j == deferred_) {
+      if (projected(j)) {
         // Projected level: its raw reduced rows, kept from an earlier layout or loaded.
-        const int row = gid - rowOff_[z(j)];
+        const int row = gid - rowOff_[z(deferFrom_)];
         tmpGid_[z(p)] = gid;
         if (rawHave_[z(row)]) {
           S.col(p).head(nr_) = Raw_.col(row).head(nr_);
@@ -626,10 +660,12 @@ void HlsFactorization::relayout(int c) {
   }
   // Columns of a projected level stay raw (kept for later layouts); the others get the earlier
   // stages' reflectors.
-  const int pDef = (deferred_ >= c) ? p - static_cast<int>(active_[z(deferred_)].size()) : p;
+  int pDef = p;
+  if (deferFrom_ >= 0)
+    for (int j = std::max(c, deferFrom_); j < L; ++j) pDef -= static_cast<int>(active_[z(j)].size());
   for (int q = pDef; q < p && fresh > 0; ++q) {
     if (colNorm_(q) != 1.0) continue;
-    const int row = tmpGid_[z(q)] - rowOff_[z(deferred_)];
+    const int row = tmpGid_[z(q)] - rowOff_[z(deferFrom_)];
     Raw_.col(row).head(nr_) = S.col(q).head(nr_);
     if (elim_) RawB_.col(row).head(m0_) = SB.col(q).head(m0_);
     rawHave_[z(row)] = 1;
@@ -667,7 +703,7 @@ void HlsFactorization::saveSnapshot(int k, int shareWith) {
   const int s = start_[z(k)];
   int cnt = 0;
   for (int j = k; j < L; ++j)
-    if (j != deferred_) cnt += act_[z(j)];  // a projected level restores from its raw rows
+    if (!projected(j)) cnt += act_[z(j)];  // a projected level restores from its raw rows
   const int c0 = col0_[z(k)];
   const int d = nr_ - c0;
   // Shared: the same columns, rows and entries as snapshot shareWith (in its storage).
@@ -685,8 +721,8 @@ void HlsFactorization::swapColumns(int a, int b, int rows) {
   if (a == b) return;
   W_.col(a).head(rows).swap(W_.col(b).head(rows));
   if (elim_) WB_.col(a).head(m0_).swap(WB_.col(b).head(m0_));
-  if (deferred_ >= 0 && levelOf_[z(colGid_[z(a)])] == deferred_) {
-    const int s = start_[z(deferred_)];
+  if (projected(levelOf_[z(colGid_[z(a)])])) {
+    const int s = start_[z(deferFrom_)];
     RawP_.col(a - s).head(nr_).swap(RawP_.col(b - s).head(nr_));
   }
   std::swap(colNorm_(a), colNorm_(b));
@@ -846,7 +882,7 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   // Trailing update of the later levels' columns: C <- Q_k^T C (compact WY, blocked).
   int rest = 0;
   for (int j = k + 1; j < L; ++j)
-    if (j != deferred_) rest += act_[z(j)];  // a projected level is projected when its turn comes
+    if (!projected(j)) rest += act_[z(j)];  // a projected level is projected when its turn comes
   if (rest > 0 && r > 0) {
     auto C = W_.block(c0, s + m, d, rest);
     if (r <= kDirectReflectors) {
@@ -990,7 +1026,8 @@ int HlsFactorization::spanningStages() const {
   return n;
 }
 
-// Projected level k (the last): keeps its raw rows in column order (RawP_) for solve() and
+// Projected level k (the last, or with a projected unit suffix the one before it too): keeps its
+// raw rows in column order (RawP_, from the first projected level's first column) for solve() and
 // multipliers(), and writes their projection Z^T a onto the null space of the earlier levels,
 // Z = Q_{<k} [0; I], into rows c0.. of its columns; factorLevel then factorises them as usual.
 // Rows 0..c0 of these columns are not used.
@@ -1000,7 +1037,9 @@ void HlsFactorization::projectDeferredLevel(int k) {
   const int c0 = col0_[z(k)];
   const int d = nr_ - c0;
   if (m == 0) return;
-  RawP_.block(0, 0, nr_, m) = W_.block(0, s, nr_, m);
+  const int po = s - start_[z(deferFrom_)];  // the level's columns in RawP_
+  auto Raw = RawP_.block(0, po, nr_, m);
+  Raw = W_.block(0, s, nr_, m);
   if (c0 == 0 || d == 0) return;  // no earlier reflector (Z = I), or nothing left to project on
   auto Z = Z_.block(0, 0, nr_, d);
   Z.setZero();
@@ -1017,16 +1056,18 @@ void HlsFactorization::projectDeferredLevel(int k) {
   // A row with a single nonzero v at reduced coordinate i (a regularisation row x_j = 0 on a
   // non-basic variable) projects to v Z(i, :) + 0: the same bits as the matrix product Z^T a,
   // whose other terms are exact zeros and whose sum starts at +0 (hence the + 0, which turns a
-  // -0 into +0). When every row is such a row (exp1's minimum-wrench rows before the Newton
-  // switch), the product is skipped. Otherwise all rows go through one product: a product of
+  // -0 into +0); a zero row (on a variable fixed by its bound) projects to +0. When every row is
+  // such a row (exp1's minimum-wrench rows before the Newton switch, its minimum-velocity rows
+  // in a projected unit suffix), the product is skipped. Otherwise all rows go through one product: a product of
   // only the other rows would round them differently (Eigen's matrix-product kernel sums a
   // column's terms in an order that depends on its place among the columns). Only where Eigen
   // takes its matrix-product kernel (two or more rows, not a small coefficient-wise product).
   bool allSingle = m >= 2 && nr_ + d + m >= EIGEN_GEMM_TO_COEFFBASED_THRESHOLD;
   for (int j = 0; j < m && allSingle; ++j) {
-    const int at = singleNonzero(RawP_.col(j).data(), nr_);
-    allSingle = at >= 0;
-    if (allSingle) W_.col(s + j).segment(c0, d) = (RawP_(at, j) * Z.row(at).transpose()).array() + 0.0;
+    const int at = singleNonzero(Raw.col(j).data(), nr_);
+    allSingle = at >= -1;
+    if (at >= 0) W_.col(s + j).segment(c0, d) = (Raw(at, j) * Z.row(at).transpose()).array() + 0.0;
+    if (at == -1) W_.col(s + j).segment(c0, d).setZero();  // a zero row: the product's +0
   }
   if (allSingle) return;
   // Z's columns from t on are unit vectors (at or below `reach`): row i of Z^T A is then row
@@ -1039,16 +1080,16 @@ void HlsFactorization::projectDeferredLevel(int k) {
   const int lead = unitColumnProductRows(nr_, d, m, std::clamp(reach - c0, 0, d));
   if (lead < 0) {
     auto P = P_.block(0, 0, d, m);
-    P.noalias() = Z.transpose() * RawP_.block(0, 0, nr_, m);
+    P.noalias() = Z.transpose() * Raw;
     W_.block(c0, s, d, m) = P;
     return;
   }
   if (lead > 0) {
     auto P = P_.block(0, 0, lead, m);
-    P.noalias() = Z.leftCols(lead).transpose() * RawP_.block(0, 0, nr_, m);
+    P.noalias() = Z.leftCols(lead).transpose() * Raw;
     W_.block(c0, s, lead, m) = P;
   }
-  W_.block(c0 + lead, s, d - lead, m) = RawP_.block(c0 + lead, 0, d - lead, m).array() + 0.0;
+  W_.block(c0 + lead, s, d - lead, m) = Raw.middleRows(c0 + lead, d - lead).array() + 0.0;
 }
 
 void HlsFactorization::factorize(double rankTol) {
@@ -1106,7 +1147,7 @@ void HlsFactorization::factorize(double rankTol) {
     // active, such as torque limits, trust region and collisions, follow one another).
     int untouchedSince = -1;
     for (int k = c; k < L; ++k) {
-      if (k == deferred_) {
+      if (projected(k)) {
         projectDeferredLevel(k);
       } else if (k > 0 && !static_[z(k)] && haveSnapshots_) {
         saveSnapshot(k, untouchedSince);
@@ -1143,13 +1184,13 @@ void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen
     auto t = t_.head(m);
     for (int j = 0; j < m; ++j) t(j) = b(colGid_[z(s + j)]);
     if (elim_) t.noalias() -= WB_.block(0, s, m0_, m).transpose() * d_.head(m0_);
-    if (c0 > 0 && k == deferred_) {
+    if (c0 > 0 && projected(k)) {
       // Projected level: a^T Q [y_0..c0; 0] from its raw rows.
       auto zv = zvec_.head(nr_);
       zv.head(c0) = y.head(c0);
       zv.tail(nr_ - c0).setZero();
       applyEarlierStagesQ(zv, k);
-      t.noalias() -= RawP_.block(0, 0, nr_, m).transpose() * zv;
+      t.noalias() -= RawP_.block(0, s - start_[z(deferFrom_)], nr_, m).transpose() * zv;
     } else if (c0 > 0) {
       t.noalias() -= W_.block(0, s, c0, m).transpose() * y.head(c0);
     }
@@ -1210,10 +1251,10 @@ void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref
       u(j) = res(gid);
       mu(gid) = res(gid);
     }
-    if (m > 0 && c0 > 0 && k == deferred_) {
+    if (m > 0 && c0 > 0 && projected(k)) {
       // Projected level: the first c0 coordinates of Q_{<k}^T (A_k^T u) from its raw rows.
       auto v = zvec_.head(nr_);
-      v.noalias() = RawP_.block(0, 0, nr_, m) * u;
+      v.noalias() = RawP_.block(0, s - start_[z(deferFrom_)], nr_, m) * u;
       applyEarlierStagesTo(v, k);
       G.head(c0) += v.head(c0);
     } else if (m > 0 && c0 > 0) {
@@ -1249,7 +1290,16 @@ void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref
       for (int i = r - 1; i >= 0; --i) applyReflector(Lm.col(i).segment(i + 1, m - i - 1), lt(i), u.segment(i, m - i));
     }
     for (int i = 0; i < m; ++i) mu(colGid_[z(s + i)]) = u(i);
-    if (c0 > 0) G.head(c0).noalias() += W_.block(0, s, c0, m) * u;
+    if (c0 > 0 && projected(j)) {
+      // A projected level before k (the unit suffix): rows 0..c0 of its columns are not formed;
+      // the first c0 coordinates of Q_{<j}^T (A_j^T u) from its raw rows.
+      auto v = zvec_.head(nr_);
+      v.noalias() = RawP_.block(0, s - start_[z(deferFrom_)], nr_, m) * u;
+      applyEarlierStagesTo(v, j);
+      G.head(c0) += v.head(c0);
+    } else if (c0 > 0) {
+      G.head(c0).noalias() += W_.block(0, s, c0, m) * u;
+    }
     if (elim_) gB_.head(m0_).noalias() += WB_.block(0, s, m0_, m) * u;
   }
   if (elim_) {

@@ -322,6 +322,7 @@ void Solver::Impl::loadData(const Problem& problem) {
   fact.setSplit(opt.split_from_variable);
   fact.setSpanning(opt.spanning_stages);
   fact.setLazySnapshots(opt.lazy_snapshots);
+  fact.setProjectUnitSuffix(opt.project_unit_suffix);
   fact.setLastLevelMode(opt.last_level_projection == Options::LastLevel::Never    ? HlsFactorization::LastLevel::Standard
                         : opt.last_level_projection == Options::LastLevel::Always ? HlsFactorization::LastLevel::Projected
                                                                                   : HlsFactorization::LastLevel::Auto);
@@ -842,6 +843,7 @@ void Solver::Impl::finish() {
   const Problem& problem = *prob;
   out.x = x;
   out.last_level_projected = fact.lastLevelProjected();
+  out.projected_levels = fact.projectedLevels();
   out.split_applied = fact.splitApplied();
   out.spanning_stages = fact.spanningStages();
   // True violations at the final x (Ax is kept up to date along the steps).

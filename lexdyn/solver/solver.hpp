@@ -104,6 +104,16 @@ struct Options {
   /// the restarted stages' rows are transformed as in a full factorisation rather than restored
   /// (rounding), and Result::factorizations counts the full factorisation.
   bool lazy_snapshots = false;
+  /// Projected unit suffix. When the last level is projected (last_level_projection), the level
+  /// before it is projected as well if its active rows have one nonzero each, on a variable that
+  /// the first level's elimination keeps (x_j = 0, say), and it has more active rows than the
+  /// null space that the earlier levels leave, counted as for the last level. Its rows then take
+  /// none of the earlier stages' reflectors; they are projected once, Z^T a, when its turn comes.
+  /// When the earlier levels have taken every coordinate that their stages reached (a level of
+  /// Newton rows over all velocities, with split coordinates), the projection is a copy of exact
+  /// zeros and the level's rows cost nothing. Decided per full factorisation. It changes the
+  /// rounding of that level's multipliers, and of its rows where it keeps coordinates.
+  bool project_unit_suffix = false;
   /// Hard cap on active-set iterations (equality sub-problems solved).
   int max_iterations = 1000;
   /// After this many consecutive zero-length steps, ties are broken by smallest index (Bland).
@@ -174,6 +184,9 @@ struct Result {
   int cycles_broken = 0;
   /// The last factorisation projected the last level (Options::last_level_projection).
   bool last_level_projected = false;
+  /// Levels the last factorisation projected: 0, 1 (the last) or 2 (with
+  /// Options::project_unit_suffix, the level before it too).
+  int projected_levels = 0;
   /// The last factorisation's elimination took its basic variables from split_from_variable on.
   bool split_applied = false;
   /// Stages of the last factorisation solved as spanning stages (Options::spanning_stages).

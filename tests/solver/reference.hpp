@@ -319,6 +319,26 @@ struct GenOptions {
   double pUnitLevel = 0.0;
 };
 
+/// The generator options of lexdyn-solver-sweep's problem `seed`, from its own stream
+/// (independent of the other problems of the sweep, so that one problem reruns alone).
+inline GenOptions sweepOptions(std::uint64_t seed, int maxN, int maxLevels, int maxRows) {
+  std::mt19937_64 meta(seed ^ 0x9e3779b97f4a7c15ULL);
+  GenOptions g;
+  g.n = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxN));
+  g.levels = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxLevels));
+  g.maxRows = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxRows));
+  g.inequalities = meta() % 4 != 0;
+  g.boundsLevel = meta() % 2;
+  const double pr[] = {0.0, 0.3, 0.8}, pd[] = {0.0, 0.2, 0.5}, pz[] = {0.0, 0.1}, pe[] = {0.1, 0.4, 0.9};
+  g.pRankDeficient = pr[meta() % 3];
+  g.pDuplicate = pd[meta() % 3];
+  g.pConflict = pd[meta() % 3];
+  g.pZeroRow = pz[meta() % 2];
+  g.pEquality = pe[meta() % 3];
+  g.dyadic = true;  // exactly representable rank deficiency: the exact reference applies
+  return g;
+}
+
 inline Problem randomProblem(std::uint64_t seed, const GenOptions& o) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u_real(-1.0, 1.0);

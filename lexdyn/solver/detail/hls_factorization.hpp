@@ -78,6 +78,12 @@ class HlsFactorization {
   /// no restart snapshots; a later restart at a level c > 0 then factorises from the first level
   /// again, saving them.
   void setLazySnapshots(bool lazy) { lazy_ = lazy; }
+  /// Projected unit suffix (Options::project_unit_suffix): when the last level is projected, the
+  /// level before it is projected too if its active rows are unit rows on reduced variables and
+  /// projection pays for it by the same row count (decided per full factorisation).
+  void setProjectUnitSuffix(bool on) { unitSuffix_ = on; }
+  /// Levels the last factorisation projected (0, 1 or 2).
+  int projectedLevels() const { return deferFrom_ < 0 ? 0 : levelCount() - deferFrom_; }
   /// Stages of the last factorisation solved as spanning stages.
   int spanningStages() const;
   /// True when the last elimination took its basic variables from the split's preferred ones.
@@ -246,11 +252,19 @@ class HlsFactorization {
   std::vector<int> tmpGid_;   // relayout: gid of each scratch column
   std::vector<int> sparseB_;  // per loaded column: -2 dense basic part, -1 zero, else its one index
 
-  // Projected last level (deferred_ = its index, or -1): raw reduced rows by row of the level
-  // (RawB_: their basic part), valid where rawHave_; RawP_: the raw rows in the level's current
-  // physical column order; Z_: the null-space basis of the earlier levels (rows c0.. of Q).
+  // Projected levels, deferFrom_ .. L-1 (deferred_ = the last level's index when it is
+  // projected, deferFrom_ = the first projected level; -1: none): raw reduced rows by row from the
+  // first projected level's first row (RawB_: their basic part), valid where rawHave_; RawP_: the
+  // raw rows in their current physical column order, from the first projected level's first
+  // column; Z_: the null-space basis of the earlier levels of the level being projected (rows
+  // c0.. of Q).
   LastLevel lastMode_ = LastLevel::Auto;
   int deferred_ = -1;
+  int deferFrom_ = -1;
+  bool unitSuffix_ = false;  // Options::project_unit_suffix
+  bool projected(int k) const { return deferFrom_ >= 0 && k >= deferFrom_; }
+  bool projectionPays(int k) const;     // decideDeferral's row-count test for level k
+  bool unitRowsOnReduced(int k) const;  // every active row of level k: one nonzero, on a reduced variable
   Eigen::MatrixXd Raw_, RawB_, RawP_, Z_, P_;
   std::vector<char> rawHave_;
   Eigen::VectorXd zvec_;
