@@ -1037,8 +1037,7 @@ void HlsFactorization::projectDeferredLevel(int k) {
   const int c0 = col0_[z(k)];
   const int d = nr_ - c0;
   if (m == 0) return;
-  const int po = s - start_[z(deferFrom_)];  // the level's columns in RawP_
-  auto Raw = RawP_.block(0, po, nr_, m);
+  auto Raw = projectedRaw(k);
   Raw = W_.block(0, s, nr_, m);
   if (c0 == 0 || d == 0) return;  // no earlier reflector (Z = I), or nothing left to project on
   auto Z = Z_.block(0, 0, nr_, d);
@@ -1190,7 +1189,7 @@ void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen
       zv.head(c0) = y.head(c0);
       zv.tail(nr_ - c0).setZero();
       applyEarlierStagesQ(zv, k);
-      t.noalias() -= RawP_.block(0, s - start_[z(deferFrom_)], nr_, m).transpose() * zv;
+      t.noalias() -= projectedRaw(k).transpose() * zv;
     } else if (c0 > 0) {
       t.noalias() -= W_.block(0, s, c0, m).transpose() * y.head(c0);
     }
@@ -1234,6 +1233,26 @@ void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen
   for (int f = 0; f < nr_; ++f) x(varPerm_[z(m0_ + f)]) = y(f);
 }
 
+Eigen::Block<Eigen::MatrixXd> HlsFactorization::projectedRaw(int k) {
+  return RawP_.block(0, start_[z(k)] - start_[z(deferFrom_)], nr_, act_[z(k)]);
+}
+
+void HlsFactorization::addLeading(int k, const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> G) {
+  const int m = act_[z(k)];
+  const int c0 = col0_[z(k)];
+  if (m == 0 || c0 == 0) return;
+  if (projected(k)) {
+    // A projected level (the last, or an earlier stage of it in a unit suffix): rows 0..c0 of
+    // its columns are not formed; the first c0 coordinates of Q_{<k}^T (A_k^T u) from its raw rows.
+    auto v = zvec_.head(nr_);
+    v.noalias() = projectedRaw(k) * u;
+    applyEarlierStagesTo(v, k);
+    G.head(c0) += v.head(c0);
+  } else {
+    G.head(c0).noalias() += W_.block(0, start_[z(k)], c0, m) * u;
+  }
+}
+
 void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref<Eigen::VectorXd> mu) {
   if (elim_ && k == 0) {
     for (int gid : active_[0]) mu(gid) = res(gid);
@@ -1244,22 +1263,13 @@ void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref
   {
     const int m = act_[z(k)];
     const int s = start_[z(k)];
-    const int c0 = col0_[z(k)];
     auto u = u_.head(m);
     for (int j = 0; j < m; ++j) {
       const int gid = colGid_[z(s + j)];
       u(j) = res(gid);
       mu(gid) = res(gid);
     }
-    if (m > 0 && c0 > 0 && projected(k)) {
-      // Projected level: the first c0 coordinates of Q_{<k}^T (A_k^T u) from its raw rows.
-      auto v = zvec_.head(nr_);
-      v.noalias() = RawP_.block(0, s - start_[z(deferFrom_)], nr_, m) * u;
-      applyEarlierStagesTo(v, k);
-      G.head(c0) += v.head(c0);
-    } else if (m > 0 && c0 > 0) {
-      G.head(c0).noalias() += W_.block(0, s, c0, m) * u;
-    }
+    addLeading(k, u, G);
     if (elim_ && m > 0) {
       gB_.head(m0_).setZero();
       gB_.head(m0_).noalias() += WB_.block(0, s, m0_, m) * u;
@@ -1290,16 +1300,7 @@ void HlsFactorization::multipliers(int k, const Eigen::VectorXd& res, Eigen::Ref
       for (int i = r - 1; i >= 0; --i) applyReflector(Lm.col(i).segment(i + 1, m - i - 1), lt(i), u.segment(i, m - i));
     }
     for (int i = 0; i < m; ++i) mu(colGid_[z(s + i)]) = u(i);
-    if (c0 > 0 && projected(j)) {
-      // A projected level before k (the unit suffix): rows 0..c0 of its columns are not formed;
-      // the first c0 coordinates of Q_{<j}^T (A_j^T u) from its raw rows.
-      auto v = zvec_.head(nr_);
-      v.noalias() = RawP_.block(0, s - start_[z(deferFrom_)], nr_, m) * u;
-      applyEarlierStagesTo(v, j);
-      G.head(c0) += v.head(c0);
-    } else if (c0 > 0) {
-      G.head(c0).noalias() += W_.block(0, s, c0, m) * u;
-    }
+    addLeading(j, u, G);
     if (elim_) gB_.head(m0_).noalias() += WB_.block(0, s, m0_, m) * u;
   }
   if (elim_) {

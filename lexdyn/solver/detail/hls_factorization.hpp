@@ -171,6 +171,11 @@ class HlsFactorization {
   /// too small for rankTol.
   bool factorSpanning(int k, int d, double rankTol);
   void projectDeferredLevel(int k);
+  /// Projected level k's raw rows in RawP_, in its current column order.
+  Eigen::Block<Eigen::MatrixXd> projectedRaw(int k);
+  /// G.head(c0) += the first c0 = col0_[k] coordinates of Q_{<k}^T (A_k^T u): from level k's
+  /// transformed rows, or from a projected level's raw rows (multipliers()).
+  void addLeading(int k, const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> G);
   void decideDeferral();
 
   int n_ = 0;
