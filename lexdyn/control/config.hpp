@@ -56,12 +56,11 @@ inline solver::Options defaultSolverOptions() {
 /// solver::Options::paper(dt) (the paper's early-stop rules) with the controller's other
 /// defaults (defaultSolverOptions), as `solver: {paper_rules: true}` in a case.
 inline solver::Options paperSolverOptions(double dt) {
-  solver::Options o = solver::Options::paper(dt);
-  const solver::Options d = defaultSolverOptions();
-  o.split_from_variable = d.split_from_variable;
-  o.spanning_stages = d.spanning_stages;
-  o.lazy_snapshots = d.lazy_snapshots;
-  o.project_unit_suffix = d.project_unit_suffix;
+  solver::Options o = defaultSolverOptions();
+  const solver::Options paper = solver::Options::paper(dt);  // its stop rules, else the solver's defaults
+  o.stop_slack_norm = paper.stop_slack_norm;
+  o.stop_optimality_iterations = paper.stop_optimality_iterations;
+  o.stop_total_iterations = paper.stop_total_iterations;
   return o;
 }
 
