@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <memory>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -57,6 +58,16 @@ std::string resolvePath(const yaml::Node& n, CaseSpec& c) {
   if (!fs::is_regular_file(norm, ec)) n.fail("file not found: " + norm.string());
   c.file_fields.emplace_back(n.path(), norm.string());
   return norm.string();
+}
+
+// A folder named by the case (robot.package_path), like resolvePath.
+std::string resolveDir(const yaml::Node& n, CaseSpec& c) {
+  const fs::path rel(n.asString());
+  const fs::path p = (rel.is_absolute() ? rel : fs::path(c.path).parent_path() / rel).lexically_normal();
+  std::error_code ec;
+  if (!fs::is_directory(p, ec)) n.fail("folder not found: " + p.string());
+  c.file_fields.emplace_back(n.path(), p.string());
+  return p.string();
 }
 
 std::string postureByName(const model::RobotDescription& d, const yaml::Node& n) {
@@ -160,15 +171,7 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
     double kp_scale = 1.0, kd_scale = 1.0;
     if (auto v = sm.optional("kp_scale")) kp_scale = v->asPositiveDouble();
     if (auto v = sm.optional("kd_scale")) kd_scale = v->asPositiveDouble();
-    const yaml::Node gains = sm.required("gains");
-    for (const yaml::Node& gn : gains.elements()) {
-      yaml::StrictMap gm(gn);
-      GainGroup g;
-      const yaml::Node match = gm.required("match");
-      g.match = match.asString();
-      g.kp = gm.required("kp").asDoubleIn(0.0, R::kMaxServoKp, "N m/rad (N/m)");
-      g.kd = gm.required("kd").asDoubleIn(0.0, R::kMaxServoKd, "N m s/rad (N s/m)");
-      gm.finish();
+    auto apply = [&](const GainGroup& g) {
       int matched = 0;
       for (int j = 0; j < nj; ++j) {
         if (globMatch(g.match, d.joints[static_cast<size_t>(j)].name)) {
@@ -177,14 +180,33 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
           ++matched;
         }
       }
-      if (matched == 0) match.fail("pattern '" + g.match + "' matches no joint");
       c.gain_groups.push_back(g);
+      return matched;
+    };
+    // The case's gain groups, or the robot data file's servo_gains (docs/model.md).
+    const std::optional<yaml::Node> gains = sm.optional("gains");
+    if (gains) {
+      for (const yaml::Node& gn : gains->elements()) {
+        yaml::StrictMap gm(gn);
+        GainGroup g;
+        const yaml::Node match = gm.required("match");
+        g.match = match.asString();
+        g.kp = gm.required("kp").asDoubleIn(0.0, R::kMaxServoKp, "N m/rad (N/m)");
+        g.kd = gm.required("kd").asDoubleIn(0.0, R::kMaxServoKd, "N m s/rad (N s/m)");
+        gm.finish();
+        if (apply(g) == 0) match.fail("pattern '" + g.match + "' matches no joint");
+      }
+    } else {
+      if (d.servo_gains.empty()) {
+        sm.node().fail("no servo gains: give sim.servo.gains here, or servo_gains in the robot data file (" + d.data_path + ")");
+      }
+      for (const model::ServoGainGroup& sg : d.servo_gains) apply({sg.match, sg.kp, sg.kd});
     }
     std::vector<std::string> missing;
     for (int j = 0; j < nj; ++j) {
       if (kp[j] < 0.0) missing.push_back(d.joints[static_cast<size_t>(j)].name);
     }
-    if (!missing.empty()) gains.fail("no gain group matches joint(s) " + joinNames(missing));
+    if (!missing.empty()) (gains ? *gains : sm.node()).fail("no gain group matches joint(s) " + joinNames(missing));
     s.servo.kp = kp_scale * kp;
     s.servo.kd = kd_scale * kd;
     sm.finish();
@@ -408,7 +430,7 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
 // and checks the events' targets against the built tasks and the contacts' grasp links.
 void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
   LexdynSpec& lx = c.controller.lexdyn;
-  const model::RobotModel model = model::RobotModel::fromFiles(c.urdf_path, c.data_path);
+  const model::RobotModel model = model::RobotModel::fromFiles(c.urdf_path, c.data_path, c.robot_options);
   for (const ContactEntry& ce : lx.contacts) {
     if (ce.grasp.empty()) continue;
     const sim::GraspSettings* g = nullptr;
@@ -564,9 +586,14 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
     yaml::StrictMap r(top.required("robot"));
     c.urdf_path = resolvePath(r.required("urdf"), c);
     c.data_path = resolvePath(r.required("data"), c);
+    if (auto strict = r.optional("strict")) c.robot_options.strict = strict->asBool();
+    if (auto pp = r.optional("package_path")) {
+      for (const yaml::Node& e : pp->elements()) c.robot_options.package_paths.push_back(resolveDir(e, c));
+    }
     r.finish();
   }
-  const model::RobotDescription d = model::loadRobotDescription(c.urdf_path, c.data_path);
+  const model::RobotDescription d = model::loadRobotDescription(c.urdf_path, c.data_path, c.robot_options);
+  c.robot_warnings = d.warnings;
   const yaml::Node duration = top.required("duration_s");
   c.duration_s = duration.asPositiveDouble();
   if (auto p = top.optional("control_period_s")) {
@@ -703,13 +730,18 @@ CaseSpec loadCase(const std::string& path, const std::vector<Override>& override
   doc::Document d;
   d.file = path;
   d.overrides = overrides;
+  // The file's own error, when it does not load as it is: the readers stopped there, so an
+  // override of a key after it cannot be checked; the file's error is then the one reported
+  // (an override never masks it, e.g. a robot file that does not load behind --duration).
+  std::unique_ptr<InputError> file_error;
   {
     // The keys the readers accept, recorded on the file as it is (an error there may be what
     // an override mends: the keys read up to it are known all the same).
     yaml::KeyRecorder recorder;
     try {
       parseCase(file_root, path);
-    } catch (const InputError&) {
+    } catch (const InputError& e) {
+      file_error = std::make_unique<InputError>(e);
     }
     d.schema.keys = recorder.paths();
   }
@@ -729,7 +761,12 @@ CaseSpec loadCase(const std::string& path, const std::vector<Override>& override
       }
       for (const std::string& k : recorder.paths())
         if (std::find(d.schema.keys.begin(), d.schema.keys.end(), k) == d.schema.keys.end()) d.schema.keys.push_back(k);
-      d.canonical.push_back(doc::set(d.root, o.path, value, d.schema, o.label).canonical);
+      try {
+        d.canonical.push_back(doc::set(d.root, o.path, value, d.schema, o.label).canonical);
+      } catch (const InputError&) {
+        if (file_error) throw InputError(*file_error);
+        throw;
+      }
     }
   }
   try {
@@ -772,7 +809,7 @@ std::string effectiveCaseText(const CaseSpec& spec, const std::string& dest_dir)
 }
 
 model::RobotDescription simulatedRobot(const CaseSpec& spec) {
-  model::RobotDescription d = model::loadRobotDescription(spec.urdf_path, spec.data_path);
+  model::RobotDescription d = model::loadRobotDescription(spec.urdf_path, spec.data_path, spec.robot_options);
   for (const LinkMassScale& s : spec.sim_model.mass_scale) {
     for (auto& l : d.links) {
       if (!globMatch(s.match, l.name)) continue;

@@ -132,6 +132,11 @@ struct CaseSpec {
   std::string path;  ///< the case file
   std::string name, description;
   std::string urdf_path, data_path;  ///< resolved
+  /// robot.strict and robot.package_path: how the robot files are read (docs/model.md).
+  model::LoadOptions robot_options;
+  /// What the loader assumed about the robot files (RobotDescription::warnings); the runner
+  /// prints them and keeps them in summary.json.
+  std::vector<std::string> robot_warnings;
   double duration_s = 0.0;
   double control_period_s = 0.005;
   InitialStateSpec initial_state;

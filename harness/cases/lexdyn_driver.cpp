@@ -86,7 +86,7 @@ struct LexdynDriver::Impl {
   std::vector<std::vector<double>> timers;
 
   Impl(const CaseSpec& s, const sim::Simulator& simu)
-      : spec(s), lx(s.controller.lexdyn), model(model::RobotModel::fromFiles(s.urdf_path, s.data_path)) {
+      : spec(s), lx(s.controller.lexdyn), model(model::RobotModel::fromFiles(s.urdf_path, s.data_path, s.robot_options)) {
     ctl = std::make_unique<control::Controller>(model, buildControllerConfig(lx, model));
     nj = model.numJoints();
     dt = s.control_period_s;

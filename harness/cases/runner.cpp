@@ -295,6 +295,7 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
   j["overrides"] = overrides;
   j["effective_case"] = fs::path(r.case_path).filename().string();
   j["skipped_checks"] = r.skipped_checks;
+  j["robot_warnings"] = spec.robot_warnings;
   j["all_checks_passed"] = r.all_checks_passed;
   if (r.expected_failure) {
     const ExpectedFailure& x = *r.expected_failure;
@@ -335,6 +336,11 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   fs::create_directories(options.out_dir, ec);
   if (ec || !fs::is_directory(options.out_dir)) throw InputError(options.out_dir, "cannot create the output directory");
 
+  if (!spec.robot_warnings.empty()) {
+    std::fprintf(stderr, "[%s] the robot files were read with %zu warning(s) (kept in summary.json, robot_warnings):\n", spec.name.c_str(),
+                 spec.robot_warnings.size());
+    for (const std::string& w : spec.robot_warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
+  }
   sim::Simulator simu(simulatedRobot(spec), spec.sim);
   const sim::Multibody& m = simu.model();
   // The initial state: at rest, the servos holding the initial posture (docs/simulator.md,

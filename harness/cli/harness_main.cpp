@@ -10,6 +10,9 @@
 //   lexdyn-harness sweep run|point|chunk|merge|submit|list|check FILE ...   (docs/sweeps.md)
 //   lexdyn-harness report --runs DIR [--sweeps DIR] [--history FILE] --out DIR [...]
 //                                      (runs harness/scripts/report.py; docs/report.md)
+//   lexdyn-harness robot init URDF --out DIR [--srdf FILE] [--package-path DIR]... [--base B] [--posture P]
+//   lexdyn-harness robot check DATA_OR_CASE_OR_URDF [--urdf FILE] [--package-path DIR]... [--png FILE]
+//                                      (bringing a robot in; docs/model.md)
 //   lexdyn-harness golden list [--manifest FILE] [--cases A,B] [--only ID]   (ID CASE_FILE METHOD lines)
 //   lexdyn-harness golden update|check [--manifest FILE] [--cases A,B] [--only ID]
 //                                      [--work DIR] [--progress]
@@ -26,6 +29,7 @@
 //              only with --wall-clock-checks).
 #include "harness/cases/runner.hpp"
 #include "harness/cli/exception_exit.hpp"
+#include "harness/cli/robot_cmd.hpp"
 #include "harness/cli/sweep_cmd.hpp"
 #include "harness/golden/golden.hpp"
 #include "lexdyn/common/error.hpp"
@@ -337,6 +341,8 @@ int main(int argc, char** argv) {
 
   lexdyn::cli::SweepCommand sweep;
   lexdyn::cli::addSweepCommands(app, sweep);
+  lexdyn::cli::RobotCommand robot;
+  lexdyn::cli::addRobotCommands(app, robot);
 
   // The report is built by harness/scripts/report.py (Debian's matplotlib through
   // /usr/bin/python3); its options pass through unchanged.
@@ -389,6 +395,7 @@ int main(int argc, char** argv) {
       throw std::runtime_error(std::string("cannot run ") + script + ": " + std::strerror(errno));
     }
     if (*sweep.sweep) return lexdyn::cli::runSweepCommand(sweep, g_signal, g_interrupt);
+    if (*robot.robot) return lexdyn::cli::runRobotCommand(robot);
     if (*check) return interrupted(runCheck(positional, case_opt, json, wall_clock));
     if (*compare) return interrupted(runCompare(case_opt, traces, json));
     if (*golden && *glist) return interrupted(runGoldenList(manifest, cases_opt, only));

@@ -11,6 +11,8 @@ PACKAGES=(
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev librapidcheck-dev libbenchmark-dev
   libgmp-dev
+  # Meshes of robot descriptions (robot init, robot check; docs/model.md).
+  libassimp-dev
   python3-numpy python3-matplotlib
   # Sweeps on Slurm (docs/sweeps.md) and their test's own single-node cluster.
   slurm-wlm munge

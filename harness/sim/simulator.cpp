@@ -65,6 +65,38 @@ Eigen::Vector3d rotationVector(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
+// Signed distance (> 0 inside) of p to the convex hull of `pts` in the plane; -distance to the
+// nearest point when there are fewer than 3.
+static double horizontalMargin(std::vector<Eigen::Vector2d> pts, const Eigen::Vector2d& p) {
+  std::sort(pts.begin(), pts.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  std::vector<Eigen::Vector2d> h(2 * pts.size() + 1);
+  size_t k = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], pts[i]) <= 1e-12) --k;
+    h[k++] = pts[i];
+  }
+  for (size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross(h[k - 2], h[k - 1], pts[i]) <= 1e-12) --k;
+    h[k++] = pts[i];
+  }
+  if (k > 1) --k;
+  h.resize(k);
+  if (h.size() < 3) {
+    double d = std::numeric_limits<double>::infinity();
+    for (const auto& q : h) d = std::min(d, (q - p).norm());
+    return h.empty() ? -std::numeric_limits<double>::infinity() : -d;
+  }
+  double m = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < h.size(); ++i) {
+    const Eigen::Vector2d a = h[i], e = (h[(i + 1) % h.size()] - a).normalized();
+    m = std::min(m, e.x() * (p.y() - a.y()) - e.y() * (p.x() - a.x()));
+  }
+  return m;
+}
+
 struct Simulator::Impl final : public OdeSystem {
   Impl(Multibody m, SimulatorSettings s)
       : model(std::move(m)), settings(std::move(s)), data(model.createState()), observed(model.createState()) {}
@@ -324,6 +356,42 @@ struct Simulator::Impl final : public OdeSystem {
     model.netForce(data, f.data());  // at u = 0: the applied forces
   }
 
+  // Where the weight goes at rest in q: the contact points that carry load, the centre of mass's
+  // margin to their support polygon, the servos saturated at their effort limits.
+  std::string describeSupport(const model::Configuration& q) {
+    Eigen::VectorXd coords(nqc);
+    model.coordinates(q, coords.data());
+    const Eigen::VectorXd zero_u = Eigen::VectorXd::Zero(nv);
+    model.setState(data, coords.data(), zero_u.data());
+    evaluateForces(data, t0, coords.data(), zero_u.data(), true);
+    const model::RobotDescription& desc = model.description();
+    const double weight = model.totalMass() * model.gravity().norm();
+    std::vector<int> loaded(desc.contact_surfaces.size(), 0), total(desc.contact_surfaces.size(), 0);
+    std::vector<Eigen::Vector2d> support;
+    for (const ContactPoint& cp : contact_points) {
+      ++total[static_cast<size_t>(cp.surface)];
+      if (cp.force.z() > 1e-3 * weight) {
+        ++loaded[static_cast<size_t>(cp.surface)];
+        support.emplace_back(cp.position.x(), cp.position.y());
+      }
+    }
+    std::string text = "loaded contact points:";
+    for (size_t k = 0; k < loaded.size(); ++k) {
+      text += (k ? ", " : " ") + desc.contact_surfaces[k].name + " " + std::to_string(loaded[k]) + " of " + std::to_string(total[k]);
+    }
+    const Eigen::Vector3d com = model.centerOfMass(data);
+    const double margin = horizontalMargin(support, com.head<2>());
+    text += "; the centre of mass is " + fmt(std::abs(margin) * 1000.0) + " mm " + (margin >= 0.0 ? "inside" : "OUTSIDE") +
+            " the support polygon of the loaded points";
+    std::string saturated;
+    const Eigen::VectorXd& tau_max = model.jointTorqueLimits();
+    for (int j = 0; j < nj; ++j) {
+      if (std::abs(servoTorque(t0, j, coords.data(), zero_u.data())) >= tau_max[j]) saturated += (saturated.empty() ? "" : ", ") + desc.joints[static_cast<size_t>(j)].name;
+    }
+    if (!saturated.empty()) text += "; servos at their effort limit (they cannot hold the posture): " + saturated;
+    return text;
+  }
+
   // Observations at the current y and tick time.
   void observe(double t) {
     const double* q = y.data();
@@ -554,18 +622,27 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
     s.model.coordinates(q, coords.data());
     s.restForce(coords, ff_out);
   };
-  auto residual = [&](const Eigen::VectorXd& xx, Eigen::VectorXd& r) {
+  // The residual the Newton iteration zeroes. With `conjugate`, the base's moments are taken along
+  // the axes roll and pitch turn about (R_yaw Ry(pitch) x and R_yaw y: the generalized forces
+  // conjugate to them), so that the stiffness -dr/dx is the Hessian of the potential energy at an
+  // equilibrium (symmetric) and its eigenvalues tell a stable start from an unstable one; the
+  // iteration itself takes them along the heading's x and y (the same equilibria).
+  auto residualOf = [&](const Eigen::VectorXd& xx, Eigen::VectorXd& r, bool conjugate) {
     force(configuration(xx), f);
     r.resize(n);
     int i = 0;
     if (solve_base) {
-      const Eigen::Vector3d m_heading = R_yaw.transpose() * f.head<3>();
-      r[i++] = m_heading.x();
-      r[i++] = m_heading.y();
+      const Eigen::Vector3d roll_axis = conjugate ? Eigen::Vector3d(R_yaw * Eigen::AngleAxisd(xx[1], Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                                                                   Eigen::Vector3d::UnitX())
+                                                  : Eigen::Vector3d(R_yaw * Eigen::Vector3d::UnitX());
+      const Eigen::Vector3d pitch_axis = R_yaw * Eigen::Vector3d::UnitY();
+      r[i++] = roll_axis.dot(f.head<3>());
+      r[i++] = pitch_axis.dot(f.head<3>());
       r[i++] = f[5];
     }
     if (solve_joints) r.tail(s.nj) = f.tail(s.nj);
   };
+  auto residual = [&](const Eigen::VectorXd& xx, Eigen::VectorXd& r) { residualOf(xx, r, false); };
   // Tolerance: 1e-9 of the weight, at least 1e-9 (N; N m for moments and joint torques).
   const double weight = s.model.totalMass() * s.model.gravity().norm();
   const double tol = 1e-9 * std::max(weight, 1.0);
@@ -578,6 +655,27 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
   auto converged = [&] {
     return out.net_force_N <= tol && out.net_moment_Nm <= tol && (!solve_joints || out.joint_residual_Nm <= tol);
   };
+  // The largest components of a mode of x, named (base roll, pitch, height; joints).
+  auto describeMode = [&](const Eigen::VectorXd& v, bool base, bool with_joints) {
+    std::vector<std::pair<double, std::string>> parts;
+    int i = 0;
+    if (base) {
+      parts.emplace_back(v[0], "base roll");
+      parts.emplace_back(v[1], "base pitch");
+      parts.emplace_back(v[2], "base height");
+      i = 3;
+    }
+    if (with_joints) {
+      for (int j = 0; j < s.nj; ++j) parts.emplace_back(v[i + j], "joint " + s.model.description().joints[static_cast<size_t>(j)].name);
+    }
+    std::stable_sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return std::abs(a.first) > std::abs(b.first); });
+    std::string text;
+    for (size_t k = 0; k < parts.size() && k < 4; ++k) {
+      if (k > 0 && std::abs(parts[k].first) < 0.1) break;
+      text += (k ? ", " : "") + parts[k].second + " " + fmt(parts[k].first);
+    }
+    return text + " (unit vector of rad and m)";
+  };
 
   if (n > 0) {
     const int max_iterations = 50;
@@ -585,16 +683,17 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
     const double max_tilt_rad = 0.5;
     Eigen::VectorXd r(n), rp(n), rm(n), dx(n), x_try(n), r_try(n);
     Eigen::MatrixXd J(n, n);
-    auto jacobian = [&] {  // central differences
+    auto jacobianOf = [&](bool conjugate) {  // central differences
       for (int c = 0; c < n; ++c) {
         Eigen::VectorXd xc = x;
         xc[c] = x[c] + h;
-        residual(xc, rp);
+        residualOf(xc, rp, conjugate);
         xc[c] = x[c] - h;
-        residual(xc, rm);
+        residualOf(xc, rm, conjugate);
         J.col(c) = (rp - rm) / (2.0 * h);
       }
     };
+    auto jacobian = [&] { jacobianOf(false); };
     residual(x, r);
     std::string failure;
     for (;;) {
@@ -603,12 +702,13 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
         // Only a stable equilibrium is a start: the stiffness -dr/dx (symmetric for these
         // conservative forces and conjugate unknowns) must have no negative eigenvalue, e.g. not
         // balanced on an edge of a sole. Its inertia does not depend on the units of x.
-        jacobian();
+        jacobianOf(true);
         const Eigen::MatrixXd K = -0.5 * (J + J.transpose());
-        const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(K, Eigen::EigenvaluesOnly);
+        const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(K);
         const double lo = es.eigenvalues()[0], hi = es.eigenvalues()[n - 1];
         if (lo < -1e-6 * std::abs(hi)) {
-          failure = "the equilibrium found is unstable (stiffness eigenvalue " + fmt(lo) + " < 0: the robot would fall)";
+          failure = "the equilibrium found is unstable (stiffness eigenvalue " + fmt(lo) + " < 0: the robot would fall; the unstable mode is " +
+                    describeMode(es.eigenvectors().col(0), solve_base, solve_joints) + ")";
         }
         break;
       }
@@ -659,7 +759,7 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
                     std::to_string(out.iterations) + " iterations; left: net force " + fmt(out.net_force_N) +
                     " N, net moment " + fmt(out.net_moment_Nm) + " N m" +
                     (solve_joints ? ", joint torque " + fmt(out.joint_residual_Nm) + " N m" : std::string()) +
-                    " (tolerance " + fmt(tol) + ")" + (ff ? "; is the centre of mass above the support polygon?" : "");
+                    " (tolerance " + fmt(tol) + ")" + (ff ? "; " + s.describeSupport(out.q) : std::string());
     }
   } else {
     summarize(out.q);

@@ -2,10 +2,15 @@
 // (YAML: base type, extra frames, contact surfaces, force sensors, self-collision capsules and
 // pairs, named postures, friction coefficient). Format and conventions: docs/model.md.
 //
-// Everything here is plain data in SI units. Loading checks the files thoroughly and throws
-// lexdyn::InputError naming the file, the line and the element for anything inconsistent:
-// missing links, bad joint references, zero or negative mass, non-positive-definite or
-// physically impossible inertia, unknown frame/link/joint/capsule names, values out of range.
+// Everything here is plain data in SI units. The URDF is read as the URDF ecosystem (urdfdom, ROS,
+// Pinocchio) reads it: links merged by fixed joints are lumped before their mass properties are
+// checked, a fixed joint's axis, limits and mimic mean nothing, unspecified limits are unlimited,
+// rounding noise in an inertia is projected away, a <mimic> joint is locked or coupled (docs/model.md,
+// "Loading and validation"); each such reading is a warning saying what was assumed (`warnings`),
+// and an error with LoadOptions::strict. Loading checks the files thoroughly and throws one
+// lexdyn::InputError listing every problem found, each naming the file, the line and the element:
+// missing links, bad joint references, bodies without mass or with a physically impossible inertia,
+// unknown frame/link/joint/capsule names, values out of range.
 #pragma once
 
 #include <Eigen/Core>
@@ -20,6 +25,21 @@ namespace lexdyn::model {
 enum class BaseType { Fixed, FreeFlyer };
 enum class JointType { Revolute, Prismatic };
 
+/// How the robot files are read.
+struct LoadOptions {
+  /// The strict rules: everything lexdyn otherwise reads leniently with a warning (an axis or
+  /// limits on a fixed joint, <mimic>, unspecified limits, inertia rounding noise, a massless link
+  /// where a body needs mass before lumping) is an error.
+  bool strict = false;
+  /// Folders searched for package://NAME/... URIs (a package NAME is the folder NAME under one of
+  /// them, or a folder below one of them whose package.xml names NAME), before $ROS_PACKAGE_PATH.
+  std::vector<std::string> package_paths;
+  bool use_ros_package_path = true;  ///< also search the folders of $ROS_PACKAGE_PATH
+  /// A mesh file that cannot be found is an error (robot init and check read them) rather than a
+  /// warning (the dynamics does not need it).
+  bool require_meshes = false;
+};
+
 /// A rigid body of the model: one URDF link, plus the links attached to it by fixed joints
 /// (their mass is lumped into it and they become frames).
 struct LinkDescription {
@@ -29,6 +49,7 @@ struct LinkDescription {
   Eigen::Vector3d com = Eigen::Vector3d::Zero();              ///< in the link frame, m
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();          ///< about the CoM, link axes, kg m^2
   std::vector<std::string> merged_links;                      ///< fixed-joint children lumped in
+  int urdf_line = 0;                                          ///< line of the URDF <link>
 };
 
 /// An actuated one-degree-of-freedom joint. Joint i moves links[i + 1] (tree order).
@@ -42,9 +63,10 @@ struct JointDescription {
   /// along `axis`.
   Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< unit vector in the joint frame
-  double lower = 0.0, upper = 0.0;                  ///< rad or m (+-inf for continuous joints)
-  double velocity_limit = 0.0;                      ///< rad/s or m/s
-  double effort_limit = 0.0;                        ///< Nm or N
+  double lower = 0.0, upper = 0.0;                  ///< rad or m (+-inf: none, e.g. continuous joints)
+  double velocity_limit = 0.0;                      ///< rad/s or m/s (+inf: unspecified)
+  double effort_limit = 0.0;                        ///< Nm or N (+inf: unspecified)
+  bool continuous = false;                          ///< a URDF continuous joint
   int urdf_line = 0;
 };
 
@@ -54,6 +76,50 @@ struct FrameDescription {
   std::string name;
   int link = -1;
   Eigen::Isometry3d placement = Eigen::Isometry3d::Identity();  ///< frame in its link frame
+};
+
+/// A <visual> or <collision> shape of a link, placed in its body's frame.
+enum class GeometryType { Box, Sphere, Cylinder, Mesh };
+struct GeometryDescription {
+  GeometryType type = GeometryType::Box;
+  bool collision = false;        ///< a <collision> element (else <visual>)
+  int link = -1;                 ///< the body it moves with (index into links)
+  std::string urdf_link;         ///< the URDF link that carries it (a merged link keeps its name)
+  Eigen::Isometry3d placement = Eigen::Isometry3d::Identity();  ///< shape frame in the body frame
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();  ///< box edge lengths, m
+  double radius = 0.0;           ///< sphere, cylinder, m
+  double length = 0.0;           ///< cylinder (along its z axis), m
+  std::string mesh_uri;          ///< as written in the URDF
+  std::string mesh_path;         ///< the file it resolves to; empty when it was not found
+  Eigen::Vector3d scale = Eigen::Vector3d::Ones();
+  int urdf_line = 0;
+};
+
+/// A URDF <mimic> on a moving joint: q_joint = multiplier * q_master + offset. Locked: the joint is
+/// held at `locked_value` (it becomes a fixed joint; its link is lumped into its parent).
+enum class MimicMode { Locked, Coupled };
+struct MimicDescription {
+  std::string joint, master;
+  double multiplier = 1.0, offset = 0.0;
+  MimicMode mode = MimicMode::Locked;
+  double locked_value = 0.0;     ///< rad or m
+  int urdf_line = 0;
+};
+
+/// A moving URDF joint the loader holds fixed: a locked mimic joint, or a joint that moves only
+/// massless links. Its child link is lumped into its parent at `value`.
+struct LockedJointDescription {
+  std::string name;
+  double value = 0.0;  ///< rad or m
+  std::string reason;  ///< "mimic" or "massless"
+};
+
+/// Servo gains of the joints whose names match `match` (a glob: * and ?); later groups override
+/// earlier ones (the data file's `servo_gains`, the cases' default).
+struct ServoGainGroup {
+  std::string match;
+  double kp = 0.0;  ///< N m/rad or N/m
+  double kd = 0.0;  ///< N m s/rad or N s/m
 };
 
 /// A planar contact surface: points (in the surface frame) that may touch the ground.
@@ -103,6 +169,21 @@ struct RobotDescription {
   double collision_safety_distance = 0.01;       ///< m
   /// Named joint postures (model joint order), e.g. "half_sitting".
   std::vector<std::pair<std::string, Eigen::VectorXd>> postures;
+  /// The data file's servo gain groups (empty when it has none).
+  std::vector<ServoGainGroup> servo_gains;
+  /// Shapes of every link (bodies and merged links), in URDF order.
+  std::vector<GeometryDescription> geometries;
+  /// The URDF's <mimic> joints on moving joints, and what they became.
+  std::vector<MimicDescription> mimics;
+  /// Every moving URDF joint the loader holds fixed (mimics and joints of massless links).
+  std::vector<LockedJointDescription> locked_joints;
+  /// What the loader assumed or repaired ("file:line: what"), in the order found.
+  std::vector<std::string> warnings;
+  std::string urdf_root;  ///< the URDF's root link (before a floating joint from a world link)
+  /// The data file's `urdf` key: the URDF it was written for, relative to the data file (robot
+  /// check reads it when given the data file alone); empty when absent.
+  std::string data_urdf;
+  bool strict = false;    ///< read with LoadOptions::strict
 
   int findLink(const std::string& name) const;   ///< -1 when absent
   int findJoint(const std::string& name) const;  ///< -1 when absent
@@ -116,12 +197,22 @@ struct RobotDescription {
   double totalMass() const;
 };
 
-/// Reads and validates a URDF file and its data file. Throws lexdyn::InputError.
-RobotDescription loadRobotDescription(const std::string& urdf_path, const std::string& data_path);
+/// Reads and validates a URDF file and its data file. Throws lexdyn::InputError (every problem of
+/// the files in one message).
+RobotDescription loadRobotDescription(const std::string& urdf_path, const std::string& data_path,
+                                      const LoadOptions& options = {});
 
-/// Same, from text (used by tests); the names are used in messages only.
+/// Same, from text (used by tests); the names are used in messages and to resolve relative mesh
+/// URIs (relative to the URDF name's folder).
 RobotDescription parseRobotDescription(const std::string& urdf_text, const std::string& urdf_name,
-                                       const std::string& data_text, const std::string& data_name);
+                                       const std::string& data_text, const std::string& data_name,
+                                       const LoadOptions& options = {});
+
+/// A URDF without a data file (robot init, robot check): links, joints, frames of the links,
+/// geometry, mimic joints (locked at the masters' zero, clamped into the limits); no surfaces,
+/// sensors or postures. `base` as given.
+RobotDescription loadUrdfOnly(const std::string& urdf_path, BaseType base, const LoadOptions& options = {});
+
 
 /// Rotation from URDF roll-pitch-yaw (fixed axes X, then Y, then Z: R = Rz(yaw) Ry(pitch) Rx(roll)).
 Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy);

@@ -227,8 +227,8 @@ detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)),
 
 RobotModel::RobotModel(RobotDescription description)
     : impl_(std::make_unique<Impl>(std::move(description))) {}
-RobotModel RobotModel::fromFiles(const std::string& urdf_path, const std::string& data_path) {
-  return RobotModel(loadRobotDescription(urdf_path, data_path));
+RobotModel RobotModel::fromFiles(const std::string& urdf_path, const std::string& data_path, const LoadOptions& options) {
+  return RobotModel(loadRobotDescription(urdf_path, data_path, options));
 }
 RobotModel::RobotModel(RobotModel&&) noexcept = default;
 RobotModel& RobotModel::operator=(RobotModel&&) noexcept = default;

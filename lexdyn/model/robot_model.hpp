@@ -106,7 +106,7 @@ class ModelData {
 class RobotModel {
  public:
   /// Loads and validates the files (throws lexdyn::InputError naming file and element).
-  static RobotModel fromFiles(const std::string& urdf_path, const std::string& data_path);
+  static RobotModel fromFiles(const std::string& urdf_path, const std::string& data_path, const LoadOptions& options = {});
   explicit RobotModel(RobotDescription description);
   RobotModel(RobotModel&&) noexcept;
   RobotModel& operator=(RobotModel&&) noexcept;

@@ -40,6 +40,12 @@ struct UrdfParts {
 
 const char* kData = "format: lexdyn-robot-data/1\nrobot: chain\nbase: fixed\n";
 
+LoadOptions strictOptions() {
+  LoadOptions o;
+  o.strict = true;
+  return o;
+}
+
 std::string errorOf(const std::string& urdf, const std::string& data) {
   return inputErrorOf([&] { parseRobotDescription(urdf, "chain.urdf", data, "chain.yaml"); });
 }
@@ -73,21 +79,36 @@ TEST(RobotDescription, MissingParentLinkNamesFileLineAndLink) {
   EXPECT_TRUE(containsAll(errorOf(p.text(), kData), {"chain.urdf:6", "'nowhere'", "j1"}));
 }
 
-TEST(RobotDescription, ZeroMassIsAnError) {
-  EXPECT_TRUE(containsAll(errorWithInertial(inertial("0")), {"chain.urdf:4", "link1", "mass must be > 0"}));
+// A moving link without mass and nothing with mass after it: the joint moves nothing the
+// dynamics sees. It is locked like a fixed joint, with a warning; strict mode refuses it.
+TEST(RobotDescription, ZeroMassIsLockedOrAnErrorInStrictMode) {
+  UrdfParts p;
+  p.link1_inertial = inertial("0");
+  const RobotDescription d = parseRobotDescription(p.text(), "chain.urdf", kData, "chain.yaml");
+  EXPECT_EQ(d.joints.size(), 0u);
+  ASSERT_EQ(d.locked_joints.size(), 1u);
+  EXPECT_EQ(d.locked_joints[0].reason, "massless");
+  EXPECT_TRUE(containsAll(d.warnings.back(), {"('j1') move only massless links: locked"}));
+  EXPECT_TRUE(containsAll(inputErrorOf([&] { parseRobotDescription(p.text(), "chain.urdf", kData, "chain.yaml", strictOptions()); }),
+                          {"chain.urdf:4", "link 'link1': mass must be > 0, found 0 (a moving body"}));
 }
 
 TEST(RobotDescription, NegativeMassIsAnError) {
   EXPECT_TRUE(containsAll(errorWithInertial(inertial("-2")), {"chain.urdf:4", "found -2"}));
 }
 
-TEST(RobotDescription, MissingInertialIsAnError) {
-  EXPECT_TRUE(containsAll(errorWithInertial(""), {"chain.urdf:4", "no <inertial>"}));
+TEST(RobotDescription, MissingInertialIsAnErrorInStrictMode) {
+  UrdfParts p;
+  p.link1_inertial = "";
+  EXPECT_TRUE(containsAll(inputErrorOf([&] { parseRobotDescription(p.text(), "chain.urdf", kData, "chain.yaml", strictOptions()); }),
+                          {"chain.urdf:4", "link 'link1' has no <inertial>"}));
 }
 
 TEST(RobotDescription, NonPositiveDefiniteInertiaIsAnError) {
+  // Principal moments -0.01, 0.01, 0.03: far beyond rounding noise.
   const std::string inertia = R"(ixx="0.01" ixy="0.02" ixz="0" iyy="0.01" iyz="0" izz="0.01")";
-  EXPECT_TRUE(containsAll(errorWithInertial(inertial("1", inertia)), {"chain.urdf:4", "not positive definite"}));
+  EXPECT_TRUE(containsAll(errorWithInertial(inertial("1", inertia)),
+                          {"chain.urdf:4", "body 'link1'", "not physically possible", "negative principal moment"}));
 }
 
 TEST(RobotDescription, ImpossibleInertiaIsAnError) {
@@ -97,16 +118,23 @@ TEST(RobotDescription, ImpossibleInertiaIsAnError) {
 
 TEST(RobotDescription, UnsupportedJointTypeIsAnError) {
   UrdfParts p;
-  p.joint1_type = "floating";
+  p.joint1_type = "planar";
   EXPECT_TRUE(containsAll(errorOf(p.text(), kData), {"chain.urdf:5", "not supported"}));
+  // A floating joint is read only from a massless root to a free-flyer base.
+  p.joint1_type = "floating";
+  EXPECT_TRUE(containsAll(errorOf(p.text(), kData), {"chain.urdf:5", "floating joint", "base: free_flyer"}));
 }
 
 TEST(RobotDescription, BadLimitsAreErrors) {
   UrdfParts p;
   p.joint1_limit = R"(<limit lower="1" upper="-1" velocity="2" effort="10"/>)";
   EXPECT_NE(errorOf(p.text(), kData).find("lower < upper"), std::string::npos);
+  p.joint1_limit = R"(<limit lower="-1" upper="1" velocity="2" effort="-3"/>)";
+  EXPECT_NE(errorOf(p.text(), kData).find("effort limit must be > 0, found -3"), std::string::npos);
+  // effort="0" is "unspecified" in URDF packages: refused only in strict mode (below).
   p.joint1_limit = R"(<limit lower="-1" upper="1" velocity="2" effort="0"/>)";
-  EXPECT_NE(errorOf(p.text(), kData).find("effort limit must be > 0"), std::string::npos);
+  EXPECT_TRUE(containsAll(inputErrorOf([&] { parseRobotDescription(p.text(), "chain.urdf", kData, "chain.yaml", strictOptions()); }),
+                          {"effort limit is unspecified", "strict mode"}));
 }
 
 // A cycle of joints detached from the tree (found by fuzzing: tests/fuzz/corpus/urdf) leaves one

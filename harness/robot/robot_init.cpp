@@ -1,0 +1,581 @@
+#include "harness/robot/robot_init.hpp"
+
+#include "harness/cases/case_file.hpp"
+#include "harness/robot/robot_layout.hpp"
+#include "harness/robot/srdf.hpp"
+#include "lexdyn/common/error.hpp"
+#include "lexdyn/common/format.hpp"
+#include "lexdyn/common/problems.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace lexdyn::robot {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string num(double v, int digits = 6) {
+  if (v == 0.0) return "0";
+  return formatNumber(v, digits);
+}
+
+// A YAML scalar: plain when safe, single-quoted otherwise.
+std::string yamlString(const std::string& s) {
+  const bool plain = !s.empty() && s.find_first_of(":#{}[],&*!|>'\"%@`") == std::string::npos && s[0] != '-' && s[0] != '?' &&
+                     s != "true" && s != "false" && s != "null" && s != "yes" && s != "no" && s != "on" && s != "off" &&
+                     !(std::isdigit(static_cast<unsigned char>(s[0])) || s[0] == '.' || s[0] == '+');
+  if (plain) return s;
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("''") : std::string(1, c);
+  return q + "'";
+}
+
+std::string vec3(const Eigen::Vector3d& v, int digits = 6) {
+  auto clean = [](double x) { return std::abs(x) < 1e-12 ? 0.0 : x; };
+  return "[" + num(clean(v.x()), digits) + ", " + num(clean(v.y()), digits) + ", " + num(clean(v.z()), digits) + "]";
+}
+
+// URDF roll-pitch-yaw of a rotation (R = Rz(yaw) Ry(pitch) Rx(roll)).
+Eigen::Vector3d rpyOf(const Eigen::Matrix3d& R) {
+  const double pitch = std::atan2(-R(2, 0), std::sqrt(R(0, 0) * R(0, 0) + R(1, 0) * R(1, 0)));
+  const double roll = std::atan2(R(2, 1), R(2, 2));
+  const double yaw = std::atan2(R(1, 0), R(0, 0));
+  return {roll, pitch, yaw};
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+// Relative to from_dir when the two share a folder below the root (the files move together),
+// absolute otherwise.
+std::string relativePath(const std::string& target, const fs::path& from_dir) {
+  std::error_code ec;
+  const fs::path t = fs::weakly_canonical(fs::absolute(target), ec);
+  const fs::path b = fs::weakly_canonical(fs::absolute(from_dir), ec);
+  const auto first = [](const fs::path& p) { return std::next(p.begin()) == p.end() ? fs::path() : *std::next(p.begin()); };
+  if (first(t).empty() || first(t) != first(b)) return t.string();
+  return t.lexically_relative(b).string();
+}
+
+// A posture value as text: 6 significant digits, or all 17 when the rounded value would fall
+// outside the joint's limits (a value clamped onto a limit).
+std::string postureValue(double v, const model::JointDescription& J) {
+  const std::string short_text = num(v);
+  const double back = std::strtod(short_text.c_str(), nullptr);
+  if (back >= J.lower && back <= J.upper) return short_text;
+  char buf[40];
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  return buf;
+}
+
+struct Posture {
+  std::string name;
+  Eigen::VectorXd q;
+  std::string source;
+  std::vector<std::string> clamped;  // joint: note
+};
+
+// Every joint at 0, clamped into its limits.
+Posture neutralPosture(const model::RobotDescription& d) {
+  Posture p;
+  p.name = "neutral";
+  p.q = Eigen::VectorXd::Zero(static_cast<int>(d.joints.size()));
+  for (size_t j = 0; j < d.joints.size(); ++j) {
+    const auto& J = d.joints[j];
+    const double v = std::min(std::max(0.0, J.lower), J.upper);
+    if (v != 0.0) p.clamped.push_back(J.name + ": 0 is outside [" + num(J.lower) + ", " + num(J.upper) + "], taken as " + num(v));
+    p.q[static_cast<int>(j)] = v;
+  }
+  p.source = "every joint at 0 (the URDF's zero configuration), clamped into its limits";
+  return p;
+}
+
+std::vector<Posture> srdfPostures(const model::RobotDescription& d, const Srdf& s) {
+  std::vector<Posture> out;
+  for (const auto& st : s.states) {
+    Posture p = neutralPosture(d);
+    p.name = st.name;
+    std::string sanitized;
+    for (char c : p.name) sanitized += (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-') ? c : '_';
+    p.name = sanitized.empty() ? "srdf_state" : sanitized;
+    p.clamped.clear();
+    int given = 0;
+    for (const auto& [joint, value] : st.values) {
+      const int j = d.findJoint(joint);
+      const auto& J = d.joints[static_cast<size_t>(j)];
+      double v = value;
+      if (v < J.lower || v > J.upper) {
+        const double c = std::min(std::max(v, J.lower), J.upper);
+        p.clamped.push_back(joint + ": " + num(v) + " is outside [" + num(J.lower) + ", " + num(J.upper) + "], clamped to " + num(c));
+        v = c;
+      }
+      p.q[j] = v;
+      ++given;
+    }
+    p.source = "the SRDF group state '" + st.name + "' (" + s.path + ":" + std::to_string(st.line) + ", " + std::to_string(given) + " of " +
+               std::to_string(d.joints.size()) + " joints; the others at 0)";
+    out.push_back(p);
+  }
+  return out;
+}
+
+const Posture& choosePosture(const std::vector<Posture>& ps, const std::string& wanted, const std::string& srdf) {
+  if (!wanted.empty()) {
+    std::string names;
+    for (const auto& p : ps) {
+      if (p.name == wanted) return p;
+      names += (names.empty() ? "" : ", ") + p.name;
+    }
+    throw InputError("--posture", "no posture '" + wanted + "' (" + (srdf.empty() ? "without --srdf: " : "") + "postures: " + names + ")");
+  }
+  for (const char* pref : {"half_sitting", "standing", "stand", "default", "home", "ready", "neutral", "init", "initial"}) {
+    for (const auto& p : ps) {
+      if (lower(p.name) == pref) return p;
+    }
+  }
+  return ps.front();
+}
+
+// A frame name not used by a link or frame of d, nor by `taken`.
+std::string freeName(const model::RobotDescription& d, const std::vector<std::string>& taken, const std::string& want) {
+  std::string n = want;
+  for (int k = 2; d.findFrame(n) >= 0 || std::find(taken.begin(), taken.end(), n) != taken.end(); ++k) n = want + "_" + std::to_string(k);
+  return n;
+}
+
+void writeFile(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) throw InputError(path.string(), std::string("cannot write: ") + std::strerror(errno));
+}
+
+struct Draft {
+  std::string robot_file;  // file name of the data file
+  std::string data, stand, reach;
+  std::vector<std::string> summary;
+};
+
+// Contact stiffness for a static penetration of 1 mm under an even share of the weight on each
+// contact point: k d^1.5 = m g / n.
+double contactStiffness(double mass, int points) {
+  const double share = mass * 9.81 / std::max(points, 1);
+  return std::clamp(share / std::pow(1e-3, 1.5), 1e3, 1e9);
+}
+
+Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Posture& posture, const std::vector<Posture>& postures,
+            const InitOptions& o, const fs::path& final_dir, const Srdf* srdf) {
+  Draft out;
+  out.robot_file = d.name + ".yaml";
+  const std::string urdf_rel = relativePath(o.urdf, final_dir);
+  const double dt = o.control_period_s;
+  std::ostringstream y;
+  y << "# " << d.name << ": the data file of " << urdf_rel << " (format: docs/model.md), drafted by\n"
+    << "# `lexdyn-harness robot init`" << (srdf ? " with the SRDF " + relativePath(srdf->path, final_dir) : std::string(" (no SRDF)")) << ".\n"
+    << "# Every value the URDF does not carry is a guess; the comment beside it says where it came from.\n"
+    << "# Check it with `lexdyn-harness robot check " << out.robot_file << "` and correct what is wrong\n"
+    << "# (docs/model.md, \"Bringing your own robot\").\n"
+    << "format: lexdyn-robot-data/1\n"
+    << "robot: " << yamlString(d.name) << "\n"
+    << "urdf: " << yamlString(urdf_rel) << "              # the URDF this file describes (robot check reads it)\n"
+    << "base: " << (d.base == model::BaseType::Fixed ? "fixed" : "free_flyer") << "                  # guessed: " << L.base_reason << "\n";
+  if (!L.feet.empty()) {
+    y << "friction_coefficient: 0.7          # guessed: rubber soles on a hard floor (HRP-2's walking controller uses 0.7)\n";
+  }
+  if (!d.mimics.empty()) {
+    y << "mimic: {mode: locked, posture: " << yamlString(posture.name) << "}   # the URDF's " << d.mimics.size()
+      << " <mimic> joint(s) are held at their masters' value in this posture (coupled mimic joints are not read)\n";
+  }
+  // Frames: soles and grasp points.
+  std::vector<std::string> taken;
+  std::vector<std::string> sole_frames, grasp_frames;
+  y << "frames:\n";
+  for (const auto& f : L.feet) {
+    std::string base = f.surface;
+    if (base.size() > 5 && base.compare(base.size() - 5, 5, "_FOOT") == 0) base = base.substr(0, base.size() - 5);
+    const std::string name = freeName(d, taken, base + "_SOLE");
+    taken.push_back(name);
+    sole_frames.push_back(name);
+    y << "  # " << f.surface << ": z up in posture '" << posture.name << "', at the centre of its contact points.\n"
+      << "  - {name: " << yamlString(name) << ", parent: " << yamlString(f.link) << ", xyz: " << vec3(f.sole_in_body.translation())
+      << ", rpy: " << vec3(rpyOf(f.sole_in_body.linear())) << "}\n";
+  }
+  for (const auto& a : L.arms) {
+    const std::string name = freeName(d, taken, a.side.empty() ? "GRASP" : a.side + "_GRASP");
+    taken.push_back(name);
+    grasp_frames.push_back(name);
+    y << "  # guessed: " << a.source << "\n"
+      << "  - {name: " << yamlString(name) << ", parent: " << yamlString(a.end_link) << ", xyz: " << vec3(a.grasp_in_body) << "}\n";
+  }
+  if (L.feet.empty() && L.arms.empty()) y << "  []\n";
+  if (!L.feet.empty()) {
+    y << "contact_surfaces:\n";
+    for (size_t k = 0; k < L.feet.size(); ++k) {
+      const auto& f = L.feet[k];
+      y << "  # guessed: " << f.source << "\n"
+        << "  - name: " << f.surface << "\n"
+        << "    frame: " << yamlString(sole_frames[k]) << "\n"
+        << "    points: [";
+      for (size_t i = 0; i < f.points.size(); ++i) y << (i ? ", " : "") << vec3(f.points[i], 5);
+      y << "]\n";
+    }
+    y << "force_sensors:   # assumed: a 6-axis sensor at each sole (it reads the ground's wrench on the foot; the URDF declares none)\n";
+    for (size_t k = 0; k < L.feet.size(); ++k) {
+      y << "  - {name: " << L.feet[k].surface << "_SENSOR, frame: " << yamlString(sole_frames[k]) << "}\n";
+    }
+  }
+  std::vector<std::string> unlimited;
+  for (const auto& J : d.joints) {
+    if (std::isinf(J.effort_limit)) unlimited.push_back(J.name);
+  }
+  if (!unlimited.empty()) {
+    y << "# The URDF leaves the effort limit of " << unlimited.size() << " joint(s) unspecified (taken as unlimited: no torque\n"
+      << "# limit). Give them here when known:\n# joint_limits:\n";
+    for (size_t k = 0; k < unlimited.size() && k < 4; ++k) y << "#   " << unlimited[k] << ": {effort: ...}\n";
+  }
+  y << "# Servo gains, sized per joint (docs/model.md, \"Servo gains\"): kp = the load torque m g r for a 5 mrad\n"
+    << "# static deflection (at least effort / 0.5 rad), kd = max(4 dt kp, 1.4 sqrt(kp I)), dt = " << num(dt) << " s.\n"
+    << "servo_gains:\n";
+  for (size_t j = 0; j < d.joints.size(); ++j) {
+    const ServoGains g = sizeServo(d, L, static_cast<int>(j), dt);
+    y << "  - {match: " << yamlString(d.joints[j].name) << ", kp: " << num(g.kp, 3) << ", kd: " << num(g.kd, 3) << "}   # " << g.source << "\n";
+  }
+  y << "postures:\n";
+  std::vector<const Posture*> written{&posture};
+  for (const auto& p : postures) {
+    if (p.name != posture.name) written.push_back(&p);
+  }
+  for (const Posture* p : written) {
+    y << "  " << yamlString(p->name) << ":   # " << p->source << "\n";
+    for (size_t j = 0; j < d.joints.size(); ++j) {
+      y << "    " << yamlString(d.joints[j].name) << ": " << postureValue(p->q[static_cast<int>(j)], d.joints[j]);
+      for (const auto& c : p->clamped) {
+        if (c.compare(0, d.joints[j].name.size() + 1, d.joints[j].name + ":") == 0) y << "   # " << c.substr(d.joints[j].name.size() + 2);
+      }
+      y << "\n";
+    }
+  }
+  out.data = y.str();
+
+  // Cases.
+  const std::string root = d.links[0].name;
+  auto robotSection = [&]() {
+    std::ostringstream r;
+    r << "robot:\n  urdf: " << yamlString(urdf_rel) << "\n  data: " << yamlString(out.robot_file) << "\n";
+    if (!o.package_paths.empty()) {
+      r << "  package_path: [";
+      for (size_t k = 0; k < o.package_paths.size(); ++k) r << (k ? ", " : "") << yamlString(relativePath(o.package_paths[k], final_dir));
+      r << "]\n";
+    }
+    if (o.strict) r << "  strict: true\n";
+    return r.str();
+  };
+  int points = 0;
+  for (const auto& f : L.feet) points += static_cast<int>(f.points.size());
+  const double k_contact = contactStiffness(L.mass, points);
+  auto simSection = [&](double dissipation) {
+    std::ostringstream s;
+    s << "sim:\n";
+    s << "  contact:\n"
+      << "    stiffness: " << num(k_contact, 2) << "              # sized: 1 mm of static penetration under an even share of the weight on each of the "
+      << points << " contact points\n"
+      << "    exponent: 1.5\n"
+      << "    dissipation_s_per_m: " << num(dissipation) << "\n"
+      << "    slip_velocity_m_per_s: 1.0e-3\n"
+      << "  servo:\n"
+      << "    setpoint_profile: hermite\n"
+      << "    # gains: the data file's servo_gains\n"
+      << "  integrator: {rtol: 1.0e-4, atol_position: 1.0e-6, atol_velocity: 1.0e-4}\n";
+    return s.str();
+  };
+  std::string surfaces;
+  for (const auto& f : L.feet) surfaces += (surfaces.empty() ? "" : ", ") + f.surface;
+  {
+    std::ostringstream c;
+    c << "# " << d.name << " holds posture '" << posture.name << "' for 10 s under its joint servos alone (no balance\n"
+      << "# control), drafted by `lexdyn-harness robot init`: a first check of the model, its servo gains and\n"
+      << "# (legged robots) its soles. " << (L.feet.empty() ? "" : "It starts in static equilibrium on its feet (docs/simulator.md, \"Initial state\").\n# ")
+      << "Run: lexdyn-harness run stand.yaml --out out/stand\n"
+      << "name: " << yamlString(d.name + "_stand") << "\n"
+      << "description: " << yamlString(d.name + " holds its posture for 10 s by its joint servos alone.") << "\n"
+      << robotSection() << "duration_s: 10.0\ncontrol_period_s: " << num(dt) << "\n"
+      << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: " << (L.feet.empty() ? "none" : "static_equilibrium") << "\n"
+      << "controller:\n  type: posture_servo\n  posture: " << yamlString(posture.name) << "\n"
+      << simSection(5.0) << "trace:\n  frames: [" << yamlString(root);
+    for (const auto& s : sole_frames) c << ", " << yamlString(s);
+    for (const auto& g : grasp_frames) c << ", " << yamlString(g);
+    c << "]\nchecks:\n";
+    if (!L.feet.empty()) {
+      c << "  # The base stays where the equilibrium put it, the feet carry the weight and do not slip.\n"
+        << "  - {name: base_drift, type: frame_drift, frame: " << yamlString(root) << ", limit_m: 0.002}\n"
+        << "  - {name: vertical_force_balance, type: force_balance, surfaces: [" << surfaces << "], limit_rel: 0.01}\n"
+        << "  - {name: foot_slip, type: contact_slip, surfaces: [" << surfaces << "], limit_m: 0.0005}\n";
+    } else {
+      const std::string f = grasp_frames.empty() ? d.frames.back().name : grasp_frames[0];
+      c << "  # The arm holds its posture: the end of the arm drifts by less than 2 mm under gravity.\n"
+        << "  - {name: hand_drift, type: frame_drift, frame: " << yamlString(f) << ", from_s: 1.0, limit_m: 0.002}\n";
+    }
+    out.stand = c.str();
+  }
+
+  // Reach: the two hands of a legged robot (as exp1), or the hand of a fixed-base arm.
+  const bool humanoid = L.legged && L.arms.size() == 2 && L.feet.size() == 2;
+  const bool arm = !L.legged && d.base == model::BaseType::Fixed && L.arms.size() == 1;
+  if (humanoid || arm) {
+    std::ostringstream c;
+    std::vector<std::string> hand_tasks;
+    std::vector<Eigen::Vector3d> in_reach, out_of_reach;
+    // The layout has the base at the origin; the simulated robot stands on the ground z = 0 (a
+    // fixed base stays where it is).
+    const Eigen::Vector3d ground = humanoid ? Eigen::Vector3d(0.0, 0.0, L.lowest_z) : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d fwd = L.forward, left = Eigen::Vector3d::UnitZ().cross(L.forward), up = Eigen::Vector3d::UnitZ();
+    for (size_t k = 0; k < L.arms.size(); ++k) {
+      ArmLayout a = L.arms[k];
+      a.shoulder -= ground;
+      const double s = a.side == "LEFT" ? 1.0 : -1.0;
+      const double R = a.reach;
+      if (humanoid) {
+        // exp1's targets relative to HRP-2's shoulders and 0.75 m reach: [0.4, +-0.5, 1.3] m is
+        // (0.53, +-0.33, -0.04) reaches from the shoulder; [0.4, -+2, 2] m is out of reach.
+        in_reach.push_back(a.shoulder + R * (0.53 * fwd + s * 0.33 * left - 0.04 * up));
+        out_of_reach.push_back(a.shoulder + R * (0.53 * fwd + s * 2.33 * left + 0.9 * up));
+      } else {
+        in_reach.push_back(a.shoulder + 0.6 * R * (0.8 * fwd + 0.3 * left + 0.52 * up).normalized());
+        out_of_reach.push_back(a.shoulder + 2.0 * R * (0.6 * fwd - 0.5 * left + 0.62 * up).normalized());
+      }
+      hand_tasks.push_back(a.side.empty() ? "hand" : lower(a.side) + "_hand");
+    }
+    // exp1 holds the in-reach targets for 30 s and the out-of-reach ones for 90 s; the draft 20 s
+    // and 40 s, the hands' convergence judged over its last 10 s.
+    const double switch_s = 20.0, duration = 60.0;
+    c << "# " << d.name << ": the " << (humanoid ? "hands reach" : "hand reaches") << " targets inside the arm's reach, then (at "
+      << num(switch_s) << " s) targets out of\n# reach" << (humanoid ? ", as in the paper's experiment 1 (cases/exp1.yaml)" : "")
+      << "; drafted by `lexdyn-harness robot init`. The targets are placed from\n"
+      << "# the arms' geometry; every method of the case runs it (--method bfgs | ah | gn | wls).\n"
+      << "# Run: lexdyn-harness run reach.yaml --out out/reach --method bfgs\n"
+      << "name: " << yamlString(d.name + "_reach") << "\n"
+      << "description: " << yamlString(std::string(humanoid ? "Two-foot stance; hands" : "Fixed base; the hand") + " to targets within reach, then out of reach.")
+      << "\n" << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
+      << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: " << (humanoid ? "static_equilibrium" : "none") << "\n\n"
+      << "controller:\n  type: lexdyn\n  method: bfgs                       # --method overrides it\n  feedforward_torque: true\n"
+      << "  state_feedback: integrated\n"
+      << "  params: {nu_dt2: 1.0e-12, xi_dt2: 1.0e-12, zeta_dt2: 1.0e-3, rho_dt2: 1.0e-12, eps_dt2: 1.0e-3, newton_identity_weight: 1.0e-4"
+      << (humanoid ? ", stop_after_level: contacts}" : "}") << "\n";
+    if (humanoid) c << "  method_params:\n    wls: {stop_after_level: hard}\n";
+    c << "  solver:\n    paper_rules: true\n";
+    if (humanoid) {
+      c << "  contacts:\n";
+      for (const auto& f : L.feet) c << "    - {name: " << f.surface << ", surface: " << f.surface << ", sensor: " << f.surface << "_SENSOR}\n";
+      c << "  initial_contacts: [" << surfaces << "]\n";
+    }
+    c << "  tasks:\n"
+      << "    - {name: joint_limits, type: joint_limits}\n";
+    if (humanoid) c << "    - {name: force_bounds, type: contact_force_bounds}\n";
+    c << "    - {name: dynamics, type: equation_of_motion}\n"
+      << "    - {name: torque_limits, type: torque_limits}\n"
+      << "    - {name: trust, type: trust_region, delta: 0.01}\n";
+    std::vector<std::string> contact_tasks;
+    if (humanoid) {
+      for (const auto& f : L.feet) {
+        contact_tasks.push_back(lower(f.surface));
+        c << "    - {name: " << lower(f.surface) << ", type: contact, contact: " << f.surface << "}\n";
+      }
+      // The CoM box of exp1 relative to the support: +-28 % of the soles' half length, +-57 % of
+      // the half width, about the CoM of the posture.
+      const std::vector<Eigen::Vector2d> poly = supportPolygon(L);
+      Eigen::Vector2d lo = poly.empty() ? Eigen::Vector2d::Zero() : poly[0], hi = lo;
+      for (const auto& p : poly) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      const Eigen::Vector2d half = 0.5 * (hi - lo);
+      const Eigen::Vector2d box(std::max(0.005, 0.28 * half.x()), std::max(0.005, 0.57 * half.y()));
+      const Eigen::Vector2d c0 = L.com.head<2>();
+      c << "    # exp1's CoM box (+-0.03 x +-0.1 m on HRP-2's 0.22 x 0.35 m support) scaled to this support: +-28 % of its half length,\n"
+        << "    # +-57 % of its half width, about the posture's centre of mass.\n"
+        << "    - {name: com_box, type: com_box, lower: [" << num(c0.x() - box.x(), 4) << ", " << num(c0.y() - box.y(), 4) << ", -.inf], upper: ["
+        << num(c0.x() + box.x(), 4) << ", " << num(c0.y() + box.y(), 4) << ", .inf]}\n";
+    }
+    for (size_t k = 0; k < L.arms.size(); ++k) {
+      c << "    - {name: " << hand_tasks[k] << ", type: position, frame: " << yamlString(grasp_frames[k]) << ", target: " << vec3(in_reach[k], 4)
+        << ", gains: {kp: 0.3}}   # " << num((in_reach[k] - (L.arms[k].shoulder - ground)).norm() / L.arms[k].reach * 100.0, 3)
+        << " % of the reach (" << num(L.arms[k].reach, 3) << " m) from the shoulder\n";
+    }
+    c << "    - {name: velocity, type: velocity_min}\n";
+    if (humanoid) c << "    - {name: wrench, type: wrench_min}\n";
+    c << "    - {name: posture, type: posture, posture: " << yamlString(posture.name) << "}     # WLS only\n";
+    auto list = [](const std::vector<std::string>& v) {
+      std::string s;
+      for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+      return s;
+    };
+    c << "  levels:\n"
+      << "    - {name: bounds, tasks: [joint_limits" << (humanoid ? ", force_bounds" : "") << "]}\n"
+      << "    - {name: dynamics, tasks: [dynamics, torque_limits]}\n"
+      << "    - {name: trust, tasks: [trust]}\n";
+    if (humanoid) c << "    - {name: contacts, tasks: [" << list(contact_tasks) << "]}\n    - {name: com, tasks: [com_box]}\n";
+    c << "    - {name: hands, tasks: [" << list(hand_tasks) << "]}\n"
+      << "    - {name: velocity, tasks: [velocity]}\n";
+    if (humanoid) c << "    - {name: wrench, tasks: [wrench]}\n";
+    c << "  wls_levels:\n"
+      << "    - {name: hard, tasks: [joint_limits" << (humanoid ? ", force_bounds" : "") << ", dynamics, torque_limits"
+      << (humanoid ? ", " + list(contact_tasks) + ", com_box" : std::string()) << "]}\n"
+      << "    - name: objective\n      tasks: [" << list(hand_tasks) << ", posture" << (humanoid ? ", wrench" : "") << "]\n      weights: {";
+    for (const auto& h : hand_tasks) c << h << ": 1.0, ";
+    c << "posture: 1.0e-3" << (humanoid ? ", wrench: 1.0e-5" : "") << "}\n\n";
+    c << simSection(humanoid ? 50.0 : 5.0) << "\nevents:\n";
+    for (size_t k = 0; k < L.arms.size(); ++k) {
+      c << "  - {at_s: " << num(switch_s) << ", action: set_target, task: " << hand_tasks[k] << ", value: " << vec3(out_of_reach[k], 4) << "}   # out of reach\n";
+    }
+    c << "\ntrace:\n  every_n_ticks: 1\n  frames: [" << yamlString(root);
+    for (const auto& g : grasp_frames) c << ", " << yamlString(g);
+    c << "]\n\nchecks:\n"
+      << "  - {name: hands_settled, type: task_error, tasks: [" << list(hand_tasks) << "], statistic: range, from_s: " << num(duration - 10.0)
+      << ", limit: 0.005}\n";
+    if (humanoid) {
+      c << "  - {name: feet_held, type: task_error, tasks: [" << list(contact_tasks) << "], statistic: max, from_s: 0.1, limit: 0.001}\n"
+        << "  - {name: upright, type: frame_height, frame: " << yamlString(root) << ", min_m: " << num(0.5 * (L.body_pose[0].translation().z() - L.lowest_z), 3)
+        << "}   # half the base's height in the posture\n";
+    }
+    c << "  - {name: torques, type: torque_limits, source: both, limit_fraction: 1.0}\n";
+    if (humanoid) {
+      for (const auto& f : L.feet) {
+        const std::string n = lower(f.surface);
+        c << "  - {name: " << n << "_unilateral, type: contact_unilateral, contact: " << f.surface << ", source: sensed, min_N: 0.0}\n"
+          << "  - {name: " << n << "_friction, type: contact_friction, contact: " << f.surface << ", source: sensed, min_normal_N: "
+          << num(std::max(1.0, 0.015 * L.mass * 9.81), 2) << "}\n";
+        if (f.points.size() >= 3) {
+          c << "  - {name: " << n << "_cop, type: contact_cop, contact: " << f.surface << ", source: sensed, min_normal_N: "
+            << num(std::max(1.0, 0.015 * L.mass * 9.81), 2) << ", limit_m: -0.001}\n";
+        }
+      }
+    }
+    c << "  - {name: joint_accel_sign_changes, type: joint_acceleration_sign_changes, source: commanded, dead_band_rad_per_s2: 0.05, limit_per_s: 5.0}\n"
+      << "  - {name: joint_velocity_hf, type: joint_velocity_hf_energy, source: measured, cutoff_hz: 5.0, limit_rad2_per_s2: 0.1}\n"
+      << "  - {name: controller_ok, type: controller_status, allowed: [ok, solver_stopped_early], limit_count: 0}\n"
+      << "  - {name: active_set_peak, type: active_set_peak, limit_iterations: 50}\n"
+      << "  - {name: tick_time_p99, type: tick_time, timer: tick, percentile: 99, limit_us: 5000}\n";
+    out.reach = c.str();
+  }
+  out.summary.push_back("base: " + std::string(d.base == model::BaseType::Fixed ? "fixed" : "free_flyer") + " (" + L.base_reason + ")");
+  out.summary.push_back("mass " + num(L.mass, 4) + " kg, height " + num(L.height, 3) + " m in posture '" + posture.name + "' (" + posture.source + ")");
+  for (const auto& f : L.feet) {
+    out.summary.push_back("foot " + f.surface + " on link '" + f.link + "': " + std::to_string(f.points.size()) + " contact point(s) from " + f.source);
+  }
+  for (const auto& a : L.arms) {
+    out.summary.push_back("arm " + (a.side.empty() ? std::string("(single)") : a.side) + ": hand link '" + a.end_link + "', reach " + num(a.reach, 3) + " m");
+  }
+  for (const auto& n : L.notes) out.summary.push_back(n);
+  return out;
+}
+
+}  // namespace
+
+InitResult initRobot(const InitOptions& o) {
+  InitResult result;
+  if (o.out_dir.empty()) throw InputError("--out", "give the folder to write the draft to");
+  const fs::path final_dir = fs::absolute(o.out_dir).lexically_normal();
+  {
+    std::error_code ec;
+    if (fs::exists(final_dir, ec) && !(fs::is_directory(final_dir, ec) && fs::is_empty(final_dir, ec))) {
+      throw InputError(o.out_dir, "exists and is not an empty folder: robot init writes a new folder (give another --out)");
+    }
+  }
+  model::LoadOptions lo;
+  lo.strict = o.strict;
+  lo.package_paths = o.package_paths;
+  lo.require_meshes = !o.allow_missing_meshes;
+
+  // The base type: as given, or fixed when the root is a `world` link, else legs decide.
+  model::BaseType base = model::BaseType::FreeFlyer;
+  std::string base_note;
+  if (o.base == "fixed") {
+    base = model::BaseType::Fixed;
+  } else if (o.base.empty()) {
+    const model::RobotDescription probe = model::loadUrdfOnly(o.urdf, model::BaseType::FreeFlyer, lo);
+    if (lower(probe.urdf_root) == "world") {
+      base = model::BaseType::Fixed;
+      base_note = "the URDF's root link is 'world'";
+    } else {
+      ProblemList ignored(o.urdf);
+      const RobotLayout probe_layout = analyseLayout(probe, neutralPosture(probe).q, ignored);
+      base = probe_layout.legged ? model::BaseType::FreeFlyer : model::BaseType::Fixed;
+    }
+  } else if (o.base != "free_flyer") {
+    throw InputError("--base", "expected free_flyer or fixed, found '" + o.base + "'");
+  }
+  const model::RobotDescription d = model::loadUrdfOnly(o.urdf, base, lo);
+  for (const auto& w : d.warnings) result.warnings.push_back(w);
+
+  ProblemList problems(o.srdf.empty() ? o.urdf : o.srdf);
+  std::optional<Srdf> srdf;
+  if (!o.srdf.empty()) srdf = readSrdf(o.srdf, d, problems);
+  problems.throwIfErrors();
+  std::vector<Posture> postures;
+  if (srdf) postures = srdfPostures(d, *srdf);
+  if (postures.empty()) postures.push_back(neutralPosture(d));
+  const Posture& posture = choosePosture(postures, o.posture, o.srdf);
+  for (const auto& p : postures) {
+    for (const auto& c : p.clamped) result.warnings.push_back("posture '" + p.name + "': " + c);
+  }
+  if (srdf) {
+    for (const auto& n : srdf->notes) result.warnings.push_back(n);
+  }
+
+  ProblemList mesh_problems(o.urdf);
+  RobotLayout L = analyseLayout(d, posture.q, mesh_problems);
+  mesh_problems.throwIfErrors();
+  for (const auto& w : mesh_problems.warnings()) result.warnings.push_back(w.text());
+  if (!base_note.empty()) L.base_reason = base_note;
+  if (d.base == model::BaseType::FreeFlyer && L.feet.size() < 2) {
+    throw InputError(o.urdf, "the robot has a floating base but no two chains reach the ground in posture '" + posture.name + "' (" +
+                                 L.base_reason + "): robot init cannot place its feet; give --base fixed for a robot welded to the world, or "
+                                 "another --posture");
+  }
+  const Draft dr = draft(d, L, posture, postures, o, final_dir, srdf ? &*srdf : nullptr);
+
+  // Written into a temporary folder beside DIR, checked by loading it, then renamed to DIR.
+  const fs::path tmp = final_dir.parent_path() / ("." + final_dir.filename().string() + ".partial-" + std::to_string(::getpid()));
+  std::error_code ec;
+  fs::remove_all(tmp, ec);
+  fs::create_directories(tmp, ec);
+  if (ec) throw InputError(final_dir.parent_path().string(), "cannot create a folder there: " + ec.message());
+  try {
+    writeFile(tmp / dr.robot_file, dr.data);
+    writeFile(tmp / "stand.yaml", dr.stand);
+    if (!dr.reach.empty()) writeFile(tmp / "reach.yaml", dr.reach);
+    // The drafts must load (a failure here is a defect of robot init, named as such).
+    for (const char* f : {"stand.yaml", "reach.yaml"}) {
+      if (!fs::exists(tmp / f)) continue;
+      try {
+        cases::loadCase((tmp / f).string());
+      } catch (const InputError& e) {
+        throw std::runtime_error(std::string("robot init drafted a case that does not load (a defect of robot init): ") + e.what());
+      }
+    }
+    if (fs::exists(final_dir)) fs::remove(final_dir);
+    fs::rename(tmp, final_dir);
+  } catch (...) {
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+  result.files.push_back((final_dir / dr.robot_file).string());
+  result.files.push_back((final_dir / "stand.yaml").string());
+  if (!dr.reach.empty()) result.files.push_back((final_dir / "reach.yaml").string());
+  result.summary = dr.summary;
+  return result;
+}
+
+}  // namespace lexdyn::robot
