@@ -391,6 +391,10 @@ int main(int argc, char** argv) {
       for (auto& a : args) argv_c.push_back(a.data());
       argv_c.push_back(nullptr);
       std::fflush(stdout);
+      // The replay converts meshes other than STL with `lexdyn-harness robot mesh` (this program).
+      std::error_code self_ec;
+      const fs::path self = fs::canonical("/proc/self/exe", self_ec);
+      if (!self_ec) ::setenv("LEXDYN_HARNESS", self.c_str(), 1);
       ::execv(argv_c[0], argv_c.data());
       throw std::runtime_error(std::string("cannot run ") + script + ": " + std::strerror(errno));
     }

@@ -1,9 +1,12 @@
 #include "harness/cli/robot_cmd.hpp"
 
+#include "harness/robot/mesh.hpp"
 #include "harness/robot/robot_check.hpp"
 #include "harness/robot/robot_init.hpp"
 
 #include <CLI/CLI.hpp>
+
+#include "lexdyn/common/error.hpp"
 
 #include <chrono>
 #include <cstdio>
@@ -29,6 +32,9 @@ void addRobotCommands(CLI::App& app, RobotCommand& c) {
   c.check->add_option("--posture", c.posture, "the posture to check (default: the case's, else the data file's first)");
   c.check->add_option("--png", c.png, "the picture to write (default: <input folder>/<robot>_posture.png; - for none)");
   c.check->add_flag("--strict", c.strict, "read the URDF with the strict rules");
+  c.mesh = c.robot->add_subcommand("mesh", "convert a mesh file (any format libassimp reads) to binary STL, as robot init reads it");
+  c.mesh->add_option("mesh", c.input, "the mesh file (STL, DAE, OBJ, glTF, ...)")->required();
+  c.mesh->add_option("--out", c.out, "the binary STL to write")->required();
 }
 
 int runRobotCommand(const RobotCommand& c) {
@@ -54,6 +60,14 @@ int runRobotCommand(const RobotCommand& c) {
     for (const auto& f : r.files) std::fprintf(stderr, "  wrote %s\n", f.c_str());
     std::fprintf(stderr, "  (%.2f s) next: lexdyn-harness robot check %s, then lexdyn-harness run %s/stand.yaml --out OUT\n", wall,
                  r.files.front().c_str(), c.out.c_str());
+    return 0;
+  }
+  if (*c.mesh) {
+    const robot::Mesh m = robot::readMesh(c.input);
+    const std::string tmp = c.out + ".partial";
+    robot::writeBinaryStl(tmp, m);
+    if (std::rename(tmp.c_str(), c.out.c_str()) != 0) throw InputError(c.out, "cannot write");
+    std::fprintf(stderr, "robot mesh: %s: %zu triangles -> %s\n", c.input.c_str(), m.triangles.size(), c.out.c_str());
     return 0;
   }
   robot::CheckOptions o;

@@ -12,7 +12,7 @@ namespace lexdyn::cli {
 
 struct RobotCommand {
   CLI::App* robot = nullptr;
-  CLI::App *init = nullptr, *check = nullptr;
+  CLI::App *init = nullptr, *check = nullptr, *mesh = nullptr;
   std::string input, srdf, out, base, posture, urdf, png;
   std::vector<std::string> package_paths;
   bool strict = false, allow_missing_meshes = false;

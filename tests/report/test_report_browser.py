@@ -53,6 +53,8 @@ RUNS = [  # id, case (relative to the repository, or to the work directory: WORK
     ("stand_yawed", "WORK/stand_yawed.yaml", "-", 0.5),
     # Joint frames, axes, a fixed joint and data-file frames with unequal roll, pitch and yaw.
     ("tilted_arm", "tests/report/fixtures/tilted_arm_case.yaml", "-", 2.0),
+    # A robot brought in by robot init: package:// STL meshes, the robot files' warnings.
+    ("g1_like_stand", "cases/g1_like/stand.yaml", "-", 0.5),
 ]
 # The paper's figure types a controller case with contacts and a CoM box must show.
 ALL_FIGURES = ["task_errors", "joint_velocities", "torques", "activity", "solver", "wrenches", "com"]
@@ -348,6 +350,19 @@ class ReportInBrowser(unittest.TestCase):
         opts = json.loads(self.js("JSON.stringify([...document.querySelectorAll('#replay-run option')].map(o => o.value))"))
         self.assertEqual(sorted(opts), sorted(r[0] for r in RUNS))
 
+    def test_robot_warnings_and_package_meshes(self):
+        # The warnings the robot loader gave (summary.json robot_warnings) are listed under the
+        # case; the model's package:// meshes are found (no warning about them).
+        with open(os.path.join(self.runs, "g1_like_stand", "summary.json")) as f:
+            expected = json.load(f)["robot_warnings"]
+        self.assertGreater(len(expected), 3)
+        items = json.loads(self.js("JSON.stringify([...document.querySelectorAll('#robot-warnings-g1_like_stand li')]"
+                                   ".map(li => li.textContent))"))
+        self.assertEqual(items, expected)
+        page_warnings = self.js("(document.querySelector('#warnings') || {textContent: ''}).textContent")
+        self.assertNotIn("g1_like_description/meshes", page_warnings)
+        self.assertNotIn("robot-warnings-exp1", self.js("document.body.innerHTML"))
+
     def test_failing_checks_show_value_limit_and_time(self):
         fails = []
         for rid, *_ in RUNS:
@@ -431,6 +446,7 @@ class ReportInBrowser(unittest.TestCase):
                 for fr in frames:
                     p = json.loads(self.js(f"JSON.stringify(LexdynReplay.framePosition({json.dumps(fr)}))"))
                     self.assertIsNotNone(p, f"{rid}: no frame {fr} in the replay")
+                    self.assertTrue(all(v is not None for v in p), f"{rid}: frame {fr} at frame {f}: {p}")
                     ref = np.array([tr.col(f"frame.{fr}.{a}")[row] for a in "xyz"])
                     err = float(np.max(np.abs(np.array(p) - ref)))
                     worst = max(worst, err)

@@ -252,6 +252,40 @@ class ReplayModel(unittest.TestCase):
             self.assertIn("missing.dae", m["warnings"][0])
             self.assertEqual(m["joints"][1]["axis"], [1.0, 0.0, 0.0])  # URDF default axis
 
+    def test_meshes_of_other_formats_and_package_paths(self):
+        # An OBJ mesh (any format libassimp reads) through `lexdyn-harness robot mesh`, found as
+        # package://NAME/... through a package path whose package.xml names NAME.
+        self.assertTrue(os.environ.get("LEXDYN_HARNESS"), "LEXDYN_HARNESS names the harness (set by ctest)")
+        with tempfile.TemporaryDirectory() as d:
+            pkg = os.path.join(d, "ws", "src", "folder_of_pkg")
+            os.makedirs(os.path.join(pkg, "meshes"))
+            with open(os.path.join(pkg, "package.xml"), "w") as f:
+                f.write("<package>\n  <name>my_pkg</name>\n</package>\n")
+            with open(os.path.join(pkg, "meshes", "tri.obj"), "w") as f:
+                f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\n")
+            os.makedirs(os.path.join(d, "robot"))
+            urdf = os.path.join(d, "robot", "r.urdf")
+            with open(urdf, "w") as f:
+                f.write('<robot name="r"><link name="base"><visual><geometry><mesh filename="package://my_pkg/meshes/tri.obj"/>'
+                        '</geometry></visual><visual><geometry><mesh filename="package://my_pkg/meshes/tri.obj"/></geometry></visual>'
+                        '</link></robot>')
+            m = replay.load_model(urdf)
+            self.assertEqual(m["links"]["base"]["visuals"], [])  # not found without the package path
+            self.assertEqual(len(m["warnings"]), 2)
+            m = replay.load_model(urdf, None, [os.path.join(d, "ws")])
+            self.assertEqual(m["warnings"], [])
+            self.assertEqual(len(m["meshes"]), 1)  # one file, stored once for both visuals
+            tri = np.frombuffer(base64.b64decode(m["meshes"][0]), dtype="<f4").reshape(-1, 3, 3)
+            self.assertEqual(tri.shape, (2, 3, 3))
+            self.assertEqual(sorted(map(tuple, tri.reshape(-1, 3).tolist())),
+                             sorted([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 0), (0, 1, 0), (0, 0, 1)]))
+            # A file that is not a mesh: a warning naming it, drawn as a marker.
+            with open(os.path.join(pkg, "meshes", "tri.obj"), "w") as f:
+                f.write("not a mesh\n")
+            m = replay.load_model(urdf, None, [os.path.join(d, "ws")])
+            self.assertEqual(len(m["warnings"]), 2)
+            self.assertIn("tri.obj: cannot read the mesh", m["warnings"][0])
+
     def test_urdf_errors_name_the_file_and_element(self):
         with tempfile.TemporaryDirectory() as d:
             urdf = os.path.join(d, "r.urdf")
@@ -281,6 +315,19 @@ class Quantisation(unittest.TestCase):
         back = self.decode(ch, len(v))
         self.assertLessEqual(np.max(np.abs(back - v)), ch["s"] / 2 * (1 + 1e-9))
         self.assertAlmostEqual(ch["s"], (v.max() - v.min()) / 65000, places=15)
+
+    def test_values_at_rest_never_become_nan(self):
+        # A base at rest moves by ulps (0.7839259367176750 +- 1e-16): a scale that small cannot
+        # be resolved by (v - offset) / scale, and the rounding once gave the NaN code.
+        v = 0.783925936717675 + np.array([0.0, 1.1e-16, -1.1e-16, 2.2e-16, 0.0])
+        ch = replay._encode(v)
+        self.assertIn("c", ch)
+        self.assertAlmostEqual(ch["c"], 0.783925936717675, places=15)
+        # Just above that threshold the values are quantised, and none is the NaN code.
+        v = 1.0 + np.array([0.0, 3e-12, -3e-12, 1e-12])
+        back = self.decode(replay._encode(v), len(v))
+        self.assertTrue(np.all(np.isfinite(back)))
+        self.assertLessEqual(np.max(np.abs(back - v)), 1e-15)
 
     def test_constants_and_non_finite_values(self):
         self.assertEqual(replay._encode([1.5, 1.5, 1.5]), {"c": 1.5})

@@ -137,9 +137,14 @@ class ReportBuilder:
         if not urdf_p:
             self.warnings.append(f"{run.id}: the robot's URDF ({urdf or 'not named'}) is not readable: no replay")
             return None
+        package_paths = []
+        for pp in (info.robot.get("package_path") or []) if isinstance(info.robot, dict) else []:
+            p = str(pp) if os.path.isabs(str(pp)) or not case_dir else os.path.join(case_dir, str(pp))
+            if os.path.isdir(p):
+                package_paths.append(os.path.abspath(p))
         key = (urdf_p, data_p)
         if key not in self.models:
-            m = replay.load_model(urdf_p, data_p)
+            m = replay.load_model(urdf_p, data_p, package_paths)
             name = m["name"] or os.path.splitext(os.path.basename(urdf_p))[0]
             taken = {v[2] for v in self.models.values()}
             base, k = name, 2
@@ -363,6 +368,16 @@ class ReportBuilder:
             if info.description:
                 out.append(f"<p>{esc(info.description)}</p>")
             out.append(self._method_table(case, runs))
+            robot_warnings = []
+            for run in runs:
+                for w in (run.summary or {}).get("robot_warnings", []) or []:
+                    if w not in robot_warnings:
+                        robot_warnings.append(w)
+            if robot_warnings:
+                # What the robot loader assumed about the robot files (docs/model.md).
+                out.append(f"<details class='robot-warnings' id='robot-warnings-{esc(case)}'><summary>the robot files were read with "
+                           f"{len(robot_warnings)} warning(s)</summary><ul>"
+                           + "".join(f"<li>{esc(w)}</li>" for w in robot_warnings) + "</ul></details>")
             comps = self.results.comparisons.get(case)
             if comps:
                 out.append(f"<table class='comparison-table' id='comparisons-{esc(case)}'><tr><th>comparison</th><th>result</th>"

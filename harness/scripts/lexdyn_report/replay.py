@@ -15,11 +15,15 @@ import base64
 import math
 import os
 import struct
+import subprocess
+import tempfile
 import xml.etree.ElementTree as ET
 
 import numpy as np
 
 from .common import ReportInputError, read_yaml
+
+REPO_ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
 
 try:
     import yaml
@@ -74,15 +78,67 @@ def read_stl(path):
     return np.array(verts, dtype=np.float32)
 
 
-def _mesh_path(filename, urdf_dir):
+def _package_name(d):
+    """The <name> of d/package.xml, or None."""
+    try:
+        with open(os.path.join(d, "package.xml"), encoding="utf-8", errors="replace") as f:
+            text = f.read()
+    except OSError:
+        return None
+    a, b = text.find("<name>"), text.find("</name>")
+    return text[a + 6:b].strip() if a >= 0 and b > a else None
+
+
+def _is_package(d, name):
+    if not os.path.isdir(d):
+        return False
+    declared = _package_name(d)
+    return declared == name if declared else os.path.basename(os.path.normpath(d)) == name
+
+
+def _find_package(root, name, depth=4):
+    if _is_package(os.path.join(root, name), name):
+        return os.path.join(root, name)
+    if depth == 0 or not os.path.isdir(root):
+        return None
+    subs = sorted(e.path for e in os.scandir(root) if e.is_dir() and not e.name.startswith("."))
+    for s in subs:
+        if _is_package(s, name):
+            return s
+    for s in subs:
+        found = _find_package(s, name, depth - 1)
+        if found:
+            return found
+    return None
+
+
+def _mesh_path(filename, urdf_dir, package_paths=()):
+    """The file a URDF mesh URI names, as lexdyn's loader resolves it (docs/model.md, "Meshes and
+    package:// URIs"): package://NAME/PATH in the URDF's own package (a folder above it whose
+    package.xml names NAME, or named NAME), then in the package path (`package_paths`, then
+    $ROS_PACKAGE_PATH); file://, absolute and relative paths. For drawing only, a package:// path
+    is also tried relative to the folders above the URDF (4 levels). None when not found."""
     if filename.startswith("file://"):
         filename = filename[len("file://"):]
     if filename.startswith("package://"):
-        rest = filename[len("package://"):].split("/", 1)
-        rel = rest[1] if len(rest) == 2 else rest[0]
+        rest = filename[len("package://"):].lstrip("/").split("/", 1)
+        name, rel = rest[0], rest[1] if len(rest) == 2 else ""
+        d = urdf_dir
+        while True:
+            if _is_package(d, name) and os.path.isfile(os.path.join(d, rel)):
+                return os.path.join(d, rel)
+            parent = os.path.dirname(d)
+            if parent == d:
+                break
+            d = parent
+        search = list(package_paths) + [p for p in os.environ.get("ROS_PACKAGE_PATH", "").split(":") if p]
+        for root in search:
+            pkg = _find_package(root, name)
+            if pkg and os.path.isfile(os.path.join(pkg, rel)):
+                return os.path.join(pkg, rel)
         d = urdf_dir
         for _ in range(4):
-            for cand in (os.path.join(d, rel), os.path.join(d, rest[0], rel)):
+            for cand in (os.path.join(d, rel), os.path.join(d, name, rel)):
                 if os.path.isfile(cand):
                     return cand
             d = os.path.dirname(d)
@@ -91,8 +147,35 @@ def _mesh_path(filename, urdf_dir):
     return p if os.path.isfile(p) else None
 
 
-def load_model(urdf_path, data_path=None):
-    """The replay model of a robot (a dict ready for JSON); warnings in model['warnings']."""
+def _harness():
+    """lexdyn-harness, to convert meshes other than STL: $LEXDYN_HARNESS (set by `lexdyn-harness
+    report`), else the build's."""
+    for p in (os.environ.get("LEXDYN_HARNESS"), os.path.join(REPO_ROOT, "build", "bin", "lexdyn-harness")):
+        if p and os.access(p, os.X_OK):
+            return p
+    return None
+
+
+def read_mesh(path):
+    """Triangles (float32, 9 per triangle) of a mesh: STL read here, any other format libassimp
+    reads converted by `lexdyn-harness robot mesh` (its unit applied, its up axis not, as lexdyn's
+    robot tools and ROS read them). Raises ReportInputError naming the file."""
+    if path.lower().endswith(".stl"):
+        return read_stl(path)
+    harness = _harness()
+    if harness is None:
+        raise ReportInputError(path, "a mesh other than STL needs lexdyn-harness (robot mesh) to be read; build it, or set LEXDYN_HARNESS")
+    with tempfile.TemporaryDirectory() as d:
+        out = os.path.join(d, "mesh.stl")
+        r = subprocess.run([harness, "robot", "mesh", path, "--out", out], capture_output=True, text=True)
+        if r.returncode != 0:
+            raise ReportInputError(path, "cannot read the mesh: " + (r.stderr.strip().splitlines() or ["?"])[-1])
+        return read_stl(out)
+
+
+def load_model(urdf_path, data_path=None, package_paths=()):
+    """The replay model of a robot (a dict ready for JSON); warnings in model['warnings'].
+    `package_paths`: the case's robot.package_path (resolved), for package:// mesh URIs."""
     try:
         root = ET.parse(urdf_path).getroot()
     except (OSError, ET.ParseError) as e:
@@ -105,6 +188,7 @@ def load_model(urdf_path, data_path=None):
             materials[m.get("name")] = _floats(c.get("rgba"), 4, f"{urdf_path}: material '{m.get('name')}'.color", [0.7] * 4)
     model = {"name": root.get("name", ""), "links": {}, "joints": [], "frames": [], "surfaces": {},
              "meshes": [], "warnings": [], "floating": False, "root": None}
+    mesh_index = {}  # a mesh file used by several links is stored once
     for link in root.findall("link"):
         name = link.get("name")
         visuals = []
@@ -125,16 +209,19 @@ def load_model(urdf_path, data_path=None):
                 geom = {"type": "sphere", "radius": float(shape.get("radius", "0.05"))}
             elif shape.tag == "mesh":
                 fn = shape.get("filename", "")
-                p = _mesh_path(fn, urdf_dir)
+                p = _mesh_path(fn, urdf_dir, package_paths)
                 scale = _floats(shape.get("scale"), 3, where + ".mesh.scale", [1, 1, 1])
                 if p is None:
                     model["warnings"].append(f"{where}: mesh '{fn}' not found; drawn as a marker")
-                elif not p.lower().endswith(".stl"):
-                    model["warnings"].append(f"{where}: mesh '{fn}' is not STL (the replay reads STL only); drawn as a marker")
                 else:
-                    tri = read_stl(p)
-                    model["meshes"].append(base64.b64encode(tri.astype("<f4").tobytes()).decode())
-                    geom = {"type": "mesh", "mesh": len(model["meshes"]) - 1, "scale": scale}
+                    try:
+                        if p not in mesh_index:
+                            tri = read_mesh(p)
+                            model["meshes"].append(base64.b64encode(tri.astype("<f4").tobytes()).decode())
+                            mesh_index[p] = len(model["meshes"]) - 1
+                        geom = {"type": "mesh", "mesh": mesh_index[p], "scale": scale}
+                    except ReportInputError as e:
+                        model["warnings"].append(f"{where}: {e}; drawn as a marker")
             else:
                 raise ReportInputError(where + ".geometry", f"expected a box, cylinder, sphere or mesh, found '{shape.tag}'")
             colour = None
@@ -210,13 +297,16 @@ def _encode(values):
     if not ok.any():
         return {"c": None}
     lo, hi = float(v[ok].min()), float(v[ok].max())
-    if lo == hi and ok.all():
-        return {"c": lo}
+    # Constant to rounding (a body at rest moves by ulps): stored once, since a scale of a few ulps
+    # is below what (v - offset) / scale can resolve.
+    if ok.all() and hi - lo <= 1e-12 * max(1.0, abs(lo), abs(hi)):
+        return {"c": 0.5 * (lo + hi)}
     offset = 0.5 * (lo + hi)
     scale = (hi - lo) / 65000.0 if hi > lo else 1.0
     k = np.full(v.shape, NAN_CODE, dtype=np.int64)
-    k[ok] = np.rint((v[ok] - offset) / scale)
-    k = np.clip(k, NAN_CODE, 32767).astype("<i2")
+    # A finite value never takes the NaN code, whatever the rounding of (v - offset) / scale.
+    k[ok] = np.clip(np.rint((v[ok] - offset) / scale), NAN_CODE + 1, 32767)
+    k = k.astype("<i2")
     return {"o": offset, "s": scale, "d": base64.b64encode(k.tobytes()).decode()}
 
 
