@@ -101,7 +101,7 @@ std::string drawPicture(const model::RobotDescription& d, const RobotLayout& L, 
   j["outlines"] = views;
   json bones = json::array();
   for (size_t b = 1; b < L.body_pose.size(); ++b) {
-    const int parent = d.joints[static_cast<size_t>(d.links[b].parent_joint)].parent_link;
+    const int parent = d.parentBody(static_cast<int>(b));
     bones.push_back(json::array({p3(L.body_pose[static_cast<size_t>(parent)].translation()), p3(L.body_pose[b].translation())}));
   }
   j["bones"] = bones;

@@ -195,8 +195,8 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     y << "friction_coefficient: 0.7          # guessed: rubber soles on a hard floor (HRP-2's walking controller uses 0.7)\n";
   }
   if (!d.mimics.empty()) {
-    y << "mimic: {mode: locked, posture: " << yamlString(posture.name) << "}   # the URDF's " << d.mimics.size()
-      << " <mimic> joint(s) are held at their masters' value in this posture (coupled mimic joints are not read)\n";
+    y << "mimic: {mode: coupled}             # the URDF's " << d.mimics.size()
+      << " <mimic> joint(s) move with their masters; `{mode: locked, posture: P}` holds them at posture P instead\n";
   }
   // Frames: soles and grasp points.
   std::vector<std::string> taken;

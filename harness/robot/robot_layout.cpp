@@ -210,7 +210,7 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
   std::vector<int> parent(static_cast<size_t>(nb), -1);
   std::vector<std::vector<int>> children(static_cast<size_t>(nb));
   for (int b = 1; b < nb; ++b) {
-    parent[static_cast<size_t>(b)] = d.joints[static_cast<size_t>(d.links[static_cast<size_t>(b)].parent_joint)].parent_link;
+    parent[static_cast<size_t>(b)] = d.parentBody(b);
     children[static_cast<size_t>(parent[static_cast<size_t>(b)])].push_back(b);
   }
   std::vector<double> subtree_mass(static_cast<size_t>(nb), 0.0);
@@ -403,7 +403,9 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     int vote = 0;
     for (int b : bodies) {
       vote += sideOfName(d.links[static_cast<size_t>(b)].name);
-      vote += sideOfName(d.joints[static_cast<size_t>(d.links[static_cast<size_t>(b)].parent_joint)].name);
+      const model::LinkDescription& l = d.links[static_cast<size_t>(b)];
+      vote += sideOfName(l.parent_joint >= 0 ? d.joints[static_cast<size_t>(l.parent_joint)].name
+                                             : d.coupled_joints[static_cast<size_t>(l.parent_coupled)].name);
     }
     return vote > 0 ? 1 : (vote < 0 ? -1 : 0);
   };
@@ -491,7 +493,10 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     a.side = side;
     a.end_body = c.hand;
     a.end_link = d.links[static_cast<size_t>(c.hand)].name;
-    a.first_joint = d.links[static_cast<size_t>(limb.bodies.front())].parent_joint;
+    {
+      const model::LinkDescription& l = d.links[static_cast<size_t>(limb.bodies.front())];
+      a.first_joint = l.parent_joint >= 0 ? l.parent_joint : d.coupled_joints[static_cast<size_t>(l.parent_coupled)].master;
+    }
     a.shoulder = L.body_pose[static_cast<size_t>(limb.bodies.front())].translation();
     // The grasp point: the centre of the hand's geometry, fingers included.
     Eigen::Vector3d g = Eigen::Vector3d::Zero();

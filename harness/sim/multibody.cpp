@@ -12,6 +12,8 @@
 
 #include <Simbody.h>
 
+#include <Eigen/Cholesky>
+
 #include <cmath>
 #include <cstring>
 
@@ -82,8 +84,20 @@ struct Multibody::Impl {
   std::vector<const SimTK::MobilizedBody*> mobody;  // per body, looked up once
   // Simbody's numbering: q[k] of ours is Simbody's q[q_index[k]], u[k] is u[u_index[k]].
   std::vector<int> q_index, u_index;
+  // Coupled mimic joints (RobotDescription::coupled_joints): a mobilizer of their own whose q and
+  // u follow a model joint's, q_c = c q_master + o; the simulated system is the reduced one.
+  struct Coupled {
+    int q_index = 0, u_index = 0;  // Simbody's
+    int master = 0;                // model joint
+    double multiplier = 1.0, offset = 0.0;
+  };
+  std::vector<Coupled> coupled;
 
   void writeCoordinates(SimTK::State& state, const double* q, const double* u) const;
+  // The accelerations of the reduced system from the unconstrained ones (s.udot): the coupled
+  // joints' coordinates follow their masters, P udot = 0 with P_c = e_c - c e_master, so
+  // udot = udot_free - M^-1 P^T (P M^-1 P^T)^-1 P udot_free (M^-1 by Simbody's O(n) operator).
+  void constrainCoupled(MultibodyState::Impl& s) const;
   void copyBodies(const SimTK::State& state, const SimTK::SpatialVec* V, BodyKinematics& K) const;
 
   // J (6 x nv, rows [linear; angular], our u order) of the point r_body of a body, through
@@ -98,6 +112,45 @@ struct Multibody::Impl {
         J(3 + i, k) = Js(i, c);
       }
     }
+    // A coupled joint's column goes to its master's, times its multiplier (J G).
+    const int off = free_flyer ? 6 : 0;
+    for (const Coupled& C : coupled) {
+      for (int i = 0; i < 3; ++i) {
+        J(i, off + C.master) += C.multiplier * Js(3 + i, C.u_index);
+        J(3 + i, off + C.master) += C.multiplier * Js(i, C.u_index);
+      }
+    }
+  }
+  // Simbody's u (all mobilities) from ours: u_simbody = G u.
+  void expandSpeeds(const double* u, SimTK::Vector& U) const {
+    U.resize(nv + static_cast<int>(coupled.size()));
+    for (int k = 0; k < nv; ++k) U[u_index[static_cast<size_t>(k)]] = u[k];
+    const int off = free_flyer ? 6 : 0;
+    for (const Coupled& C : coupled) U[C.u_index] = C.multiplier * u[off + C.master];
+  }
+  // Ours from a quantity in Simbody's mobilities (a generalized force): G^T f.
+  void reduceForces(const SimTK::Vector& F, double* f) const {
+    for (int k = 0; k < nv; ++k) f[k] = F[u_index[static_cast<size_t>(k)]];
+    const int off = free_flyer ? 6 : 0;
+    for (const Coupled& C : coupled) f[off + C.master] += C.multiplier * F[C.u_index];
+  }
+  // G^T M G from Simbody's M (all mobilities).
+  void reduceMatrix(const SimTK::Matrix& Ms, Eigen::Ref<Eigen::MatrixXd> M) const {
+    const int nu = nv + static_cast<int>(coupled.size());
+    std::vector<int> model_of(static_cast<size_t>(nu), -1);
+    std::vector<double> g(static_cast<size_t>(nu), 1.0);
+    for (int k = 0; k < nv; ++k) model_of[static_cast<size_t>(u_index[static_cast<size_t>(k)])] = k;
+    const int off = free_flyer ? 6 : 0;
+    for (const Coupled& C : coupled) {
+      model_of[static_cast<size_t>(C.u_index)] = off + C.master;
+      g[static_cast<size_t>(C.u_index)] = C.multiplier;
+    }
+    M.setZero();
+    for (int i = 0; i < nu; ++i) {
+      for (int j = 0; j < nu; ++j) {
+        M(model_of[static_cast<size_t>(i)], model_of[static_cast<size_t>(j)]) += g[static_cast<size_t>(i)] * g[static_cast<size_t>(j)] * Ms(i, j);
+      }
+    }
   }
 };
 
@@ -109,7 +162,8 @@ Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(sy
   nq = base_dofs + nj;
   nv = base_dofs + nj;
   total_mass = desc.totalMass();
-  LEXDYN_ALWAYS_ASSERT(nb == nj + 1, "robot description: one body per joint plus the root");
+  LEXDYN_ALWAYS_ASSERT(nb == nj + 1 + static_cast<int>(desc.coupled_joints.size()),
+                       "robot description: one body per joint and coupled joint plus the root");
 
   // Bodies in description order (parents before children): the root on a Free (free-flyer) or
   // Weld (fixed base) mobilizer to Ground, every other link on its joint's Pin or Slider.
@@ -121,17 +175,25 @@ Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(sy
   } else {
     mobod[0] = SimTK::MobilizedBody::Weld(matter.Ground(), SimTK::Transform(), root, SimTK::Transform()).getMobilizedBodyIndex();
   }
-  for (int j = 0; j < nj; ++j) {
-    const model::JointDescription& J = desc.joints[static_cast<size_t>(j)];
-    LEXDYN_ALWAYS_ASSERT(J.child_link == j + 1 && J.parent_link >= 0 && J.parent_link <= j,
-                         "robot description: joint j moves link j + 1, whose parent comes before it");
-    const SimTK::Body::Rigid body(linkMassProperties(desc.links[static_cast<size_t>(J.child_link)]));
-    SimTK::MobilizedBody& parent = matter.updMobilizedBody(mobod[static_cast<size_t>(J.parent_link)]);
+  // Every other body on its joint's (or coupled joint's) Pin or Slider, in body order (parents
+  // before children).
+  for (int b = 1; b < nb; ++b) {
+    const model::LinkDescription& L = desc.links[static_cast<size_t>(b)];
+    const bool is_joint = L.parent_joint >= 0;
+    const model::JointType type = is_joint ? desc.joints[static_cast<size_t>(L.parent_joint)].type
+                                           : desc.coupled_joints[static_cast<size_t>(L.parent_coupled)].type;
+    const Eigen::Vector3d axis = is_joint ? desc.joints[static_cast<size_t>(L.parent_joint)].axis
+                                          : desc.coupled_joints[static_cast<size_t>(L.parent_coupled)].axis;
+    const Eigen::Isometry3d& origin = desc.jointOrigin(b);
+    const int parent_body = desc.parentBody(b);
+    LEXDYN_ALWAYS_ASSERT(parent_body >= 0 && parent_body < b, "robot description: a body's parent comes before it");
+    const SimTK::Body::Rigid body(linkMassProperties(L));
+    SimTK::MobilizedBody& parent = matter.updMobilizedBody(mobod[static_cast<size_t>(parent_body)]);
     // F on the parent: the joint origin, axis along the mobilizer's; M on the child: the child
     // link frame (which coincides with the joint frame at q = 0), axis along the mobilizer's.
-    const bool revolute = J.type == model::JointType::Revolute;
-    const Eigen::Matrix3d R_axis = mobilizerFrame(J.axis, revolute ? 2 : 0);
-    const SimTK::Transform X_PF = transform(J.origin.linear() * R_axis, J.origin.translation());
+    const bool revolute = type == model::JointType::Revolute;
+    const Eigen::Matrix3d R_axis = mobilizerFrame(axis, revolute ? 2 : 0);
+    const SimTK::Transform X_PF = transform(origin.linear() * R_axis, origin.translation());
     const SimTK::Transform X_BM = transform(R_axis, Eigen::Vector3d::Zero());
     SimTK::MobilizedBodyIndex index;
     if (revolute) {
@@ -139,7 +201,7 @@ Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(sy
     } else {
       index = SimTK::MobilizedBody::Slider(parent, X_PF, body, X_BM).getMobilizedBodyIndex();
     }
-    mobod[static_cast<size_t>(J.child_link)] = index;
+    mobod[static_cast<size_t>(b)] = index;
   }
   system.realizeTopology();
   for (const SimTK::MobilizedBodyIndex i : mobod) mobody.push_back(&matter.getMobilizedBody(i));
@@ -147,7 +209,7 @@ Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(sy
   matter.setUseEulerAngles(default_state, true);  // Free: q = body-fixed X-Y-Z angles, then position
   system.realizeModel(default_state);
   // (Simbody may keep room for a quaternion's fourth q; only the u count must match.)
-  LEXDYN_ALWAYS_ASSERT(default_state.getNQ() >= nq && default_state.getNU() == nv,
+  LEXDYN_ALWAYS_ASSERT(default_state.getNQ() >= nq && default_state.getNU() == nv + static_cast<int>(desc.coupled_joints.size()),
                        "Simbody's coordinate counts differ from the simulator's");
 
   // Index maps, asked from Simbody rather than assumed.
@@ -161,19 +223,20 @@ Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(sy
     }
   }
   for (int j = 0; j < nj; ++j) {
-    const SimTK::MobilizedBody& mb = matter.getMobilizedBody(mobod[static_cast<size_t>(j + 1)]);
+    const SimTK::MobilizedBody& mb = matter.getMobilizedBody(mobod[static_cast<size_t>(desc.joints[static_cast<size_t>(j)].child_link)]);
     q_index[static_cast<size_t>(base_dofs + j)] = mb.getFirstQIndex(default_state);
     u_index[static_cast<size_t>(base_dofs + j)] = mb.getFirstUIndex(default_state);
+  }
+  for (const model::CoupledJointDescription& C : desc.coupled_joints) {
+    const SimTK::MobilizedBody& mb = matter.getMobilizedBody(mobod[static_cast<size_t>(C.child_link)]);
+    coupled.push_back({mb.getFirstQIndex(default_state), mb.getFirstUIndex(default_state), C.master, C.multiplier, C.offset});
   }
 
   // Subtree masses, accumulated from the leaves to the root (children come after parents).
   subtree_mass.assign(static_cast<size_t>(nb), 0.0);
   for (int b = nb - 1; b >= 0; --b) {
     subtree_mass[static_cast<size_t>(b)] += desc.links[static_cast<size_t>(b)].mass;
-    if (b > 0) {
-      const int parent = desc.joints[static_cast<size_t>(desc.links[static_cast<size_t>(b)].parent_joint)].parent_link;
-      subtree_mass[static_cast<size_t>(parent)] += subtree_mass[static_cast<size_t>(b)];
-    }
+    if (b > 0) subtree_mass[static_cast<size_t>(desc.parentBody(b))] += subtree_mass[static_cast<size_t>(b)];
   }
   torque_limit.resize(nj);
   for (int j = 0; j < nj; ++j) {
@@ -193,6 +256,11 @@ struct MultibodyState::Impl {
   // Workspaces of the Jacobian queries.
   SimTK::Matrix jacobian, matrix;
   SimTK::Vector speeds, rates;
+  // Workspaces of the coupled mimic joints' projection (constrainCoupled), sized once.
+  Eigen::MatrixXd coupled_w, coupled_a;  // M^-1 P^T (nu x nc), P M^-1 P^T (nc x nc)
+  Eigen::VectorXd coupled_b, coupled_ud, coupled_lambda;
+  Eigen::LDLT<Eigen::MatrixXd> coupled_ldlt;
+  SimTK::Vector coupled_p, coupled_mp;
 };
 
 Multibody::Multibody(model::RobotDescription description) : impl_(std::make_unique<Impl>(std::move(description))) {}
@@ -267,11 +335,23 @@ MultibodyState Multibody::createState() const {
   s->bodies.omega.setZero(3, m.nb);
   s->bodies.v.setZero(3, m.nb);
   s->weighted_com.setZero(3, m.nb);
-  s->mobility_forces.resize(m.nv);
-  s->udot.resize(m.nv);
+  const int nu = m.nv + static_cast<int>(m.coupled.size());
+  s->mobility_forces.resize(nu);
+  s->udot.resize(nu);
   s->body_forces.resize(m.matter.getNumBodies());
   s->body_accelerations.resize(m.matter.getNumBodies());
   s->body_velocities.resize(m.matter.getNumBodies());
+  if (!m.coupled.empty()) {
+    const int nc = static_cast<int>(m.coupled.size());
+    s->coupled_w.resize(nu, nc);
+    s->coupled_a.resize(nc, nc);
+    s->coupled_b.resize(nc);
+    s->coupled_ud.resize(nu);
+    s->coupled_lambda.resize(nc);
+    s->coupled_ldlt = Eigen::LDLT<Eigen::MatrixXd>(nc);
+    s->coupled_p.resize(nu);
+    s->coupled_mp.resize(nu);
+  }
   MultibodyState out(std::move(s));
   // One realization at the neutral state, so that Simbody's lazily allocated caches exist.
   const std::vector<double> zero(static_cast<size_t>(m.nq + m.nv), 0.0);
@@ -292,13 +372,16 @@ void Multibody::Impl::writeCoordinates(SimTK::State& state, const double* q, con
     }
     return true;
   };
+  const int off = free_flyer ? 6 : 0;
   if (!same(state.getQ(), q_index, q, nq)) {
     double* Q = state.updQ().updContiguousScalarData();
     for (int k = 0; k < nq; ++k) Q[q_index[static_cast<size_t>(k)]] = q[k];
+    for (const Coupled& C : coupled) Q[C.q_index] = C.multiplier * q[off + C.master] + C.offset;
   }
   if (!same(state.getU(), u_index, u, nv)) {
     double* U = state.updU().updContiguousScalarData();
     for (int k = 0; k < nv; ++k) U[u_index[static_cast<size_t>(k)]] = u[k];
+    for (const Coupled& C : coupled) U[C.u_index] = C.multiplier * u[off + C.master];
   }
 }
 
@@ -368,9 +451,7 @@ Eigen::Vector3d Multibody::centerOfMass(const MultibodyState& st) const {
   const Impl& m = *impl_;
   Eigen::Matrix3Xd& W = st.impl_->weighted_com;
   for (int b = 0; b < m.nb; ++b) W.col(b) = m.desc.links[static_cast<size_t>(b)].mass * st.impl_->bodies.com.col(b);
-  for (int b = m.nb - 1; b > 0; --b) {
-    W.col(m.desc.joints[static_cast<size_t>(m.desc.links[static_cast<size_t>(b)].parent_joint)].parent_link) += W.col(b);
-  }
+  for (int b = m.nb - 1; b > 0; --b) W.col(m.desc.parentBody(b)) += W.col(b);
   return W.col(0) / m.subtree_mass[0];
 }
 
@@ -399,18 +480,54 @@ void Multibody::accelerations(MultibodyState& st, double* udot) const {
   MultibodyState::Impl& s = *st.impl_;
   m.system.realize(s.state, SimTK::Stage::Dynamics);
   m.matter.calcAccelerationIgnoringConstraints(s.state, s.mobility_forces, s.body_forces, s.udot, s.body_accelerations);
+  if (!m.coupled.empty()) m.constrainCoupled(s);
   const double* ud = s.udot.getContiguousScalarData();
   for (int k = 0; k < m.nv; ++k) udot[k] = ud[m.u_index[static_cast<size_t>(k)]];
+}
+
+// udot of the free tree, projected onto the coupling P udot = 0 (row c of P: u_c - multiplier
+// u_master) with the mass metric: udot - M^-1 P^T (P M^-1 P^T)^-1 P udot, the motion under the
+// couplings' ideal constraint forces. M^-1 P^T takes one O(n) multiplyByMInv per coupled joint;
+// nothing is allocated.
+void Multibody::Impl::constrainCoupled(MultibodyState::Impl& s) const {
+  const int nc = static_cast<int>(coupled.size());
+  const int nu = nv + nc;
+  const int off = free_flyer ? 6 : 0;
+  Eigen::MatrixXd& W = s.coupled_w;
+  for (int c = 0; c < nc; ++c) {
+    const Coupled& C = coupled[static_cast<size_t>(c)];
+    s.coupled_p = 0.0;
+    s.coupled_p[C.u_index] = 1.0;
+    s.coupled_p[u_index[static_cast<size_t>(off + C.master)]] = -C.multiplier;
+    matter.multiplyByMInv(s.state, s.coupled_p, s.coupled_mp);
+    for (int i = 0; i < nu; ++i) W(i, c) = s.coupled_mp[i];
+  }
+  auto applyP = [&](const auto& v, int c) {
+    const Coupled& C = coupled[static_cast<size_t>(c)];
+    return v[C.u_index] - C.multiplier * v[u_index[static_cast<size_t>(off + C.master)]];
+  };
+  Eigen::VectorXd& ud = s.coupled_ud;
+  for (int i = 0; i < nu; ++i) ud[i] = s.udot[i];
+  for (int c = 0; c < nc; ++c) {
+    s.coupled_b[c] = applyP(ud, c);
+    for (int k = 0; k < nc; ++k) s.coupled_a(c, k) = applyP(W.col(k), c);
+  }
+  s.coupled_ldlt.compute(s.coupled_a);
+  s.coupled_lambda = s.coupled_ldlt.solve(s.coupled_b);
+  ud.noalias() -= W * s.coupled_lambda;
+  for (int i = 0; i < nu; ++i) s.udot[i] = ud[i];
 }
 
 void Multibody::netForce(MultibodyState& st, double* f) const {
   const Impl& m = *impl_;
   MultibodyState::Impl& s = *st.impl_;
-  SimTK::Vector residual(m.nv, 0.0);
-  const SimTK::Vector zero_udot(m.nv, 0.0);
-  // residual = M udot + C(q, u) - applied forces.
+  const int nu = m.nv + static_cast<int>(m.coupled.size());
+  SimTK::Vector residual(nu, 0.0);
+  const SimTK::Vector zero_udot(nu, 0.0);
+  // residual = M udot + C(q, u) - applied forces; ours is G^T of it.
   m.matter.calcResidualForceIgnoringConstraints(s.state, s.mobility_forces, s.body_forces, zero_udot, residual);
-  for (int k = 0; k < m.nv; ++k) f[k] = -residual[m.u_index[static_cast<size_t>(k)]];
+  m.reduceForces(residual, f);
+  for (int k = 0; k < m.nv; ++k) f[k] = -f[k];
 }
 
 // =============================================================================================
@@ -426,6 +543,14 @@ void Multibody::inverseMassMatrix(MultibodyState& st, Eigen::Ref<Eigen::MatrixXd
   const Impl& m = *impl_;
   LEXDYN_ALWAYS_ASSERT(Minv.rows() == m.nv && Minv.cols() == m.nv, "inverseMassMatrix: Minv must be nv x nv");
   SimTK::Matrix& Ms = st.impl_->matrix;
+  if (!m.coupled.empty()) {
+    // The reduced system's: (G^T M G)^-1.
+    m.matter.calcM(st.impl_->state, Ms);
+    Eigen::MatrixXd M(m.nv, m.nv);
+    m.reduceMatrix(Ms, M);
+    Minv = M.ldlt().solve(Eigen::MatrixXd::Identity(m.nv, m.nv));
+    return;
+  }
   m.matter.calcMInv(st.impl_->state, Ms);
   for (int j = 0; j < m.nv; ++j) {
     const int c = m.u_index[static_cast<size_t>(j)];
@@ -437,13 +562,15 @@ void Multibody::rateMatrix(MultibodyState& st, Eigen::Ref<Eigen::MatrixXd> N) co
   const Impl& m = *impl_;
   LEXDYN_ALWAYS_ASSERT(N.rows() == m.nq && N.cols() == m.nv, "rateMatrix: N must be nq x nv");
   MultibodyState::Impl& s = *st.impl_;
-  s.speeds.resize(m.nv);
+  const int nu = m.nv + static_cast<int>(m.coupled.size());
+  s.speeds.resize(nu);
   s.speeds = 0.0;
+  std::vector<double> unit(static_cast<size_t>(m.nv), 0.0);
   for (int j = 0; j < m.nv; ++j) {
-    const int c = m.u_index[static_cast<size_t>(j)];
-    s.speeds[c] = 1.0;
+    unit[static_cast<size_t>(j)] = 1.0;
+    m.expandSpeeds(unit.data(), s.speeds);  // column j of G
+    unit[static_cast<size_t>(j)] = 0.0;
     m.matter.multiplyByN(s.state, false, s.speeds, s.rates);
-    s.speeds[c] = 0.0;
     for (int i = 0; i < m.nq; ++i) N(i, j) = s.rates[m.q_index[static_cast<size_t>(i)]];
   }
 }
@@ -456,9 +583,7 @@ void Multibody::massMatrix(const MultibodyState& st, Eigen::Ref<Eigen::MatrixXd>
   LEXDYN_ALWAYS_ASSERT(M.rows() == m.nv && M.cols() == m.nv, "massMatrix: M must be nv x nv");
   SimTK::Matrix Ms;
   m.matter.calcM(st.impl_->state, Ms);
-  for (int i = 0; i < m.nv; ++i) {
-    for (int j = 0; j < m.nv; ++j) M(i, j) = Ms(m.u_index[static_cast<size_t>(i)], m.u_index[static_cast<size_t>(j)]);
-  }
+  m.reduceMatrix(Ms, M);
 }
 
 void Multibody::biasForces(const MultibodyState& st, Eigen::Ref<Eigen::VectorXd> N) const {
@@ -474,10 +599,13 @@ void Multibody::biasForces(const MultibodyState& st, Eigen::Ref<Eigen::VectorXd>
     const SimTK::Vec3 f = L.mass * vec3(m.desc.gravity);
     gravity[m.mobod[static_cast<size_t>(b)]] = SimTK::SpatialVec(r % f, f);
   }
-  const SimTK::Vector no_mobility_forces(m.nv, 0.0), zero_udot(m.nv, 0.0);
+  const int nu = m.nv + static_cast<int>(m.coupled.size());
+  const SimTK::Vector no_mobility_forces(nu, 0.0), zero_udot(nu, 0.0);
   SimTK::Vector residual;
   m.matter.calcResidualForceIgnoringConstraints(state, no_mobility_forces, gravity, zero_udot, residual);
-  for (int k = 0; k < m.nv; ++k) N[k] = residual[m.u_index[static_cast<size_t>(k)]];
+  std::vector<double> f(static_cast<size_t>(m.nv));
+  m.reduceForces(residual, f.data());
+  for (int k = 0; k < m.nv; ++k) N[k] = f[static_cast<size_t>(k)];
 }
 
 void Multibody::frameJacobian(const MultibodyState& st, model::FrameId f, Eigen::Ref<Eigen::MatrixXd> J) const {

@@ -26,8 +26,48 @@ inline void addSymmetric(Eigen::Ref<Eigen::MatrixXd>& H, int i, int j, double h)
 
 }  // namespace
 
+void pointHessianOfTree(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws,
+                        model::FrameId f, const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w,
+                        Eigen::Ref<Eigen::MatrixXd>& H);
+void orientationHessianOfTree(const model::RobotModel& model, const KinematicHessianWorkspace& ws, model::FrameId f,
+                              const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd>& H);
+void comHessianOfTree(const model::RobotModel& model, const KinematicHessianWorkspace& ws, const Eigen::Vector3d& w,
+                      Eigen::Ref<Eigen::MatrixXd>& H);
+
+namespace {
+
+// H += G^T T G (the tree's Hessian T to the model's dofs).
+void addReduced(const model::RobotModel& model, const Eigen::MatrixXd& T, Eigen::Ref<Eigen::MatrixXd>& H) {
+  const int n = static_cast<int>(T.rows());
+  for (int j = 0; j < n; ++j) {
+    const int cj = model.treeDofModel(j);
+    const double gj = model.treeDofMultiplier(j);
+    for (int i = 0; i < n; ++i) {
+      const double t = T(i, j);
+      if (t != 0.0) H(model.treeDofModel(i), cj) += model.treeDofMultiplier(i) * gj * t;
+    }
+  }
+}
+
+// Runs accumulate(target) on H directly, or on the workspace's tree-size scratch then reduces it.
+template <class F>
+void accumulateVia(const model::RobotModel& model, const KinematicHessianWorkspace& ws, Eigen::Ref<Eigen::MatrixXd> H, F accumulate) {
+  if (!model.hasCoupledJoints()) {
+    accumulate(H);
+    return;
+  }
+  Eigen::MatrixXd& T = ws.treeScratch();
+  T.setZero();
+  Eigen::Ref<Eigen::MatrixXd> target(T);
+  accumulate(target);
+  addReduced(model, T, H);
+}
+
+}  // namespace
+
 KinematicHessianWorkspace::KinematicHessianWorkspace(const model::RobotModel& model) {
-  const int nv = model.nv();
+  const int nv = model.numTreeDofs();
+  if (model.hasCoupledJoints()) scratch_.setZero(nv, nv);
   const model::KinematicTree& tree = model.tree();
   axes_.setZero(3, nv);
   points_.setZero(3, nv);
@@ -59,7 +99,7 @@ KinematicHessianWorkspace::KinematicHessianWorkspace(const model::RobotModel& mo
 }
 
 void KinematicHessianWorkspace::update(const model::RobotModel& model, const model::ModelData& data) {
-  LEXDYN_ALWAYS_ASSERT(model.nv() == nv(), "KinematicHessianWorkspace::update: another model");
+  LEXDYN_ALWAYS_ASSERT(model.numTreeDofs() == nv(), "KinematicHessianWorkspace::update: another model");
   model.dofAxes(data, axes_, points_);
   // Subtree centres of mass: bodies are in tree order (parents first), so one backward sweep
   // accumulates the mass-weighted body CoMs into every ancestor.
@@ -90,6 +130,12 @@ void accumulatePointHessian(const model::RobotModel& model, const model::ModelDa
                             Eigen::Ref<Eigen::MatrixXd> H) {
   const int nv = model.nv();
   LEXDYN_ALWAYS_ASSERT(H.rows() == nv && H.cols() == nv, "accumulatePointHessian: H must be nv x nv");
+  accumulateVia(model, ws, H, [&](Eigen::Ref<Eigen::MatrixXd>& Ht) { pointHessianOfTree(model, data, ws, f, p_in_frame, w, Ht); });
+}
+
+void pointHessianOfTree(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws,
+                        model::FrameId f, const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w,
+                        Eigen::Ref<Eigen::MatrixXd>& H) {
   const model::KinematicTree& tree = model.tree();
   const std::vector<int>& chain = tree.bodies[static_cast<size_t>(model.frameBody(f))].ancestor_dofs;
   const Eigen::Vector3d p = model.pointPosition(data, f, p_in_frame);
@@ -117,6 +163,11 @@ void accumulateOrientationHessian(const model::RobotModel& model, const model::M
   const int nv = model.nv();
   LEXDYN_ALWAYS_ASSERT(H.rows() == nv && H.cols() == nv,
                        "accumulateOrientationHessian: H must be nv x nv");
+  accumulateVia(model, ws, H, [&](Eigen::Ref<Eigen::MatrixXd>& Ht) { orientationHessianOfTree(model, ws, f, w, Ht); });
+}
+
+void orientationHessianOfTree(const model::RobotModel& model, const KinematicHessianWorkspace& ws, model::FrameId f,
+                              const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd>& H) {
   const model::KinematicTree& tree = model.tree();
   const std::vector<int>& chain = tree.bodies[static_cast<size_t>(model.frameBody(f))].ancestor_dofs;
   const int n = static_cast<int>(chain.size());
@@ -138,8 +189,14 @@ void accumulateOrientationHessian(const model::RobotModel& model, const model::M
 
 void accumulateComHessian(const model::RobotModel& model, const KinematicHessianWorkspace& ws,
                           const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd> H) {
-  const int nv = model.nv();
-  LEXDYN_ALWAYS_ASSERT(H.rows() == nv && H.cols() == nv, "accumulateComHessian: H must be nv x nv");
+  const int nv_model = model.nv();
+  LEXDYN_ALWAYS_ASSERT(H.rows() == nv_model && H.cols() == nv_model, "accumulateComHessian: H must be nv x nv");
+  accumulateVia(model, ws, H, [&](Eigen::Ref<Eigen::MatrixXd>& Ht) { comHessianOfTree(model, ws, w, Ht); });
+}
+
+void comHessianOfTree(const model::RobotModel& model, const KinematicHessianWorkspace& ws, const Eigen::Vector3d& w,
+                      Eigen::Ref<Eigen::MatrixXd>& H) {
+  const int nv = ws.nv();
   const model::KinematicTree& tree = model.tree();
   // c = sum_b m_b c_b / m. Dof j moves its body's subtree rigidly, so the CoM Jacobian column is
   // J_j = (m_sub(j) / m) (a_j x (c_sub(j) - o_j)) (revolute) or (m_sub(j) / m) a_j (prismatic), a

@@ -19,7 +19,9 @@
 //  - centre of mass: the mass-weighted position Hessians of all bodies, computed in O(nv^2)
 //    from subtree masses and centres of mass.
 // Each function accumulates H += sum_d w[d] * d^2 f_d / dq^2 for a weight vector w (the
-// multipliers of eq. 21), in O(nv^2), without allocating. Derivations, conventions and their
+// multipliers of eq. 21), in O(nv^2), without allocating. With coupled mimic joints the
+// coordinates above are the tree's (one per mobilizer); the model's Hessian is G^T H_tree G with
+// u_tree = G u (a tree coordinate is a linear function of the model's). Derivations, conventions and their
 // verification: docs/controller.md, "Hessians".
 #pragma once
 
@@ -40,7 +42,11 @@ class KinematicHessianWorkspace {
   /// RobotModel::update, before the accumulate functions).
   void update(const model::RobotModel& model, const model::ModelData& data);
 
+  /// The tree's dofs (model::RobotModel::numTreeDofs(): the model's, unless it has coupled joints).
   int nv() const { return static_cast<int>(axes_.cols()); }
+  /// With coupled joints: a tree-size scratch the accumulate functions sum into before reducing
+  /// to the model's dofs (G^T H G).
+  Eigen::MatrixXd& treeScratch() const { return scratch_; }
   const Eigen::Matrix3Xd& axes() const { return axes_; }
   const Eigen::Matrix3Xd& points() const { return points_; }
   /// Centre of mass (world) of the subtree of the body moved by each dof's mobilizer (3 x nv).
@@ -56,6 +62,7 @@ class KinematicHessianWorkspace {
   Eigen::Matrix3Xd bodyMoment_;  ///< per body: mass-weighted sum of the subtree's body CoMs
   Eigen::VectorXd subtreeMassFraction_;
   std::vector<int> chainPosition_;
+  mutable Eigen::MatrixXd scratch_;
 };
 
 /// Position of a point given in frame f's coordinates.

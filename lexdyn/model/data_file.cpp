@@ -42,6 +42,13 @@ const LockedJointDescription* lockedJoint(const RobotDescription& d, const std::
   return nullptr;
 }
 
+bool coupledJoint(const RobotDescription& d, const std::string& joint) {
+  for (const auto& c : d.coupled_joints) {
+    if (c.name == joint) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 BaseType readBaseType(const yaml::Node& root) {
@@ -59,11 +66,9 @@ MimicPolicy readMimicPolicy(const yaml::Node& root, ProblemList& problems) {
     p.where = node.where();
     yaml::StrictMap m(node);
     const std::string mode = m.required("mode").asEnum({"locked", "coupled"});
-    if (mode == "coupled") {
-      m.required("mode").fail("coupled mimic joints are not supported yet: give `mode: locked` (the joint is held at the posture's value)");
-    }
-    p.mode = MimicMode::Locked;
+    p.mode = mode == "coupled" ? MimicMode::Coupled : MimicMode::Locked;
     if (auto posture = m.optional("posture")) {
+      if (p.mode == MimicMode::Coupled) posture->fail("a posture locks mimic joints: it goes with `mode: locked`");
       p.posture = posture->asString();
       const YAML::Node all = root.raw()["postures"];
       if (!all || !all.IsMap() || !all[p.posture]) posture->fail("no posture '" + p.posture + "' in the data file's postures");
@@ -250,7 +255,8 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
         if (j < 0) {
           ln.fail(lockedJoint(d, jname) ? "joint '" + jname + "' is locked by the loader (" + lockedJoint(d, jname)->reason +
                                               "): not a joint of the model"
-                                        : "unknown joint '" + jname + "'");
+                  : coupledJoint(d, jname) ? "joint '" + jname + "' is a mimic joint coupled to its master: give the master's limits"
+                                           : "unknown joint '" + jname + "'");
         }
         JointDescription& jd = d.joints[static_cast<size_t>(j)];
         yaml::StrictMap m(ln);
@@ -296,6 +302,7 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
           const int j = d.findJoint(jname);
           const double v = vn.asDouble();
           if (j < 0) {
+            if (coupledJoint(d, jname)) continue;  // a coupled mimic joint follows its master
             const LockedJointDescription* l = lockedJoint(d, jname);
             if (!l) vn.fail("unknown joint '" + jname + "'");
             if (std::abs(v - l->value) > 1e-6) {  // a locked joint stays at its own value

@@ -29,6 +29,19 @@ int RobotDescription::findLink(const std::string& n) const { return indexOfName(
 int RobotDescription::findJoint(const std::string& n) const { return indexOfName(joints, n); }
 int RobotDescription::findFrame(const std::string& n) const { return indexOfName(frames, n); }
 int RobotDescription::findCapsule(const std::string& n) const { return indexOfName(capsules, n); }
+int RobotDescription::parentBody(int b) const {
+  const LinkDescription& l = links.at(static_cast<size_t>(b));
+  if (l.parent_joint >= 0) return joints[static_cast<size_t>(l.parent_joint)].parent_link;
+  if (l.parent_coupled >= 0) return coupled_joints[static_cast<size_t>(l.parent_coupled)].parent_link;
+  return -1;
+}
+const Eigen::Isometry3d& RobotDescription::jointOrigin(int b) const {
+  static const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+  const LinkDescription& l = links.at(static_cast<size_t>(b));
+  if (l.parent_joint >= 0) return joints[static_cast<size_t>(l.parent_joint)].origin;
+  if (l.parent_coupled >= 0) return coupled_joints[static_cast<size_t>(l.parent_coupled)].origin;
+  return identity;
+}
 // "a, b, c": the names of `items` (name_of(item) gives one), for messages.
 template <class T, class NameOf>
 static std::string knownNames(const std::vector<T>& items, NameOf name_of) {

@@ -44,7 +44,8 @@ struct LoadOptions {
 /// (their mass is lumped into it and they become frames).
 struct LinkDescription {
   std::string name;
-  int parent_joint = -1;        ///< index into RobotDescription::joints; -1 for the root
+  int parent_joint = -1;        ///< index into RobotDescription::joints; -1 for the root (and a coupled body)
+  int parent_coupled = -1;      ///< index into RobotDescription::coupled_joints for a body moved by one
   double mass = 0.0;            ///< kg
   Eigen::Vector3d com = Eigen::Vector3d::Zero();              ///< in the link frame, m
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();          ///< about the CoM, link axes, kg m^2
@@ -96,13 +97,30 @@ struct GeometryDescription {
 };
 
 /// A URDF <mimic> on a moving joint: q_joint = multiplier * q_master + offset. Locked: the joint is
-/// held at `locked_value` (it becomes a fixed joint; its link is lumped into its parent).
+/// held at `locked_value` (it becomes a fixed joint; its link is lumped into its parent). Coupled:
+/// the joint keeps its body and moves with its master (RobotDescription::coupled_joints).
 enum class MimicMode { Locked, Coupled };
 struct MimicDescription {
   std::string joint, master;
   double multiplier = 1.0, offset = 0.0;
   MimicMode mode = MimicMode::Locked;
   double locked_value = 0.0;     ///< rad or m
+  int urdf_line = 0;
+};
+
+/// A <mimic> joint coupled to its master: one body on a mobilizer of its own whose coordinate is
+/// not independent, q = multiplier * q_master + offset (the master a model joint; a mimic of a
+/// mimic is composed down to it). Not a model joint: the controller's model and the simulator
+/// work in the independent coordinates (docs/model.md, "Mimic joints").
+struct CoupledJointDescription {
+  std::string name;
+  JointType type = JointType::Revolute;
+  int parent_link = -1, child_link = -1;
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  ///< joint frame in the parent body at q = 0
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();           ///< unit, joint frame
+  int master = -1;          ///< model joint index (RobotDescription::joints)
+  double multiplier = 1.0, offset = 0.0;
+  double lower = 0.0, upper = 0.0;  ///< its own limits (rad or m; +-inf: none)
   int urdf_line = 0;
 };
 
@@ -177,6 +195,8 @@ struct RobotDescription {
   std::vector<MimicDescription> mimics;
   /// Every moving URDF joint the loader holds fixed (mimics and joints of massless links).
   std::vector<LockedJointDescription> locked_joints;
+  /// The coupled mimic joints, each moving its own body (LinkDescription::parent_coupled).
+  std::vector<CoupledJointDescription> coupled_joints;
   /// What the loader assumed or repaired ("file:line: what"), in the order found.
   std::vector<std::string> warnings;
   std::string urdf_root;  ///< the URDF's root link (before a floating joint from a world link)
@@ -189,6 +209,10 @@ struct RobotDescription {
   int findJoint(const std::string& name) const;  ///< -1 when absent
   int findFrame(const std::string& name) const;  ///< -1 when absent
   int findCapsule(const std::string& name) const;
+  /// The body that body b hangs from (through its joint or its coupled joint); -1 for the root.
+  int parentBody(int b) const;
+  /// The placement of body b's joint frame in its parent body at q = 0, and its axis and type.
+  const Eigen::Isometry3d& jointOrigin(int b) const;
   /// Like findJoint / findFrame, but throw lexdyn::InputError listing the known names when absent
   /// (the URDF for joints, the data file for frames and postures).
   int jointIndex(const std::string& name) const;

@@ -10,6 +10,8 @@
 
 #include "lexdyn/common/error.hpp"
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <cmath>
 
@@ -108,7 +110,33 @@ detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)),
   nv = nj + (free_flyer ? 6 : 0);
   const int off = free_flyer ? 6 : 0;
   total_mass = desc.totalMass();
-  LEXDYN_ALWAYS_ASSERT(nb == nj + 1, "description: one body per joint plus the root");
+  nt = nb - 1;
+  ntv = nt + off;
+  coupled = !desc.coupled_joints.empty();
+  LEXDYN_ALWAYS_ASSERT(nt == nj + static_cast<int>(desc.coupled_joints.size()),
+                       "description: one body per joint and coupled joint plus the root");
+
+  // Tree joints in body order: body b moves on tree joint b - 1.
+  tree_joints.resize(static_cast<size_t>(nt));
+  for (int b = 1; b < nb; ++b) {
+    const LinkDescription& L = desc.links[static_cast<size_t>(b)];
+    TreeJoint& T = tree_joints[static_cast<size_t>(b - 1)];
+    if (L.parent_joint >= 0) {
+      const JointDescription& J = desc.joints[static_cast<size_t>(L.parent_joint)];
+      T = {J.type, J.parent_link, J.origin, J.axis.normalized(), L.parent_joint, 1.0, 0.0};
+    } else {
+      const CoupledJointDescription& C = desc.coupled_joints[static_cast<size_t>(L.parent_coupled)];
+      T = {C.type, C.parent_link, C.origin, C.axis.normalized(), C.master, C.multiplier, C.offset};
+    }
+    LEXDYN_ALWAYS_ASSERT(coupled || L.parent_joint == b - 1, "description: joint j moves body j + 1");
+  }
+  tree_dof_model.resize(static_cast<size_t>(ntv));
+  tree_dof_multiplier.assign(static_cast<size_t>(ntv), 1.0);
+  for (int k = 0; k < off; ++k) tree_dof_model[static_cast<size_t>(k)] = k;
+  for (int t = 0; t < nt; ++t) {
+    tree_dof_model[static_cast<size_t>(off + t)] = off + tree_joints[static_cast<size_t>(t)].model_joint;
+    tree_dof_multiplier[static_cast<size_t>(off + t)] = tree_joints[static_cast<size_t>(t)].multiplier;
+  }
 
   matter.setShowDefaultGeometry(false);
   mobod.resize(static_cast<size_t>(nb));
@@ -125,8 +153,8 @@ detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)),
       }
       continue;
     }
-    const JointDescription& J = desc.joints[static_cast<size_t>(L.parent_joint)];
-    SimTK::MobilizedBody& parent = matter.updMobilizedBody(mobod[static_cast<size_t>(J.parent_link)]);
+    const TreeJoint& J = tree_joints[static_cast<size_t>(b - 1)];
+    SimTK::MobilizedBody& parent = matter.updMobilizedBody(mobod[static_cast<size_t>(J.parent)]);
     const bool revolute = J.type == JointType::Revolute;
     // Pin rotates about the z axis of its F/M frames, Slider translates along x.
     const Eigen::Matrix3d R_align = alignAxis(J.axis, revolute ? 2 : 0);
@@ -146,24 +174,24 @@ detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)),
   system.realizeModel(default_state);
   simbody_nq = default_state.getNQ();
   simbody_nu = default_state.getNU();
-  LEXDYN_ALWAYS_ASSERT(simbody_nu == nv, "Simbody mobility count differs from the model's");
+  LEXDYN_ALWAYS_ASSERT(simbody_nu == ntv, "Simbody mobility count differs from the model's tree");
 
   // Index maps (Simbody numbers mobilities in mobilized-body order, which is our body order).
-  joint_q_index.resize(static_cast<size_t>(nj));
-  dof_u_index.resize(static_cast<size_t>(nv));
+  joint_q_index.resize(static_cast<size_t>(nt));
+  dof_u_index.resize(static_cast<size_t>(ntv));
   if (free_flyer) {
     const SimTK::MobilizedBody& base = matter.getMobilizedBody(mobod[0]);
     base_q_index = base.getFirstQIndex(default_state);
     const int u0 = base.getFirstUIndex(default_state);
     for (int k = 0; k < 6; ++k) dof_u_index[static_cast<size_t>(k)] = u0 + k;
   }
-  for (int j = 0; j < nj; ++j) {
-    const SimTK::MobilizedBody& mb = matter.getMobilizedBody(mobod[static_cast<size_t>(j + 1)]);
-    joint_q_index[static_cast<size_t>(j)] = mb.getFirstQIndex(default_state);
-    dof_u_index[static_cast<size_t>(off + j)] = mb.getFirstUIndex(default_state);
+  for (int t = 0; t < nt; ++t) {
+    const SimTK::MobilizedBody& mb = matter.getMobilizedBody(mobod[static_cast<size_t>(t + 1)]);
+    joint_q_index[static_cast<size_t>(t)] = mb.getFirstQIndex(default_state);
+    dof_u_index[static_cast<size_t>(off + t)] = mb.getFirstUIndex(default_state);
   }
 
-  // Names and limits.
+  // Names and limits (model joints).
   lower.resize(nj);
   upper.resize(nj);
   velocity_limit.resize(nj);
@@ -175,13 +203,13 @@ detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)),
     upper[j] = J.upper;
     velocity_limit[j] = J.velocity_limit;
     torque_limit[j] = J.effort_limit;
-    joint_axis_local.push_back(J.axis.normalized());
   }
+  for (const TreeJoint& T : tree_joints) joint_axis_local.push_back(T.axis);
 
-  // Kinematic tree.
+  // Kinematic tree (tree dofs).
   children.assign(static_cast<size_t>(nb), {});
   tree.bodies.resize(static_cast<size_t>(nb));
-  tree.dofs.resize(static_cast<size_t>(nv));
+  tree.dofs.resize(static_cast<size_t>(ntv));
   for (int b = 0; b < nb; ++b) {
     const LinkDescription& L = desc.links[static_cast<size_t>(b)];
     KinematicTree::Body& B = tree.bodies[static_cast<size_t>(b)];
@@ -204,17 +232,17 @@ detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)),
         }
       }
     } else {
-      const JointDescription& J = desc.joints[static_cast<size_t>(L.parent_joint)];
-      B.parent = J.parent_link;
+      const TreeJoint& J = tree_joints[static_cast<size_t>(b - 1)];
+      B.parent = J.parent;
       children[static_cast<size_t>(B.parent)].push_back(b);
-      const int k = off + L.parent_joint;
+      const int k = off + b - 1;
       B.dofs = {k};
       B.ancestor_dofs = tree.bodies[static_cast<size_t>(B.parent)].ancestor_dofs;
       KinematicTree::Dof& D = tree.dofs[static_cast<size_t>(k)];
       D.type = J.type == JointType::Revolute ? DofType::Revolute : DofType::Prismatic;
       D.body = b;
       D.parent = B.ancestor_dofs.empty() ? -1 : B.ancestor_dofs.back();
-      D.joint = L.parent_joint;
+      D.joint = J.model_joint;
       B.ancestor_dofs.push_back(k);
     }
   }
@@ -257,6 +285,10 @@ const Eigen::VectorXd& RobotModel::jointUpperLimits() const { return impl_->uppe
 const Eigen::VectorXd& RobotModel::jointVelocityLimits() const { return impl_->velocity_limit; }
 const Eigen::VectorXd& RobotModel::jointTorqueLimits() const { return impl_->torque_limit; }
 const KinematicTree& RobotModel::tree() const { return impl_->tree; }
+bool RobotModel::hasCoupledJoints() const { return impl_->coupled; }
+int RobotModel::numTreeDofs() const { return impl_->ntv; }
+int RobotModel::treeDofModel(int k) const { return impl_->tree_dof_model.at(static_cast<size_t>(k)); }
+double RobotModel::treeDofMultiplier(int k) const { return impl_->tree_dof_multiplier.at(static_cast<size_t>(k)); }
 int RobotModel::numCollisionPairs() const { return static_cast<int>(impl_->desc.collision_pairs.size()); }
 
 int RobotModel::jointIndex(const std::string& n) const { return impl_->desc.jointIndex(n); }
@@ -322,11 +354,18 @@ ModelData RobotModel::createData() const {
   d->alpha_bias.setZero(3, m.nb);
   d->a_bias.setZero(3, m.nb);
   d->subtree_com.setZero(3, m.nb);
-  d->S.setZero(6, m.nv);
-  d->axis.setZero(3, m.nv);
-  d->point.setZero(3, m.nv);
+  d->S.setZero(6, m.ntv);
+  d->axis.setZero(3, m.ntv);
+  d->point.setZero(3, m.ntv);
   d->composite.assign(static_cast<size_t>(m.nb), Matrix6d::Zero());
   d->wrench.setZero(6, m.nb);
+  if (m.coupled) {
+    d->q_tree.setZero(m.nt);
+    d->u_tree.setZero(m.ntv);
+    d->M_tree.setZero(m.ntv, m.ntv);
+    d->N_tree.setZero(m.ntv);
+    d->J_tree.setZero(6, m.ntv);
+  }
   ModelData data(std::move(d));
   // One update so that the caches hold a valid state (Simbody's own caches are allocated when a
   // reference operator first realizes the state).
@@ -345,7 +384,19 @@ void RobotModel::update(ModelData& data, const Configuration& q, const Eigen::Re
   d.q = q;  // same sizes: no allocation
   d.u = u;
   d.state_current = false;
-  detail::computeKinematics(m, d, q, u);
+  if (!m.coupled) {
+    detail::computeKinematics(m, d, q, q.joints, u);
+    return;
+  }
+  // The tree's coordinates: q_t = c q_master + o for a coupled joint, u_tree = G u.
+  const int off = m.free_flyer ? 6 : 0;
+  d.u_tree.head(off) = u.head(off);
+  for (int t = 0; t < m.nt; ++t) {
+    const detail::RobotModelImpl::TreeJoint& T = m.tree_joints[static_cast<size_t>(t)];
+    d.q_tree[t] = T.multiplier * q.joints[T.model_joint] + T.offset;
+    d.u_tree[off + t] = T.multiplier * u[off + T.model_joint];
+  }
+  detail::computeKinematics(m, d, q, d.q_tree, d.u_tree);
 }
 
 namespace detail {
@@ -360,9 +411,11 @@ const SimTK::State& realizedState(const RobotModelImpl& m, const ModelDataImpl& 
         Q[m.base_q_index + 3 + k] = d.q.base_position[k];
       }
     }
-    for (int j = 0; j < m.nj; ++j) Q[m.joint_q_index[static_cast<size_t>(j)]] = d.q.joints[j];
+    const Eigen::VectorXd& qt = m.coupled ? d.q_tree : d.q.joints;
+    const Eigen::VectorXd& ut = m.coupled ? d.u_tree : d.u;
+    for (int t = 0; t < m.nt; ++t) Q[m.joint_q_index[static_cast<size_t>(t)]] = qt[t];
     SimTK::Vector& U = d.state.updU();
-    for (int k = 0; k < m.nv; ++k) U[m.dof_u_index[static_cast<size_t>(k)]] = d.u[k];
+    for (int k = 0; k < m.ntv; ++k) U[m.dof_u_index[static_cast<size_t>(k)]] = ut[k];
     d.state_current = true;
   }
   m.system.realize(d.state, SimTK::Stage::Velocity);
@@ -370,7 +423,7 @@ const SimTK::State& realizedState(const RobotModelImpl& m, const ModelDataImpl& 
 }
 
 void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configuration& q,
-                       const Eigen::Ref<const Eigen::VectorXd>& u) {
+                       const Eigen::Ref<const Eigen::VectorXd>& q_tree, const Eigen::Ref<const Eigen::VectorXd>& u) {
   // Placements, velocities and velocity-product accelerations (Jdot u) of the bodies, root to
   // leaves (parents come before their children). The free-flyer's u are the base's angular
   // velocity and origin velocity in the world frame, so its Jdot u is zero; a joint sits at its
@@ -390,13 +443,13 @@ void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configur
   d.a_bias.col(0).setZero();
   const int off = m.free_flyer ? 6 : 0;
   for (int b = 1; b < m.nb; ++b) {
-    const int j = m.desc.links[static_cast<size_t>(b)].parent_joint;
-    const JointDescription& J = m.desc.joints[static_cast<size_t>(j)];
-    const int P = J.parent_link;
+    const int j = b - 1;  // the body's tree joint
+    const RobotModelImpl::TreeJoint& J = m.tree_joints[static_cast<size_t>(j)];
+    const int P = J.parent;
     const Eigen::Matrix3d& RP = d.R[static_cast<size_t>(P)];
     const Eigen::Matrix3d RJ = RP * J.origin.linear();
     const Eigen::Vector3d& axis = m.joint_axis_local[static_cast<size_t>(j)];
-    const double qj = q.joints[j];
+    const double qj = q_tree[j];
     const double uj = u[off + j];
     const Eigen::Vector3d wP = d.omega.col(P);
     const Eigen::Vector3d a = RJ * axis;  // world axis (the same in the joint and child frames)
@@ -439,14 +492,14 @@ void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configur
       d.S.col(3 + k).tail<3>() = a;
     }
   }
-  for (int j = 0; j < m.nj; ++j) {
+  for (int j = 0; j < m.nt; ++j) {
     const int b = j + 1;
     const int k = off + j;
     const Eigen::Vector3d a = d.R[static_cast<size_t>(b)] * m.joint_axis_local[static_cast<size_t>(j)];
     const Eigen::Vector3d o = d.p.col(b);
     d.axis.col(k) = a;
     d.point.col(k) = o;
-    if (m.desc.joints[static_cast<size_t>(j)].type == JointType::Revolute) {
+    if (m.tree_joints[static_cast<size_t>(j)].type == JointType::Revolute) {
       d.S.col(k).head<3>() = a;
       d.S.col(k).tail<3>() = o.cross(a);
     } else {
@@ -469,11 +522,55 @@ void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configur
 
 }  // namespace detail
 
+namespace {
+
+// With coupled joints: the model's quantities from the tree's, u_tree = G u (G: one entry per
+// tree dof, its multiplier in the column of its model dof).
+void reduceMatrix(const detail::RobotModelImpl& m, const Eigen::MatrixXd& A, Eigen::Ref<Eigen::MatrixXd> out) {
+  out.setZero();
+  for (int j = 0; j < m.ntv; ++j) {
+    const int cj = m.tree_dof_model[static_cast<size_t>(j)];
+    const double gj = m.tree_dof_multiplier[static_cast<size_t>(j)];
+    for (int i = 0; i < m.ntv; ++i) {
+      out(m.tree_dof_model[static_cast<size_t>(i)], cj) += m.tree_dof_multiplier[static_cast<size_t>(i)] * gj * A(i, j);
+    }
+  }
+}
+
+void reduceVector(const detail::RobotModelImpl& m, const Eigen::VectorXd& a, Eigen::Ref<Eigen::VectorXd> out) {
+  out.setZero();
+  for (int i = 0; i < m.ntv; ++i) out[m.tree_dof_model[static_cast<size_t>(i)]] += m.tree_dof_multiplier[static_cast<size_t>(i)] * a[i];
+}
+
+void massMatrixOfTree(const detail::RobotModelImpl& m, detail::ModelDataImpl& d, Eigen::Ref<Eigen::MatrixXd> M);
+void nonlinearEffectsOfTree(const detail::RobotModelImpl& m, detail::ModelDataImpl& d, Eigen::Ref<Eigen::VectorXd> N);
+
+template <class Out>
+void reduceColumns(const detail::RobotModelImpl& m, const Eigen::MatrixXd& A, int rows, Out& out) {
+  out.setZero();
+  for (int k = 0; k < m.ntv; ++k) {
+    out.col(m.tree_dof_model[static_cast<size_t>(k)]) += m.tree_dof_multiplier[static_cast<size_t>(k)] * A.block(0, k, rows, 1);
+  }
+}
+
+}  // namespace
+
 void RobotModel::massMatrix(ModelData& data, Eigen::Ref<Eigen::MatrixXd> M) const {
   const Impl& m = *impl_;
   ModelData::Impl& d = data.impl();
   LEXDYN_ALWAYS_ASSERT(d.updated, "massMatrix: call update() first");
   LEXDYN_ALWAYS_ASSERT(M.rows() == m.nv && M.cols() == m.nv, "massMatrix: M must be nv x nv");
+  if (m.coupled) {
+    massMatrixOfTree(m, d, d.M_tree);
+    reduceMatrix(m, d.M_tree, M);
+    return;
+  }
+  massMatrixOfTree(m, d, M);
+}
+
+namespace {
+
+void massMatrixOfTree(const detail::RobotModelImpl& m, detail::ModelDataImpl& d, Eigen::Ref<Eigen::MatrixXd> M) {
   // Spatial inertia of each body about the world origin, [angular; linear] ordering:
   //   I_O = [ Ic - m [c]x[c]x , m [c]x ; -m [c]x , m 1 ]
   for (int b = 0; b < m.nb; ++b) {
@@ -504,11 +601,24 @@ void RobotModel::massMatrix(ModelData& data, Eigen::Ref<Eigen::MatrixXd> M) cons
   }
 }
 
+}  // namespace
+
 void RobotModel::nonlinearEffects(ModelData& data, Eigen::Ref<Eigen::VectorXd> N) const {
   const Impl& m = *impl_;
   ModelData::Impl& d = data.impl();
   LEXDYN_ALWAYS_ASSERT(d.updated, "nonlinearEffects: call update() first");
   LEXDYN_ALWAYS_ASSERT(N.size() == m.nv, "nonlinearEffects: N must have nv entries");
+  if (m.coupled) {
+    nonlinearEffectsOfTree(m, d, d.N_tree);
+    reduceVector(m, d.N_tree, N);
+    return;
+  }
+  nonlinearEffectsOfTree(m, d, N);
+}
+
+namespace {
+
+void nonlinearEffectsOfTree(const detail::RobotModelImpl& m, detail::ModelDataImpl& d, Eigen::Ref<Eigen::VectorXd> N) {
   const Eigen::Vector3d& g = m.desc.gravity;
   // Newton-Euler wrench of each body at udot = 0, about the world origin:
   //   f = m (a_c - g),  n_O = Ic alpha + w x (Ic w) + c x f
@@ -526,8 +636,10 @@ void RobotModel::nonlinearEffects(ModelData& data, Eigen::Ref<Eigen::VectorXd> N
     d.wrench.col(b).tail<3>() = f;
   }
   for (int b = m.nb - 1; b > 0; --b) d.wrench.col(m.tree.bodies[static_cast<size_t>(b)].parent) += d.wrench.col(b);
-  for (int k = 0; k < m.nv; ++k) N[k] = d.S.col(k).dot(d.wrench.col(m.tree.dofs[static_cast<size_t>(k)].body));
+  for (int k = 0; k < m.ntv; ++k) N[k] = d.S.col(k).dot(d.wrench.col(m.tree.dofs[static_cast<size_t>(k)].body));
 }
+
+}  // namespace
 
 Eigen::Isometry3d RobotModel::bodyPlacement(const ModelData& data, int body) const {
   const ModelData::Impl& d = data.impl();
@@ -579,6 +691,14 @@ void RobotModel::pointJacobian(const ModelData& data, FrameId f, const Eigen::Ve
   LEXDYN_ALWAYS_ASSERT(J.rows() == 3 && J.cols() == m.nv, "pointJacobian: J must be 3 x nv");
   const int b = m.desc.frames[static_cast<size_t>(f)].link;
   const Eigen::Vector3d p = pointPosition(data, f, p_in_frame);
+  if (m.coupled) {
+    d.J_tree.setZero();
+    for (int k : m.tree.bodies[static_cast<size_t>(b)].ancestor_dofs) {
+      d.J_tree.col(k).head<3>() = d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(p);
+    }
+    reduceColumns(m, d.J_tree, 3, J);
+    return;
+  }
   J.setZero();
   for (int k : m.tree.bodies[static_cast<size_t>(b)].ancestor_dofs) {
     J.col(k) = d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(p);
@@ -591,6 +711,15 @@ void RobotModel::frameJacobian(const ModelData& data, FrameId f, Eigen::Ref<Eige
   LEXDYN_ALWAYS_ASSERT(J.rows() == 6 && J.cols() == m.nv, "frameJacobian: J must be 6 x nv");
   const int b = m.desc.frames[static_cast<size_t>(f)].link;
   const Eigen::Vector3d p = pointPosition(data, f, Eigen::Vector3d::Zero());
+  if (m.coupled) {
+    d.J_tree.setZero();
+    for (int k : m.tree.bodies[static_cast<size_t>(b)].ancestor_dofs) {
+      d.J_tree.col(k).head<3>() = d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(p);
+      d.J_tree.col(k).tail<3>() = d.S.col(k).head<3>();
+    }
+    reduceColumns(m, d.J_tree, 6, J);
+    return;
+  }
   J.setZero();
   for (int k : m.tree.bodies[static_cast<size_t>(b)].ancestor_dofs) {
     J.col(k).head<3>() = d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(p);
@@ -637,6 +766,16 @@ void RobotModel::centerOfMassJacobian(const ModelData& data, Eigen::Ref<Eigen::M
   LEXDYN_ALWAYS_ASSERT(J.rows() == 3 && J.cols() == m.nv, "centerOfMassJacobian: J must be 3 x nv");
   // Column k moves the subtree of its body rigidly: the CoM moves by (m_sub / M) times the
   // velocity of the subtree's CoM.
+  if (m.coupled) {
+    d.J_tree.setZero();
+    for (int k = 0; k < m.ntv; ++k) {
+      const int b = m.tree.dofs[static_cast<size_t>(k)].body;
+      const double w = m.tree.bodies[static_cast<size_t>(b)].subtree_mass / m.total_mass;
+      d.J_tree.col(k).head<3>() = w * (d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(d.subtree_com.col(b)));
+    }
+    reduceColumns(m, d.J_tree, 3, J);
+    return;
+  }
   for (int k = 0; k < m.nv; ++k) {
     const int b = m.tree.dofs[static_cast<size_t>(k)].body;
     const double w = m.tree.bodies[static_cast<size_t>(b)].subtree_mass / m.total_mass;
@@ -653,7 +792,7 @@ Eigen::Vector3d RobotModel::centerOfMassBias(const ModelData& data) const {
 }
 
 void RobotModel::dofAxes(const ModelData& data, Eigen::Ref<Eigen::Matrix3Xd> axes, Eigen::Ref<Eigen::Matrix3Xd> points) const {
-  LEXDYN_ALWAYS_ASSERT(axes.cols() == impl_->nv && points.cols() == impl_->nv, "dofAxes: 3 x nv outputs");
+  LEXDYN_ALWAYS_ASSERT(axes.cols() == impl_->ntv && points.cols() == impl_->ntv, "dofAxes: 3 x numTreeDofs() outputs");
   axes = data.impl().axis;
   points = data.impl().point;
 }
@@ -730,10 +869,12 @@ CapsuleDistance RobotModel::capsuleDistance(const ModelData& data, int pair,
     LEXDYN_ALWAYS_ASSERT(J.size() == m.nv, "capsuleDistance: J must be 1 x nv");
     J.setZero();
     for (int k : m.tree.bodies[static_cast<size_t>(A.link)].ancestor_dofs) {
-      J[k] += out.normal.dot(d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(out.point_a));
+      J[m.tree_dof_model[static_cast<size_t>(k)]] += m.tree_dof_multiplier[static_cast<size_t>(k)] *
+                                                     out.normal.dot(d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(out.point_a));
     }
     for (int k : m.tree.bodies[static_cast<size_t>(B.link)].ancestor_dofs) {
-      J[k] -= out.normal.dot(d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(out.point_b));
+      J[m.tree_dof_model[static_cast<size_t>(k)]] -= m.tree_dof_multiplier[static_cast<size_t>(k)] *
+                                                     out.normal.dot(d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(out.point_b));
     }
   }
   return out;
@@ -762,8 +903,10 @@ void RobotModel::massMatrixReference(const ModelData& data, Eigen::Ref<Eigen::Ma
   const Impl& m = *impl_;
   SimTK::Matrix Ms;
   m.matter.calcM(detail::realizedState(m, data.impl()), Ms);
-  for (int i = 0; i < m.nv; ++i)
-    for (int j = 0; j < m.nv; ++j) M(i, j) = Ms(m.dof_u_index[static_cast<size_t>(i)], m.dof_u_index[static_cast<size_t>(j)]);
+  Eigen::MatrixXd Mt(m.ntv, m.ntv);
+  for (int i = 0; i < m.ntv; ++i)
+    for (int j = 0; j < m.ntv; ++j) Mt(i, j) = Ms(m.dof_u_index[static_cast<size_t>(i)], m.dof_u_index[static_cast<size_t>(j)]);
+  reduceMatrix(m, Mt, M);
 }
 
 void RobotModel::inverseDynamicsReference(const ModelData& data, const Eigen::Ref<const Eigen::VectorXd>& udot,
@@ -772,10 +915,15 @@ void RobotModel::inverseDynamicsReference(const ModelData& data, const Eigen::Re
   const ModelData::Impl& d = data.impl();
   SimTK::Vector_<SimTK::SpatialVec> F;
   gravityBodyForces(m, d, F);
+  // udot_tree = G udot (G is constant: no G-dot term).
   SimTK::Vector ud(m.simbody_nu), resid;
-  for (int k = 0; k < m.nv; ++k) ud[m.dof_u_index[static_cast<size_t>(k)]] = udot[k];
+  for (int k = 0; k < m.ntv; ++k) {
+    ud[m.dof_u_index[static_cast<size_t>(k)]] = m.tree_dof_multiplier[static_cast<size_t>(k)] * udot[m.tree_dof_model[static_cast<size_t>(k)]];
+  }
   m.matter.calcResidualForceIgnoringConstraints(detail::realizedState(m, d), SimTK::Vector(), F, ud, resid);
-  for (int k = 0; k < m.nv; ++k) tau[k] = resid[m.dof_u_index[static_cast<size_t>(k)]];
+  Eigen::VectorXd rt(m.ntv);
+  for (int k = 0; k < m.ntv; ++k) rt[k] = resid[m.dof_u_index[static_cast<size_t>(k)]];
+  reduceVector(m, rt, tau);
 }
 
 void RobotModel::forwardDynamicsReference(ModelData& data, const Eigen::Ref<const Eigen::VectorXd>& tau,
@@ -786,6 +934,15 @@ void RobotModel::forwardDynamicsReference(ModelData& data, const Eigen::Ref<cons
   m.system.realize(d.state, SimTK::Stage::Dynamics);
   SimTK::Vector_<SimTK::SpatialVec> F;
   gravityBodyForces(m, d, F);
+  if (m.coupled) {
+    // (G^T M G) udot = tau - G^T N, with Simbody's M and N.
+    Eigen::MatrixXd M(m.nv, m.nv);
+    massMatrixReference(data, M);
+    Eigen::VectorXd N(m.nv);
+    inverseDynamicsReference(data, Eigen::VectorXd::Zero(m.nv), N);
+    udot = M.ldlt().solve(tau - N);
+    return;
+  }
   SimTK::Vector f(m.simbody_nu), ud;
   for (int k = 0; k < m.nv; ++k) f[m.dof_u_index[static_cast<size_t>(k)]] = tau[k];
   SimTK::Vector_<SimTK::SpatialVec> A_GB;
@@ -799,13 +956,15 @@ void RobotModel::frameJacobianReference(const ModelData& data, FrameId f, Eigen:
   SimTK::Matrix Js;
   m.matter.calcFrameJacobian(detail::realizedState(m, data.impl()), m.mobod[static_cast<size_t>(F.link)],
                              toSimTK(F.placement.translation()), Js);
-  for (int k = 0; k < m.nv; ++k) {
+  Eigen::MatrixXd Jt(6, m.ntv);
+  for (int k = 0; k < m.ntv; ++k) {
     const int c = m.dof_u_index[static_cast<size_t>(k)];
     for (int i = 0; i < 3; ++i) {
-      J(i, k) = Js(3 + i, c);  // linear
-      J(3 + i, k) = Js(i, c);  // angular
+      Jt(i, k) = Js(3 + i, c);  // linear
+      Jt(3 + i, k) = Js(i, c);  // angular
     }
   }
+  reduceColumns(m, Jt, 6, J);
 }
 
 Eigen::Vector3d RobotModel::centerOfMassReference(const ModelData& data) const {

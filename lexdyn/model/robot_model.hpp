@@ -137,6 +137,15 @@ class RobotModel {
   /// Named posture from the data file (throws InputError when absent).
   const Eigen::VectorXd& posture(const std::string& name) const;
   const KinematicTree& tree() const;
+  /// Coupled mimic joints (docs/model.md, "Mimic joints") move with their masters, so the model's
+  /// dofs (the columns of u) are fewer than its tree's: one dof per body's mobilizer, in body
+  /// order (the free-flyer's first). tree(), dofAxes() and the analytic Hessians work in the tree
+  /// dofs; every other query in the model's (G^T M G, G^T N, J G with u_tree = G u). Without
+  /// coupled joints the two are the same, dof for dof.
+  bool hasCoupledJoints() const;
+  int numTreeDofs() const;
+  int treeDofModel(int k) const;          ///< the model dof tree dof k moves with
+  double treeDofMultiplier(int k) const;  ///< its factor (1 for a model dof)
 
   // ----- configuration helpers ------------------------------------------------------------
   Configuration neutralConfiguration() const;  ///< identity base at the origin, joints 0
@@ -189,7 +198,8 @@ class RobotModel {
                                   Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> J) const;
   int numCollisionPairs() const;
 
-  /// World axis and a point on the axis of every dof (3 x nv each), for analytic derivatives.
+  /// World axis and a point on the axis of every tree dof (3 x numTreeDofs() each), for analytic
+  /// derivatives.
   void dofAxes(const ModelData& data, Eigen::Ref<Eigen::Matrix3Xd> axes,
                Eigen::Ref<Eigen::Matrix3Xd> points) const;
   /// World pose of a body frame.

@@ -594,6 +594,13 @@ void readGeometry(const XmlLink& l, int body, const Eigen::Isometry3d& X_body_li
 // ---------------------------------------------------------------------------------------------
 // The bodies
 // ---------------------------------------------------------------------------------------------
+// A coupled mimic joint: its independent master (a mimic of a mimic composed down to it).
+struct Coupling {
+  std::string master;
+  double multiplier = 1.0, offset = 0.0;
+  int line = 0;
+};
+
 struct TreeBuilder {
   const XmlIndex& idx;
   const urdf::ModelInterface& model;
@@ -608,6 +615,7 @@ struct TreeBuilder {
   std::map<std::string, const XmlLink*> xml_link;
   std::map<std::string, const XmlJoint*> xml_joint;
   std::map<std::string, double> locked;  // mimic joint -> locked value
+  std::map<std::string, Coupling> coupled;  // coupled mimic joint -> its master
 
   const urdf::Link& link(const std::string& name) const {
     auto it = model.links_.find(name);
@@ -697,6 +705,33 @@ struct TreeBuilder {
         continue;
       }
       JointDescription jd = movingJoint(xj, uj, body, X_body_joint);
+      if (coupled.count(xj.name)) {
+        // A coupled mimic joint: a body of its own, not a model joint (its master is resolved once
+        // every joint is read).
+        CoupledJointDescription cj;
+        cj.name = jd.name;
+        cj.type = jd.type;
+        cj.parent_link = body;
+        cj.origin = jd.origin;
+        cj.axis = jd.axis;
+        cj.lower = jd.lower;
+        cj.upper = jd.upper;
+        cj.multiplier = coupled.at(xj.name).multiplier;
+        cj.offset = coupled.at(xj.name).offset;
+        cj.urdf_line = xj.line;
+        const int child_body = static_cast<int>(d.links.size());
+        cj.child_link = child_body;
+        LinkDescription ld;
+        ld.name = xj.child;
+        ld.parent_coupled = static_cast<int>(d.coupled_joints.size());
+        ld.urdf_line = idx.lineOfLink(xj.child);
+        d.links.push_back(ld);
+        d.coupled_joints.push_back(cj);
+        body_mass.push_back(linkMassProps(link(xj.child), whereLink(xj.child), false, problems));
+        addFrameAndGeometry(xj.child, child_body, Eigen::Isometry3d::Identity());
+        visit(xj.child, child_body, Eigen::Isometry3d::Identity());
+        continue;
+      }
       const int child_body = static_cast<int>(d.links.size());
       jd.child_link = child_body;
       LinkDescription ld;
@@ -715,7 +750,8 @@ struct TreeBuilder {
 
 // The joints URDF reads as mimics and the value each locked one is held at.
 void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const std::string& file, const MimicPolicy& policy,
-                RobotDescription& d, ProblemList& problems, std::map<std::string, double>& locked) {
+                RobotDescription& d, ProblemList& problems, std::map<std::string, double>& locked,
+                std::map<std::string, Coupling>& coupled) {
   std::map<std::string, const XmlJoint*> by_name;
   for (const auto& j : idx.joints) by_name[j.name] = &j;
   for (const auto& xj : idx.joints) {
@@ -755,6 +791,26 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
     }
     return v;
   };
+  // Coupled: composed down to the independent master.
+  std::function<Coupling(const std::string&, int)> composed = [&](const std::string& joint, int depth) -> Coupling {
+    for (const auto& md : d.mimics) {
+      if (md.joint != joint) continue;
+      if (depth > 32) break;
+      Coupling inner = composed(md.master, depth + 1);
+      return {inner.master, md.multiplier * inner.multiplier, md.multiplier * inner.offset + md.offset, md.urdf_line};
+    }
+    return {joint, 1.0, 0.0, 0};
+  };
+  for (auto& md : d.mimics) {
+    if (md.mode != MimicMode::Coupled) continue;
+    Coupling c = composed(md.joint, 0);
+    c.line = md.urdf_line;
+    if (c.master == md.joint) {
+      problems.error(at(file, md.urdf_line), "joint '" + md.joint + "': its <mimic> joints form a cycle");
+      continue;
+    }
+    coupled[md.joint] = c;
+  }
   // One warning per master: "joints 'a' (locked at x), 'b' (at y) mimic 'm' ...".
   std::vector<std::string> masters;
   std::map<std::string, std::string> locked_text;
@@ -785,10 +841,27 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
     const std::string source = policy.posture.empty() ? "'" + m + "' at " + fmt(valueOf(m, 0))
                                                       : "'" + m + "' at " + fmt(valueOf(m, 0)) + " in posture '" + policy.posture + "'";
     const std::string what = "mimic joints of '" + m + "': " + locked_text[m] + "; from " + source;
+    problems.warning(at(file, first_line[m]), what);
+  }
+  // Coupled: one note per master, a warning without the data file's `mimic` (strict: an error).
+  std::vector<std::string> coupled_masters;
+  std::map<std::string, std::string> coupled_text;
+  std::map<std::string, int> coupled_line;
+  for (const auto& [joint, c] : coupled) {
+    if (!coupled_text.count(c.master)) {
+      coupled_masters.push_back(c.master);
+      coupled_line[c.master] = c.line;
+    }
+    std::string& t = coupled_text[c.master];
+    t += std::string(t.empty() ? "" : ", ") + "'" + joint + "' = " + fmt(c.multiplier) + " q" + (c.offset != 0.0 ? " + " + fmt(c.offset) : "");
+  }
+  for (const std::string& m : coupled_masters) {
+    const std::string what = "mimic joints coupled to '" + m + "' (q its coordinate): " + coupled_text[m] +
+                             "; they move with it in the controller's model and in the simulator";
     if (policy.given) {
-      problems.warning(at(file, first_line[m]), what);
+      problems.warning(at(file, coupled_line[m]), what);
     } else {
-      problems.lenient(at(file, first_line[m]), what + "; say `mimic: {mode: locked}` in the data file to keep this without a warning");
+      problems.lenient(at(file, coupled_line[m]), what + " (`mimic: {mode: locked}` in the data file holds them at the posture instead)");
     }
   }
 }
@@ -799,10 +872,7 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
 std::vector<double> jointInertias(const RobotDescription& d) {
   const size_t nb = d.links.size();
   std::vector<Eigen::Isometry3d> X(nb, Eigen::Isometry3d::Identity());
-  for (size_t b = 1; b < nb; ++b) {
-    const JointDescription& J = d.joints[static_cast<size_t>(d.links[b].parent_joint)];
-    X[b] = X[static_cast<size_t>(J.parent_link)] * J.origin;
-  }
+  for (size_t b = 1; b < nb; ++b) X[b] = X[static_cast<size_t>(d.parentBody(static_cast<int>(b)))] * d.jointOrigin(static_cast<int>(b));
   // Subtree mass, first moment and inertia about the world origin (children after parents).
   std::vector<double> m(nb, 0.0);
   std::vector<Eigen::Vector3d> h(nb, Eigen::Vector3d::Zero());
@@ -815,7 +885,7 @@ std::vector<double> jointInertias(const RobotDescription& d) {
     h[b] += L.mass * c;
     I[b] += R * L.inertia * R.transpose() + L.mass * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
     if (b > 0) {
-      const size_t p = static_cast<size_t>(d.joints[static_cast<size_t>(L.parent_joint)].parent_link);
+      const size_t p = static_cast<size_t>(d.parentBody(static_cast<int>(b)));
       m[p] += m[b];
       h[p] += h[b];
       I[p] += I[b];
@@ -835,9 +905,13 @@ std::vector<double> jointInertias(const RobotDescription& d) {
     out[0] = m[0] > 0.0 ? Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(0.5 * (Ic + Ic.transpose()), Eigen::EigenvaluesOnly).eigenvalues()[0] : 0.0;
   }
   for (size_t b = 1; b < nb; ++b) {
-    const JointDescription& J = d.joints[static_cast<size_t>(d.links[b].parent_joint)];
-    const Eigen::Vector3d a = X[b].linear() * J.axis;
-    out[b] = J.type == JointType::Prismatic ? m[b] : a.dot(about(b, X[b].translation()) * a);
+    const LinkDescription& L = d.links[b];
+    const Eigen::Vector3d axis = L.parent_joint >= 0 ? d.joints[static_cast<size_t>(L.parent_joint)].axis
+                                                     : d.coupled_joints[static_cast<size_t>(L.parent_coupled)].axis;
+    const JointType type = L.parent_joint >= 0 ? d.joints[static_cast<size_t>(L.parent_joint)].type
+                                               : d.coupled_joints[static_cast<size_t>(L.parent_coupled)].type;
+    const Eigen::Vector3d a = X[b].linear() * axis;
+    out[b] = type == JointType::Prismatic ? m[b] : a.dot(about(b, X[b].translation()) * a);
   }
   return out;
 }
@@ -904,6 +978,7 @@ void checkBodies(RobotDescription& d, BaseType base, const std::string& file, co
                                                 ": a floating robot needs mass and a positive inertia");
   }
   for (size_t b = 1; b < d.links.size(); ++b) {
+    if (d.links[b].parent_joint < 0) continue;  // a coupled body: its master's column carries it
     const JointDescription& J = d.joints[static_cast<size_t>(d.links[b].parent_joint)];
     if (!(moved[b] >= ranges::kMinPrincipalInertia_kgm2)) {
       problems.error(at(file, J.urdf_line), "joint '" + J.name + "' moves nothing with mass or inertia about its " +
@@ -951,6 +1026,36 @@ void lockMasslessJoints(const XmlIndex& idx, const urdf::ModelInterface& model, 
     problems.warning(file, std::to_string(names.size()) + " moving joint(s) (" + list +
                                ") move only massless links: locked (at 0, or the limit nearest to it), as fixed joints; "
                                "the dynamics has no use for them");
+  }
+}
+
+// Each coupled joint's master as a model joint, and the master's range narrowed to where its
+// coupled joints stay within their own limits (q_c = c q + o in [lo_c, hi_c]).
+void resolveCoupledMasters(RobotDescription& d, const std::map<std::string, Coupling>& coupled, const std::string& file,
+                           ProblemList& problems) {
+  for (auto& cj : d.coupled_joints) {
+    const Coupling& c = coupled.at(cj.name);
+    cj.master = d.findJoint(c.master);
+    LEXDYN_ALWAYS_ASSERT(cj.master >= 0, "coupled joint " + cj.name + ": its master " + c.master + " is not a model joint");
+    if (!(std::isfinite(cj.lower) && std::isfinite(cj.upper)) || cj.multiplier == 0.0) continue;
+    JointDescription& M = d.joints[static_cast<size_t>(cj.master)];
+    double lo = (cj.lower - cj.offset) / cj.multiplier, hi = (cj.upper - cj.offset) / cj.multiplier;
+    if (lo > hi) std::swap(lo, hi);
+    if (lo > M.lower || hi < M.upper) {
+      const double new_lo = std::max(lo, M.lower), new_hi = std::min(hi, M.upper);
+      if (!(new_lo < new_hi)) {
+        problems.error(at(file, cj.urdf_line), "joint '" + cj.name + "' (coupled to '" + M.name + "'): its limits [" + fmt(cj.lower) +
+                                                   ", " + fmt(cj.upper) + "] leave its master no range within [" + fmt(M.lower) + ", " +
+                                                   fmt(M.upper) + "]");
+        continue;
+      }
+      problems.warning(at(file, cj.urdf_line), "the range of '" + M.name + "' is narrowed from [" + fmt(M.lower) + ", " + fmt(M.upper) +
+                                                   "] to [" + fmt(new_lo) + ", " + fmt(new_hi) + "], where its coupled joint '" + cj.name +
+                                                   "' stays within its own limits");
+      M.lower = new_lo;
+      M.upper = new_hi;
+      M.continuous = false;
+    }
   }
 }
 
@@ -1067,8 +1172,21 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
                 {}, {}, {}, {}};
   for (const auto& l : idx.links) t.xml_link[l.name] = &l;
   for (const auto& j : idx.joints) t.xml_joint[j.name] = &j;
-  readMimics(idx, *model, file, mimic, d, problems, t.locked);
+  readMimics(idx, *model, file, mimic, d, problems, t.locked, t.coupled);
   lockMasslessJoints(idx, *model, file, problems, t.locked, d);
+  // A coupled joint locked (it moves only massless links), or whose master is locked, is locked.
+  for (auto it = t.coupled.begin(); it != t.coupled.end();) {
+    if (t.locked.count(it->first)) {
+      it = t.coupled.erase(it);
+    } else if (t.locked.count(it->second.master)) {
+      const double v = it->second.multiplier * t.locked.at(it->second.master) + it->second.offset;
+      t.locked[it->first] = v;
+      d.locked_joints.push_back(LockedJointDescription{it->first, v, "mimic of a locked joint"});
+      it = t.coupled.erase(it);
+    } else {
+      ++it;
+    }
+  }
   problems.throwIfHardErrors();
 
   {
@@ -1081,6 +1199,7 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
     t.addFrameAndGeometry(root, 0, Eigen::Isometry3d::Identity());
   }
   t.visit(root, 0, Eigen::Isometry3d::Identity());
+  resolveCoupledMasters(d, t.coupled, file, problems);
 
   for (size_t b = 0; b < d.links.size(); ++b) {
     d.links[b].mass = t.body_mass[b].mass;

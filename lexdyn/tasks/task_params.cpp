@@ -75,7 +75,7 @@ int resolveJoint(const model::RobotModel& model, const std::string& name, const 
 
 void markBodyChain(const model::RobotModel& model, int body, std::vector<char>& mask) {
   LEXDYN_ALWAYS_ASSERT(static_cast<int>(mask.size()) == model.nv(), "chainDofs: the mask needs nv entries");
-  for (int k : model.tree().bodies[static_cast<size_t>(body)].ancestor_dofs) mask[static_cast<size_t>(k)] = 1;
+  for (int k : model.tree().bodies[static_cast<size_t>(body)].ancestor_dofs) mask[static_cast<size_t>(model.treeDofModel(k))] = 1;
 }
 
 Eigen::Vector3d rotationError(const Eigen::Matrix3d& R_d, const Eigen::Matrix3d& R) {

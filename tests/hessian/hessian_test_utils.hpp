@@ -32,6 +32,8 @@ inline model::RobotModel loadPlanar3r() { return loadModel("models/planar_3r", "
 inline model::RobotModel loadArm7() { return loadModel("models/arm_7dof", "arm_7dof"); }
 /// Free-flyer test model with a revolute -> prismatic -> revolute branch (tests/data/hessian).
 inline model::RobotModel loadBranched() { return loadModel("tests/data/hessian", "branched_rpr"); }
+/// Coupled mimic joints: the tree's extra dofs reduced onto their masters.
+inline model::RobotModel loadCoupled() { return loadModel("tests/data/model", "coupled"); }
 
 class Rng {
  public:

@@ -28,11 +28,10 @@ TEST(HessianAllocation, CounterSeesAllocations) {
   EXPECT_GE(n, 3u);
 }
 
-TEST(HessianAllocation, AccumulateFunctionsAllocateNothing) {
-  const model::RobotModel m = testing::loadHumanoid();
+void expectAccumulateAllocationFree(const model::RobotModel& m, const std::string& posture) {
   model::ModelData data = m.createData();
   Rng rng(301);
-  const model::Configuration q = testing::randomConfiguration(m, rng, "half_sitting", 0.3);
+  const model::Configuration q = testing::randomConfiguration(m, rng, posture, posture.empty() ? 0.0 : 0.3);
   m.update(data, q, rng.uniformVector(m.nv()));
   KinematicHessianWorkspace ws(m);
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m.nv(), m.nv());
@@ -52,6 +51,10 @@ TEST(HessianAllocation, AccumulateFunctionsAllocateNothing) {
   EXPECT_EQ(count, 0u);
   EXPECT_GT(H.cwiseAbs().maxCoeff(), 0.0);
 }
+
+TEST(HessianAllocation, AccumulateFunctionsAllocateNothing) { expectAccumulateAllocationFree(testing::loadHumanoid(), "half_sitting"); }
+// With coupled mimic joints the tree's Hessian is accumulated in the workspace, then reduced.
+TEST(HessianAllocation, CoupledMimicJointsAllocateNothingEither) { expectAccumulateAllocationFree(testing::loadCoupled(), ""); }
 
 TEST(HessianAllocation, RegularizeFactorAndEigenAllocateNothing) {
   const int n = 38;

@@ -280,6 +280,7 @@ TEST(KinematicHessian, Arm7dof) { runCase({"arm_7dof", &testing::loadArm7, "", 0
 TEST(KinematicHessian, FreeFlyerWithPrismaticBetweenRevolutes) {
   runCase({"branched_rpr", &testing::loadBranched, "", 0.0, 5}, 44);
 }
+TEST(KinematicHessian, CoupledMimicJoints) { runCase({"coupled", &testing::loadCoupled, "", 0.0, 5}, 45); }
 
 // The humanoid at a random configuration near half-sitting (seeded, zero velocity) with its
 // Hessian workspace updated; the generator goes on from there.

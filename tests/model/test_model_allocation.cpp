@@ -13,6 +13,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <new>
+#include <string>
+#include <vector>
 
 extern "C" {
 void* __libc_malloc(size_t);
@@ -101,19 +103,19 @@ TEST(ModelAllocation, CounterSeesAllocations) {
   EXPECT_GE(seen, 2);
 }
 
-TEST(ModelAllocation, ControllerTickQueriesAreAllocationFree) {
-  RobotModel model = testing::loadHumanoid();
+// Three ticks of the controller's model queries on `model`, counting allocations.
+void expectTickQueriesAllocationFree(RobotModel& model, const std::vector<std::string>& frame_names) {
   ModelData data = model.createData();
   testing::RandomStates rs(21);
-  const int n = model.nv();
+  const int n = model.nv(), nt = model.numTreeDofs();
   // Everything sized once at setup.
   Configuration q = rs.configuration(model), q_next = q;
   Eigen::VectorXd u = rs.velocity(model), N(n), du(n);
   Eigen::MatrixXd M(n, n), J6(6, n), J3(3, n), Jc(3, n);
-  Eigen::RowVectorXd Jd(n);
-  Eigen::Matrix3Xd axes(3, n), points(3, n);
-  const FrameId frames[] = {model.frameId("RSOLE"), model.frameId("LSOLE"), model.frameId("RGRASP"),
-                            model.frameId("LGRASP"), model.frameId("CHEST_LINK1"), model.frameId("HEAD_LINK1")};
+  Eigen::RowVectorXd Jd = Eigen::RowVectorXd::Zero(n);  // (no collision pairs: stays zero)
+  Eigen::Matrix3Xd axes(3, nt), points(3, nt);
+  std::vector<FrameId> frames;
+  for (const auto& f : frame_names) frames.push_back(model.frameId(f));
   double sink = 0.0;
   for (int tick = 0; tick < 3; ++tick) {
     Guard guard;
@@ -137,6 +139,18 @@ TEST(ModelAllocation, ControllerTickQueriesAreAllocationFree) {
     EXPECT_EQ(g_allocations.load(), 0) << "tick " << tick;
   }
   EXPECT_TRUE(std::isfinite(sink + M.sum() + N.sum() + J6.sum() + Jc.sum() + Jd.sum() + du.sum()));
+}
+
+TEST(ModelAllocation, ControllerTickQueriesAreAllocationFree) {
+  RobotModel model = testing::loadHumanoid();
+  expectTickQueriesAllocationFree(model, {"RSOLE", "LSOLE", "RGRASP", "LGRASP", "CHEST_LINK1", "HEAD_LINK1"});
+}
+
+// With coupled mimic joints the queries reduce the tree's (G^T M G, J G) in workspaces.
+TEST(ModelAllocation, CoupledMimicJointsAllocateNothingEither) {
+  RobotModel model = testing::loadModel("tests/data/model", "coupled");
+  ASSERT_TRUE(model.hasCoupledJoints());
+  expectTickQueriesAllocationFree(model, {"fingertip", "nail_end", "tail_end", "torso"});
 }
 
 // Simbody's own operators allocate temporaries on every call (the reason the per-tick queries

@@ -30,6 +30,7 @@ const ModelCase kCases[] = {
     {"models/hrp2kai_like", "hrp2kai_like"}, {"models/arm_7dof", "arm_7dof"},
     {"models/planar_3r", "planar_3r"},       {"models/point_mass", "point_mass"},
     {"tests/data/model", "free_body"},       {"tests/data/model", "merged"},
+    {"tests/data/model", "coupled"},
 };
 
 constexpr double kH = 1e-5;
@@ -272,13 +273,16 @@ TEST_P(ModelDynamics, CenterOfMassJacobianAndBiasMatchFiniteDifferences) {
   });
 }
 
+// The tree's dofs are the model's, plus one per coupled mimic joint (moving with its master by a
+// factor): each body's Jacobian is the sum of its moving dofs' screws, each in its model column.
 TEST_P(ModelDynamics, DofAxesAndTreeRelationAgreeWithJacobians) {
   RandomStates rs(17);
-  const int n = model().nv();
+  const int n = model().nv(), nt = model().numTreeDofs();
+  EXPECT_EQ(nt > n, model().hasCoupledJoints());
   const Configuration q = rs.configuration(model());
   model().update(data(), q, rs.velocity(model()));
   const KinematicTree& tree = model().tree();
-  Eigen::Matrix3Xd axes(3, n), points(3, n);
+  Eigen::Matrix3Xd axes(3, nt), points(3, nt);
   model().dofAxes(data(), axes, points);
   for (int b = 0; b < model().numBodies(); ++b) {
     // The body frame is the frame of the same name.
@@ -286,19 +290,18 @@ TEST_P(ModelDynamics, DofAxesAndTreeRelationAgreeWithJacobians) {
     Eigen::MatrixXd J(6, n);
     model().frameJacobian(data(), f, J);
     const Eigen::Vector3d p = model().framePlacement(data(), f).translation();
-    for (int k = 0; k < n; ++k) {
-      if (!tree.dofMovesBody(k, b)) {
-        EXPECT_EQ(J.col(k).norm(), 0.0);
-        continue;
-      }
-      Eigen::VectorXd expected(6);
+    Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(6, n);
+    for (int k = 0; k < nt; ++k) {
+      if (!tree.dofMovesBody(k, b)) continue;
+      Eigen::VectorXd screw(6);
       if (tree.dofs[static_cast<size_t>(k)].type == DofType::Revolute) {
-        expected << axes.col(k).cross(p - points.col(k)), axes.col(k);
+        screw << axes.col(k).cross(p - points.col(k)), axes.col(k);
       } else {
-        expected << axes.col(k), Eigen::Vector3d::Zero();
+        screw << axes.col(k), Eigen::Vector3d::Zero();
       }
-      EXPECT_TRUE(near(J.col(k), expected, 1e-12)) << "dof " << k << " body " << b;
+      expected.col(model().treeDofModel(k)) += model().treeDofMultiplier(k) * screw;
     }
+    EXPECT_TRUE(near(J, expected, 1e-12)) << "body " << b;
   }
   // Parent links follow the ancestor lists.
   for (int b = 0; b < model().numBodies(); ++b) {

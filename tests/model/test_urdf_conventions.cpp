@@ -89,38 +89,72 @@ std::string allWarnings(const RobotDescription& d) {
 TEST(UrdfConventions, APackageStyleRobotLoadsWithItsWarnings) {
   const RosStyleRobot r;
   const RobotDescription d = r.load();
-  // Bodies: base_link + pelvis + imu_link lumped; thigh; shank + finger (locked) + cover.
-  ASSERT_EQ(d.links.size(), 3u);
+  // Bodies: base_link + pelvis + imu_link lumped; thigh; shank + cover; finger_link, moved by the
+  // coupled mimic joint 'finger'.
+  ASSERT_EQ(d.links.size(), 4u);
   ASSERT_EQ(d.joints.size(), 2u);
   EXPECT_EQ(d.joints[0].name, "hip");
   EXPECT_EQ(d.joints[1].name, "knee");
   EXPECT_EQ(d.links[0].name, "base_link");
   EXPECT_DOUBLE_EQ(d.links[0].mass, 5.05);
-  EXPECT_DOUBLE_EQ(d.links[2].mass, 1.6);
+  EXPECT_DOUBLE_EQ(d.links[2].mass, 1.5);
+  EXPECT_EQ(d.links[3].name, "finger_link");
+  EXPECT_EQ(d.links[3].parent_joint, -1);
+  EXPECT_EQ(d.parentBody(3), 2);
+  ASSERT_EQ(d.coupled_joints.size(), 1u);
+  const CoupledJointDescription& c = d.coupled_joints[0];
+  EXPECT_EQ(c.name, "finger");
+  EXPECT_EQ(c.master, 1);
+  EXPECT_DOUBLE_EQ(c.multiplier, 0.5);
+  EXPECT_DOUBLE_EQ(c.offset, 0.1);
+  EXPECT_EQ(d.links[3].parent_coupled, 0);
   const std::string w = allWarnings(d);
   EXPECT_TRUE(containsAll(w, {"fixed joint", "'base_to_pelvis'", "ignored"})) << w;
   EXPECT_TRUE(containsAll(w, {"ros.urdf:7", "link 'imu_link'", "zero inertia", "point mass"})) << w;
   EXPECT_TRUE(containsAll(w, {"ros.urdf:9", "body 'thigh'", "rounding noise", "projected"})) << w;
   EXPECT_TRUE(containsAll(w, {"'hip'", "effort limit is unspecified", "unlimited"})) << w;
   EXPECT_TRUE(containsAll(w, {"velocity limit is unspecified"})) << w;
-  EXPECT_TRUE(containsAll(w, {"ros.urdf:12", "mimic joints of 'knee': 'finger' (x 0.5 + 0.1: locked at 0.1)"})) << w;
+  EXPECT_TRUE(containsAll(w, {"ros.urdf:12", "mimic joints coupled to 'knee' (q its coordinate): 'finger' = 0.5 q + 0.1",
+                              "`mimic: {mode: locked}`"})) << w;
   EXPECT_TRUE(containsAll(w, {"'cover_joint')", "<mimic>", "ignored"})) << w;
+  // The finger's limits [0, 0.5] narrow its master's range: 0.5 q + 0.1 in [0, 0.5].
+  EXPECT_TRUE(containsAll(w, {"ros.urdf:12", "the range of 'knee' is narrowed", "to [-0.2, 0.8]"})) << w;
+  EXPECT_DOUBLE_EQ(d.joints[1].lower, -0.2);
+  EXPECT_DOUBLE_EQ(d.joints[1].upper, 0.8);
+  EXPECT_FALSE(d.joints[1].continuous);
   // What was assumed.
   EXPECT_TRUE(std::isinf(d.joints[0].effort_limit));
   EXPECT_TRUE(std::isinf(d.joints[0].velocity_limit));
-  EXPECT_TRUE(std::isinf(d.joints[1].lower) && d.joints[1].continuous);
   ASSERT_EQ(d.mimics.size(), 1u);
-  EXPECT_EQ(d.mimics[0].mode, MimicMode::Locked);
-  EXPECT_DOUBLE_EQ(d.mimics[0].locked_value, 0.1);
+  EXPECT_EQ(d.mimics[0].mode, MimicMode::Coupled);
   // The point mass is lumped exactly: the base's CoM moves towards it.
   EXPECT_NEAR(d.links[0].com.x(), 0.05 * 0.1 / 5.05, 1e-15);
   // The thigh's inertia is physical after the projection, and within 1e-6 of the file's.
-  const InertiaCheck c = checkInertia(d.links[1].inertia);
-  EXPECT_EQ(c.kind, InertiaClass::Valid);
+  const InertiaCheck ci = checkInertia(d.links[1].inertia);
+  EXPECT_EQ(ci.kind, InertiaClass::Valid);
   EXPECT_NEAR(d.links[1].inertia(2, 2), 0.020001, 1e-6);
-  // The controller's model builds from it.
+  // The controller's model builds from it, in the independent coordinates.
   const RobotModel m(d);
   EXPECT_EQ(m.nv(), 8);
+  EXPECT_TRUE(m.hasCoupledJoints());
+}
+
+// Locked instead of coupled: the data file's `mimic: {mode: locked}` holds the finger at the
+// default posture's value and lumps its link into the shank.
+TEST(UrdfConventions, LockedMimicsAreLumpedIntoTheirParent) {
+  RosStyleRobot r;
+  r.data_extra = "mimic: {mode: locked}\n";
+  const RobotDescription d = r.load();
+  ASSERT_EQ(d.links.size(), 3u);
+  EXPECT_TRUE(d.coupled_joints.empty());
+  EXPECT_DOUBLE_EQ(d.links[2].mass, 1.6);
+  ASSERT_EQ(d.mimics.size(), 1u);
+  EXPECT_EQ(d.mimics[0].mode, MimicMode::Locked);
+  EXPECT_DOUBLE_EQ(d.mimics[0].locked_value, 0.1);
+  EXPECT_TRUE(std::isinf(d.joints[1].lower) && d.joints[1].continuous);
+  const std::string w = allWarnings(d);
+  EXPECT_TRUE(containsAll(w, {"ros.urdf:12", "mimic joints of 'knee': 'finger' (x 0.5 + 0.1: locked at 0.1)"})) << w;
+  EXPECT_FALSE(RobotModel(d).hasCoupledJoints());
 }
 
 TEST(UrdfConventions, StrictModeKeepsTheOlderRulesAndListsEveryProblem) {
@@ -131,7 +165,7 @@ TEST(UrdfConventions, StrictModeKeepsTheOlderRulesAndListsEveryProblem) {
                               "ros.urdf:14: fixed joint 'cover_joint' has <mimic>",
                               "link 'imu_link': inertia is zero (mass 0.05 kg)",
                               "link 'thigh': inertia is not physically possible",
-                              "mimic joints of 'knee': 'finger'",
+                              "mimic joints coupled to 'knee'",
                               "link 'base_link' has no <inertial>",
                               "effort limit is unspecified",
                               "strict mode"}))
@@ -176,9 +210,12 @@ TEST(UrdfConventions, TheDataFileFillsUnspecifiedLimitsAndLocksMimicsAtAPosture)
   const std::string w = allWarnings(d);
   EXPECT_EQ(w.find("effort limit is unspecified"), std::string::npos) << w;
   EXPECT_TRUE(containsAll(w, {"locked at 0.4", "'knee' at 0.6 in posture 'bent'"})) << w;
-  // Coupled mimic joints are not read yet: a clear error, naming the key.
-  r.data_extra = "mimic: {mode: coupled}\n";
-  EXPECT_TRUE(containsAll(inputErrorOf([&] { r.load(); }), {"ros.yaml:4: mimic.mode", "mode: locked"}));
+  // A posture locks: it does not go with coupled mimic joints (the error names the key).
+  r.data_extra = "mimic: {mode: coupled, posture: bent}\npostures:\n  bent: {hip: 0.2, knee: 0.6}\n";
+  EXPECT_TRUE(containsAll(inputErrorOf([&] { r.load(); }), {"ros.yaml:4: mimic.posture", "mode: locked"}));
+  // Coupled mimic joints are not model joints: their limits are their master's.
+  r.data_extra = "joint_limits:\n  finger: {effort: 2}\n";
+  EXPECT_TRUE(containsAll(inputErrorOf([&] { r.load(); }), {"ros.yaml:5", "'finger' is a mimic joint coupled to its master"}));
 }
 
 TEST(UrdfConventions, AMimicOfAnUnknownJointIsAnError) {

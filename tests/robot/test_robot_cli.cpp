@@ -87,9 +87,9 @@ TEST(RobotInit, AHumanoidsDraftComesFromItsGeometry) {
                                  dir);
   expectExit(init, 0, {"base: free_flyer (2 chains reach the ground below the root link (legs))",
                        "foot LEFT_FOOT on link 'left_ankle_roll_link': 4 contact point(s)", "collision box",
-                       "arm LEFT: hand link", "posture 'standing' (the SRDF group state 'standing'", "mimic joints of"});
+                       "arm LEFT: hand link", "posture 'standing' (the SRDF group state 'standing'", "mimic joints coupled to 'left_hand_thumb_0_joint'"});
   const std::string data = slurp(out + "/g1_like.yaml");
-  EXPECT_TRUE(containsAll(data, {"base: free_flyer", "friction_coefficient: 0.7", "mimic: {mode: locked, posture: standing}",
+  EXPECT_TRUE(containsAll(data, {"base: free_flyer", "friction_coefficient: 0.7", "mimic: {mode: coupled}",
                                  "- {name: LEFT_SOLE, parent: left_ankle_roll_link", "- {name: LEFT_GRASP", "name: LEFT_FOOT",
                                  "frame: LEFT_SOLE", "- {name: LEFT_FOOT_SENSOR, frame: LEFT_SOLE}", "standing:   # the SRDF group state"}));
   const std::string reach = slurp(out + "/reach.yaml");

@@ -3,7 +3,8 @@
 // on seeded random states of every robot, the controller's own mass matrix (composite rigid
 // bodies), bias forces (Newton-Euler), frame Jacobians and centre of mass against Simbody's
 // calcM, calcResidualForceIgnoringConstraints, calcFrameJacobian and
-// calcSystemMassCenterLocationInGround on the simulator's system, to 1e-9 relative. A
+// calcSystemMassCenterLocationInGround on the simulator's system, and the simulator's forward
+// dynamics under gravity and joint forces against M udot + N = tau, to 1e-9 relative. A
 // conversion bug on either side (an inertia shifted wrongly, a joint axis or frame mixed up, an
 // index map off by one) shows here.
 //
@@ -44,7 +45,7 @@ double relativeDifference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& ref, 
 }
 
 struct Worst {
-  double mass_matrix = 0.0, bias = 0.0, jacobian = 0.0, com = 0.0, placement = 0.0;
+  double mass_matrix = 0.0, bias = 0.0, jacobian = 0.0, com = 0.0, placement = 0.0, acceleration = 0.0;
 };
 
 Worst crossCheck(const std::string& dir, const std::string& name, unsigned seed, int states) {
@@ -132,19 +133,42 @@ Worst crossCheck(const std::string& dir, const std::string& name, unsigned seed,
       worst.placement = std::max(worst.placement, (Xc.linear() - Xs.linear()).cwiseAbs().maxCoeff());
     }
 
+    // The simulator's forward dynamics (articulated bodies; with coupled mimic joints, projected
+    // onto the couplings) under gravity and random joint forces against the controller's
+    // M udot + N = tau. Gravity is an applied force in the simulator (the harness adds it).
+    Eigen::VectorXd tau_s = Eigen::VectorXd::Zero(nv), tau_c(nv), udot_s(nv);
+    simu.clearForces(sd);
+    for (int b = 0; b < simu.numBodies(); ++b) {
+      const Eigen::Vector3d f = simu.description().links[static_cast<size_t>(b)].mass * simu.gravity();
+      const Eigen::Vector3d r = sd.bodies().com.col(b) - sd.bodies().p.col(b);
+      simu.addBodyForce(sd, b, r.cross(f), f);
+    }
+    for (int j = 0; j < nj; ++j) {
+      tau_s[base + j] = uniform(-5.0, 5.0);
+      simu.setJointForce(sd, j, tau_s[base + j]);
+    }
+    simu.accelerations(sd, udot_s.data());
+    for (int r = 0; r < nv; ++r) tau_c[map[static_cast<size_t>(r)]] = tau_s[r];
+    const Eigen::VectorXd udot_c = M_c.ldlt().solve(tau_c - N_c);
+    Eigen::VectorXd udot_cs(nv);
+    for (int r = 0; r < nv; ++r) udot_cs[r] = udot_c[map[static_cast<size_t>(r)]];
+    worst.acceleration = std::max(worst.acceleration, relativeDifference(udot_s, udot_cs, 1e-12));
+    simu.clearForces(sd);
+
     const Eigen::Vector3d c_ref = simu.systemCenterOfMass(sd);
     const double c_scale = std::max(1.0, c_ref.norm());
     worst.com = std::max(worst.com, (ctrl.centerOfMass(cd) - c_ref).cwiseAbs().maxCoeff() / c_scale);
     // The simulator's own centre of mass (the trace's com.*) against Simbody's.
     worst.com = std::max(worst.com, (simu.centerOfMass(sd) - c_ref).cwiseAbs().maxCoeff() / c_scale);
   }
-  std::printf("%-14s %3d states: M %.2e  N %.2e  J %.2e  CoM %.2e  frames %.2e\n", name.c_str(), states,
-              worst.mass_matrix, worst.bias, worst.jacobian, worst.com, worst.placement);
+  std::printf("%-14s %3d states: M %.2e  N %.2e  J %.2e  CoM %.2e  frames %.2e  udot %.2e\n", name.c_str(), states,
+              worst.mass_matrix, worst.bias, worst.jacobian, worst.com, worst.placement, worst.acceleration);
   EXPECT_LE(worst.mass_matrix, kRelativeTolerance) << name << ": mass matrix";
   EXPECT_LE(worst.bias, kRelativeTolerance) << name << ": bias forces";
   EXPECT_LE(worst.jacobian, kRelativeTolerance) << name << ": frame Jacobians";
   EXPECT_LE(worst.com, kRelativeTolerance) << name << ": centre of mass";
   EXPECT_LE(worst.placement, kRelativeTolerance) << name << ": frame placements";
+  EXPECT_LE(worst.acceleration, kRelativeTolerance) << name << ": forward dynamics";
   return worst;
 }
 
@@ -155,6 +179,9 @@ TEST(ModelVsSimulator, Arm7Dof) { crossCheck("models/arm_7dof", "arm_7dof", 1200
 TEST(ModelVsSimulator, Pendulum) { crossCheck("tests/data/model", "pendulum", 12005, 100); }
 TEST(ModelVsSimulator, FreeBody) { crossCheck("tests/data/model", "free_body", 12006, 100); }
 TEST(ModelVsSimulator, MergedFixedJoints) { crossCheck("tests/data/model", "merged", 12007, 100); }
+// Coupled mimic joints: the controller reduces its tree (G^T M G, G^T N, J G); the simulator
+// keeps a mobilizer per coupled joint and projects Simbody's accelerations onto the couplings.
+TEST(ModelVsSimulator, CoupledMimicJoints) { crossCheck("tests/data/model", "coupled", 12008, 100); }
 
 // setKinematicState realizes Simbody's state through Position only and takes the body
 // velocities from the system Jacobian: its body kinematics must be setState's to the bit (the

@@ -36,6 +36,23 @@ struct RobotModelImpl {
   int nb = 0;  // bodies (description links)
   int nj = 0;  // actuated joints
   int nv = 0;
+  // The tree's joints: one per body after the root (body b moves on tree joint b - 1): the model
+  // joints and the coupled mimic joints (RobotDescription::coupled_joints). Without coupled
+  // joints the tree joints are the model joints, in the same order.
+  struct TreeJoint {
+    JointType type = JointType::Revolute;
+    int parent = -1;                  // parent body
+    Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit, joint frame
+    int model_joint = -1;             // the model joint it is, or its master's for a coupled one
+    double multiplier = 1.0, offset = 0.0;  // q = multiplier * q_model_joint + offset
+  };
+  std::vector<TreeJoint> tree_joints;
+  int nt = 0;             // tree joints
+  int ntv = 0;            // tree dofs: (6) + nt
+  bool coupled = false;   // some tree joint is coupled: the model's quantities are reduced
+  std::vector<int> tree_dof_model;        // per tree dof: the model dof it moves with
+  std::vector<double> tree_dof_multiplier;
   double total_mass = 0.0;
 
   SimTK::MultibodySystem system;
@@ -44,13 +61,13 @@ struct RobotModelImpl {
   SimTK::State default_state;                    // Euler angles on, realized to Model
   int simbody_nq = 0, simbody_nu = 0;
   int base_q_index = 0;               // first q of the free-flyer (3 angles then 3 positions)
-  std::vector<int> joint_q_index;     // per joint
-  std::vector<int> dof_u_index;       // Simbody u index of each model dof (identity here)
+  std::vector<int> joint_q_index;     // per tree joint
+  std::vector<int> dof_u_index;       // Simbody u index of each tree dof
 
   KinematicTree tree;
   std::vector<std::string> joint_names;
   Eigen::VectorXd lower, upper, velocity_limit, torque_limit;
-  std::vector<Eigen::Vector3d> joint_axis_local;  // per joint, in the child body frame, normalised
+  std::vector<Eigen::Vector3d> joint_axis_local;  // per tree joint, in the child body frame, normalised
                                                   // (as Simbody's mobilizers take it)
   std::vector<std::vector<int>> children;         // per body
 };
@@ -79,11 +96,18 @@ struct ModelDataImpl {
   // Workspaces.
   std::vector<Matrix6d> composite;                 // composite spatial inertia (world origin)
   Eigen::Matrix<double, 6, Eigen::Dynamic> wrench; // subtree wrench (world origin)
+  // With coupled joints: the tree's coordinates and speeds, and the tree-size results reduced
+  // to the model's (G^T M G, G^T N, J G).
+  Eigen::VectorXd q_tree, u_tree;
+  Eigen::MatrixXd M_tree;
+  Eigen::VectorXd N_tree;
+  mutable Eigen::MatrixXd J_tree;  // 6 x tree dofs
 };
 
-/// Fills the kinematic caches of `d` for (q, u) (our own recursion; Simbody is not realized).
+/// Fills the kinematic caches of `d` for the base of q, the tree joints' coordinates q_tree and
+/// the tree speeds u_tree (our own recursion; Simbody is not realized).
 void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configuration& q,
-                       const Eigen::Ref<const Eigen::VectorXd>& u);
+                       const Eigen::Ref<const Eigen::VectorXd>& q_tree, const Eigen::Ref<const Eigen::VectorXd>& u_tree);
 
 /// d.state realized to Velocity (for the Simbody reference operators).
 const SimTK::State& realizedState(const RobotModelImpl& m, const ModelDataImpl& d);

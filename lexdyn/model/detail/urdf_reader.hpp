@@ -11,7 +11,7 @@ namespace lexdyn::model::detail {
 
 /// What the data file says about the URDF's <mimic> joints, read before the tree is built.
 struct MimicPolicy {
-  MimicMode mode = MimicMode::Locked;
+  MimicMode mode = MimicMode::Coupled;
   bool given = false;                            ///< the data file has a `mimic` section
   std::string where;                             ///< of that section, for messages
   std::string posture;                           ///< the posture whose master values lock them
