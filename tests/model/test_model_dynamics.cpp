@@ -329,6 +329,75 @@ TEST_P(ModelDynamics, IntegrateAndDifferenceAreInverse) {
 INSTANTIATE_TEST_SUITE_P(Models, ModelDynamics, ::testing::ValuesIn(kCases),
                          [](const ::testing::TestParamInfo<ModelCase>& info) { return std::string(info.param.name); });
 
+// Locked and coupled mimic joints are the same mechanism while the masters stand still: at the
+// masters' posture value (0 here; no posture) the locked model's mass matrix and bias forces
+// equal the coupled model's outside the masters' rows and columns, and every frame is in the same
+// place.
+TEST(MimicJoints, LockedIsCoupledWithTheMasterHeld) {
+  const RobotModel coupled = loadModel("tests/data/model", "coupled");
+  const RobotModel locked = RobotModel::fromFiles(testing::sourcePath("tests/data/model/coupled.urdf"),
+                                                  testing::sourcePath("tests/data/model/coupled_locked.yaml"));
+  ASSERT_TRUE(coupled.hasCoupledJoints());
+  ASSERT_FALSE(locked.hasCoupledJoints());
+  EXPECT_NEAR(coupled.totalMass(), locked.totalMass(), 1e-12);
+  const int grip = coupled.jointIndex("grip"), shoulder = coupled.jointIndex("shoulder");
+  // Both have the same joints (the masters stay model joints; 'nail_joint', below a finger, too).
+  ASSERT_EQ(locked.numJoints(), coupled.numJoints());
+  const int dof_grip = coupled.jointVelocityOffset() + grip, dof_shoulder = coupled.jointVelocityOffset() + shoulder;
+  ModelData dc = coupled.createData(), dl = locked.createData();
+  RandomStates rs(31);
+  for (int trial = 0; trial < 5; ++trial) {
+    Configuration qc = rs.configuration(coupled);
+    qc.joints[grip] = 0.0;
+    qc.joints[shoulder] = 0.0;  // the tail's master, at its locked value
+    Eigen::VectorXd uc = rs.velocity(coupled);
+    uc[coupled.jointVelocityOffset() + grip] = 0.0;
+    uc[coupled.jointVelocityOffset() + shoulder] = 0.0;
+    Configuration ql = locked.neutralConfiguration();
+    ql.base_rotation = qc.base_rotation;
+    ql.base_position = qc.base_position;
+    Eigen::VectorXd ul(locked.nv());
+    std::vector<int> map(static_cast<size_t>(locked.nv()));  // locked dof -> coupled dof
+    for (int k = 0; k < locked.jointVelocityOffset(); ++k) map[static_cast<size_t>(k)] = k;
+    for (int j = 0; j < locked.numJoints(); ++j) {
+      const int cj = coupled.jointIndex(locked.jointNames()[static_cast<size_t>(j)]);
+      ql.joints[j] = qc.joints[cj];
+      map[static_cast<size_t>(locked.jointVelocityOffset() + j)] = coupled.jointVelocityOffset() + cj;
+    }
+    for (int k = 0; k < locked.nv(); ++k) ul[k] = uc[map[static_cast<size_t>(k)]];
+    coupled.update(dc, qc, uc);
+    locked.update(dl, ql, ul);
+    Eigen::MatrixXd Mc(coupled.nv(), coupled.nv()), Ml(locked.nv(), locked.nv());
+    Eigen::VectorXd Nc(coupled.nv()), Nl(locked.nv());
+    coupled.massMatrix(dc, Mc);
+    locked.massMatrix(dl, Ml);
+    coupled.nonlinearEffects(dc, Nc);
+    locked.nonlinearEffects(dl, Nl);
+    Eigen::MatrixXd Mcl(locked.nv(), locked.nv());
+    Eigen::VectorXd Ncl(locked.nv());
+    auto master = [&](int k) { return map[static_cast<size_t>(k)] == dof_grip || map[static_cast<size_t>(k)] == dof_shoulder; };
+    for (int i = 0; i < locked.nv(); ++i) {
+      Ncl[i] = Nc[map[static_cast<size_t>(i)]];
+      for (int j = 0; j < locked.nv(); ++j) Mcl(i, j) = Mc(map[static_cast<size_t>(i)], map[static_cast<size_t>(j)]);
+    }
+    // The masters' rows and columns differ (they move the fingers and the tail, or not).
+    for (int i = 0; i < locked.nv(); ++i) {
+      if (!master(i)) continue;
+      Ncl[i] = Nl[i];
+      Mcl.row(i) = Ml.row(i);
+      Mcl.col(i) = Ml.col(i);
+    }
+    EXPECT_GT((Mc(dof_grip, dof_grip) - Ml(dof_grip, dof_grip)), 1e-6);  // the fingers' inertia
+    EXPECT_TRUE(near(Mcl, Ml, 1e-12)) << "trial " << trial;
+    EXPECT_TRUE(near(Ncl, Nl, 1e-12)) << "trial " << trial;
+    for (const char* f : {"fingertip", "nail_end", "tail_end"}) {
+      const Eigen::Isometry3d Xc = coupled.framePlacement(dc, coupled.frameId(f)), Xl = locked.framePlacement(dl, locked.frameId(f));
+      EXPECT_TRUE(near(Xc.matrix(), Xl.matrix(), 1e-12)) << f;
+    }
+    EXPECT_TRUE(near(coupled.centerOfMass(dc), locked.centerOfMass(dl), 1e-12));
+  }
+}
+
 TEST(EulerAngles, RoundTripIncludingGimbalLock) {
   RandomStates rs(20);
   for (int i = 0; i < 200; ++i) {
