@@ -20,6 +20,7 @@ void addRobotCommands(CLI::App& app, RobotCommand& c) {
   c.init->add_option("urdf", c.input, "the robot's URDF, as its package ships it")->required();
   c.init->add_option("--out", c.out, "a new folder for the drafted files")->required();
   c.init->add_option("--srdf", c.srdf, "the robot's SRDF: its group states become postures, its groups name limbs");
+  c.init->add_flag("--srdf-skip-unknown", c.srdf_skip_unknown, "leave out the SRDF's joints the URDF does not have (else an error)");
   c.init->add_option("--package-path", c.package_paths, "a folder to look for package://NAME/ in (repeatable; also $ROS_PACKAGE_PATH)");
   c.init->add_option("--base", c.base, "free_flyer or fixed (default: guessed from the URDF: fixed for a `world` root or no legs)");
   c.init->add_option("--posture", c.posture, "the SRDF group state to stand in (default: half_sitting, standing, home, ... or the first)");
@@ -35,6 +36,8 @@ void addRobotCommands(CLI::App& app, RobotCommand& c) {
   c.mesh = c.robot->add_subcommand("mesh", "convert a mesh file (any format libassimp reads) to binary STL, as robot init reads it");
   c.mesh->add_option("mesh", c.input, "the mesh file (STL, DAE, OBJ, glTF, ...)")->required();
   c.mesh->add_option("--out", c.out, "the binary STL to write")->required();
+  c.mesh->add_option("--up-axis", c.up_axis, "ignore: a COLLADA file's coordinates as written (ROS's tools); file: turned by its <up_axis> (the data file's mesh_up_axis)")
+      ->check(CLI::IsMember({"ignore", "file"}));
 }
 
 int runRobotCommand(const RobotCommand& c) {
@@ -43,6 +46,7 @@ int runRobotCommand(const RobotCommand& c) {
     robot::InitOptions o;
     o.urdf = c.input;
     o.srdf = c.srdf;
+    o.srdf_skip_unknown = c.srdf_skip_unknown;
     o.out_dir = c.out;
     o.package_paths = c.package_paths;
     o.base = c.base;
@@ -63,7 +67,7 @@ int runRobotCommand(const RobotCommand& c) {
     return 0;
   }
   if (*c.mesh) {
-    const robot::Mesh m = robot::readMesh(c.input);
+    const robot::Mesh m = robot::placedMesh(robot::readMesh(c.input), Eigen::Vector3d::Ones(), c.up_axis == "file");
     const std::string tmp = c.out + ".partial";
     robot::writeBinaryStl(tmp, m);
     if (std::rename(tmp.c_str(), c.out.c_str()) != 0) throw InputError(c.out, "cannot write");

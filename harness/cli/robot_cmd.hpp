@@ -15,7 +15,8 @@ struct RobotCommand {
   CLI::App *init = nullptr, *check = nullptr, *mesh = nullptr;
   std::string input, srdf, out, base, posture, urdf, png;
   std::vector<std::string> package_paths;
-  bool strict = false, allow_missing_meshes = false;
+  bool strict = false, allow_missing_meshes = false, srdf_skip_unknown = false;
+  std::string up_axis = "ignore";  // robot mesh --up-axis
 };
 
 void addRobotCommands(CLI::App& app, RobotCommand& c);

@@ -79,7 +79,8 @@ Loaded load(const CheckOptions& o) {
 // The picture: three views of the robot's geometry outlines, skeleton, contact points, CoM and
 // support polygon, drawn by harness/scripts/robot_view.py (matplotlib).
 std::string drawPicture(const model::RobotDescription& d, const RobotLayout& L, const std::vector<Eigen::Vector3d>& contacts,
-                        const std::vector<Eigen::Vector2d>& poly, double ground, const std::string& title, const std::string& png) {
+                        const std::vector<Eigen::Vector2d>& poly, double ground, const std::vector<std::pair<std::string, Eigen::Isometry3d>>& frames,
+                        const std::string& title, const std::string& png) {
   using nlohmann::json;
   json j;
   j["title"] = title;
@@ -112,6 +113,15 @@ std::string drawPicture(const model::RobotDescription& d, const RobotLayout& L, 
   for (const auto& q : poly) pj.push_back(json::array({q.x(), q.y()}));
   j["support"] = pj;
   j["com"] = p3(L.com);
+  // The data file's frames (soles, grasp points, sensors): origin and x, z axes (a tenth of the
+  // robot's height long).
+  json fj = json::array();
+  const double len = 0.1 * std::max(L.height, 0.1);
+  for (const auto& [name, X] : frames) {
+    fj.push_back({{"name", name}, {"p", p3(X.translation())}, {"x", p3(X * Eigen::Vector3d(len, 0, 0))}, {"z", p3(X * Eigen::Vector3d(0, 0, len))}});
+  }
+  j["frames"] = fj;
+  j["forward"] = L.forward.x() < 0.0 ? -1 : 1;
   const fs::path json_path = fs::path(png).string() + ".json";
   {
     std::ofstream out(json_path);
@@ -151,7 +161,6 @@ CheckReport checkRobot(const CheckOptions& o) {
   }
   ProblemList problems(d.urdf_path);
   const RobotLayout L = analyseLayout(d, q, problems);
-  for (const auto& w : problems.warnings()) rep.warnings++;
 
   std::ostringstream t;
   t << "robot " << d.name << "\n  URDF: " << d.urdf_path << "\n  data: " << (ld.data_path.empty() ? "(none: the URDF alone)" : ld.data_path) << "\n";
@@ -160,14 +169,25 @@ CheckReport checkRobot(const CheckOptions& o) {
     << " joints";
   if (!d.locked_joints.empty()) t << " (+ " << d.locked_joints.size() << " locked)";
   t << "\n  mass " << num(L.mass) << " kg; height " << num(L.height, 3) << " m in posture '" << posture << "'\n";
+  const bool backwards = L.forward.x() < 0.0;
   t << "  centre of mass " << num(L.com.x(), 3) << ", " << num(L.com.y(), 3) << ", " << num(L.com.z() - ground, 3)
-    << " m (x forward, y left, z above the lowest point; the base at the origin)\n";
+    << " m (z above the lowest point; the base at the origin)\n"
+    << "  forward: " << (backwards ? "-x" : "+x") << " of the base frame"
+    << (L.sides_from == "names" ? (backwards ? " (the links' names put the robot's left at -y)" : " (the links' names put the robot's left at +y)")
+                                : " (x forward, y left, as REP 103 has it)")
+    << "\n";
+  if (!L.base_rotation.isIdentity(1e-12)) {
+    const Eigen::AngleAxisd aa(L.base_rotation);
+    t << "  the base is turned by " << num(aa.angle() * 180.0 / 3.14159265358979323846, 3)
+      << " deg so that the feet stand flat (the posture tilts them; the start's equilibrium finds the same)\n";
+  }
 
   // Contact points from the data file, in the posture.
   const model::RobotModel m(d);
   model::ModelData data = m.createData();
   model::Configuration cq = m.neutralConfiguration();
   cq.joints = q;
+  cq.base_rotation = L.base_rotation;
   m.update(data, cq, Eigen::VectorXd::Zero(m.nv()));
   std::vector<Eigen::Vector3d> contacts;
   std::vector<Eigen::Vector2d> flat;
@@ -284,7 +304,12 @@ CheckReport checkRobot(const CheckOptions& o) {
   if (o.png != "-") {
     std::string png = o.png;
     if (png.empty()) png = (fs::path(o.input).parent_path() / (d.name + "_posture.png")).string();
-    rep.png = drawPicture(d, L, contacts, convexHull(flat), ground, d.name + " in posture '" + posture + "'", png);
+    std::vector<std::pair<std::string, Eigen::Isometry3d>> frames;
+    for (size_t f = 0; f < d.frames.size(); ++f) {
+      if (!d.frames[f].from_data_file) continue;  // a link's own frame
+      frames.emplace_back(d.frames[f].name, m.framePlacement(data, static_cast<model::FrameId>(f)));
+    }
+    rep.png = drawPicture(d, L, contacts, convexHull(flat), ground, frames, d.name + " in posture '" + posture + "'", png);
     t << "  picture: " << rep.png << "\n";
   }
   rep.text = t.str();

@@ -1,6 +1,7 @@
 #include "harness/robot/robot_init.hpp"
 
 #include "harness/cases/case_file.hpp"
+#include "harness/robot/mesh.hpp"
 #include "harness/robot/robot_layout.hpp"
 #include "harness/robot/srdf.hpp"
 #include "lexdyn/common/error.hpp"
@@ -16,6 +17,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 namespace lexdyn::robot {
@@ -116,6 +118,15 @@ std::vector<Posture> srdfPostures(const model::RobotDescription& d, const Srdf& 
       const int j = d.findJoint(joint);
       const auto& J = d.joints[static_cast<size_t>(j)];
       double v = value;
+      if ((v < J.lower || v > J.upper) && J.type == model::JointType::Revolute && std::isfinite(v)) {
+        // The same angle a turn away may be inside (an SRDF written for another range, e.g. [0, 2 pi]).
+        const double two_pi = 2.0 * 3.14159265358979323846;
+        const double w = v + two_pi * std::ceil((J.lower - v) / two_pi);
+        if (w >= J.lower && w <= J.upper) {
+          p.clamped.push_back(joint + ": " + num(v) + " is outside [" + num(J.lower) + ", " + num(J.upper) + "], taken as the same angle " + num(w));
+          v = w;
+        }
+      }
       if (v < J.lower || v > J.upper) {
         const double c = std::min(std::max(v, J.lower), J.upper);
         p.clamped.push_back(joint + ": " + num(v) + " is outside [" + num(J.lower) + ", " + num(J.upper) + "], clamped to " + num(c));
@@ -162,10 +173,71 @@ void writeFile(const fs::path& path, const std::string& text) {
   if (!out) throw InputError(path.string(), std::string("cannot write: ") + std::strerror(errno));
 }
 
+// COLLADA files may declare another up axis than z. ROS's tools (RViz, MoveIt) take a mesh's
+// coordinates as written whatever it declares, and most packages are written for them; some
+// (exported for tools that turn the mesh) are right only turned. The links' own centres of mass
+// decide: the interpretation that puts them nearer their meshes' centres, by a clear margin.
+struct UpAxisChoice {
+  bool apply = false;
+  std::string line;  // the data file's line (empty: every mesh is z up)
+  std::string note;  // for the summary
+};
+
+UpAxisChoice chooseMeshUpAxis(const model::RobotDescription& d, MeshCache& cache) {
+  UpAxisChoice c;
+  std::map<char, int> files;
+  std::map<std::string, bool> seen;
+  double sum_written = 0.0, sum_turned = 0.0;
+  int compared = 0;
+  for (const auto& g : d.geometries) {
+    if (g.type != model::GeometryType::Mesh || g.mesh_path.empty()) continue;
+    const Mesh* m = nullptr;
+    try {
+      m = &cache.get(g.mesh_path);
+    } catch (const InputError&) {
+      continue;  // said by the layout's reading
+    }
+    if (m->up_axis == 'Z' || m->vertices.empty()) continue;
+    if (!seen[g.mesh_path]) {
+      seen[g.mesh_path] = true;
+      ++files[m->up_axis];
+    }
+    const model::LinkDescription& L = d.links[static_cast<size_t>(g.link)];
+    if (g.urdf_link != L.name || !(L.mass > 0.0)) continue;  // a lumped link's own CoM is not kept
+    Eigen::Vector3f lo = m->vertices.front(), hi = lo;
+    for (const auto& v : m->vertices) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+    const Eigen::Vector3d centre = (0.5 * (lo + hi)).cast<double>();
+    const Eigen::Matrix3d R = upAxisRotation(m->up_axis).cast<double>();
+    sum_written += (g.placement * centre.cwiseProduct(g.scale) - L.com).norm();
+    sum_turned += (g.placement * (R * centre).cwiseProduct(g.scale) - L.com).norm();
+    ++compared;
+  }
+  if (files.empty()) return c;
+  std::string declared;
+  for (const auto& [axis, n] : files) declared += std::string(declared.empty() ? "" : ", ") + std::to_string(n) + " declare " + axis + "_UP";
+  auto cm = [&](double sum) {
+    char b[32];
+    std::snprintf(b, sizeof(b), "%.1f cm", 100.0 * sum / compared);
+    return std::string(b);
+  };
+  const std::string fit = compared == 0 ? std::string("no link with mass to compare")
+                                        : "the links' centres of mass lie " + cm(sum_turned) + " on average from their meshes' centres with the up axis applied, " +
+                                              cm(sum_written) + " as written (" + std::to_string(compared) + " meshes)";
+  c.apply = compared > 0 && sum_turned < 0.5 * sum_written;
+  c.note = "meshes: of the COLLADA files, " + declared + "; " + fit + ": " + (c.apply ? "turned to z up" : "taken as written");
+  c.line = std::string("mesh_up_axis: ") + (c.apply ? "file" : "ignore") + "               # guessed: " + fit +
+           (c.apply ? " (file: COLLADA meshes turned by their <up_axis>)" : " (ignore: as ROS's tools read them)") + "\n";
+  return c;
+}
+
 struct Draft {
   std::string robot_file;  // file name of the data file
   std::string data, stand, reach;
   std::vector<std::string> summary;
+  std::vector<std::string> warnings;
 };
 
 // Contact stiffness for a static penetration of 1 mm under an even share of the weight on each
@@ -176,7 +248,7 @@ double contactStiffness(double mass, int points) {
 }
 
 Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Posture& posture, const std::vector<Posture>& postures,
-            const InitOptions& o, const fs::path& final_dir, const Srdf* srdf) {
+            const InitOptions& o, const fs::path& final_dir, const Srdf* srdf, const UpAxisChoice& up) {
   Draft out;
   out.robot_file = d.name + ".yaml";
   const std::string urdf_rel = relativePath(o.urdf, final_dir);
@@ -190,7 +262,8 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     << "format: lexdyn-robot-data/1\n"
     << "robot: " << yamlString(d.name) << "\n"
     << "urdf: " << yamlString(urdf_rel) << "              # the URDF this file describes (robot check reads it)\n"
-    << "base: " << (d.base == model::BaseType::Fixed ? "fixed" : "free_flyer") << "                  # guessed: " << L.base_reason << "\n";
+    << "base: " << (d.base == model::BaseType::Fixed ? "fixed" : "free_flyer") << "                  # guessed: " << L.base_reason << "\n"
+    << up.line;
   if (!L.feet.empty()) {
     y << "friction_coefficient: 0.7          # guessed: rubber soles on a hard floor (HRP-2's walking controller uses 0.7)\n";
   }
@@ -439,15 +512,45 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     for (size_t k = 0; k < L.arms.size(); ++k) {
       c << "  - {at_s: " << num(switch_s) << ", action: set_target, task: " << hand_tasks[k] << ", value: " << vec3(out_of_reach[k], 4) << "}   # out of reach\n";
     }
+    // The top of the trunk: the body not part of an arm whose centre of mass is highest in the
+    // posture (the head, the chest); a robot folding forward at the hip lowers it long before its
+    // base. The check is on its origin, at 80 % of the origin's height in the posture.
+    std::string top;
+    double top_z = -1e9, top_origin_z = 0.0;
+    if (humanoid) {
+      std::vector<bool> in_arm(d.links.size(), false);
+      for (const auto& a : L.arms) in_arm[static_cast<size_t>(d.joints[static_cast<size_t>(a.first_joint)].child_link)] = true;
+      for (size_t b = 1; b < d.links.size(); ++b) {
+        if (in_arm[static_cast<size_t>(d.parentBody(static_cast<int>(b)))]) in_arm[b] = true;
+      }
+      for (size_t b = 0; b < d.links.size(); ++b) {
+        if (!(d.links[b].mass > 0.0)) continue;
+        const double z = (L.body_pose[b] * d.links[b].com).z();  // its centre of mass's height
+        if (!in_arm[b] && z > top_z + 1e-9) {
+          top_z = z;
+          top = d.links[b].name;
+          top_origin_z = L.body_pose[b].translation().z();
+        }
+      }
+      if (top == root) top.clear();
+    }
     c << "\ntrace:\n  every_n_ticks: 1\n  frames: [" << yamlString(root);
+    if (!top.empty()) c << ", " << yamlString(top);
     for (const auto& g : grasp_frames) c << ", " << yamlString(g);
     c << "]\n\nchecks:\n"
+      << "  # The hands reach the targets within reach (1 cm each) before they move out of reach at " << num(switch_s) << " s.\n"
+      << "  - {name: hands_reached, type: task_error, tasks: [" << list(hand_tasks) << "], statistic: max, from_s: " << num(switch_s - 5.0)
+      << ", to_s: " << num(switch_s - 0.01) << ", limit: " << num(0.01 * static_cast<double>(hand_tasks.size())) << "}\n"
       << "  - {name: hands_settled, type: task_error, tasks: [" << list(hand_tasks) << "], statistic: range, from_s: " << num(duration - 10.0)
       << ", limit: 0.005}\n";
     if (humanoid) {
       c << "  - {name: feet_held, type: task_error, tasks: [" << list(contact_tasks) << "], statistic: max, from_s: 0.1, limit: 0.001}\n"
         << "  - {name: upright, type: frame_height, frame: " << yamlString(root) << ", min_m: " << num(0.5 * (L.body_pose[0].translation().z() - L.lowest_z), 3)
         << "}   # half the base's height in the posture\n";
+      if (!top.empty()) {
+        c << "  - {name: trunk_up, type: frame_height, frame: " << yamlString(top) << ", min_m: " << num(0.8 * (top_origin_z - L.lowest_z), 3)
+          << "}   # 80 % of the height of '" << top << "' in the posture: the trunk does not fold\n";
+      }
     }
     c << "  - {name: torques, type: torque_limits, source: both, limit_fraction: 1.0}\n";
     if (humanoid) {
@@ -477,6 +580,22 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
   for (const auto& a : L.arms) {
     out.summary.push_back("arm " + (a.side.empty() ? std::string("(single)") : a.side) + ": hand link '" + a.end_link + "', reach " + num(a.reach, 3) + " m");
   }
+  if (!L.feet.empty()) {
+    // The centre of mass over the support: the stand tips when it is outside, and a small margin
+    // leaves the servos' deflection and the contacts' compliance little room.
+    const std::vector<Eigen::Vector2d> poly = supportPolygon(L);
+    const double margin = marginInPolygon(poly, L.com.head<2>());
+    if (poly.size() >= 3) {
+      out.summary.push_back("centre of mass " + num(100.0 * std::abs(margin), 3) + " cm " + (margin >= 0.0 ? "inside" : "outside") +
+                            " the support polygon's nearest edge in posture '" + posture.name + "'");
+    }
+    if (poly.size() >= 3 && margin < 0.01) {
+      out.warnings.push_back("posture '" + posture.name + "': the centre of mass is " + num(100.0 * std::abs(margin), 3) + " cm " +
+                             (margin >= 0.0 ? "inside" : "outside") + " the support polygon's nearest edge: the stand " +
+                             (margin >= 0.0 ? "may tip" : "tips") + "; give another --posture (an SRDF group state) or correct the posture in the data file");
+    }
+  }
+  if (!up.note.empty()) out.summary.push_back(up.note);
   for (const auto& n : L.notes) out.summary.push_back(n);
   return out;
 }
@@ -498,30 +617,35 @@ InitResult initRobot(const InitOptions& o) {
   lo.package_paths = o.package_paths;
   lo.require_meshes = !o.allow_missing_meshes;
 
+  // Meshes are read once (the base's guess and the draft read the same ones).
+  MeshCache meshes;
+  model::RobotDescription probe = model::loadUrdfOnly(o.urdf, model::BaseType::FreeFlyer, lo);
+  const UpAxisChoice up = chooseMeshUpAxis(probe, meshes);
+  probe.mesh_up_axis_from_file = up.apply;
   // The base type: as given, or fixed when the root is a `world` link, else legs decide.
   model::BaseType base = model::BaseType::FreeFlyer;
   std::string base_note;
   if (o.base == "fixed") {
     base = model::BaseType::Fixed;
   } else if (o.base.empty()) {
-    const model::RobotDescription probe = model::loadUrdfOnly(o.urdf, model::BaseType::FreeFlyer, lo);
     if (lower(probe.urdf_root) == "world") {
       base = model::BaseType::Fixed;
       base_note = "the URDF's root link is 'world'";
     } else {
       ProblemList ignored(o.urdf);
-      const RobotLayout probe_layout = analyseLayout(probe, neutralPosture(probe).q, ignored);
+      const RobotLayout probe_layout = analyseLayout(probe, neutralPosture(probe).q, ignored, &meshes);
       base = probe_layout.legged ? model::BaseType::FreeFlyer : model::BaseType::Fixed;
     }
   } else if (o.base != "free_flyer") {
     throw InputError("--base", "expected free_flyer or fixed, found '" + o.base + "'");
   }
-  const model::RobotDescription d = model::loadUrdfOnly(o.urdf, base, lo);
+  model::RobotDescription d = base == model::BaseType::FreeFlyer ? std::move(probe) : model::loadUrdfOnly(o.urdf, base, lo);
+  d.mesh_up_axis_from_file = up.apply;
   for (const auto& w : d.warnings) result.warnings.push_back(w);
 
   ProblemList problems(o.srdf.empty() ? o.urdf : o.srdf);
   std::optional<Srdf> srdf;
-  if (!o.srdf.empty()) srdf = readSrdf(o.srdf, d, problems);
+  if (!o.srdf.empty()) srdf = readSrdf(o.srdf, d, problems, o.srdf_skip_unknown);
   problems.throwIfErrors();
   std::vector<Posture> postures;
   if (srdf) postures = srdfPostures(d, *srdf);
@@ -535,7 +659,7 @@ InitResult initRobot(const InitOptions& o) {
   }
 
   ProblemList mesh_problems(o.urdf);
-  RobotLayout L = analyseLayout(d, posture.q, mesh_problems);
+  RobotLayout L = analyseLayout(d, posture.q, mesh_problems, &meshes);
   mesh_problems.throwIfErrors();
   for (const auto& w : mesh_problems.warnings()) result.warnings.push_back(w.text());
   if (!base_note.empty()) L.base_reason = base_note;
@@ -544,7 +668,7 @@ InitResult initRobot(const InitOptions& o) {
                                  L.base_reason + "): robot init cannot place its feet; give --base fixed for a robot welded to the world, or "
                                  "another --posture");
   }
-  const Draft dr = draft(d, L, posture, postures, o, final_dir, srdf ? &*srdf : nullptr);
+  const Draft dr = draft(d, L, posture, postures, o, final_dir, srdf ? &*srdf : nullptr, up);
 
   // Written into a temporary folder beside DIR, checked by loading it, then renamed to DIR.
   const fs::path tmp = final_dir.parent_path() / ("." + final_dir.filename().string() + ".partial-" + std::to_string(::getpid()));
@@ -575,6 +699,7 @@ InitResult initRobot(const InitOptions& o) {
   result.files.push_back((final_dir / "stand.yaml").string());
   if (!dr.reach.empty()) result.files.push_back((final_dir / "reach.yaml").string());
   result.summary = dr.summary;
+  for (const auto& w : dr.warnings) result.warnings.push_back(w);
   return result;
 }
 

@@ -14,6 +14,7 @@ namespace lexdyn::robot {
 struct InitOptions {
   std::string urdf;
   std::string srdf;                       ///< optional
+  bool srdf_skip_unknown = false;         ///< drop an SRDF state's joints the URDF lacks (else an error)
   std::string out_dir;                    ///< must not exist, or be empty
   std::vector<std::string> package_paths;
   std::string base;                       ///< "free_flyer", "fixed" or "" (guess)

@@ -21,11 +21,13 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kSoleBand_m = 0.003;
 /// A foot whose sole points span less than this is a point foot (m).
 constexpr double kPointFootSpan_m = 0.02;
+/// The band is widened (a rounded or tilted sole) only for a foot this wide within 1 cm (m).
+constexpr double kSoleSpan_m = 0.05;
 
 // Points of one geometry that bound it (world): box corners, sphere extremes along the world
 // axes, cylinder rims (with the exact lowest points of a tilted cylinder), mesh vertices.
-void geometryPoints(const model::GeometryDescription& g, const Eigen::Isometry3d& X_world_body,
-                    std::map<std::string, Mesh>& meshes, ProblemList& problems, std::vector<Eigen::Vector3d>& out) {
+void geometryPoints(const model::GeometryDescription& g, const Eigen::Isometry3d& X_world_body, bool apply_up_axis,
+                    MeshCache& meshes, ProblemList& problems, std::vector<Eigen::Vector3d>& out) {
   const Eigen::Isometry3d X = X_world_body * g.placement;
   switch (g.type) {
     case model::GeometryType::Box:
@@ -54,14 +56,18 @@ void geometryPoints(const model::GeometryDescription& g, const Eigen::Isometry3d
     }
     case model::GeometryType::Mesh: {
       if (g.mesh_path.empty()) return;
-      const std::string key = g.mesh_path + "|" + formatNumber(g.scale.x()) + "," + formatNumber(g.scale.y()) + "," + formatNumber(g.scale.z());
-      auto it = meshes.find(key);
-      if (it == meshes.end()) {
-        Mesh m;
-        problems.attempt([&] { m = readMesh(g.mesh_path, g.scale); });
-        it = meshes.emplace(key, std::move(m)).first;
+      const Mesh* m = nullptr;
+      problems.attempt([&] { m = &meshes.get(g.mesh_path); });
+      if (!m) {
+        meshes.meshes[g.mesh_path] = Mesh{};  // unreadable: said once, then no points
+        return;
       }
-      for (const auto& v : it->second.vertices) out.push_back(X * v.cast<double>());
+      // The file's coordinates turned to z up (when asked), then URDF's scale, then the placement.
+      const Eigen::Matrix3d R = upAxisRotation(apply_up_axis ? m->up_axis : 'Z').cast<double>();
+      const Eigen::Matrix3d A = X.linear() * g.scale.asDiagonal() * R;
+      const Eigen::Vector3d t = X.translation();
+      out.reserve(out.size() + m->vertices.size());
+      for (const auto& v : m->vertices) out.push_back(A * v.cast<double>() + t);
       break;
     }
   }
@@ -152,7 +158,7 @@ std::vector<Eigen::Vector2d> supportPolygon(const RobotLayout& layout) {
   return convexHull(pts);
 }
 
-RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorXd& posture, ProblemList& problems) {
+RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorXd& posture, ProblemList& problems, MeshCache* cache) {
   RobotLayout L;
   L.posture = posture;
   const model::RobotModel model(d);
@@ -166,10 +172,11 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
   L.mass = model.totalMass();
 
   // Bounding points of every body: collision geometry, else visual, else its origin and CoM.
-  std::map<std::string, Mesh> meshes;
+  MeshCache own;
+  MeshCache& meshes = cache ? *cache : own;
   for (const auto& g : d.geometries) {
     L.geometry_points.emplace_back();
-    geometryPoints(g, L.body_pose[static_cast<size_t>(g.link)], meshes, problems, L.geometry_points.back());
+    geometryPoints(g, L.body_pose[static_cast<size_t>(g.link)], d.mesh_up_axis_from_file, meshes, problems, L.geometry_points.back());
   }
   std::vector<std::vector<Eigen::Vector3d>> pts(static_cast<size_t>(nb));
   std::vector<std::string> shapes(static_cast<size_t>(nb));
@@ -298,6 +305,53 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     }
   }
 
+  // Two feet standing flat in the URDF's zero configuration (the convention of humanoid
+  // descriptions) may be tilted by a posture whose legs do not cancel (an SRDF's half-sitting
+  // with the ankles a little off): the robot stands on them flat with its base tilted, which is
+  // what the start's equilibrium finds. The layout turns the whole robot so (up to 15 deg, both
+  // feet agreeing within 2 deg).
+  if (L.legged && L.feet.size() == 2) {
+    model::Configuration q0 = model.neutralConfiguration();
+    for (int j = 0; j < model.numJoints(); ++j) {
+      q0.joints[j] = std::min(std::max(0.0, model.jointLowerLimits()[j]), model.jointUpperLimits()[j]);
+    }
+    model::ModelData data0 = model.createData();
+    model.update(data0, q0, Eigen::VectorXd::Zero(model.nv()));
+    std::vector<Eigen::Vector3d> ups;
+    for (const auto& f : L.feet) {
+      const Eigen::Matrix3d R0 = model.bodyPlacement(data0, f.body).linear(), Rp = L.body_pose[static_cast<size_t>(f.body)].linear();
+      ups.push_back(Rp * R0.transpose() * Eigen::Vector3d::UnitZ());  // the foot's zero-configuration up, in the posture
+    }
+    const double agree = std::acos(std::clamp(ups[0].dot(ups[1]), -1.0, 1.0));
+    const Eigen::Vector3d u = (ups[0] + ups[1]).normalized();
+    const double tilt = std::acos(std::clamp(u.z(), -1.0, 1.0));
+    if (tilt > 1e-4 && tilt <= 15.0 * kPi / 180.0 && agree <= 2.0 * kPi / 180.0) {
+      const Eigen::Matrix3d C = Eigen::Quaterniond::FromTwoVectors(u, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      for (auto& X : L.body_pose) X = Eigen::Isometry3d(C) * X;
+      L.base_rotation = C;
+      for (auto& g : L.geometry_points) {
+        for (auto& p : g) p = C * p;
+      }
+      for (auto& b : pts) {
+        for (auto& p : b) p = C * p;
+      }
+      L.com = C * L.com;
+      for (int b = 0; b < nb; ++b) {
+        low[static_cast<size_t>(b)] = high[static_cast<size_t>(b)] = pts[static_cast<size_t>(b)][0].z();
+        for (const auto& p : pts[static_cast<size_t>(b)]) {
+          low[static_cast<size_t>(b)] = std::min(low[static_cast<size_t>(b)], p.z());
+          high[static_cast<size_t>(b)] = std::max(high[static_cast<size_t>(b)], p.z());
+        }
+      }
+      L.lowest_z = *std::min_element(low.begin(), low.end());
+      L.highest_z = *std::max_element(high.begin(), high.end());
+      L.height = L.highest_z - L.lowest_z;
+      L.notes.push_back("the posture tilts the feet by " + formatNumber(tilt * 180.0 / kPi, 3) +
+                        " deg from their zero-configuration attitude: the robot is turned to stand them flat (the base tilted; the start's "
+                        "equilibrium finds the same)");
+    }
+  }
+
   // Soles: the foot's points within a band of its lowest point; a point foot when they span less
   // than 2 cm; else the extreme points along the foot's diagonals.
   for (auto& f : L.feet) {
@@ -308,7 +362,8 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     heading.normalize();
     const Eigen::Vector2d lateral(-heading.y(), heading.x());
     // The sole: the points within a band above the lowest; a band of 3 mm, widened up to 1 cm
-    // when its points make a line (a rounded or slightly tilted sole) while the foot is wider.
+    // when its points make a line (a rounded or slightly tilted sole) while the foot is wider
+    // (5 cm or more within 1 cm).
     std::vector<Eigen::Vector3d> sole;
     double band = kSoleBand_m;
     for (; band <= 0.0101; band += 0.001) {
@@ -333,8 +388,11 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
         L_lo = std::min(L_lo, p.head<2>().dot(heading));
         L_hi = std::max(L_hi, p.head<2>().dot(heading));
       }
+      // Only a foot that is a sole (5 cm or more across within 1 cm of its lowest point): a ball
+      // or a rounded tip stays a point.
+      const bool sole_sized = std::max(W_hi - W_lo, L_hi - L_lo) >= kSoleSpan_m;
       const bool wider = (W_hi - W_lo) - (w_hi - w_lo) > 0.005 || (L_hi - L_lo) - (l_hi - l_lo) > 0.005;
-      if (!wider) break;
+      if (!wider || !sole_sized) break;
     }
     band = std::min(band, 0.01);
     double span_x = 0, span_y = 0;
@@ -462,7 +520,15 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
         break;
       }
     }
-    if (hand == limb.bodies.back() && n >= 2) {
+    // A finger moves on a short stroke: prismatic, or revolute within half a turn (a wrist that
+    // turns all the way round is not one).
+    auto fingerJoint = [&](int b) {
+      const model::LinkDescription& l = d.links[static_cast<size_t>(b)];
+      if (l.parent_joint < 0) return true;  // a coupled (mimic) joint
+      const model::JointDescription& J = d.joints[static_cast<size_t>(l.parent_joint)];
+      return J.type == model::JointType::Prismatic || (std::isfinite(J.lower) && std::isfinite(J.upper) && J.upper - J.lower <= kPi + 1e-9);
+    };
+    if (hand == limb.bodies.back() && n >= 2 && fingerJoint(hand)) {
       const int p = limb.bodies[n - 2];
       if (subtree_mass[static_cast<size_t>(hand)] < 0.4 * d.links[static_cast<size_t>(p)].mass) {
         hand = p;
@@ -498,20 +564,32 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
       a.first_joint = l.parent_joint >= 0 ? l.parent_joint : d.coupled_joints[static_cast<size_t>(l.parent_coupled)].master;
     }
     a.shoulder = L.body_pose[static_cast<size_t>(limb.bodies.front())].translation();
-    // The grasp point: the centre of the hand's geometry, fingers included.
-    Eigen::Vector3d g = Eigen::Vector3d::Zero();
-    int count = 0;
-    std::vector<int> stack{c.hand};
-    while (!stack.empty()) {
-      const int k = stack.back();
-      stack.pop_back();
-      for (const auto& p : pts[static_cast<size_t>(k)]) {
-        g += p;
-        ++count;
+    // The grasp point: between the fingers (the centre of their geometry) when the hand has two
+    // or more, else the centre of the hand's geometry and what it carries.
+    const std::vector<int>& fingers = children[static_cast<size_t>(c.hand)];
+    auto centreOf = [&](const std::vector<int>& roots, int& count) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      count = 0;
+      std::vector<int> stack = roots;
+      while (!stack.empty()) {
+        const int k = stack.back();
+        stack.pop_back();
+        for (const auto& p : pts[static_cast<size_t>(k)]) {
+          sum += p;
+          ++count;
+        }
+        for (int ch : children[static_cast<size_t>(k)]) stack.push_back(ch);
       }
-      for (int ch : children[static_cast<size_t>(k)]) stack.push_back(ch);
+      return Eigen::Vector3d(sum / static_cast<double>(std::max(count, 1)));
+    };
+    int count = 0;
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    bool between_fingers = false;
+    if (fingers.size() >= 2) {
+      g = centreOf(fingers, count);
+      between_fingers = count > 0;
     }
-    g /= static_cast<double>(std::max(count, 1));
+    if (!between_fingers) g = centreOf({c.hand}, count);
     a.grasp_world = g;
     a.grasp_in_body = L.body_pose[static_cast<size_t>(c.hand)].inverse() * g;
     std::vector<Eigen::Vector3d> chain;
@@ -521,8 +599,9 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     }
     chain.push_back(g);
     a.reach = chainLength(chain);
-    a.source = "the centre of the geometry of the hand, link '" + a.end_link + "' and what it carries (the end of the " +
-               std::to_string(c.joints) + "-joint chain from joint '" + d.joints[static_cast<size_t>(a.first_joint)].name + "')";
+    a.source = (between_fingers ? "the centre of the geometry of the " + std::to_string(fingers.size()) + " fingers of the hand, link '" + a.end_link + "'"
+                                : "the centre of the geometry of the hand, link '" + a.end_link + "' and what it carries") +
+               " (the end of the " + std::to_string(c.joints) + "-joint chain from joint '" + d.joints[static_cast<size_t>(a.first_joint)].name + "')";
     L.arms.push_back(a);
   }
   if (L.arms.empty()) L.notes.push_back("no arm found (no chain of 3 or more joints that is not a leg)");

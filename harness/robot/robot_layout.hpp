@@ -15,6 +15,8 @@
 
 namespace lexdyn::robot {
 
+struct MeshCache;
+
 /// Where a guessed value came from, for the comment beside it in a drafted file.
 struct Sourced {
   double value = 0.0;
@@ -58,6 +60,9 @@ struct ServoGains {
 
 struct RobotLayout {
   Eigen::VectorXd posture;               ///< model joint order
+  /// The base's orientation in the layout's world: the identity, or turned so that two feet that
+  /// the posture tilts stand flat (the base at the origin either way).
+  Eigen::Matrix3d base_rotation = Eigen::Matrix3d::Identity();
   std::vector<Eigen::Isometry3d> body_pose;  ///< world pose of every body in the posture
   double lowest_z = 0.0, highest_z = 0.0;    ///< of the geometry (or the bodies) in the posture
   double height = 0.0;
@@ -80,8 +85,9 @@ struct RobotLayout {
 /// The layout in `posture` (model joint order). `legged_hint`: the base type the URDF implies
 /// (a robot whose root is welded to the world has no legs). Geometry meshes are read (problems
 /// record a mesh that cannot be read). Throws nothing for a robot without feet or arms: the
-/// lists are empty and `notes` say so.
-RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorXd& posture, ProblemList& problems);
+/// lists are empty and `notes` say so. `cache`: meshes already read (and kept for the next call).
+RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorXd& posture, ProblemList& problems,
+                          MeshCache* cache = nullptr);
 
 /// Servo gains sized for joint j (docs/model.md, "Servo gains"): kp = load torque m g r over a
 /// static deflection of 5 mrad, at least effort / 0.5 rad; kd = max(4 dt kp, 1.4 sqrt(kp I)).

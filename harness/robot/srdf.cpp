@@ -36,7 +36,7 @@ bool numbers(const std::string& text, std::vector<double>& out) {
 
 }  // namespace
 
-Srdf readSrdf(const std::string& path, const model::RobotDescription& d, ProblemList& problems) {
+Srdf readSrdf(const std::string& path, const model::RobotDescription& d, ProblemList& problems, bool skip_unknown) {
   Srdf s;
   s.path = path;
   const std::string text = readTextFile(path, "SRDF");
@@ -54,6 +54,12 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
   auto lockedJoint = [&](const std::string& n) {
     for (const auto& l : d.locked_joints) {
       if (l.name == n) return true;
+    }
+    return false;
+  };
+  auto coupledJoint = [&](const std::string& n) {
+    for (const auto& c : d.coupled_joints) {
+      if (c.name == n) return true;
     }
     return false;
   };
@@ -117,7 +123,17 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
           dropped.push_back(name + " (locked by the loader: not a joint of the model)");
           continue;
         }
-        problems.error(at(j), "group state '" + state.name + "' names joint '" + name + "', which the URDF does not have");
+        if (coupledJoint(name)) {
+          dropped.push_back(name + " (a mimic joint: it follows its master)");
+          continue;
+        }
+        if (skip_unknown) {
+          dropped.push_back(name + " (not a joint of the URDF; --srdf-skip-unknown)");
+          continue;
+        }
+        problems.error(at(j), "group state '" + state.name + "' names joint '" + name +
+                                  "', which the URDF does not have (an SRDF written for another version of the robot? "
+                                  "--srdf-skip-unknown leaves such joints out)");
         continue;
       }
       if (v.size() != 1) {

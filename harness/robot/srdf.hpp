@@ -45,6 +45,7 @@ struct Srdf {
 
 /// Reads an SRDF for the robot `d`. Records every problem in `problems` (joints and links it names
 /// that the URDF lacks, a state without a group, bad numbers), each with the file and line.
-Srdf readSrdf(const std::string& path, const model::RobotDescription& d, ProblemList& problems);
+/// `skip_unknown`: a group state's joint the URDF lacks is dropped with a note instead.
+Srdf readSrdf(const std::string& path, const model::RobotDescription& d, ProblemList& problems, bool skip_unknown = false);
 
 }  // namespace lexdyn::robot

@@ -593,6 +593,38 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
   RestingState out;
   out.settle = settle;
   out.q = placeOnGround(joints, R_yaw, base_xy);
+  const bool solve_base = ff && settle != Settle::None;
+  // The first guess of the base's roll and pitch: the contact surfaces level (their normals, the
+  // frames' z, averaged over the points, vertical). A posture that tilts the soles a few degrees
+  // (an ankle a little off) then starts flat on them, not balanced on an edge. A tilt below
+  // 1e-6 rad is left alone (the guess stays exactly level).
+  double roll0 = 0.0, pitch0 = 0.0;
+  if (solve_base && !s.points.empty()) {
+    MultibodyState state = s.model.createState();
+    std::vector<double> coords(static_cast<size_t>(s.nqc));
+    s.model.coordinates(out.q, coords.data());
+    const Eigen::VectorXd zero_u = Eigen::VectorXd::Zero(s.nv);
+    s.model.setState(state, coords.data(), zero_u.data());
+    const model::RobotDescription& desc = s.model.description();
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    for (const auto& surf : desc.contact_surfaces) {
+      const auto& F = desc.frames[static_cast<size_t>(surf.frame)];
+      normal += static_cast<double>(surf.points.size()) * (state.bodies().R[static_cast<size_t>(F.link)] * F.placement.linear().col(2));
+    }
+    if (normal.norm() > 0.0 && std::acos(std::clamp(normal.normalized().z(), -1.0, 1.0)) > 1e-6) {
+      const Eigen::Matrix3d C = Eigen::Quaterniond::FromTwoVectors(normal.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      const Eigen::Matrix3d M = R_yaw.transpose() * C * R_yaw;  // ~ Ry(pitch) Rx(roll) in the heading's axes
+      pitch0 = std::asin(std::clamp(-M(2, 0), -1.0, 1.0));
+      roll0 = std::atan2(M(2, 1), M(2, 2));
+      if (std::abs(pitch0) <= 0.5 && std::abs(roll0) <= 0.5) {
+        out.q = placeOnGround(joints, R_yaw * Eigen::AngleAxisd(pitch0, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                                          Eigen::AngleAxisd(roll0, Eigen::Vector3d::UnitX()).toRotationMatrix(),
+                              base_xy);
+      } else {
+        roll0 = pitch0 = 0.0;  // surfaces far from level: not a stance to start from
+      }
+    }
+  }
 
   // Unknowns x: [roll, pitch, z] of the base (free-flyer; R = Rz(yaw) Ry(pitch) Rx(roll), x and
   // y kept) then, with StaticEquilibrium, the joints. Equations, each (nearly) conjugate to its
@@ -601,10 +633,9 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
   // moment) vanish at rest: vertical normal forces and gravity have none, and friction is zero
   // at zero slip velocity.
   const bool solve_joints = settle == Settle::StaticEquilibrium;
-  const bool solve_base = ff && settle != Settle::None;
   const int n = (solve_base ? 3 : 0) + (solve_joints ? s.nj : 0);
   Eigen::VectorXd x(n);
-  if (solve_base) x.head(3) << 0.0, 0.0, out.q.base_position.z();
+  if (solve_base) x.head(3) << roll0, pitch0, out.q.base_position.z();
   if (solve_joints) x.tail(s.nj) = joints;
 
   auto configuration = [&](const Eigen::VectorXd& xx) {

@@ -35,7 +35,14 @@ void ProblemList::throwIfErrors() const {
     const long ib = std::find(files.begin(), files.end(), fb.first) - files.begin();
     return ia != ib ? ia < ib : fa.second < fb.second;
   });
-  std::string text = std::to_string(errors_.size()) + " problems:";
+  // The files named, when they are not only the one this list reads (a data file's problems
+  // listed with its URDF's).
+  std::string text = std::to_string(errors_.size()) + " problems";
+  if (files.size() > 1 || files.front() != file_) {
+    text += " in ";
+    for (size_t k = 0; k < files.size(); ++k) text += (k == 0 ? "" : (k + 1 == files.size() ? " and " : ", ")) + files[k];
+  }
+  text += ":";
   for (const Problem& p : sorted) text += "\n  " + p.text();
   throw InputError(file_, text);
 }

@@ -100,6 +100,9 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
   attempt([&] {
     if (auto u = top.optional("urdf")) d.data_urdf = u->asString();
   });
+  attempt([&] {
+    if (auto u = top.optional("mesh_up_axis")) d.mesh_up_axis_from_file = u->asEnum({"ignore", "file"}) == "file";
+  });
   if (top.has("mimic")) top.optional("mimic");  // read before the tree was built
   attempt([&] {
     if (auto g = top.optional("gravity")) {
@@ -167,6 +170,7 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
     f.name = fname;
     f.link = d.frames[static_cast<size_t>(parent)].link;
     f.placement = d.frames[static_cast<size_t>(parent)].placement * X;
+    f.from_data_file = true;
     d.frames.push_back(f);
   });
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -111,7 +112,21 @@ ResolvedResource resolveResource(const std::string& uri, const std::string& urdf
       if (!pkg.empty() && found_without_file.empty()) found_without_file = pkg.string();
     }
     if (!found_without_file.empty()) {
+      r.package_found = true;
       r.searched = "package '" + name + "' is " + found_without_file + ", which has no file " + inside;
+      // A name that differs only in case (a package written on a case-insensitive file system).
+      const fs::path want = fs::path(found_without_file) / inside;
+      std::error_code ec;
+      for (const auto& e : fs::directory_iterator(want.parent_path(), ec)) {
+        std::string a = e.path().filename().string(), b = want.filename().string();
+        if (a.size() != b.size() || a == b) continue;
+        bool same = true;
+        for (size_t k = 0; k < a.size() && same; ++k) same = std::tolower(static_cast<unsigned char>(a[k])) == std::tolower(static_cast<unsigned char>(b[k]));
+        if (same) {
+          r.searched += " (it has " + e.path().filename().string() + ", which differs in case only)";
+          break;
+        }
+      }
       return r;
     }
     r.searched = "package '" + name + "' not found above " + urdf_dir.string();

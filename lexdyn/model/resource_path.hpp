@@ -11,6 +11,7 @@ namespace lexdyn::model {
 struct ResolvedResource {
   std::string path;      ///< the existing file; empty when not found
   std::string searched;  ///< where it was looked for (for the message when not found)
+  bool package_found = false;  ///< a package:// URI whose package was found without the file
 };
 
 /// The folders a package:// URI is looked up in: `package_paths`, then (when `use_ros`) the

@@ -77,6 +77,7 @@ struct FrameDescription {
   std::string name;
   int link = -1;
   Eigen::Isometry3d placement = Eigen::Isometry3d::Identity();  ///< frame in its link frame
+  bool from_data_file = false;  ///< given by the data file's frames (not a URDF link)
 };
 
 /// A <visual> or <collision> shape of a link, placed in its body's frame.
@@ -203,6 +204,10 @@ struct RobotDescription {
   /// The data file's `urdf` key: the URDF it was written for, relative to the data file (robot
   /// check reads it when given the data file alone); empty when absent.
   std::string data_urdf;
+  /// The data file's `mesh_up_axis: file`: COLLADA meshes are turned by the <up_axis> they
+  /// declare (robot init, robot check, the replay; the dynamics use no mesh). Default `ignore`:
+  /// their coordinates as written, as ROS's tools read them.
+  bool mesh_up_axis_from_file = false;
   bool strict = false;    ///< read with LoadOptions::strict
 
   int findLink(const std::string& name) const;   ///< -1 when absent

@@ -580,7 +580,8 @@ void readGeometry(const XmlLink& l, int body, const Eigen::Isometry3d& X_body_li
         if (r.path.empty()) {
           const std::string msg = "link '" + l.name + "': <" + std::string(kind) + "> mesh '" + g.mesh_uri + "' not found: " + r.searched;
           if (options.require_meshes) {
-            problems.error(at(file, s), msg + " (give --package-path, or --allow-missing-meshes to go on without it)");
+            problems.error(at(file, s), msg + (r.package_found ? " (the package is there without the file; --allow-missing-meshes goes on without it)"
+                                                               : " (give --package-path, or --allow-missing-meshes to go on without it)"));
           } else {
             problems.warning(at(file, s), msg + " (not needed by the dynamics; robot init, robot check and the replay need it)");
           }
@@ -1169,7 +1170,7 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
   }
 
   TreeBuilder t{idx, *model, file, base, mimic, options, d, problems, packageSearchPath(options.package_paths, options.use_ros_package_path),
-                {}, {}, {}, {}};
+                {}, {}, {}, {}, {}};
   for (const auto& l : idx.links) t.xml_link[l.name] = &l;
   for (const auto& j : idx.joints) t.xml_joint[j.name] = &j;
   readMimics(idx, *model, file, mimic, d, problems, t.locked, t.coupled);

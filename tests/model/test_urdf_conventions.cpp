@@ -193,7 +193,9 @@ TEST(UrdfConventions, DataFileProblemsAreListedWithTheUrdfs) {
   r.thigh_inertia = R"(ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="-1")";
   r.data_extra = "frames:\n  - {name: f, parent: nowhere}\nforce_sensors:\n  - {name: s, frame: nothing}\n";
   const std::string e = inputErrorOf([&] { r.load(); });
-  EXPECT_TRUE(containsAll(e, {"problems:", "body 'thigh'", "ros.yaml:5: frames[0].parent", "ros.yaml:7: force_sensors[0].frame"})) << e;
+  EXPECT_TRUE(containsAll(e, {"ros.urdf: 4 problems in ros.urdf and ros.yaml:", "body 'thigh'", "ros.yaml:5: frames[0].parent",
+                              "ros.yaml:7: force_sensors[0].frame"}))
+      << e;
 }
 
 TEST(UrdfConventions, TheDataFileFillsUnspecifiedLimitsAndLocksMimicsAtAPosture) {

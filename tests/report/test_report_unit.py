@@ -286,6 +286,41 @@ class ReplayModel(unittest.TestCase):
             self.assertEqual(len(m["warnings"]), 2)
             self.assertIn("tri.obj: cannot read the mesh", m["warnings"][0])
 
+    def test_a_collada_up_axis_follows_the_data_file(self):
+        # A Y_UP COLLADA triangle: as written without a data file (ROS's tools' reading), turned
+        # to z up ((x, y, z) -> (x, -z, y)) with the data file's mesh_up_axis: file.
+        self.assertTrue(os.environ.get("LEXDYN_HARNESS"), "LEXDYN_HARNESS names the harness (set by ctest)")
+        with tempfile.TemporaryDirectory() as d:
+            with open(os.path.join(d, "t.dae"), "w") as f:
+                f.write('<?xml version="1.0"?>\n<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">'
+                        '<asset><unit meter="1"/><up_axis>Y_UP</up_axis></asset><library_geometries><geometry id="g"><mesh>'
+                        '<source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array><technique_common>'
+                        '<accessor source="#pa" count="3" stride="3"><param name="X" type="float"/><param name="Y" type="float"/>'
+                        '<param name="Z" type="float"/></accessor></technique_common></source><vertices id="v">'
+                        '<input semantic="POSITION" source="#p"/></vertices><triangles count="1"><input semantic="VERTEX" source="#v" '
+                        'offset="0"/><p>0 1 2</p></triangles></mesh></geometry></library_geometries><library_visual_scenes>'
+                        '<visual_scene id="s"><node id="n"><instance_geometry url="#g"/></node></visual_scene>'
+                        '</library_visual_scenes><scene><instance_visual_scene url="#s"/></scene></COLLADA>\n')
+            urdf = os.path.join(d, "r.urdf")
+            with open(urdf, "w") as f:
+                f.write('<robot name="r"><link name="base"><visual><geometry><mesh filename="t.dae"/></geometry></visual></link></robot>')
+            data = os.path.join(d, "r.yaml")
+            def triangle(data_path):
+                m = replay.load_model(urdf, data_path)
+                self.assertEqual(m["warnings"], [])
+                return np.frombuffer(base64.b64decode(m["meshes"][0]), dtype="<f4").reshape(3, 3).tolist()
+            written = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+            self.assertEqual(triangle(None), written)
+            for up, expected in (("ignore", written), ("file", [[0, 0, 0], [1, 0, 0], [0, 0, 1]])):
+                with open(data, "w") as f:
+                    f.write(f"format: lexdyn-robot-data/1\nrobot: r\nbase: fixed\nmesh_up_axis: {up}\n")
+                self.assertEqual(triangle(data), expected, up)
+            with open(data, "w") as f:
+                f.write("format: lexdyn-robot-data/1\nrobot: r\nbase: fixed\nmesh_up_axis: y\n")
+            with self.assertRaises(ReportInputError) as e:
+                replay.load_model(urdf, data)
+            self.assertIn("r.yaml: mesh_up_axis: expected ignore or file, found 'y'", str(e.exception))
+
     def test_urdf_errors_name_the_file_and_element(self):
         with tempfile.TemporaryDirectory() as d:
             urdf = os.path.join(d, "r.urdf")

@@ -7,8 +7,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -94,7 +96,11 @@ TEST(RobotInit, AHumanoidsDraftComesFromItsGeometry) {
                                  "frame: LEFT_SOLE", "- {name: LEFT_FOOT_SENSOR, frame: LEFT_SOLE}", "standing:   # the SRDF group state"}));
   const std::string reach = slurp(out + "/reach.yaml");
   EXPECT_TRUE(containsAll(reach, {"- {name: left_hand, type: position, frame: LEFT_GRASP", "action: set_target, task: left_hand",
-                                  "type: com_box", "sensor: LEFT_FOOT_SENSOR"}));
+                                  "type: com_box", "sensor: LEFT_FOOT_SENSOR",
+                                  "- {name: hands_reached, type: task_error, tasks: [left_hand, right_hand], statistic: max, from_s: 15, to_s: 19.99, limit: 0.02}",
+                                  "- {name: trunk_up, type: frame_height, frame:"}));
+  // The grasp point is between the fingers of the hand.
+  EXPECT_TRUE(containsAll(data, {"the centre of the geometry of the", "fingers of the hand, link 'left_wrist_yaw_link'"})) << data;
   // The drafted robot checks: CoM above the soles, the joint table.
   const CliResult check = harness("robot check " + out + "/g1_like.yaml --png " + dir + "/g1.png", dir);
   expectExit(check, 0);
@@ -104,6 +110,101 @@ TEST(RobotInit, AHumanoidsDraftComesFromItsGeometry) {
   const std::string png = slurp(dir + "/g1.png");
   ASSERT_GT(png.size(), 1000u);
   EXPECT_EQ(png.substr(1, 3), "PNG");
+}
+
+// A COLLADA box (8 vertices, 12 triangles) of half extents `h` about `c`, in the file's
+// coordinates, declaring `up` (Y_UP, Z_UP) as its up axis.
+std::string colladaBox(const std::string& up, const std::array<double, 3>& c, const std::array<double, 3>& h) {
+  std::ostringstream v;
+  for (int k = 0; k < 8; ++k) {
+    v << c[0] + ((k & 1) ? h[0] : -h[0]) << " " << c[1] + ((k & 2) ? h[1] : -h[1]) << " " << c[2] + ((k & 4) ? h[2] : -h[2]) << " ";
+  }
+  const char* tri = "0 1 3 0 3 2 4 6 7 4 7 5 0 4 5 0 5 1 2 3 7 2 7 6 0 2 6 0 6 4 1 5 7 1 7 3";
+  return "<?xml version=\"1.0\"?>\n<COLLADA xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" version=\"1.4.1\">\n"
+         "<asset><unit meter=\"1\"/><up_axis>" + up + "</up_axis></asset>\n"
+         "<library_geometries><geometry id=\"g\"><mesh><source id=\"p\"><float_array id=\"pa\" count=\"24\">" + v.str() +
+         "</float_array><technique_common><accessor source=\"#pa\" count=\"8\" stride=\"3\"><param name=\"X\" type=\"float\"/>"
+         "<param name=\"Y\" type=\"float\"/><param name=\"Z\" type=\"float\"/></accessor></technique_common></source>"
+         "<vertices id=\"v\"><input semantic=\"POSITION\" source=\"#p\"/></vertices><triangles count=\"12\">"
+         "<input semantic=\"VERTEX\" source=\"#v\" offset=\"0\"/><p>" + tri + "</p></triangles></mesh></geometry></library_geometries>\n"
+         "<library_visual_scenes><visual_scene id=\"s\"><node id=\"n\"><instance_geometry url=\"#g\"/></node></visual_scene>"
+         "</library_visual_scenes><scene><instance_visual_scene url=\"#s\"/></scene>\n</COLLADA>\n";
+}
+
+// COLLADA meshes that declare Y_UP: robot init turns them when the links' centres of mass say so
+// (mesh_up_axis: file), and takes them as written (as ROS's tools do) when the centres of mass
+// agree with that.
+TEST(RobotInit, AColladaUpAxisIsAppliedWhenTheLinksSayItIsMeant) {
+  const std::string dir = scratch("up_axis");
+  fs::create_directories(dir + "/meshes");
+  // Each link 0.4 m long along its z; the file writes the box along its y (Y_UP: y is up).
+  std::ofstream(dir + "/meshes/link.dae") << colladaBox("Y_UP", {0.0, 0.2, 0.0}, {0.03, 0.2, 0.03});
+  auto urdf = [&](const std::string& com) {
+    std::string u = "<?xml version=\"1.0\"?>\n<robot name=\"stick\">\n  <link name=\"world\"/>\n";
+    const char* names[] = {"a", "b", "c"};
+    for (int k = 0; k < 3; ++k) {
+      const std::string n = names[k], parent = k == 0 ? "world" : names[k - 1];
+      u += "  <joint name=\"j" + n + "\" type=\"revolute\"><parent link=\"" + parent + "\"/><child link=\"" + n + "\"/>"
+           "<origin xyz=\"0 0 " + std::string(k == 0 ? "0" : "0.4") + "\"/><axis xyz=\"0 1 0\"/><limit lower=\"-2\" upper=\"2\" effort=\"100\" velocity=\"2\"/></joint>\n"
+           "  <link name=\"" + n + "\"><inertial><origin xyz=\"" + com + "\"/><mass value=\"1\"/>"
+           "<inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.001\"/></inertial>"
+           "<collision><geometry><mesh filename=\"meshes/link.dae\"/></geometry></collision></link>\n";
+    }
+    return u + "</robot>\n";
+  };
+  std::ofstream(dir + "/turned.urdf") << urdf("0 0 0.2");   // the mass along z: the file's y is the link's z
+  std::ofstream(dir + "/written.urdf") << urdf("0 0.2 0");  // the mass along y: as written
+  const CliResult t = harness("robot init " + dir + "/turned.urdf --out " + dir + "/t", dir);
+  expectExit(t, 0, {"meshes: of the COLLADA files, 1 declare Y_UP", "lie 0.0 cm on average from their meshes' centres with the up axis applied, 28.3 cm as written (3 meshes): turned to z up"});
+  EXPECT_TRUE(containsAll(slurp(dir + "/t/stick.yaml"), {"mesh_up_axis: file ", "(file: COLLADA meshes turned by their <up_axis>)"}));
+  const CliResult w = harness("robot init " + dir + "/written.urdf --out " + dir + "/w", dir);
+  expectExit(w, 0, {"meshes: of the COLLADA files, 1 declare Y_UP", "taken as written"});
+  EXPECT_TRUE(containsAll(slurp(dir + "/w/stick.yaml"), {"mesh_up_axis: ignore ", "(ignore: as ROS's tools read them)"}));
+  // robot check reads the data file's choice: the stick stands 1.2 m tall turned, 0.06 m as written.
+  const CliResult ct = harness("robot check " + dir + "/t/stick.yaml --png -", dir);
+  expectExit(ct, 0);
+  EXPECT_TRUE(containsAll(ct.out, {"height 1.2 m"})) << ct.out;
+  const CliResult cw = harness("robot check " + dir + "/w/stick.yaml --png -", dir);
+  expectExit(cw, 0);
+  EXPECT_TRUE(containsAll(cw.out, {"height 0.86 m"})) << cw.out;
+  // The mesh conversion of the replay does the same.
+  expectExit(harness("robot mesh " + dir + "/meshes/link.dae --out " + dir + "/turned.stl --up-axis file", dir), 0);
+  expectExit(harness("robot mesh " + dir + "/meshes/link.dae --out " + dir + "/written.stl", dir), 0);
+  EXPECT_NE(slurp(dir + "/turned.stl"), slurp(dir + "/written.stl"));
+}
+
+// A posture that tilts both feet (the ankles 0.05 rad off half-sitting's): robot init stands the
+// robot flat on them with its base tilted, robot check shows the same, and the drafted stand's
+// equilibrium starts from the level soles and passes. An SRDF state naming a joint the URDF
+// lacks is an error, or dropped with --srdf-skip-unknown.
+TEST(RobotInit, APostureThatTiltsTheFeetStandsOnThemFlat) {
+  const std::string dir = scratch("tilted");
+  std::string srdf = slurp(kSrc + "/models/hrp2kai_like/hrp2kai_like.srdf");
+  for (const std::string j : {"RLEG_JOINT4", "LLEG_JOINT4"}) {
+    const std::string from = "<joint name=\"" + j + "\" value=\"-0.4189\"/>";
+    ASSERT_NE(srdf.find(from), std::string::npos);
+    srdf.replace(srdf.find(from), from.size(), "<joint name=\"" + j + "\" value=\"-0.3689\"/>");
+  }
+  std::ofstream(dir + "/tilted.srdf") << srdf;
+  const std::string urdf = kSrc + "/models/hrp2kai_like/hrp2kai_like.urdf";
+  const CliResult init = harness("robot init " + urdf + " --srdf " + dir + "/tilted.srdf --out " + dir + "/draft", dir);
+  expectExit(init, 0, {"the posture tilts the feet by 2.86 deg from their zero-configuration attitude: the robot is turned to stand them flat",
+                       "centre of mass", "inside the support polygon's nearest edge"});
+  const CliResult check = harness("robot check " + dir + "/draft/hrp2kai_like.yaml --png -", dir);
+  expectExit(check, 0);
+  EXPECT_TRUE(containsAll(check.out, {"the base is turned by 2.86 deg so that the feet stand flat", "forward: +x"})) << check.out;
+  EXPECT_EQ(check.out.find("apart in height"), std::string::npos) << check.out;  // the soles are flat
+  const CliResult stand = harness("run " + dir + "/draft/stand.yaml --out " + dir + "/stand --quiet", dir);
+  expectExit(stand, 0, {"completed"});
+  // An SRDF of another version of the robot: a joint it does not have.
+  std::string other = srdf;
+  other.replace(other.find("<joint name=\"HEAD_JOINT1\" value="), 0, "<joint name=\"HEAD_JOINT2\" value=\"0\"/>\n    ");
+  std::ofstream(dir + "/other.srdf") << other;
+  expectExit(harness("robot init " + urdf + " --srdf " + dir + "/other.srdf --out " + dir + "/other", dir), 2,
+             {"other.srdf:", "names joint 'HEAD_JOINT2', which the URDF does not have", "--srdf-skip-unknown"});
+  EXPECT_FALSE(fs::exists(dir + "/other"));
+  const CliResult skip = harness("robot init " + urdf + " --srdf " + dir + "/other.srdf --srdf-skip-unknown --out " + dir + "/other", dir);
+  expectExit(skip, 0, {"dropped HEAD_JOINT2 (not a joint of the URDF; --srdf-skip-unknown)"});
 }
 
 // robot check on a case file and on a URDF alone; a fixed-base robot whose posture its servos
@@ -138,7 +239,8 @@ TEST(RobotInit, BadInputIsRefusedAndLeavesNothing) {
   std::ofstream(dir + "/pkg/urdf/panda_like.urdf") << urdf;
   const CliResult mesh = harness("robot init " + dir + "/pkg/urdf/panda_like.urdf --out " + out, dir);
   expectExit(mesh, 2, {"pkg/urdf/panda_like.urdf:", "mesh 'package://panda_like_description/meshes/", "not found",
-                       "which has no file meshes/", "--allow-missing-meshes"});
+                       "which has no file meshes/", "the package is there without the file; --allow-missing-meshes"});
+  EXPECT_EQ(mesh.err.find("--package-path"), std::string::npos) << mesh.err;  // the package was found
   EXPECT_FALSE(fs::exists(out));
   // An SRDF naming a joint the URDF lacks.
   std::ofstream(dir + "/bad.srdf") << "<?xml version=\"1.0\"?>\n<robot name=\"panda_like\">\n  <group_state name=\"ready\" group=\"arm\">\n"

@@ -156,10 +156,11 @@ def _harness():
     return None
 
 
-def read_mesh(path):
+def read_mesh(path, up_axis="ignore"):
     """Triangles (float32, 9 per triangle) of a mesh: STL read here, any other format libassimp
-    reads converted by `lexdyn-harness robot mesh` (its unit applied, its up axis not, as lexdyn's
-    robot tools and ROS read them). Raises ReportInputError naming the file."""
+    reads converted by `lexdyn-harness robot mesh` (its unit applied; a COLLADA file's up axis
+    applied only with up_axis="file", the data file's mesh_up_axis, as lexdyn's robot tools do).
+    Raises ReportInputError naming the file."""
     if path.lower().endswith(".stl"):
         return read_stl(path)
     harness = _harness()
@@ -167,7 +168,7 @@ def read_mesh(path):
         raise ReportInputError(path, "a mesh other than STL needs lexdyn-harness (robot mesh) to be read; build it, or set LEXDYN_HARNESS")
     with tempfile.TemporaryDirectory() as d:
         out = os.path.join(d, "mesh.stl")
-        r = subprocess.run([harness, "robot", "mesh", path, "--out", out], capture_output=True, text=True)
+        r = subprocess.run([harness, "robot", "mesh", path, "--out", out, "--up-axis", up_axis], capture_output=True, text=True)
         if r.returncode != 0:
             raise ReportInputError(path, "cannot read the mesh: " + (r.stderr.strip().splitlines() or ["?"])[-1])
         return read_stl(out)
@@ -189,6 +190,7 @@ def load_model(urdf_path, data_path=None, package_paths=()):
     model = {"name": root.get("name", ""), "links": {}, "joints": [], "frames": [], "surfaces": {},
              "meshes": [], "warnings": [], "floating": False, "root": None}
     mesh_index = {}  # a mesh file used by several links is stored once
+    up_axis = _mesh_up_axis(data_path)
     for link in root.findall("link"):
         name = link.get("name")
         visuals = []
@@ -216,7 +218,7 @@ def load_model(urdf_path, data_path=None, package_paths=()):
                 else:
                     try:
                         if p not in mesh_index:
-                            tri = read_mesh(p)
+                            tri = read_mesh(p, up_axis)
                             model["meshes"].append(base64.b64encode(tri.astype("<f4").tobytes()).decode())
                             mesh_index[p] = len(model["meshes"]) - 1
                         geom = {"type": "mesh", "mesh": mesh_index[p], "scale": scale}
@@ -271,6 +273,16 @@ def load_model(urdf_path, data_path=None, package_paths=()):
     if data_path:
         _add_data_file(model, data_path)
     return model
+
+
+def _mesh_up_axis(data_path):
+    """The data file's mesh_up_axis (ignore | file); ignore without one."""
+    if not data_path or yaml is None:
+        return "ignore"
+    v = (read_yaml(data_path, "robot data file") or {}).get("mesh_up_axis", "ignore")
+    if v not in ("ignore", "file"):
+        raise ReportInputError(f"{data_path}: mesh_up_axis", f"expected ignore or file, found '{v}'")
+    return v
 
 
 def _add_data_file(model, data_path):
