@@ -230,6 +230,9 @@ Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(sy
   for (const model::CoupledJointDescription& C : desc.coupled_joints) {
     const SimTK::MobilizedBody& mb = matter.getMobilizedBody(mobod[static_cast<size_t>(C.child_link)]);
     coupled.push_back({mb.getFirstQIndex(default_state), mb.getFirstUIndex(default_state), C.master, C.multiplier, C.offset});
+    // At q = 0 (the default state) a coupled joint is at its offset: writeCoordinates writes only
+    // what differs from the state's q, so the default must already hold it.
+    default_state.updQ()[coupled.back().q_index] = C.offset;
   }
 
   // Subtree masses, accumulated from the leaves to the root (children come after parents).
@@ -487,8 +490,8 @@ void Multibody::accelerations(MultibodyState& st, double* udot) const {
 
 // udot of the free tree, projected onto the coupling P udot = 0 (row c of P: u_c - multiplier
 // u_master) with the mass metric: udot - M^-1 P^T (P M^-1 P^T)^-1 P udot, the motion under the
-// couplings' ideal constraint forces. M^-1 P^T takes one O(n) multiplyByMInv per coupled joint;
-// nothing is allocated.
+// couplings' ideal constraint forces. M^-1 P^T takes one O(n) multiplyByMInv per coupled joint
+// (which allocates inside Simbody); the workspaces here are sized once.
 void Multibody::Impl::constrainCoupled(MultibodyState::Impl& s) const {
   const int nc = static_cast<int>(coupled.size());
   const int nu = nv + nc;

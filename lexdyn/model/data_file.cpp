@@ -8,6 +8,7 @@
 #include "lexdyn/common/input_ranges.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 namespace lexdyn::model::detail {
@@ -57,6 +58,23 @@ BaseType readBaseType(const yaml::Node& root) {
   return b.asEnum({"free_flyer", "fixed"}) == "fixed" ? BaseType::Fixed : BaseType::FreeFlyer;
 }
 
+std::vector<std::string> readPackagePaths(const yaml::Node& root, ProblemList& problems) {
+  std::vector<std::string> out;
+  if (!root.raw()["package_path"]) return out;
+  problems.attempt([&] {
+    const yaml::Node node(root.raw()["package_path"], root.file(), "package_path");
+    const std::filesystem::path dir = std::filesystem::path(root.file()).parent_path();
+    for (const yaml::Node& e : node.elements()) {
+      const std::filesystem::path rel(e.asString());
+      const std::filesystem::path p = (rel.is_absolute() ? rel : dir / rel).lexically_normal();
+      std::error_code ec;
+      if (!std::filesystem::is_directory(p, ec)) e.fail("folder not found: " + p.string());
+      out.push_back(p.string());
+    }
+  });
+  return out;
+}
+
 MimicPolicy readMimicPolicy(const yaml::Node& root, ProblemList& problems) {
   MimicPolicy p;
   if (!root.raw()["mimic"]) return p;
@@ -104,6 +122,7 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
     if (auto u = top.optional("mesh_up_axis")) d.mesh_up_axis_from_file = u->asEnum({"ignore", "file"}) == "file";
   });
   if (top.has("mimic")) top.optional("mimic");  // read before the tree was built
+  if (top.has("package_path")) top.optional("package_path");  // read before the URDF's meshes were
   attempt([&] {
     if (auto g = top.optional("gravity")) {
       d.gravity = g->asVector3();
@@ -302,11 +321,15 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
     for (const auto& [pname, pn] : postures->entries()) {
       attempt([&] {
         Eigen::VectorXd q = Eigen::VectorXd::Constant(static_cast<int>(d.joints.size()), std::numeric_limits<double>::quiet_NaN());
+        std::vector<std::pair<std::string, double>> coupled_values;  // checked against their masters below
         for (const auto& [jname, vn] : pn.entries()) {
           const int j = d.findJoint(jname);
           const double v = vn.asDouble();
           if (j < 0) {
-            if (coupledJoint(d, jname)) continue;  // a coupled mimic joint follows its master
+            if (coupledJoint(d, jname)) {  // a coupled mimic joint follows its master
+              coupled_values.emplace_back(jname, v);
+              continue;
+            }
             const LockedJointDescription* l = lockedJoint(d, jname);
             if (!l) vn.fail("unknown joint '" + jname + "'");
             if (std::abs(v - l->value) > 1e-6) {  // a locked joint stays at its own value
@@ -327,6 +350,18 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
           if (std::isnan(q[static_cast<int>(j)])) missing += (missing.empty() ? "" : ", ") + d.joints[j].name;
         }
         if (!missing.empty()) pn.fail("posture '" + pname + "' does not give every joint; missing: " + missing);
+        for (const auto& [cname, v] : coupled_values) {
+          for (const auto& c : d.coupled_joints) {
+            if (c.name != cname) continue;
+            const double follows = c.multiplier * q[c.master] + c.offset;
+            if (std::abs(v - follows) > 1e-6) {
+              problems.warning(pn.where(), "posture '" + pname + "': mimic joint '" + cname + "' at " + fmt(v) + " is not where its master puts it (" +
+                                               fmt(c.multiplier) + " x " + d.joints[static_cast<size_t>(c.master)].name + " " +
+                                               fmt(q[c.master]) + (c.offset != 0.0 ? " + " + fmt(c.offset) : "") + " = " + fmt(follows) +
+                                               "): the master decides");
+            }
+          }
+        }
         d.postures.emplace_back(pname, q);
       });
     }

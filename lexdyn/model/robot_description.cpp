@@ -96,8 +96,11 @@ RobotDescription parseRobotDescription(const std::string& urdf_text, const std::
   problems.attempt([&] { base = detail::readBaseType(data_root); });
   d.base = base;
   const detail::MimicPolicy mimic = detail::readMimicPolicy(data_root, problems);
-  detail::readUrdf(urdf_text, urdf_name, base, mimic, options, d, problems);
+  LoadOptions with_paths = options;  // the data file's package_path after the caller's
+  for (const std::string& p : detail::readPackagePaths(data_root, problems)) with_paths.package_paths.push_back(p);
+  detail::readUrdf(urdf_text, urdf_name, base, mimic, with_paths, d, problems);
   detail::readDataFile(d, data_root, problems);
+  problems.attempt([&] { detail::narrowCoupledMasters(d, problems); });
   detail::noteUnspecifiedLimits(d, problems);
   problems.throwIfErrors();
   keepWarnings(d, problems);
@@ -110,14 +113,18 @@ RobotDescription loadRobotDescription(const std::string& urdf_path, const std::s
   return parseRobotDescription(urdf_text, urdf_path, data_text, data_path, options);
 }
 
-RobotDescription loadUrdfOnly(const std::string& urdf_path, BaseType base, const LoadOptions& options) {
+RobotDescription loadUrdfOnly(const std::string& urdf_path, BaseType base, const LoadOptions& options, MimicMode mimic_mode) {
   const std::string urdf_text = readTextFile(urdf_path, "URDF");
   RobotDescription d;
   d.urdf_path = urdf_path;
   d.base = base;
   d.strict = options.strict;
   ProblemList problems(urdf_path, options.strict);
-  detail::readUrdf(urdf_text, urdf_path, base, detail::MimicPolicy{}, options, d, problems);
+  detail::MimicPolicy mimic;
+  mimic.mode = mimic_mode;
+  mimic.given = mimic_mode == MimicMode::Locked;  // asked for: no note that a data file could say it
+  detail::readUrdf(urdf_text, urdf_path, base, mimic, options, d, problems);
+  detail::narrowCoupledMasters(d, problems);
   detail::noteUnspecifiedLimits(d, problems);
   problems.throwIfErrors();
   keepWarnings(d, problems);

@@ -122,6 +122,7 @@ struct CoupledJointDescription {
   int master = -1;          ///< model joint index (RobotDescription::joints)
   double multiplier = 1.0, offset = 0.0;
   double lower = 0.0, upper = 0.0;  ///< its own limits (rad or m; +-inf: none)
+  double velocity_limit = 0.0;       ///< its own (rad/s or m/s; inf: none)
   int urdf_line = 0;
 };
 
@@ -238,9 +239,11 @@ RobotDescription parseRobotDescription(const std::string& urdf_text, const std::
                                        const LoadOptions& options = {});
 
 /// A URDF without a data file (robot init, robot check): links, joints, frames of the links,
-/// geometry, mimic joints (locked at the masters' zero, clamped into the limits); no surfaces,
-/// sensors or postures. `base` as given.
-RobotDescription loadUrdfOnly(const std::string& urdf_path, BaseType base, const LoadOptions& options = {});
+/// geometry, mimic joints (coupled to their masters, as without a data file's `mimic`); no surfaces,
+/// sensors or postures. `base` as given; `mimic`: Locked holds the mimic joints at their masters'
+/// zero (clamped into their limits).
+RobotDescription loadUrdfOnly(const std::string& urdf_path, BaseType base, const LoadOptions& options = {},
+                              MimicMode mimic = MimicMode::Coupled);
 
 
 /// Rotation from URDF roll-pitch-yaw (fixed axes X, then Y, then Z: R = Rz(yaw) Ry(pitch) Rx(roll)).

@@ -25,6 +25,7 @@
 #include <cstdlib>
 #include <functional>
 #include <limits>
+#include <algorithm>
 #include <map>
 #include <set>
 #include <sstream>
@@ -108,7 +109,8 @@ void refuseXacro(const TiXmlElement* robot, const std::string& file) {
     throw InputError(at(file, x ? x->Row() : robot->Row()),
                      std::string(x ? "<" + std::string(x->Value()) + ">: " : "") +
                          "this is a xacro file (ROS's XML macros), not a URDF: expand it first, e.g. `xacro " + file +
-                         " > robot.urdf` (ROS's xacro package), and give lexdyn the expanded file");
+                         " > robot.urdf` where ROS's xacro package is installed, and give lexdyn the expanded file (many "
+                         "description packages also ship an expanded .urdf beside the xacro)");
   }
 }
 
@@ -673,6 +675,11 @@ struct TreeBuilder {
       if (!given && jd.lower == 0.0 && jd.upper == 0.0) {
         jd.lower = -kInf;
         jd.upper = kInf;
+      } else if (jd.lower == 0.0 && jd.upper == 0.0 && !problems.strict()) {
+        // lower="0" upper="0": what CAD exporters write for "not set"; read as no limits (the
+        // joint is listed with those without a range; strict mode refuses it).
+        jd.lower = -kInf;
+        jd.upper = kInf;
       } else if (!(jd.lower < jd.upper)) {
         problems.error(at(file, xj.line), "joint '" + xj.name + "': expected limit lower < upper, found lower=" + fmt(jd.lower) +
                                               " upper=" + fmt(jd.upper));
@@ -717,6 +724,7 @@ struct TreeBuilder {
         cj.axis = jd.axis;
         cj.lower = jd.lower;
         cj.upper = jd.upper;
+        cj.velocity_limit = jd.velocity_limit;
         cj.multiplier = coupled.at(xj.name).multiplier;
         cj.offset = coupled.at(xj.name).offset;
         cj.urdf_line = xj.line;
@@ -728,6 +736,7 @@ struct TreeBuilder {
         ld.urdf_line = idx.lineOfLink(xj.child);
         d.links.push_back(ld);
         d.coupled_joints.push_back(cj);
+        strictOwnMass(xj.child);
         body_mass.push_back(linkMassProps(link(xj.child), whereLink(xj.child), false, problems));
         addFrameAndGeometry(xj.child, child_body, Eigen::Isometry3d::Identity());
         visit(xj.child, child_body, Eigen::Isometry3d::Identity());
@@ -776,11 +785,34 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
     }
     d.mimics.push_back(md);
   }
+  // Cycles (a mimic of a mimic of ... itself): an error naming the cycle; its joints are no
+  // mimics from here on (so that the chains below end).
+  {
+    std::map<std::string, const MimicDescription*> of;
+    for (const auto& md : d.mimics) of[md.joint] = &md;
+    std::set<std::string> cyclic;
+    for (const auto& md : d.mimics) {
+      std::vector<std::string> path{md.joint};
+      std::string cur = md.master;
+      while (of.count(cur) && std::find(path.begin(), path.end(), cur) == path.end() && !cyclic.count(cur)) {
+        path.push_back(cur);
+        cur = of.at(cur)->master;
+      }
+      if (cur != md.joint) continue;  // ends at an independent joint (or joins another's cycle)
+      std::string text;
+      for (const auto& j : path) text += "'" + j + "' -> ";
+      problems.error(at(file, md.urdf_line), "joint '" + md.joint + "': its <mimic> joints form a cycle (" + text + "'" + md.joint +
+                                                 "'): one of them must be independent");
+      for (const auto& j : path) cyclic.insert(j);
+    }
+    d.mimics.erase(std::remove_if(d.mimics.begin(), d.mimics.end(), [&](const MimicDescription& m) { return cyclic.count(m.joint) > 0; }),
+                   d.mimics.end());
+  }
   // Locked values: the master's value in the posture (0 when none), through chains of mimics.
   std::function<double(const std::string&, int)> valueOf = [&](const std::string& joint, int depth) -> double {
     for (const auto& md : d.mimics) {
       if (md.joint == joint) {
-        if (depth > 32) return md.offset;
+        LEXDYN_ALWAYS_ASSERT(depth <= static_cast<int>(d.mimics.size()), "mimic chain longer than the mimics: a cycle was not caught");
         return md.multiplier * valueOf(md.master, depth + 1) + md.offset;
       }
     }
@@ -796,7 +828,7 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
   std::function<Coupling(const std::string&, int)> composed = [&](const std::string& joint, int depth) -> Coupling {
     for (const auto& md : d.mimics) {
       if (md.joint != joint) continue;
-      if (depth > 32) break;
+      LEXDYN_ALWAYS_ASSERT(depth <= static_cast<int>(d.mimics.size()), "mimic chain longer than the mimics: a cycle was not caught");
       Coupling inner = composed(md.master, depth + 1);
       return {inner.master, md.multiplier * inner.multiplier, md.multiplier * inner.offset + md.offset, md.urdf_line};
     }
@@ -806,10 +838,6 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
     if (md.mode != MimicMode::Coupled) continue;
     Coupling c = composed(md.joint, 0);
     c.line = md.urdf_line;
-    if (c.master == md.joint) {
-      problems.error(at(file, md.urdf_line), "joint '" + md.joint + "': its <mimic> joints form a cycle");
-      continue;
-    }
     coupled[md.joint] = c;
   }
   // One warning per master: "joints 'a' (locked at x), 'b' (at y) mimic 'm' ...".
@@ -844,7 +872,11 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
     const std::string what = "mimic joints of '" + m + "': " + locked_text[m] + "; from " + source;
     problems.warning(at(file, first_line[m]), what);
   }
-  // Coupled: one note per master, a warning without the data file's `mimic` (strict: an error).
+}
+
+// Coupled mimic joints: one note per master (once the locking is done), a warning without the
+// data file's `mimic` (strict: an error).
+void noteCoupled(const std::string& file, const MimicPolicy& policy, const std::map<std::string, Coupling>& coupled, ProblemList& problems) {
   std::vector<std::string> coupled_masters;
   std::map<std::string, std::string> coupled_text;
   std::map<std::string, int> coupled_line;
@@ -979,7 +1011,19 @@ void checkBodies(RobotDescription& d, BaseType base, const std::string& file, co
                                                 ": a floating robot needs mass and a positive inertia");
   }
   for (size_t b = 1; b < d.links.size(); ++b) {
-    if (d.links[b].parent_joint < 0) continue;  // a coupled body: its master's column carries it
+    if (d.links[b].parent_joint < 0) {
+      // A coupled body: the simulator's tree moves it on a mobilizer of its own, which must move
+      // something (the reduced model would not mind; the tree's mass matrix would be singular).
+      const CoupledJointDescription& C = d.coupled_joints[static_cast<size_t>(d.links[b].parent_coupled)];
+      if (!(moved[b] >= ranges::kMinPrincipalInertia_kgm2)) {
+        problems.error(at(file, C.urdf_line), "mimic joint '" + C.name + "' moves nothing with mass or inertia about its " +
+                                                  (C.type == JointType::Prismatic ? "direction" : "axis") + " (link '" + d.links[b].name +
+                                                  "' and everything after it: " + fmt(moved[b]) + (C.type == JointType::Prismatic ? " kg" : " kg m^2") +
+                                                  "); the simulator's coupled mechanism would be singular: give those links mass and inertia, "
+                                                  "or hold the mimic joints (`mimic: {mode: locked}` in the data file)");
+      }
+      continue;
+    }
     const JointDescription& J = d.joints[static_cast<size_t>(d.links[b].parent_joint)];
     if (!(moved[b] >= ranges::kMinPrincipalInertia_kgm2)) {
       problems.error(at(file, J.urdf_line), "joint '" + J.name + "' moves nothing with mass or inertia about its " +
@@ -1030,33 +1074,12 @@ void lockMasslessJoints(const XmlIndex& idx, const urdf::ModelInterface& model, 
   }
 }
 
-// Each coupled joint's master as a model joint, and the master's range narrowed to where its
-// coupled joints stay within their own limits (q_c = c q + o in [lo_c, hi_c]).
-void resolveCoupledMasters(RobotDescription& d, const std::map<std::string, Coupling>& coupled, const std::string& file,
-                           ProblemList& problems) {
+// Each coupled joint's master as a model joint.
+void resolveCoupledMasters(RobotDescription& d, const std::map<std::string, Coupling>& coupled) {
   for (auto& cj : d.coupled_joints) {
     const Coupling& c = coupled.at(cj.name);
     cj.master = d.findJoint(c.master);
     LEXDYN_ALWAYS_ASSERT(cj.master >= 0, "coupled joint " + cj.name + ": its master " + c.master + " is not a model joint");
-    if (!(std::isfinite(cj.lower) && std::isfinite(cj.upper)) || cj.multiplier == 0.0) continue;
-    JointDescription& M = d.joints[static_cast<size_t>(cj.master)];
-    double lo = (cj.lower - cj.offset) / cj.multiplier, hi = (cj.upper - cj.offset) / cj.multiplier;
-    if (lo > hi) std::swap(lo, hi);
-    if (lo > M.lower || hi < M.upper) {
-      const double new_lo = std::max(lo, M.lower), new_hi = std::min(hi, M.upper);
-      if (!(new_lo < new_hi)) {
-        problems.error(at(file, cj.urdf_line), "joint '" + cj.name + "' (coupled to '" + M.name + "'): its limits [" + fmt(cj.lower) +
-                                                   ", " + fmt(cj.upper) + "] leave its master no range within [" + fmt(M.lower) + ", " +
-                                                   fmt(M.upper) + "]");
-        continue;
-      }
-      problems.warning(at(file, cj.urdf_line), "the range of '" + M.name + "' is narrowed from [" + fmt(M.lower) + ", " + fmt(M.upper) +
-                                                   "] to [" + fmt(new_lo) + ", " + fmt(new_hi) + "], where its coupled joint '" + cj.name +
-                                                   "' stays within its own limits");
-      M.lower = new_lo;
-      M.upper = new_hi;
-      M.continuous = false;
-    }
   }
 }
 
@@ -1180,7 +1203,11 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
     if (t.locked.count(it->first)) {
       it = t.coupled.erase(it);
     } else if (t.locked.count(it->second.master)) {
-      const double v = it->second.multiplier * t.locked.at(it->second.master) + it->second.offset;
+      double v = it->second.multiplier * t.locked.at(it->second.master) + it->second.offset;
+      const urdf::Joint& uj = *model->joints_.at(it->first);
+      if (uj.type != urdf::Joint::CONTINUOUS && uj.limits && uj.limits->lower < uj.limits->upper) {
+        v = std::min(std::max(v, uj.limits->lower), uj.limits->upper);  // as a locked mimic is
+      }
       t.locked[it->first] = v;
       d.locked_joints.push_back(LockedJointDescription{it->first, v, "mimic of a locked joint"});
       it = t.coupled.erase(it);
@@ -1188,6 +1215,7 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
       ++it;
     }
   }
+  noteCoupled(file, mimic, t.coupled, problems);
   problems.throwIfHardErrors();
 
   {
@@ -1200,7 +1228,7 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
     t.addFrameAndGeometry(root, 0, Eigen::Isometry3d::Identity());
   }
   t.visit(root, 0, Eigen::Isometry3d::Identity());
-  resolveCoupledMasters(d, t.coupled, file, problems);
+  resolveCoupledMasters(d, t.coupled);
 
   for (size_t b = 0; b < d.links.size(); ++b) {
     d.links[b].mass = t.body_mass[b].mass;
@@ -1211,6 +1239,63 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
   for (const auto& l : d.links) link_lines.push_back(l.urdf_line);
   checkBodies(d, base, file, link_lines, problems);
   d.name = idx.robot_name;
+}
+
+void narrowCoupledMasters(RobotDescription& d, ProblemList& problems) {
+  const std::string& file = d.urdf_path;
+  for (const auto& cj : d.coupled_joints) {
+    JointDescription& M = d.joints[static_cast<size_t>(cj.master)];
+    const std::string where = at(file, cj.urdf_line);
+    if (cj.multiplier == 0.0) {
+      if (cj.offset < cj.lower || cj.offset > cj.upper) {
+        problems.error(where, "joint '" + cj.name + "' (a mimic of '" + M.name + "' with multiplier 0) is held at its offset " + fmt(cj.offset) +
+                                  ", outside its limits [" + fmt(cj.lower) + ", " + fmt(cj.upper) + "]");
+      }
+      continue;
+    }
+    // Its velocity: |c| qdot_M within its own limit.
+    if (std::isfinite(cj.velocity_limit) && cj.velocity_limit > 0.0) {
+      const double v = cj.velocity_limit / std::abs(cj.multiplier);
+      if (v < M.velocity_limit) {
+        problems.warning(where, "the velocity limit of '" + M.name + "' is lowered from " + fmt(M.velocity_limit) + " to " + fmt(v) +
+                                    ", where its coupled joint '" + cj.name + "' stays within its own (" + fmt(cj.velocity_limit) + ")");
+        M.velocity_limit = v;
+      }
+    }
+    if (!(std::isfinite(cj.lower) && std::isfinite(cj.upper))) continue;
+    double lo = (cj.lower - cj.offset) / cj.multiplier, hi = (cj.upper - cj.offset) / cj.multiplier;
+    if (lo > hi) std::swap(lo, hi);
+    if (lo > M.lower || hi < M.upper) {
+      const double new_lo = std::max(lo, M.lower), new_hi = std::min(hi, M.upper);
+      if (!(new_lo < new_hi)) {
+        // Limits that contradict the coupling (a finger's limits written for the other sign of
+        // its multiplier): ROS's tools never enforce a mimic joint's own limits; neither does
+        // lexdyn then (strict mode refuses them).
+        problems.lenient(where, "joint '" + cj.name + "' (coupled to '" + M.name + "' by " + fmt(cj.multiplier) + " q" +
+                                    (cj.offset != 0.0 ? " + " + fmt(cj.offset) : "") + "): its limits [" + fmt(cj.lower) + ", " + fmt(cj.upper) +
+                                    "] leave its master no range within [" + fmt(M.lower) + ", " + fmt(M.upper) +
+                                    "]: they contradict the coupling and are ignored (the master's limits hold)");
+        continue;
+      }
+      problems.warning(where, "the range of '" + M.name + "' is narrowed from [" + fmt(M.lower) + ", " + fmt(M.upper) + "] to [" +
+                                  fmt(new_lo) + ", " + fmt(new_hi) + "], where its coupled joint '" + cj.name + "' stays within its own limits");
+      M.lower = new_lo;
+      M.upper = new_hi;
+      M.continuous = false;
+    }
+  }
+  // The data file's postures within the narrowed ranges.
+  for (const auto& [pname, q] : d.postures) {
+    for (const auto& cj : d.coupled_joints) {
+      const JointDescription& M = d.joints[static_cast<size_t>(cj.master)];
+      const double v = q[cj.master];
+      if (v < M.lower - 1e-12 || v > M.upper + 1e-12) {
+        problems.error(d.data_path, "posture '" + pname + "': '" + M.name + "' at " + fmt(v) + " puts its mimic joint '" + cj.name + "' at " +
+                                        fmt(cj.multiplier * v + cj.offset) + ", outside its limits [" + fmt(cj.lower) + ", " + fmt(cj.upper) +
+                                        "] (the master's range there: [" + fmt(M.lower) + ", " + fmt(M.upper) + "])");
+      }
+    }
+  }
 }
 
 void noteUnspecifiedLimits(const RobotDescription& d, ProblemList& problems) {
@@ -1238,7 +1323,7 @@ void noteUnspecifiedLimits(const RobotDescription& d, ProblemList& problems) {
                                "in the data file");
   }
   if (!range.empty()) {
-    problems.lenient(file, std::to_string(range.size()) + " revolute or prismatic joint(s) without lower and upper (" + nameList(range) +
+    problems.lenient(file, std::to_string(range.size()) + " revolute or prismatic joint(s) without lower and upper, or with both 0 (" + nameList(range) +
                                "): no position limits, as for a continuous joint; give `joint_limits: {JOINT: {lower: ..., upper: ...}}`");
   }
 }

@@ -220,6 +220,85 @@ TEST(UrdfConventions, TheDataFileFillsUnspecifiedLimitsAndLocksMimicsAtAPosture)
   EXPECT_TRUE(containsAll(inputErrorOf([&] { r.load(); }), {"ros.yaml:5", "'finger' is a mimic joint coupled to its master"}));
 }
 
+// A small arm whose gripper fingers are mimic joints, for the coupled mimic joints' edge cases.
+// `fingers` are the mimic joints' lines: each a joint from 'palm' with a link of its own.
+std::string gripperUrdf(const std::string& fingers, const std::string& grip_limit = R"(<limit lower="-1" upper="1" effort="5" velocity="2"/>)") {
+  return std::string("<?xml version=\"1.0\"?>\n<robot name=\"gripper\">\n<link name=\"world\"/>\n") +
+         "<joint name=\"grip\" type=\"revolute\"><parent link=\"world\"/><child link=\"palm\"/><axis xyz=\"0 0 1\"/>" + grip_limit + "</joint>\n" +
+         "<link name=\"palm\">" + inertial("0.5", kValidInertia, "0.05 0 0") + "</link>\n" + fingers + "</robot>\n";
+}
+std::string finger(const std::string& name, const std::string& mimic, const std::string& limit = R"(<limit lower="-2" upper="2" effort="1" velocity="3"/>)",
+                   const std::string& link_inertial = inertial("0.1", kValidInertia, "0.02 0 0")) {
+  return "<joint name=\"" + name + "\" type=\"revolute\"><parent link=\"palm\"/><child link=\"" + name + "_link\"/><origin xyz=\"0.1 0 0\"/>"
+         "<axis xyz=\"0 1 0\"/>" + limit + mimic + "</joint>\n<link name=\"" + name + "_link\">" + link_inertial + "</link>\n";
+}
+RobotDescription loadGripper(const std::string& urdf, const std::string& data_extra = "", const LoadOptions& o = {}) {
+  return parseRobotDescription(urdf, "g.urdf", "format: lexdyn-robot-data/1\nrobot: gripper\nbase: fixed\n" + data_extra, "g.yaml", o);
+}
+
+TEST(UrdfConventions, CoupledMimicJointsEdgeCases) {
+  // A cycle of two (a mimics b, b mimics a) is an error naming it, not a crash.
+  std::string e = inputErrorOf([] {
+    loadGripper(gripperUrdf(finger("a", "<mimic joint=\"b\"/>") + finger("b", "<mimic joint=\"a\"/>")));
+  });
+  EXPECT_TRUE(containsAll(e, {"g.urdf:", "its <mimic> joints form a cycle ('a' -> 'b' -> 'a')"})) << e;
+  // A chain into a cycle too.
+  e = inputErrorOf([] {
+    loadGripper(gripperUrdf(finger("a", "<mimic joint=\"b\"/>") + finger("b", "<mimic joint=\"c\"/>") + finger("c", "<mimic joint=\"b\"/>")));
+  });
+  EXPECT_TRUE(containsAll(e, {"form a cycle ('b' -> 'c' -> 'b')"})) << e;
+  // A long chain composes to its independent master.
+  std::string chain = finger("f0", "<mimic joint=\"grip\" multiplier=\"0.9\"/>");
+  for (int k = 1; k < 40; ++k) chain += finger("f" + std::to_string(k), "<mimic joint=\"f" + std::to_string(k - 1) + "\" multiplier=\"1\"/>");
+  const RobotDescription long_chain = loadGripper(gripperUrdf(chain));
+  ASSERT_EQ(long_chain.coupled_joints.size(), 40u);
+  for (const auto& c : long_chain.coupled_joints) {
+    EXPECT_EQ(c.master, 0);
+    EXPECT_DOUBLE_EQ(c.multiplier, 0.9);
+  }
+  // A coupled link that moves nothing about its axis (a point mass on it): the simulator's tree
+  // would be singular; the error says so and how to go on.
+  e = inputErrorOf([] {
+    loadGripper(gripperUrdf(finger("a", "<mimic joint=\"grip\"/>", R"(<limit lower="-2" upper="2" effort="1" velocity="3"/>)",
+                                   inertial("0.2", R"(ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0")"))));
+  });
+  EXPECT_TRUE(containsAll(e, {"mimic joint 'a' moves nothing with mass or inertia about its axis", "`mimic: {mode: locked}`"})) << e;
+  // The master's range is narrowed to where the finger stays within its limits, and the data
+  // file's joint_limits are narrowed the same way; the velocity limit too (|c| qdot <= its own).
+  const std::string f = finger("a", "<mimic joint=\"grip\" multiplier=\"2\"/>", R"(<limit lower="-1" upper="1" effort="1" velocity="3"/>)");
+  RobotDescription d = loadGripper(gripperUrdf(f));
+  EXPECT_DOUBLE_EQ(d.joints[0].lower, -0.5);
+  EXPECT_DOUBLE_EQ(d.joints[0].upper, 0.5);
+  EXPECT_DOUBLE_EQ(d.joints[0].velocity_limit, 1.5);
+  d = loadGripper(gripperUrdf(f), "joint_limits:\n  grip: {lower: -3, upper: 3, velocity: 10}\n");
+  EXPECT_DOUBLE_EQ(d.joints[0].lower, -0.5);
+  EXPECT_DOUBLE_EQ(d.joints[0].upper, 0.5);
+  EXPECT_DOUBLE_EQ(d.joints[0].velocity_limit, 1.5);
+  EXPECT_TRUE(containsAll(allWarnings(d), {"the range of 'grip' is narrowed from [-3, 3] to [-0.5, 0.5]",
+                                           "the velocity limit of 'grip' is lowered from 10 to 1.5"}));
+  // A posture outside the narrowed range is an error naming it; a mimic joint's value that its
+  // master contradicts is a warning.
+  e = inputErrorOf([&] { loadGripper(gripperUrdf(f), "postures:\n  open: {grip: 0.8}\n"); });
+  EXPECT_TRUE(containsAll(e, {"posture 'open': 'grip' at 0.8 puts its mimic joint 'a' at 1.6, outside its limits [-1, 1]"})) << e;
+  d = loadGripper(gripperUrdf(f), "postures:\n  half: {grip: 0.2, a: 0.3}\n");
+  EXPECT_TRUE(containsAll(allWarnings(d), {"posture 'half': mimic joint 'a' at 0.3 is not where its master puts it (2 x grip 0.2 = 0.4)"}));
+  // Limits written for the other sign of the multiplier (as a gripper package ships them): they
+  // contradict the coupling and are ignored with a warning; strict mode refuses them.
+  const std::string g = finger("a", "<mimic joint=\"grip\" multiplier=\"-1\"/>", R"(<limit lower="0" upper="0.9" effort="1" velocity="3"/>)");
+  d = loadGripper(gripperUrdf(g, R"(<limit lower="0" upper="0.8" effort="5" velocity="2"/>)"));
+  EXPECT_DOUBLE_EQ(d.joints[0].lower, 0.0);
+  EXPECT_DOUBLE_EQ(d.joints[0].upper, 0.8);
+  EXPECT_TRUE(containsAll(allWarnings(d), {"its limits [0, 0.9] leave its master no range within [0, 0.8]", "contradict the coupling and are ignored"}));
+  EXPECT_TRUE(containsAll(inputErrorOf([&] { loadGripper(gripperUrdf(g, R"(<limit lower="0" upper="0.8" effort="5" velocity="2"/>)"), "", strict()); }),
+                          {"contradict the coupling", "refused in strict mode"}));
+  // lower="0" upper="0" (a CAD exporter's "not set"): no position limits; strict refuses it.
+  d = loadGripper(gripperUrdf("", R"(<limit lower="0" upper="0" effort="5" velocity="2"/>)"));
+  EXPECT_TRUE(std::isinf(d.joints[0].lower) && std::isinf(d.joints[0].upper));
+  EXPECT_TRUE(containsAll(allWarnings(d), {"without lower and upper, or with both 0 ('grip')"}));
+  EXPECT_TRUE(containsAll(inputErrorOf([&] { loadGripper(gripperUrdf("", R"(<limit lower="0" upper="0" effort="5" velocity="2"/>)"), "", strict()); }),
+                          {"expected limit lower < upper, found lower=0 upper=0"}));
+}
+
 TEST(UrdfConventions, AMimicOfAnUnknownJointIsAnError) {
   RosStyleRobot r;
   std::string u = r.urdf();

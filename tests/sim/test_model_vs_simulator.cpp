@@ -25,6 +25,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -182,6 +184,38 @@ TEST(ModelVsSimulator, MergedFixedJoints) { crossCheck("tests/data/model", "merg
 // Coupled mimic joints: the controller reduces its tree (G^T M G, G^T N, J G); the simulator
 // keeps a mobilizer per coupled joint and projects Simbody's accelerations onto the couplings.
 TEST(ModelVsSimulator, CoupledMimicJoints) { crossCheck("tests/data/model", "coupled", 12008, 100); }
+
+// A fresh simulator state at q = 0 has its coupled joints at their offsets (the state is written
+// only where q changes: the default state must hold them).
+TEST(ModelVsSimulator, CoupledJointsSitAtTheirOffsetsAtZero) {
+  const std::string urdf = src("tests/data/model/coupled.urdf");
+  std::string data_text;
+  {
+    std::ifstream in(src("tests/data/model/coupled.yaml"));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    data_text = ss.str();
+  }
+  for (const char* base : {"free_flyer", "fixed"}) {
+    SCOPED_TRACE(base);
+    std::string text = data_text;
+    text.replace(text.find("base: free_flyer"), 16, std::string("base: ") + base);
+    const std::string data = std::string(LEXDYN_BINARY_DIR) + "/coupled_" + base + ".yaml";
+    std::ofstream(data) << text;
+    // (the data file names no URDF: it is given beside it)
+    const model::RobotModel ctrl = model::RobotModel::fromFiles(urdf, data);
+    const Multibody simu(model::loadRobotDescription(urdf, data));
+    MultibodyState sd = simu.createState();
+    const std::vector<double> q(static_cast<size_t>(simu.nq()), 0.0), u(static_cast<size_t>(simu.nv()), 0.0);
+    simu.setState(sd, q.data(), u.data());
+    model::ModelData cd = ctrl.createData();
+    ctrl.update(cd, ctrl.neutralConfiguration(), Eigen::VectorXd::Zero(ctrl.nv()));
+    for (const char* f : {"fingertip", "nail_end", "tail_end"}) {
+      const Eigen::Vector3d a = ctrl.framePlacement(cd, ctrl.frameId(f)).translation(), b = simu.framePlacement(sd, simu.frameId(f)).translation();
+      EXPECT_LT((a - b).norm(), 1e-12) << f << ": model " << a.transpose() << ", simulator " << b.transpose();
+    }
+  }
+}
 
 // setKinematicState realizes Simbody's state through Position only and takes the body
 // velocities from the system Jacobian: its body kinematics must be setState's to the bit (the

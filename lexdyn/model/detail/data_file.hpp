@@ -12,6 +12,8 @@ namespace lexdyn::model::detail {
 /// Throws InputError when `base` is missing or wrong (nothing can be built without it).
 BaseType readBaseType(const yaml::Node& root);
 MimicPolicy readMimicPolicy(const yaml::Node& root, ProblemList& problems);
+/// The data file's `package_path` (folders for package:// URIs, relative to the data file).
+std::vector<std::string> readPackagePaths(const yaml::Node& root, ProblemList& problems);
 
 /// Reads the rest of the data file into d (whose URDF part is read), recording every problem.
 void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& problems);

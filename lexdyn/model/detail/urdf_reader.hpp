@@ -24,6 +24,10 @@ struct MimicPolicy {
 void readUrdf(const std::string& text, const std::string& file, BaseType base, const MimicPolicy& mimic,
               const LoadOptions& options, RobotDescription& d, ProblemList& problems);
 
+/// Narrows each coupled mimic joint's master to where the coupled joint stays within its own
+/// position and velocity limits (a warning for each), once the data file's joint_limits are in.
+void narrowCoupledMasters(RobotDescription& d, ProblemList& problems);
+
 /// Warnings (errors in strict mode) for the joints whose limits are still unspecified once the
 /// data file's joint_limits are applied: unlimited effort, velocity or position range.
 void noteUnspecifiedLimits(const RobotDescription& d, ProblemList& problems);
