@@ -708,6 +708,7 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
   std::optional<yaml::Node> stop = top.optional("stop_at_s");
   top.finish();
   if (isLexdyn(c)) validateLexdyn(c, controller_node);
+  c.scenario_duration_s = c.duration_s;
   if (stop) {
     c.stop_at_s = stop->asPositiveDouble();
     if (c.stop_at_s < c.control_period_s) stop->fail("expected at least one control period (" + std::to_string(c.control_period_s) + " s)");

@@ -151,6 +151,8 @@ struct CaseSpec {
   SimModelPerturbation sim_model;                   ///< sim.model
   /// stop_at_s (`run --duration`): the run stops there; duration_s is already cut to it.
   double stop_at_s = 0.0;
+  /// The scenario's own duration (the file's duration_s, before stop_at_s cut it).
+  double scenario_duration_s = 0.0;
   std::vector<Override> overrides;  ///< applied to the file's document before reading
   /// The effective case document (the file with the overrides) as YAML text, and the keys that
   /// hold file paths (key path, resolved path), for effectiveCaseText.

@@ -52,7 +52,12 @@ struct RunSummary {
   long integrator_restarts = 0;
   std::vector<checks::CheckResult> checks;
   std::vector<checks::CheckResult> statistics;  ///< RunOptions::statistics, evaluated
-  std::vector<std::string> skipped_checks;  ///< checks restricted to other methods
+  /// Checks not evaluated: restricted to other methods, or whose window starts after a run
+  /// stopped early (stop_at_s) ends; each with the reason.
+  struct Skipped {
+    std::string name, reason;
+  };
+  std::vector<Skipped> skipped_checks;
   bool all_checks_passed = false;
   bool has_controller_stats = false;
   ControllerStats controller;               ///< lexdyn: per task errors, iterations, timings
@@ -62,13 +67,18 @@ struct RunSummary {
   /// and how the run departs from it (empty: the run failed exactly as expected).
   std::optional<ExpectedFailure> expected_failure;
   std::vector<std::string> expectation_mismatches;
+  /// False when a run stopped early (stop_at_s) ended before the expected failure showed: the
+  /// expected status not reached and none of the listed checks failing. True otherwise.
+  bool expected_failure_reached = true;
 };
 
 /// How a finished run departs from an expected failure: a status other than the expected one,
 /// a check that decides and fails but is not listed, a listed check that passed or was not
 /// evaluated. Empty when the run failed exactly as expected.
+/// `cut_short`: the run was stopped early (stop_at_s): the expected failure may lie beyond its end,
+/// so only a failure that is not expected departs from it.
 std::vector<std::string> expectationMismatches(const ExpectedFailure& expected, const std::string& status,
-                                               const std::vector<checks::CheckResult>& results);
+                                               const std::vector<checks::CheckResult>& results, bool cut_short = false);
 
 /// Throws lexdyn::InputError for bad input (nothing is simulated then). An exception once the
 /// run has started (an internal error, out of memory) stops it: the trace is kept with the end

@@ -61,6 +61,7 @@ class CheckBase : public Check {
     if (!seen_) {
       r.value = kNaN;
       r.passed = false;
+      r.saw_rows = false;
       r.detail = noRowDetail();
       return r;
     }

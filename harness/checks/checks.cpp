@@ -4,8 +4,10 @@
 #include "lexdyn/common/format.hpp"
 #include "lexdyn/common/error.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 
 namespace lexdyn::checks {
@@ -28,6 +30,21 @@ bool appliesTo(const CheckSpec& spec, const std::string& method) {
     if (m == method) return true;
   }
   return false;
+}
+
+WindowCut cutWindow(const CheckSpec& spec, double run_end_s, double scenario_end_s) {
+  WindowCut w;
+  if (!(run_end_s < scenario_end_s - 1e-9)) return w;  // the whole scenario was run
+  const double end = std::min(spec.to_s, scenario_end_s);
+  auto window = [&] { return "[" + fmt(spec.from_s) + ", " + fmt(end) + "] s"; };
+  if (spec.from_s > run_end_s + 1e-9) {
+    w.skip = true;
+    w.note = "its window " + window() + " starts after the run's end at " + fmt(run_end_s) + " s (stop_at_s, run --duration)";
+  } else if (end > run_end_s + 1e-9) {
+    w.note = "over [" + fmt(spec.from_s) + ", " + fmt(run_end_s) + "] s of its window " + window() + ": the run stopped at " + fmt(run_end_s) +
+             " s (stop_at_s, run --duration)";
+  }
+  return w;
 }
 
 std::string taskChannel(const std::string& task, const char* what) { return "task." + task + "." + what; }
@@ -77,11 +94,22 @@ CheckResult evaluate(const CheckSpec& spec, const TraceSchema& schema, const Tra
 std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace, bool wall_clock_checks) {
   const TraceSchema schema = schemaOf(trace);
   const std::string* method = findMetadata(trace.metadata, kMethodMetadata);
+  // A run stopped early (stop_at_s) records the scenario's duration beside its own: windows are
+  // cut as the run cut them (cutWindow).
+  const std::string* run_end = findMetadata(trace.metadata, "duration_s");
+  const std::string* scenario_end = findMetadata(trace.metadata, kScenarioDurationMetadata);
+  const double run_end_s = run_end ? std::strtod(run_end->c_str(), nullptr) : kInf;
+  const double scenario_end_s = scenario_end ? std::strtod(scenario_end->c_str(), nullptr) : run_end_s;
   std::vector<CheckResult> out;
   for (const auto& s : specs) {
     if (!appliesTo(s, method ? *method : std::string())) continue;
-    out.push_back(evaluate(s, schema, trace));
-    applyWallClockPolicy(out.back(), wall_clock_checks);
+    const WindowCut cut = cutWindow(s, run_end_s, scenario_end_s);
+    if (cut.skip) continue;
+    CheckResult r = evaluate(s, schema, trace);
+    if (!cut.note.empty() && !r.saw_rows) continue;
+    r.partial_window = cut.note;
+    applyWallClockPolicy(r, wall_clock_checks);
+    out.push_back(std::move(r));
   }
   return out;
 }

@@ -89,7 +89,20 @@ struct CheckResult {
   bool decides = true;
   /// The check bounds its value from below (passes when value >= limit), e.g. frame_height.
   bool bounds_below = false;
+  /// A run stopped early (stop_at_s, `run --duration`) inside the check's window: what of the
+  /// window was run (empty otherwise). The value covers that part only.
+  std::string partial_window;
+  /// False when no trace row fell in the window (value NaN; the detail says which rows it wanted).
+  bool saw_rows = true;
 };
+
+/// Where a run stopped early (at run_end_s, before the scenario's end at scenario_end_s) leaves a
+/// check's window [from_s, to_s] (to_s infinite: the scenario's end).
+struct WindowCut {
+  bool skip = false;   ///< the window starts after the run's end: not evaluated
+  std::string note;    ///< why it is skipped, or what of the window was run (empty: all of it)
+};
+WindowCut cutWindow(const CheckSpec& spec, double run_end_s, double scenario_end_s);
 
 /// Sets `decides` of a machine-dependent result: it decides only when `wall_clock_checks`.
 void applyWallClockPolicy(CheckResult& r, bool wall_clock_checks);
@@ -136,6 +149,9 @@ std::string timerChannel(const std::string& timer);                        // ti
 constexpr const char* kTimeChannel = "t";
 constexpr const char* kWeightMetadata = "robot_weight_N";
 constexpr const char* kMethodMetadata = "method";
+/// The scenario's duration, recorded when a run was stopped before it (stop_at_s); the trace's
+/// duration_s is the run's.
+constexpr const char* kScenarioDurationMetadata = "scenario_duration_s";
 constexpr const char* kControllerStatusChannel = "ctrl.status";
 constexpr const char* kSolverStatusChannel = "solver.status";
 constexpr const char* kSolverIterationsChannel = "solver.iterations";

@@ -72,10 +72,11 @@ void printChecks(const std::vector<lexdyn::checks::CheckResult>& checks, const s
     // reported as "info", labelled; a failure the case expects (expected_failures) as "xfail".
     const bool expected = std::find(expected_to_fail.begin(), expected_to_fail.end(), c.name) != expected_to_fail.end();
     const char* mark = c.decides ? (c.passed ? "ok" : (expected ? "xfail" : "FAIL")) : "info";
-    std::fprintf(stderr, "  %-4s %-28s value %-12.6g limit %-10.6g %s%s%s%s\n", mark, c.name.c_str(), c.value, c.limit,
+    std::fprintf(stderr, "  %-4s %-28s value %-12.6g limit %-10.6g %s%s%s%s%s\n", mark, c.name.c_str(), c.value, c.limit,
                  c.unit.c_str(), c.detail.empty() ? "" : "  (", c.detail.empty() ? "" : (c.detail + ")").c_str(),
                  c.decides ? "" : (c.passed ? "  [machine-dependent, reported only: within the limit here]"
-                                            : "  [machine-dependent, reported only: above the limit here]"));
+                                            : "  [machine-dependent, reported only: above the limit here]"),
+                 c.partial_window.empty() ? "" : "  [part of its window]");
   }
 }
 
@@ -455,17 +456,21 @@ int main(int argc, char** argv) {
     printChecks(s.checks, s.expected_failure ? s.expected_failure->checks : std::vector<std::string>{});
     if (s.expected_failure) {
       const lexdyn::cases::ExpectedFailure& x = *s.expected_failure;
-      if (s.expectation_mismatches.empty()) {
+      if (s.expectation_mismatches.empty() && !s.expected_failure_reached) {
+        std::fprintf(stderr, "  the case's expected failure (%s: %s) was not reached by the run's end at %g s\n", x.where.c_str(),
+                     x.reason.c_str(), s.duration_s);
+      } else if (s.expectation_mismatches.empty()) {
         std::fprintf(stderr, "  expected failure, as the case says (%s): %s\n", x.where.c_str(), x.reason.c_str());
       } else {
         std::fprintf(stderr, "  NOT the expected failure (%s: %s):\n", x.where.c_str(), x.reason.c_str());
         for (const std::string& m : s.expectation_mismatches) std::fprintf(stderr, "    %s\n", m.c_str());
       }
     }
-    if (!s.skipped_checks.empty()) {
-      std::string names;
-      for (const auto& n : s.skipped_checks) names += (names.empty() ? "" : ", ") + n;
-      std::fprintf(stderr, "  skipped (other methods): %s\n", names.c_str());
+    for (const auto& k : s.skipped_checks) std::fprintf(stderr, "  skip %-28s %s\n", k.name.c_str(), k.reason.c_str());
+    if (std::any_of(s.checks.begin(), s.checks.end(), [](const auto& c) { return !c.partial_window.empty(); })) {
+      std::fprintf(stderr, "  [part of its window]: the run stopped at %g s of the scenario's %g s (stop_at_s, run --duration); such a check "
+                           "covers what was run (summary.json: partial_window)\n",
+                   s.duration_s, spec.scenario_duration_s);
     }
     std::fprintf(stderr, "  wrote %s and %s\n", s.trace_path.c_str(), s.summary_path.c_str());
     return lexdyn::cases::exitCode(s);

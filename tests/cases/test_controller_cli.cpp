@@ -19,6 +19,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 namespace lexdyn::cases {
 namespace {
@@ -123,6 +124,55 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
   // Two traces of one method: bad input.
   cmp = harness("compare --case " + c + " " + dir + "/gn/trace.csv " + dir + "/gn/trace.csv", dir);
   expectExit(cmp, 2, {"a second trace of method gn"});
+}
+
+// A run stopped early (run --duration, stop_at_s): a check whose window starts after the end, or
+// whose window held no row in what was run (a contact made later), is skipped with the reason; a
+// check whose window the end cuts covers what was run and says so; an expected failure that
+// lies beyond the end is no departure, a failure that is not expected still fails the run.
+TEST(ControllerCli, ShortRunsSkipLateChecksAndCoverWhatWasRun) {
+  const std::string dir = outputDir("ctl_cli_short");
+  const std::string src = LEXDYN_SOURCE_DIR;
+  const CliResult run = harness("run " + src + "/cases/exp2.yaml --duration 1 --out " + dir + "/exp2 --quiet", dir);
+  expectExit(run, 0, {"skip pole_held", "its window [10.1, 120] s starts after the run's end at 1 s (stop_at_s, run --duration)",
+                      "skip pole_computed_vs_sensed", "no row of its window in what was run (no row with contact 'POLE' active",
+                      "[part of its window]", "the run stopped at 1 s of the scenario's 120 s"});
+  const nlohmann::json s = nlohmann::json::parse(slurp(dir + "/exp2/summary.json"));
+  EXPECT_TRUE(s["all_checks_passed"].get<bool>());
+  EXPECT_EQ(s["scenario_duration_s"], 120.0);
+  std::map<std::string, std::string> skipped;
+  for (const auto& k : s["skipped_checks"]) skipped[k["name"]] = k["reason"];
+  EXPECT_TRUE(skipped.count("pole_held") && skipped.count("pole_computed_vs_sensed")) << s["skipped_checks"].dump(1);
+  EXPECT_TRUE(containsAll(skipped["factorization_peak_wls"], {"restricted to other methods (wls)"}));
+  int partial = 0;
+  for (const auto& c : s["checks"]) {
+    if (!c.contains("partial_window")) continue;
+    ++partial;
+    EXPECT_TRUE(containsAll(c["partial_window"].get<std::string>(), {"of its window [", "the run stopped at 1 s"})) << c.dump();
+  }
+  EXPECT_GT(partial, 5);
+  // The stored trace gives the same checks (its header records both durations).
+  const CliResult check = harness("check " + dir + "/exp2/trace.csv --json", dir);
+  EXPECT_EQ(nlohmann::json::parse(check.out)["checks"], s["checks"]);
+  // exp1-kp1 expects its CoP checks to fail in the first reach (0.5-1.3 s): a run stopped at 5 s
+  // has the expected failure. exp2-instant expects its failure at 12 s: a run stopped at 5 s
+  // has not reached it and passes as any run would, saying so.
+  const CliResult kp1 = harness("run " + src + "/cases/exp1-kp1.yaml --duration 5 --out " + dir + "/kp1 --quiet", dir);
+  expectExit(kp1, 0, {"xfail right_foot_cop", "expected failure, as the case says"});
+  const nlohmann::json ks = nlohmann::json::parse(slurp(dir + "/kp1/summary.json"));
+  EXPECT_FALSE(ks["all_checks_passed"].get<bool>());
+  EXPECT_TRUE(ks["expected_failure"]["met"].get<bool>());
+  EXPECT_TRUE(ks["expected_failure"]["reached"].get<bool>());
+  const CliResult inst = harness("run " + src + "/cases/exp2-instant.yaml --duration 5 --out " + dir + "/instant --quiet", dir);
+  expectExit(inst, 0, {"the case's expected failure", "was not reached by the run's end at 5 s"});
+  EXPECT_EQ(inst.err.find("expected failure, as the case says"), std::string::npos) << inst.err;
+  const nlohmann::json is = nlohmann::json::parse(slurp(dir + "/instant/summary.json"));
+  EXPECT_TRUE(is["all_checks_passed"].get<bool>());
+  EXPECT_FALSE(is["expected_failure"]["reached"].get<bool>());
+  // A failure within what was run fails a short run: exp1 with the weakly weighted WLS posture
+  // rolls the feet within 3 s.
+  const CliResult weak = harness("run " + src + "/cases/exp1-wls-weak.yaml --duration 3 --out " + dir + "/weak --quiet", dir);
+  expectExit(weak, 1, {"FAIL right_foot_cop", "[part of its window]"});
 }
 
 TEST(ControllerCli, TwoProcessesWriteBitIdenticalTracesButForTheWallTimes) {

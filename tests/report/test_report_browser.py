@@ -47,6 +47,8 @@ ARGS = None
 RUNS = [  # id, case (relative to the repository, or to the work directory: WORK/...), method, simulated seconds
     ("exp1.bfgs", "cases/exp1.yaml", "bfgs", 1.5),
     ("exp1.wls", "cases/exp1.yaml", "wls", 1.5),
+    # WLS with weak task weights: its feet roll within 3 s (right_foot_cop and others fail).
+    ("exp1-wls-weak.wls", "cases/exp1-wls-weak.yaml", "wls", 3.0),
     ("pointmass-damping.gn", "cases/pointmass-damping.yaml", "gn", 3.0),
     # The stand case turned by 1 rad about z and moved: the base's Euler-angle convention
     # matters at first order (an upright, unturned robot would hide it).
@@ -314,6 +316,17 @@ class ReportInBrowser(unittest.TestCase):
         # Verdicts: one row per case, one cell per run.
         cells = json.loads(self.js("JSON.stringify([...document.querySelectorAll('#verdict-table td[data-run]')].map(e => e.dataset.run))"))
         self.assertEqual(sorted(cells), sorted(r[0] for r in RUNS))
+        # A run stopped before its scenario's end says so, with the checks it skipped.
+        for rid, *_ in RUNS:
+            with open(os.path.join(self.runs, rid, "summary.json")) as f:
+                s = json.load(f)
+            text = self.js(f"document.querySelector('#verdict-table td[data-run=\"{rid}\"]').textContent")
+            # summary.json has scenario_duration_s only for a run stopped before the scenario's end.
+            if "scenario_duration_s" in s:
+                k = len(s["skipped_checks"])
+                self.assertIn(f"run to {s['duration_s']:g} of the scenario's {s['scenario_duration_s']:g} s, {k} check", text)
+            else:
+                self.assertNotIn("run to", text)
         # Every case: its method table, and every figure type its channels allow.
         for case in sorted({r[0].split(".")[0] for r in RUNS}):
             tr_names = set()
@@ -368,7 +381,7 @@ class ReportInBrowser(unittest.TestCase):
         for rid, *_ in RUNS:
             with open(os.path.join(self.runs, rid, "summary.json")) as f:
                 fails += [(rid, c) for c in json.load(f)["checks"] if not c["passed"]]
-        self.assertGreater(len(fails), 0, "the fixture runs are cut short: exp1's 'hands_settled' (from 100 s) fails")
+        self.assertGreater(len(fails), 0, "exp1-wls-weak's feet roll within 3 s")
         rows = json.loads(self.js("JSON.stringify([...document.querySelectorAll('#failing-checks tr.fail')].map("
                                   "r => [...r.cells].map(c => c.textContent)))"))
         self.assertEqual(len(rows), len(fails))

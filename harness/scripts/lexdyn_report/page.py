@@ -51,7 +51,18 @@ def _verdict_text(run):
         # The case expects this failure (expected_failures): as expected, or a different outcome.
         head = ("expected failure" if x.get("met") else "NOT the expected failure") + \
             ("" if run.status == "completed" else f": {run.status}")
-    return f"{head} ({n - f}/{n} checks)"
+    return f"{head} ({n - f}/{n} checks){_cut_text(run)}"
+
+
+def _cut_text(run):
+    """', run to T of the scenario's D s, K checks skipped' for a run stopped before its
+    scenario's end (run --duration, stop_at_s), else ''."""
+    s = run.summary or {}
+    scenario, stop = s.get("scenario_duration_s"), s.get("duration_s")
+    if scenario is None or stop is None or stop >= scenario:
+        return ""
+    k = len(s.get("skipped_checks", []))
+    return f", run to {stop:g} of the scenario's {scenario:g} s, {k} check{'s' if k != 1 else ''} skipped"
 
 
 def _failing_rows(run):
