@@ -21,6 +21,8 @@ void addRobotCommands(CLI::App& app, RobotCommand& c) {
   c.init->add_option("--out", c.out, "a new folder for the drafted files")->required();
   c.init->add_option("--srdf", c.srdf, "the robot's SRDF: its group states become postures, its groups name limbs");
   c.init->add_flag("--srdf-skip-unknown", c.srdf_skip_unknown, "leave out the SRDF's joints the URDF does not have (else an error)");
+  c.init->add_option("--mimic", c.mimic, "the URDF's <mimic> joints: coupled (move with their masters; the default) or locked (held at the posture)")
+      ->check(CLI::IsMember({"coupled", "locked"}));
   c.init->add_option("--package-path", c.package_paths, "a folder to look for package://NAME/ in (repeatable; also $ROS_PACKAGE_PATH)");
   c.init->add_option("--base", c.base, "free_flyer or fixed (default: guessed from the URDF: fixed for a `world` root or no legs)");
   c.init->add_option("--posture", c.posture, "the SRDF group state to stand in (default: half_sitting, standing, home, ... or the first)");
@@ -47,6 +49,7 @@ int runRobotCommand(const RobotCommand& c) {
     o.urdf = c.input;
     o.srdf = c.srdf;
     o.srdf_skip_unknown = c.srdf_skip_unknown;
+    o.mimic = c.mimic;
     o.out_dir = c.out;
     o.package_paths = c.package_paths;
     o.base = c.base;

@@ -17,6 +17,7 @@ struct RobotCommand {
   std::vector<std::string> package_paths;
   bool strict = false, allow_missing_meshes = false, srdf_skip_unknown = false;
   std::string up_axis = "ignore";  // robot mesh --up-axis
+  std::string mimic = "coupled";   // robot init --mimic
 };
 
 void addRobotCommands(CLI::App& app, RobotCommand& c);

@@ -208,10 +208,24 @@ CheckReport checkRobot(const CheckOptions& o) {
       t << "\n";
       if (zmax - zmin > 0.005) t << "      note: its points are " << num((zmax - zmin) * 1000, 3) << " mm apart in height: the sole is not flat on the ground in this posture\n";
     }
+    // The points on the ground (within 2 mm of the lowest) make the support polygon.
+    double zlow = 1e18;
+    for (const auto& c : contacts) zlow = std::min(zlow, c.z());
+    flat.clear();
+    int in_air = 0;
+    for (const auto& c : contacts) {
+      if (c.z() <= zlow + 0.002) {
+        flat.emplace_back(c.x(), c.y());
+      } else {
+        ++in_air;
+      }
+    }
     const std::vector<Eigen::Vector2d> poly = convexHull(flat);
     const double margin = marginInPolygon(poly, L.com.head<2>());
     rep.com_inside = margin > 0.0;
-    t << "  support polygon: " << poly.size() << " corners; the centre of mass is " << num(std::abs(margin) * 1000, 3) << " mm "
+    t << "  support polygon: " << poly.size() << " corners";
+    if (in_air > 0) t << " (" << in_air << " contact point(s) more than 2 mm above the lowest: in the air, left out)";
+    t << "; the centre of mass is " << num(std::abs(margin) * 1000, 3) << " mm "
       << (margin > 0 ? "inside its nearest edge" : "OUTSIDE it: the robot cannot stand in this posture") << "\n";
   }
 
@@ -276,7 +290,14 @@ CheckReport checkRobot(const CheckOptions& o) {
     for (size_t k = 0; k < overloaded.size(); ++k) t << (k ? ", " : "") << overloaded[k];
     t << "\n";
   }
-  if (!d.mimics.empty() || !d.locked_joints.empty()) {
+  if (!d.coupled_joints.empty()) {
+    t << "  coupled mimic joints (each moves with its master; no coordinate of its own):\n";
+    for (const auto& cj : d.coupled_joints) {
+      t << "    " << pad(cj.name, 26) << "= " << num(cj.multiplier) << " x " << d.joints[static_cast<size_t>(cj.master)].name
+        << (cj.offset != 0.0 ? " + " + num(cj.offset) : "") << "\n";
+    }
+  }
+  if (!d.locked_joints.empty()) {
     t << "  locked joints (fixed by the loader; their links are lumped into their parents):\n";
     for (const auto& l : d.locked_joints) {
       t << "    " << pad(l.name, 26) << "at " << pad(num(l.value, 4), 9);
@@ -296,6 +317,7 @@ CheckReport checkRobot(const CheckOptions& o) {
   }
   std::vector<std::string> warnings = d.warnings;
   for (const auto& w : problems.warnings()) warnings.push_back(w.text());
+  for (const auto& w : L.warnings) warnings.push_back("posture '" + posture + "': " + w);
   rep.warnings = static_cast<int>(warnings.size());
   t << "  warnings (" << warnings.size() << "):\n";
   for (const auto& w : warnings) t << "    " << w << "\n";

@@ -7,8 +7,11 @@
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/common/format.hpp"
 #include "lexdyn/common/problems.hpp"
+#include "lexdyn/model/robot_model.hpp"
 
 #include <unistd.h>
+
+#include <Eigen/SVD>
 
 #include <algorithm>
 #include <cmath>
@@ -87,6 +90,7 @@ struct Posture {
   Eigen::VectorXd q;
   std::string source;
   std::vector<std::string> clamped;  // joint: note
+  int given = -1;                    // joints the SRDF state gives (-1: all, not from an SRDF)
 };
 
 // Every joint at 0, clamped into its limits.
@@ -135,6 +139,7 @@ std::vector<Posture> srdfPostures(const model::RobotDescription& d, const Srdf& 
       p.q[j] = v;
       ++given;
     }
+    p.given = given;
     p.source = "the SRDF group state '" + st.name + "' (" + s.path + ":" + std::to_string(st.line) + ", " + std::to_string(given) + " of " +
                std::to_string(d.joints.size()) + " joints; the others at 0)";
     out.push_back(p);
@@ -151,7 +156,7 @@ const Posture& choosePosture(const std::vector<Posture>& ps, const std::string& 
     }
     throw InputError("--posture", "no posture '" + wanted + "' (" + (srdf.empty() ? "without --srdf: " : "") + "postures: " + names + ")");
   }
-  for (const char* pref : {"half_sitting", "standing", "stand", "default", "home", "ready", "neutral", "init", "initial"}) {
+  for (const char* pref : {"half_sitting", "standing", "stand", "ready", "default", "home", "neutral", "init", "initial"}) {
     for (const auto& p : ps) {
       if (lower(p.name) == pref) return p;
     }
@@ -264,10 +269,18 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     << "urdf: " << yamlString(urdf_rel) << "              # the URDF this file describes (robot check reads it)\n"
     << "base: " << (d.base == model::BaseType::Fixed ? "fixed" : "free_flyer") << "                  # guessed: " << L.base_reason << "\n"
     << up.line;
+  if (!o.package_paths.empty()) {
+    y << "package_path: [";
+    for (size_t k = 0; k < o.package_paths.size(); ++k) y << (k ? ", " : "") << yamlString(relativePath(o.package_paths[k], final_dir));
+    y << "]   # folders for the URDF's package:// meshes (--package-path)\n";
+  }
   if (!L.feet.empty()) {
     y << "friction_coefficient: 0.7          # guessed: rubber soles on a hard floor (HRP-2's walking controller uses 0.7)\n";
   }
-  if (!d.mimics.empty()) {
+  if (!d.mimics.empty() && o.mimic == "locked") {
+    y << "mimic: {mode: locked, posture: " << yamlString(posture.name) << "}   # the URDF's " << d.mimics.size()
+      << " <mimic> joint(s) held at their masters' value in this posture (--mimic locked); `{mode: coupled}` moves them\n";
+  } else if (!d.mimics.empty()) {
     y << "mimic: {mode: coupled}             # the URDF's " << d.mimics.size()
       << " <mimic> joint(s) move with their masters; `{mode: locked, posture: P}` holds them at posture P instead\n";
   }
@@ -361,10 +374,14 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
   auto simSection = [&](double dissipation) {
     std::ostringstream s;
     s << "sim:\n";
-    s << "  contact:\n"
-      << "    stiffness: " << num(k_contact, 2) << "              # sized: 1 mm of static penetration under an even share of the weight on each of the "
-      << points << " contact points\n"
-      << "    exponent: 1.5\n"
+    s << "  contact:";
+    if (points > 0) {
+      s << "\n    stiffness: " << num(k_contact, 2) << "              # sized: 1 mm of static penetration under an even share of the weight on each of the "
+        << points << " contact points\n";
+    } else {
+      s << "                          # (the robot has no contact points: nothing touches the ground)\n    stiffness: " << num(k_contact, 2) << "\n";
+    }
+    s << "    exponent: 1.5\n"
       << "    dissipation_s_per_m: " << num(dissipation) << "\n"
       << "    slip_velocity_m_per_s: 1.0e-3\n"
       << "  servo:\n"
@@ -403,9 +420,10 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     out.stand = c.str();
   }
 
-  // Reach: the two hands of a legged robot (as exp1), or the hand of a fixed-base arm.
+  // Reach: the two hands of a legged robot (as exp1), or the hand(s) of a fixed-base robot (one
+  // arm, or two as on a dual-arm torso).
   const bool humanoid = L.legged && L.arms.size() == 2 && L.feet.size() == 2;
-  const bool arm = !L.legged && d.base == model::BaseType::Fixed && L.arms.size() == 1;
+  const bool arm = !L.legged && d.base == model::BaseType::Fixed && (L.arms.size() == 1 || L.arms.size() == 2);
   if (humanoid || arm) {
     std::ostringstream c;
     std::vector<std::string> hand_tasks;
@@ -424,22 +442,27 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
         // (0.53, +-0.33, -0.04) reaches from the shoulder; [0.4, -+2, 2] m is out of reach.
         in_reach.push_back(a.shoulder + R * (0.53 * fwd + s * 0.33 * left - 0.04 * up));
         out_of_reach.push_back(a.shoulder + R * (0.53 * fwd + s * 2.33 * left + 0.9 * up));
-      } else {
+      } else if (a.side.empty()) {
         in_reach.push_back(a.shoulder + 0.6 * R * (0.8 * fwd + 0.3 * left + 0.52 * up).normalized());
         out_of_reach.push_back(a.shoulder + 2.0 * R * (0.6 * fwd - 0.5 * left + 0.62 * up).normalized());
+      } else {
+        // One of two arms: in front and to its own side, then out of reach outwards (the hands
+        // do not cross).
+        in_reach.push_back(a.shoulder + 0.6 * R * (0.8 * fwd + s * 0.3 * left + 0.52 * up).normalized());
+        out_of_reach.push_back(a.shoulder + 2.0 * R * (0.6 * fwd + s * 0.5 * left + 0.62 * up).normalized());
       }
       hand_tasks.push_back(a.side.empty() ? "hand" : lower(a.side) + "_hand");
     }
     // exp1 holds the in-reach targets for 30 s and the out-of-reach ones for 90 s; the draft 20 s
     // and 40 s, the hands' convergence judged over its last 10 s.
     const double switch_s = 20.0, duration = 60.0;
-    c << "# " << d.name << ": the " << (humanoid ? "hands reach" : "hand reaches") << " targets inside the arm's reach, then (at "
+    c << "# " << d.name << ": the " << (L.arms.size() == 2 ? "hands reach" : "hand reaches") << " targets inside the arm's reach, then (at "
       << num(switch_s) << " s) targets out of\n# reach" << (humanoid ? ", as in the paper's experiment 1 (cases/exp1.yaml)" : "")
       << "; drafted by `lexdyn-harness robot init`. The targets are placed from\n"
       << "# the arms' geometry; every method of the case runs it (--method bfgs | ah | gn | wls).\n"
       << "# Run: lexdyn-harness run reach.yaml --out out/reach --method bfgs\n"
       << "name: " << yamlString(d.name + "_reach") << "\n"
-      << "description: " << yamlString(std::string(humanoid ? "Two-foot stance; hands" : "Fixed base; the hand") + " to targets within reach, then out of reach.")
+      << "description: " << yamlString(std::string(humanoid ? "Two-foot stance; hands" : L.arms.size() == 2 ? "Fixed base; the hands" : "Fixed base; the hand") + " to targets within reach, then out of reach.")
       << "\n" << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
       << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: " << (humanoid ? "static_equilibrium" : "none") << "\n\n"
       << "controller:\n  type: lexdyn\n  method: bfgs                       # --method overrides it\n  feedforward_torque: true\n"
@@ -538,10 +561,12 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     if (!top.empty()) c << ", " << yamlString(top);
     for (const auto& g : grasp_frames) c << ", " << yamlString(g);
     c << "]\n\nchecks:\n"
-      << "  # The hands reach the targets within reach (1 cm each) before they move out of reach at " << num(switch_s) << " s.\n"
-      << "  - {name: hands_reached, type: task_error, tasks: [" << list(hand_tasks) << "], statistic: max, from_s: " << num(switch_s - 5.0)
-      << ", to_s: " << num(switch_s - 0.01) << ", limit: " << num(0.01 * static_cast<double>(hand_tasks.size())) << "}\n"
-      << "  - {name: hands_settled, type: task_error, tasks: [" << list(hand_tasks) << "], statistic: range, from_s: " << num(duration - 10.0)
+      << "  # Each hand reaches its target within reach (1 cm) before the targets move out of reach at " << num(switch_s) << " s.\n";
+    for (const auto& h : hand_tasks) {
+      c << "  - {name: " << h << "_reached, type: task_error, tasks: [" << h << "], statistic: max, from_s: " << num(switch_s - 5.0)
+        << ", to_s: " << num(switch_s - 0.01) << ", limit: 0.01}\n";
+    }
+    c << "  - {name: hands_settled, type: task_error, tasks: [" << list(hand_tasks) << "], statistic: range, from_s: " << num(duration - 10.0)
       << ", limit: 0.005}\n";
     if (humanoid) {
       c << "  - {name: feet_held, type: task_error, tasks: [" << list(contact_tasks) << "], statistic: max, from_s: 0.1, limit: 0.001}\n"
@@ -600,6 +625,41 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
   return out;
 }
 
+// An arm near a singularity in the posture (stretched out, or folded onto its axis): the
+// smallest singular value of its hand's position Jacobian over the arm's joints under 2 % of the
+// largest. The drafted reach starts there, where the hand cannot move every way.
+std::vector<std::string> armSingularities(const model::RobotDescription& d, const RobotLayout& L, const std::string& posture) {
+  std::vector<std::string> out;
+  if (L.arms.empty()) return out;
+  const model::RobotModel m(d);
+  model::ModelData data = m.createData();
+  model::Configuration q = m.neutralConfiguration();
+  q.joints = L.posture;
+  m.update(data, q, Eigen::VectorXd::Zero(m.nv()));
+  Eigen::MatrixXd J(3, m.nv());
+  for (const auto& a : L.arms) {
+    // The arm's joints: from the hand up to the body its first joint moves.
+    std::vector<int> cols;
+    const int first_body = d.joints[static_cast<size_t>(a.first_joint)].child_link;
+    for (int b = a.end_body; b > 0; b = d.parentBody(b)) {
+      if (d.links[static_cast<size_t>(b)].parent_joint >= 0) cols.push_back(m.jointVelocityOffset() + d.links[static_cast<size_t>(b)].parent_joint);
+      if (b == first_body) break;
+    }
+    if (cols.size() < 3) continue;
+    m.pointJacobian(data, m.frameId(a.end_link), a.grasp_in_body, J);
+    Eigen::MatrixXd Ja(3, static_cast<int>(cols.size()));
+    for (size_t k = 0; k < cols.size(); ++k) Ja.col(static_cast<int>(k)) = J.col(cols[k]);
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Ja);
+    const Eigen::VectorXd sv = svd.singularValues();
+    if (sv[0] > 0.0 && sv[2] < 0.02 * sv[0]) {
+      out.push_back("posture '" + posture + "': the " + (a.side.empty() ? std::string("arm") : lower(a.side) + " arm") +
+                    " is near a singularity (its hand's position Jacobian has singular values " + num(sv[0], 3) + ", " + num(sv[1], 3) + ", " +
+                    num(sv[2], 3) + " m/rad: stretched out or folded): the drafted reach starts there; another --posture starts it better");
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 InitResult initRobot(const InitOptions& o) {
@@ -619,7 +679,9 @@ InitResult initRobot(const InitOptions& o) {
 
   // Meshes are read once (the base's guess and the draft read the same ones).
   MeshCache meshes;
-  model::RobotDescription probe = model::loadUrdfOnly(o.urdf, model::BaseType::FreeFlyer, lo);
+  if (o.mimic != "coupled" && o.mimic != "locked") throw InputError("--mimic", "expected coupled or locked, found '" + o.mimic + "'");
+  const model::MimicMode mimic = o.mimic == "locked" ? model::MimicMode::Locked : model::MimicMode::Coupled;
+  model::RobotDescription probe = model::loadUrdfOnly(o.urdf, model::BaseType::FreeFlyer, lo, mimic);
   const UpAxisChoice up = chooseMeshUpAxis(probe, meshes);
   probe.mesh_up_axis_from_file = up.apply;
   // The base type: as given, or fixed when the root is a `world` link, else legs decide.
@@ -639,7 +701,7 @@ InitResult initRobot(const InitOptions& o) {
   } else if (o.base != "free_flyer") {
     throw InputError("--base", "expected free_flyer or fixed, found '" + o.base + "'");
   }
-  model::RobotDescription d = base == model::BaseType::FreeFlyer ? std::move(probe) : model::loadUrdfOnly(o.urdf, base, lo);
+  model::RobotDescription d = base == model::BaseType::FreeFlyer ? std::move(probe) : model::loadUrdfOnly(o.urdf, base, lo, mimic);
   d.mesh_up_axis_from_file = up.apply;
   for (const auto& w : d.warnings) result.warnings.push_back(w);
 
@@ -663,6 +725,13 @@ InitResult initRobot(const InitOptions& o) {
   mesh_problems.throwIfErrors();
   for (const auto& w : mesh_problems.warnings()) result.warnings.push_back(w.text());
   if (!base_note.empty()) L.base_reason = base_note;
+  if (posture.given >= 0 && 2 * posture.given < static_cast<int>(d.joints.size())) {
+    result.warnings.push_back("posture '" + posture.name + "' (the SRDF's) gives " + std::to_string(posture.given) + " of the " +
+                              std::to_string(d.joints.size()) + " joints; the others are at 0: is it a state of one group only? "
+                              "(another --posture, or complete it in the data file)");
+  }
+  for (const auto& w : armSingularities(d, L, posture.name)) result.warnings.push_back(w);
+  for (const auto& w : L.warnings) result.warnings.push_back("posture '" + posture.name + "': " + w);
   if (d.base == model::BaseType::FreeFlyer && L.feet.size() < 2) {
     throw InputError(o.urdf, "the robot has a floating base but no two chains reach the ground in posture '" + posture.name + "' (" +
                                  L.base_reason + "): robot init cannot place its feet; give --base fixed for a robot welded to the world, or "

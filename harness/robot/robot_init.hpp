@@ -21,6 +21,7 @@ struct InitOptions {
   std::string posture;                    ///< the SRDF state to stand in ("" for the best one)
   bool strict = false;
   bool allow_missing_meshes = false;      ///< a mesh that cannot be found is a warning, not an error
+  std::string mimic = "coupled";          ///< the URDF's <mimic> joints: coupled | locked (at the posture)
   double control_period_s = 0.005;
 };
 

@@ -23,6 +23,8 @@ constexpr double kSoleBand_m = 0.003;
 constexpr double kPointFootSpan_m = 0.02;
 /// The band is widened (a rounded or tilted sole) only for a foot this wide within 1 cm (m).
 constexpr double kSoleSpan_m = 0.05;
+/// A foot this far above the lowest one is in the air (m).
+constexpr double kFootInAir_m = 0.002;
 
 // Points of one geometry that bound it (world): box corners, sphere extremes along the world
 // axes, cylinder rims (with the exact lowest points of a tilted cylinder), mesh vertices.
@@ -455,6 +457,15 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
                                                           formatNumber(std::round(band * 1000.0), 2) + " mm of ") +
                shapes[static_cast<size_t>(f.body)] + " in the posture";
   }
+  // A foot above the others' level: the robot does not stand on it in this posture.
+  for (const auto& f : L.feet) {
+    double z = 1e18;
+    for (const auto& p : f.points_world) z = std::min(z, p.z());
+    if (z > L.lowest_z + kFootInAir_m) {
+      L.warnings.push_back("foot on link '" + f.link + "' is " + formatNumber((z - L.lowest_z) * 1000.0, 3) +
+                           " mm above the lowest foot in the posture: the robot does not stand on it (is the posture one of both legs?)");
+    }
+  }
   // Sides. Names tell left from right where they can (left_, l_, LLEG, LHip...); where the named
   // left is at -y the robot faces -x in its base frame, and forward is -x.
   auto sideOfLimb = [&](const std::vector<int>& bodies) {
@@ -564,9 +575,17 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
       a.first_joint = l.parent_joint >= 0 ? l.parent_joint : d.coupled_joints[static_cast<size_t>(l.parent_coupled)].master;
     }
     a.shoulder = L.body_pose[static_cast<size_t>(limb.bodies.front())].translation();
-    // The grasp point: between the fingers (the centre of their geometry) when the hand has two
-    // or more, else the centre of the hand's geometry and what it carries.
+    // The grasp point: between the fingertips when the hand has two fingers or more (each
+    // finger's tip: the body of its subtree whose geometry's centre is farthest from the hand's
+    // origin), else the end of the hand (its geometry's extreme along the direction from its
+    // joint to its centre: the end of a forearm, a flange's face).
     const std::vector<int>& fingers = children[static_cast<size_t>(c.hand)];
+    const Eigen::Vector3d hand_origin = L.body_pose[static_cast<size_t>(c.hand)].translation();
+    auto bodyCentre = [&](int b) {
+      Eigen::Vector3d s = Eigen::Vector3d::Zero();
+      for (const auto& p : pts[static_cast<size_t>(b)]) s += p;
+      return Eigen::Vector3d(s / static_cast<double>(std::max<size_t>(pts[static_cast<size_t>(b)].size(), 1)));
+    };
     auto centreOf = [&](const std::vector<int>& roots, int& count) {
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       count = 0;
@@ -584,12 +603,45 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     };
     int count = 0;
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
-    bool between_fingers = false;
+    bool between_fingers = false, at_end = false;
     if (fingers.size() >= 2) {
-      g = centreOf(fingers, count);
-      between_fingers = count > 0;
+      int tips = 0;
+      for (int f : fingers) {
+        int tip = f;
+        double far = -1.0;
+        std::vector<int> stack{f};
+        while (!stack.empty()) {
+          const int k = stack.back();
+          stack.pop_back();
+          const double r = (bodyCentre(k) - hand_origin).norm();
+          if (r > far) {
+            far = r;
+            tip = k;
+          }
+          for (int ch : children[static_cast<size_t>(k)]) stack.push_back(ch);
+        }
+        g += bodyCentre(tip);
+        ++tips;
+      }
+      g /= static_cast<double>(tips);
+      between_fingers = true;
+    } else {
+      g = centreOf({c.hand}, count);
+      const Eigen::Vector3d dir = g - hand_origin;
+      if (dir.norm() > 0.01 && count > 0) {
+        const Eigen::Vector3d u = dir.normalized();
+        double ext = 0.0;
+        std::vector<int> stack{c.hand};
+        while (!stack.empty()) {
+          const int k = stack.back();
+          stack.pop_back();
+          for (const auto& p : pts[static_cast<size_t>(k)]) ext = std::max(ext, (p - g).dot(u));
+          for (int ch : children[static_cast<size_t>(k)]) stack.push_back(ch);
+        }
+        g += ext * u;
+        at_end = true;
+      }
     }
-    if (!between_fingers) g = centreOf({c.hand}, count);
     a.grasp_world = g;
     a.grasp_in_body = L.body_pose[static_cast<size_t>(c.hand)].inverse() * g;
     std::vector<Eigen::Vector3d> chain;
@@ -599,7 +651,8 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     }
     chain.push_back(g);
     a.reach = chainLength(chain);
-    a.source = (between_fingers ? "the centre of the geometry of the " + std::to_string(fingers.size()) + " fingers of the hand, link '" + a.end_link + "'"
+    a.source = (between_fingers ? "between the tips of the " + std::to_string(fingers.size()) + " fingers of the hand, link '" + a.end_link + "'"
+                : at_end        ? "the end of the hand, link '" + a.end_link + "' and what it carries (its geometry's extreme away from its joint)"
                                 : "the centre of the geometry of the hand, link '" + a.end_link + "' and what it carries") +
                " (the end of the " + std::to_string(c.joints) + "-joint chain from joint '" + d.joints[static_cast<size_t>(a.first_joint)].name + "')";
     L.arms.push_back(a);

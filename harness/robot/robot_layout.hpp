@@ -80,6 +80,7 @@ struct RobotLayout {
   /// RobotDescription::geometries; a mesh that could not be read has none).
   std::vector<std::vector<Eigen::Vector3d>> geometry_points;
   std::vector<std::string> notes;        ///< what could not be found, what was assumed
+  std::vector<std::string> warnings;     ///< what is likely wrong (a foot in the air in the posture)
 };
 
 /// The layout in `posture` (model joint order). `legged_hint`: the base type the URDF implies

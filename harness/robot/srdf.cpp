@@ -6,6 +6,7 @@
 
 #include <tinyxml.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -96,6 +97,7 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
     }
     s.end_effectors.push_back(ee);
   }
+  std::vector<std::string> prefixes;  // namespace prefixes matched away (below)
   for (const TiXmlElement* st = robot->FirstChildElement("group_state"); st; st = st->NextSiblingElement("group_state")) {
     SrdfState state;
     state.name = attr(st, "name");
@@ -107,7 +109,22 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
     }
     std::vector<std::string> dropped;
     for (const TiXmlElement* j = st->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
-      const std::string name = attr(j, "name");
+      std::string name = attr(j, "name");
+      // A namespace prefix ('baxter/left_s0', as a multi-robot MoveIt configuration writes it)
+      // on a name the URDF has without it: matched without the prefix, noted once per prefix.
+      const size_t slash = name.rfind('/');
+      if (d.findJoint(name) < 0 && slash != std::string::npos && slash + 1 < name.size()) {
+        const std::string bare = name.substr(slash + 1);
+        if (d.findJoint(bare) >= 0 || lockedJoint(bare) || coupledJoint(bare)) {
+          const std::string prefix = name.substr(0, slash + 1);
+          if (std::find(prefixes.begin(), prefixes.end(), prefix) == prefixes.end()) {
+            prefixes.push_back(prefix);
+            s.notes.push_back("SRDF joint names with the prefix '" + prefix + "' (e.g. '" + name + "', line " + std::to_string(j->Row()) +
+                              ") matched to the URDF's joints without it");
+          }
+          name = bare;
+        }
+      }
       std::vector<double> v;
       if (!numbers(attr(j, "value"), v)) {
         problems.error(at(j), "group state '" + state.name + "': joint '" + name + "': value=\"" + attr(j, "value") + "\" is not a list of finite numbers");
@@ -143,6 +160,30 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
       state.values.emplace_back(name, v[0]);
     }
     for (const auto& x : dropped) s.notes.push_back("SRDF state '" + state.name + "': dropped " + x);
+    // A state given once per group (MoveIt configurations often define `ready` for each arm and
+    // leg): one posture of all of them, with a note; a joint given twice keeps its first value.
+    auto same = std::find_if(s.states.begin(), s.states.end(), [&](const SrdfState& o) { return o.name == state.name; });
+    if (same != s.states.end()) {
+      int added = 0;
+      for (const auto& [joint, value] : state.values) {
+        const bool known = std::any_of(same->values.begin(), same->values.end(), [&](const auto& jv) { return jv.first == joint; });
+        if (known) {
+          const double first = std::find_if(same->values.begin(), same->values.end(), [&](const auto& jv) { return jv.first == joint; })->second;
+          if (first != value) {
+            s.notes.push_back("SRDF state '" + state.name + "' (groups '" + same->group + "' and '" + state.group + "'): joint '" + joint +
+                              "' given twice, " + formatNumber(first) + " and " + formatNumber(value) + ": the first is kept");
+          }
+          continue;
+        }
+        same->values.emplace_back(joint, value);
+        ++added;
+      }
+      s.notes.push_back("SRDF state '" + state.name + "' of group '" + state.group + "' (line " + std::to_string(state.line) +
+                        ") merged with the one of group '" + same->group + "' (line " + std::to_string(same->line) + "): " +
+                        std::to_string(added) + " more joint(s)");
+      same->group += "+" + state.group;
+      continue;
+    }
     s.states.push_back(state);
   }
   return s;

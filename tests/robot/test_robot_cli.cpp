@@ -10,6 +10,7 @@
 #include <array>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -97,15 +98,17 @@ TEST(RobotInit, AHumanoidsDraftComesFromItsGeometry) {
   const std::string reach = slurp(out + "/reach.yaml");
   EXPECT_TRUE(containsAll(reach, {"- {name: left_hand, type: position, frame: LEFT_GRASP", "action: set_target, task: left_hand",
                                   "type: com_box", "sensor: LEFT_FOOT_SENSOR",
-                                  "- {name: hands_reached, type: task_error, tasks: [left_hand, right_hand], statistic: max, from_s: 15, to_s: 19.99, limit: 0.02}",
+                                  "- {name: left_hand_reached, type: task_error, tasks: [left_hand], statistic: max, from_s: 15, to_s: 19.99, limit: 0.01}",
+                                  "- {name: right_hand_reached, type: task_error, tasks: [right_hand], statistic: max, from_s: 15, to_s: 19.99, limit: 0.01}",
                                   "- {name: trunk_up, type: frame_height, frame:"}));
-  // The grasp point is between the fingers of the hand.
-  EXPECT_TRUE(containsAll(data, {"the centre of the geometry of the", "fingers of the hand, link 'left_wrist_yaw_link'"})) << data;
+  // The grasp point is between the fingertips of the hand (g1_like's hand: three fingers, each
+  // at the end of its own chain below the wrist).
+  EXPECT_TRUE(containsAll(data, {"between the tips of the 3 fingers of the hand, link 'left_wrist_yaw_link'"})) << data;
   // The drafted robot checks: CoM above the soles, the joint table.
   const CliResult check = harness("robot check " + out + "/g1_like.yaml --png " + dir + "/g1.png", dir);
   expectExit(check, 0);
   EXPECT_TRUE(containsAll(check.out, {"robot g1_like", "mass 35.1", "inside its nearest edge", "left_knee_joint", "servo kp",
-                                      "locked joints", "warnings (", "picture: " + dir + "/g1.png"}))
+                                      "coupled mimic joints", "warnings (", "picture: " + dir + "/g1.png"}))
       << check.out;
   const std::string png = slurp(dir + "/g1.png");
   ASSERT_GT(png.size(), 1000u);
@@ -207,6 +210,130 @@ TEST(RobotInit, APostureThatTiltsTheFeetStandsOnThemFlat) {
   expectExit(skip, 0, {"dropped HEAD_JOINT2 (not a joint of the URDF; --srdf-skip-unknown)"});
 }
 
+// An SRDF in the conventions of MoveIt configurations: one group state per limb under the same
+// name. They are merged into one posture; a state of one leg, a lifted foot and a stretched arm
+// are warned about; --mimic locked and --package-path are written into the data file and used.
+TEST(RobotInit, PerGroupSrdfStatesMergeAndPostureProblemsAreWarned) {
+  const std::string dir = scratch("per_group");
+  const std::string urdf = kSrc + "/models/hrp2kai_like/hrp2kai_like.urdf";
+  const std::string full = slurp(kSrc + "/models/hrp2kai_like/hrp2kai_like.srdf");
+  // The half-sitting values by joint.
+  std::vector<std::pair<std::string, std::string>> values;
+  for (size_t at = full.find("<joint name=\""); at != std::string::npos; at = full.find("<joint name=\"", at + 1)) {
+    const size_t n0 = at + 13, n1 = full.find('"', n0);
+    const size_t v0 = full.find("value=\"", n1);
+    if (v0 == std::string::npos || v0 > full.find('>', n1)) continue;  // a group's member, not a state's value
+    values.emplace_back(full.substr(n0, n1 - n0), full.substr(v0 + 7, full.find('"', v0 + 7) - v0 - 7));
+  }
+  ASSERT_GT(values.size(), 24u);
+  auto state = [&](const std::string& name, const std::string& group, const std::string& prefix,
+                   const std::map<std::string, std::string>& change = {}) {
+    std::string t = "  <group_state name=\"" + name + "\" group=\"" + group + "\">\n";
+    for (const auto& [j, v] : values) {
+      if (j.rfind(prefix, 0) != 0) continue;
+      t += "    <joint name=\"" + j + "\" value=\"" + (change.count(j) ? change.at(j) : v) + "\"/>\n";
+    }
+    return t + "  </group_state>\n";
+  };
+  const std::string head = full.substr(0, full.find("  <group_state"));
+  std::string srdf = head + state("ready", "right_leg", "RLEG") + state("ready", "left_leg", "LLEG") + state("ready", "right_arm", "RARM") +
+                     state("ready", "left_arm", "LARM") +
+                     // A state of the right leg alone, straight.
+                     state("one_leg", "right_leg", "RLEG", {{"RLEG_JOINT2", "0"}, {"RLEG_JOINT3", "0"}, {"RLEG_JOINT4", "0"}}) +
+                     // The right knee bent 0.1 rad further than half-sitting: that foot lifts.
+                     state("lifted", "right_leg", "RLEG", {{"RLEG_JOINT3", "0.9727"}}) + state("lifted", "left_leg", "LLEG") +
+                     state("lifted", "right_arm", "RARM") + state("lifted", "left_arm", "LARM") +
+                     // Both legs half-sitting, the arms stretched down (elbows straight).
+                     state("arms_straight", "right_leg", "RLEG") + state("arms_straight", "left_leg", "LLEG") +
+                     state("arms_straight", "right_arm", "RARM", {{"RARM_JOINT0", "0"}, {"RARM_JOINT1", "0"}, {"RARM_JOINT3", "0"}}) +
+                     state("arms_straight", "left_arm", "LARM", {{"LARM_JOINT0", "0"}, {"LARM_JOINT1", "0"}, {"LARM_JOINT3", "0"}}) +
+                     "</robot>\n";
+  std::ofstream(dir + "/r.srdf") << srdf;
+  const CliResult init = harness("robot init " + urdf + " --srdf " + dir + "/r.srdf --out " + dir + "/ready", dir);
+  expectExit(init, 0, {"SRDF state 'ready' of group 'left_leg'", "merged with the one of group 'right_leg'", "6 more joint(s)",
+                       "posture 'ready'"});
+  EXPECT_EQ(init.err.find("near a singularity"), std::string::npos) << init.err;
+  EXPECT_EQ(init.err.find("above the lowest foot"), std::string::npos) << init.err;
+  EXPECT_TRUE(containsAll(slurp(dir + "/ready/hrp2kai_like.yaml"), {"ready:"}));
+  expectExit(harness("run " + dir + "/ready/stand.yaml --out " + dir + "/ready_stand --quiet", dir), 0, {"completed"});
+  // A state of one leg: the other joints at 0.
+  const CliResult one = harness("robot init " + urdf + " --srdf " + dir + "/r.srdf --posture one_leg --out " + dir + "/one", dir);
+  expectExit(one, 0, {"posture 'one_leg' (the SRDF's) gives 6 of the", "the others are at 0: is it a state of one group only?"});
+  // A foot in the air: warned by init and by robot check, whose support polygon leaves it out.
+  const CliResult lifted = harness("robot init " + urdf + " --srdf " + dir + "/r.srdf --posture lifted --out " + dir + "/lifted", dir);
+  expectExit(lifted, 0, {"posture 'lifted': foot on link 'RLEG_LINK5' is", "mm above the lowest foot in the posture: the robot does not stand on it"});
+  const CliResult lifted_check = harness("robot check " + dir + "/lifted/hrp2kai_like.yaml --png -", dir);
+  expectExit(lifted_check, 0, {});
+  EXPECT_TRUE(containsAll(lifted_check.out, {"contact point(s) more than 2 mm above the lowest: in the air, left out",
+                                             "foot on link 'RLEG_LINK5' is"})) << lifted_check.out;
+  // Joint names under a namespace prefix (a multi-robot configuration's 'hrp/RLEG_JOINT0'):
+  // matched without it, noted once.
+  std::string prefixed = state("ready", "right_leg", "RLEG") + state("ready", "left_leg", "LLEG") + state("ready", "right_arm", "RARM") +
+                         state("ready", "left_arm", "LARM");
+  for (size_t at = prefixed.find("<joint name=\""); at != std::string::npos; at = prefixed.find("<joint name=\"", at + 1)) {
+    prefixed.insert(at + 13, "hrp/");
+  }
+  std::ofstream(dir + "/prefixed.srdf") << head + prefixed + "</robot>\n";
+  const CliResult pre = harness("robot init " + urdf + " --srdf " + dir + "/prefixed.srdf --out " + dir + "/prefixed", dir);
+  expectExit(pre, 0, {"SRDF joint names with the prefix 'hrp/' (e.g. 'hrp/RLEG_JOINT0', line", "matched to the URDF's joints without it",
+                      "posture 'ready'"});
+  // The same joint values as the unprefixed states (the lines after the posture's comment).
+  auto postureValues = [](const std::string& data) {
+    const size_t p = data.find("postures:");
+    if (p == std::string::npos) return std::string();
+    std::string v = data.substr(data.find('\n', data.find('\n', p) + 1));  // after "postures:" and "  ready:   # ..."
+    // Up to the first line indented less than a joint's value (the next posture, key or comment).
+    for (size_t k = v.find('\n', 1); k != std::string::npos; k = v.find('\n', k + 1)) {
+      if (v.compare(k + 1, 4, "    ") != 0) return v.substr(0, k);
+    }
+    return v;
+  };
+  const std::string values_prefixed = postureValues(slurp(dir + "/prefixed/hrp2kai_like.yaml"));
+  EXPECT_GT(values_prefixed.size(), 200u);
+  EXPECT_EQ(values_prefixed, postureValues(slurp(dir + "/ready/hrp2kai_like.yaml")));
+  // Straight elbows: both arms near a singularity.
+  const CliResult straight = harness("robot init " + urdf + " --srdf " + dir + "/r.srdf --posture arms_straight --out " + dir + "/straight", dir);
+  expectExit(straight, 0, {"posture 'arms_straight': the right arm is near a singularity", "the left arm is near a singularity"});
+  // The mimic mode and the package path go into the data file; the data file's package path,
+  // relative to it, finds the meshes.
+  const std::string pkg = dir + "/pkgs/g1_like_description";
+  fs::create_directories(dir + "/pkgs");
+  fs::copy(kSrc + "/models/g1_like", pkg, fs::copy_options::recursive);
+  fs::create_directories(dir + "/alone");
+  fs::copy_file(kSrc + "/models/g1_like/urdf/g1_like.urdf", dir + "/alone/g1_like.urdf");
+  const std::string srdf_g1 = kSrc + "/models/g1_like/srdf/g1_like.srdf";
+  const CliResult without = harness("robot check " + dir + "/alone/g1_like.urdf --png -", dir);
+  EXPECT_TRUE(containsAll(without.out + without.err, {"package 'g1_like_description' not found"})) << without.out << without.err;
+  const CliResult g1 = harness("robot init " + dir + "/alone/g1_like.urdf --srdf " + srdf_g1 + " --package-path " + dir + "/pkgs --mimic locked --out " +
+                                   dir + "/g1",
+                               dir);
+  expectExit(g1, 0, {"posture 'standing'"});
+  const std::string g1_data = slurp(dir + "/g1/g1_like.yaml");
+  EXPECT_TRUE(containsAll(g1_data, {"mimic: {mode: locked, posture: standing}", "package_path: ['../pkgs']"})) << g1_data;
+  const CliResult g1_check = harness("robot check " + dir + "/g1/g1_like.yaml --png -", dir);
+  expectExit(g1_check, 0, {});
+  EXPECT_TRUE(containsAll(g1_check.out, {"locked joints"})) << g1_check.out;
+  EXPECT_EQ((g1_check.out + g1_check.err).find("not found"), std::string::npos) << g1_check.out << g1_check.err;
+  EXPECT_EQ(g1_check.out.find("coupled mimic joints"), std::string::npos) << g1_check.out;
+  expectExit(harness("run " + dir + "/g1/stand.yaml --out " + dir + "/g1_stand --quiet", dir), 0, {"completed"});
+}
+
+// A dual-arm robot on a fixed base (here the humanoid welded at its waist): both hands reach.
+TEST(RobotInit, AFixedBaseWithTwoArmsGetsAReachOfBothHands) {
+  const std::string dir = scratch("dual_arm");
+  const CliResult init = harness("robot init " + kSrc + "/models/hrp2kai_like/hrp2kai_like.urdf --srdf " + kSrc +
+                                     "/models/hrp2kai_like/hrp2kai_like.srdf --base fixed --out " + dir + "/draft",
+                                 dir);
+  expectExit(init, 0, {"base: fixed", "wrote " + dir + "/draft/reach.yaml"});
+  const std::string reach = slurp(dir + "/draft/reach.yaml");
+  EXPECT_TRUE(containsAll(reach, {"Fixed base; the hands", "- {name: left_hand, type: position", "- {name: right_hand, type: position",
+                                  "left_hand_reached", "right_hand_reached"}))
+      << reach;
+  harness("run " + dir + "/draft/reach.yaml --out " + dir + "/reach --quiet --duration 2", dir);
+  const nlohmann::json s = nlohmann::json::parse(slurp(dir + "/reach/summary.json"));
+  EXPECT_EQ(s["status"], "completed") << s.dump(2);
+}
+
 // robot check on a case file and on a URDF alone; a fixed-base robot whose posture its servos
 // cannot hold is told so.
 TEST(RobotCheck, ReadsCasesAndUrdfs) {
@@ -218,7 +345,8 @@ TEST(RobotCheck, ReadsCasesAndUrdfs) {
       << c.out;
   const CliResult u = harness("robot check " + kSrc + "/models/panda_like/urdf/panda_like.urdf --png -", dir);
   expectExit(u, 0);
-  EXPECT_TRUE(containsAll(u.out, {"robot panda_like", "data: (none: the URDF alone)", "panda_joint4", "locked joints"})) << u.out;
+  EXPECT_TRUE(containsAll(u.out, {"robot panda_like", "data: (none: the URDF alone)", "panda_joint4", "coupled mimic joints",
+                                  "panda_finger_joint2       = 1 x panda_finger_joint1"})) << u.out;
 }
 
 // What the user gets wrong: one clear error (exit code 2), naming the file and the element, and
