@@ -130,7 +130,16 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
     for (const yaml::Node& p : pts.elements()) c.points.push_back(p.asVector3In(-R::kMaxLength_m, R::kMaxLength_m, "m"));
   }
   if (auto v = m.optional("fixed")) c.fixed = v->asBool();
+  c.dims = c.points.size() == 1 && !c.fixed ? 3 : 6;
+  if (auto v = m.optional("dims")) {
+    const double k = v->asDouble();
+    if (k != 3.0 && k != 6.0) v->fail("expected 3 (a point contact: its position held) or 6 (the frame's pose held)");
+    c.dims = static_cast<int>(k);
+    if (c.dims == 3 && c.points.size() != 1) v->fail("dims 3 is a point contact: it needs exactly one point (this contact has " +
+                                                     std::to_string(c.points.size()) + ")");
+  }
   if (auto v = m.optional("normal")) {
+    if (c.dims == 3) v->fail("a point contact (dims 3) takes the ground's normal (world +z); normal is for a contact of dims 6");
     c.normal = v->asVector3();
     if (!(c.normal.norm() > 1e-9)) v->fail("expected a nonzero normal");
     c.normal.normalize();
@@ -338,6 +347,7 @@ control::ControllerConfig buildControllerConfig(const LexdynSpec& spec, const mo
     cs.fixed = c.fixed;
     cs.friction = c.friction;
     cs.normal_in_frame = c.normal;
+    cs.point = c.dims == 3;
     cfg.contacts.push_back(cs);
   }
   cfg.initial_contacts = spec.initial_contacts;

@@ -26,6 +26,9 @@ struct ContactEntry {
   bool fixed = false;
   double friction = 0.7;
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< in the frame
+  /// 3: a point contact (its task holds the point's position; the force's normal is the
+  /// ground's, world +z); 6: the frame's pose held. Default: 3 for one point that is not fixed.
+  int dims = 6;
   std::string grasp;   ///< linked simulator grasp (switched with the contact); empty: none
   std::string sensor;  ///< linked force/torque sensor (traced for comparison); empty: none
 };

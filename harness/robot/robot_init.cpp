@@ -240,7 +240,7 @@ UpAxisChoice chooseMeshUpAxis(const model::RobotDescription& d, MeshCache& cache
 
 struct Draft {
   std::string robot_file;  // file name of the data file
-  std::string data, stand, reach;
+  std::string data, stand, reach, base;
   std::vector<std::string> summary;
   std::vector<std::string> warnings;
 };
@@ -597,6 +597,107 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       << "  - {name: tick_time_p99, type: tick_time, timer: tick, percentile: 99, limit_us: 5000}\n";
     out.reach = c.str();
   }
+
+  // Base: a legged robot without the two arms of a reach (a quadruped, a hexapod) moves its base
+  // on its feet: to a target within reach (lower, forward and to the side), tilted, then to one
+  // out of reach (its height higher).
+  if (L.legged && d.base == model::BaseType::FreeFlyer && !humanoid && L.feet.size() >= 2) {
+    std::ostringstream c;
+    const double h = L.body_pose[0].translation().z() - L.lowest_z;  // the base's height above the ground
+    const Eigen::Vector3d fwd = L.forward, left = Eigen::Vector3d::UnitZ().cross(L.forward);
+    const Eigen::Vector3d start(0.0, 0.0, h);
+    const Eigen::Vector3d in_reach = start + h * (0.1 * fwd + 0.05 * left - 0.1 * Eigen::Vector3d::UnitZ());
+    const Eigen::Vector3d out_of_reach = start + Eigen::Vector3d(0.0, 0.0, h);
+    // Tilted: pitched nose-down by 0.1 rad about the robot's left axis, as a body turns to look down.
+    const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.1, left).toRotationMatrix() * L.body_pose[0].linear();
+    // kp 1 (kv 2): 6 s after a step the error is 1.7 % of it.
+    const double move_s = 6.0, tilt_s = 8.0, switch_s = 20.0, duration = 40.0;
+    std::vector<std::string> contact_tasks;
+    for (const auto& f : L.feet) contact_tasks.push_back(lower(f.surface));
+    auto list = [](const std::vector<std::string>& v) {
+      std::string s;
+      for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+      return s;
+    };
+    auto rot9 = [](const Eigen::Matrix3d& R) {
+      std::string s = "[";
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) s += std::string(i || j ? ", " : "") + num(std::abs(R(i, j)) < 1e-12 ? 0.0 : R(i, j), 6);
+      return s + "]";
+    };
+    const double fmin = std::max(1.0, 0.015 * L.mass * 9.81);
+    c << "# " << d.name << ": the base moves on the feet to a target within reach (by 10 % of its height lower, forward\n"
+      << "# and to the side), at " << num(tilt_s) << " s it tilts nose-down by 0.1 rad, at " << num(switch_s)
+      << " s its target moves out of reach (its height\n# above the ground higher); drafted by `lexdyn-harness robot init`. "
+      << "Every method runs it (--method bfgs | ah | gn | wls).\n"
+      << "# Run: lexdyn-harness run base.yaml --out out/base --method bfgs\n"
+      << "name: " << yamlString(d.name + "_base") << "\n"
+      << "description: " << yamlString("On " + std::to_string(L.feet.size()) + " feet; the base to a target within reach, tilted, then out of reach.") << "\n"
+      << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
+      << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: static_equilibrium\n\n"
+      << "controller:\n  type: lexdyn\n  method: bfgs                       # --method overrides it\n  feedforward_torque: true\n"
+      << "  state_feedback: integrated\n"
+      << "  params: {nu_dt2: 1.0e-12, xi_dt2: 1.0e-12, zeta_dt2: 1.0e-3, rho_dt2: 1.0e-12, eps_dt2: 1.0e-3, newton_identity_weight: 1.0e-4, "
+         "stop_after_level: contacts}\n"
+      << "  method_params:\n    wls: {stop_after_level: hard}\n"
+      << "  solver:\n    paper_rules: true\n"
+      << "  contacts:   # a foot of one point is a point contact (3 rows: its position; docs/controller.md)\n";
+    for (const auto& f : L.feet) c << "    - {name: " << f.surface << ", surface: " << f.surface << ", sensor: " << f.surface << "_SENSOR}\n";
+    c << "  initial_contacts: [" << surfaces << "]\n"
+      << "  tasks:\n"
+      << "    - {name: joint_limits, type: joint_limits}\n"
+      << "    - {name: force_bounds, type: contact_force_bounds}\n"
+      << "    - {name: dynamics, type: equation_of_motion}\n"
+      << "    - {name: torque_limits, type: torque_limits}\n"
+      << "    - {name: trust, type: trust_region, delta: 0.01}\n";
+    for (const auto& f : L.feet) c << "    - {name: " << lower(f.surface) << ", type: contact, contact: " << f.surface << "}\n";
+    c << "    - {name: base_position, type: position, frame: " << yamlString(root) << ", target: " << vec3(in_reach, 4)
+      << ", gains: {kp: 1.0}}   # from " << vec3(start, 4) << " (the posture's base " << num(h, 3) << " m above the ground)\n"
+      << "    - {name: base_orientation, type: orientation, frame: " << yamlString(root) << ", gains: {kp: 1.0}}   # holds the start's attitude\n"
+      << "    - {name: velocity, type: velocity_min}\n"
+      << "    - {name: wrench, type: wrench_min}\n"
+      << "    - {name: posture, type: posture, posture: " << yamlString(posture.name) << "}     # WLS only\n"
+      << "  levels:\n"
+      << "    - {name: bounds, tasks: [joint_limits, force_bounds]}\n"
+      << "    - {name: dynamics, tasks: [dynamics, torque_limits]}\n"
+      << "    - {name: trust, tasks: [trust]}\n"
+      << "    - {name: contacts, tasks: [" << list(contact_tasks) << "]}\n"
+      << "    - {name: base, tasks: [base_position, base_orientation]}\n"
+      << "    - {name: velocity, tasks: [velocity]}\n"
+      << "    - {name: wrench, tasks: [wrench]}\n"
+      << "  wls_levels:\n"
+      << "    - {name: hard, tasks: [joint_limits, force_bounds, dynamics, torque_limits, " << list(contact_tasks) << "]}\n"
+      << "    - name: objective\n      tasks: [base_position, base_orientation, posture, wrench]\n"
+      << "      weights: {base_position: 1.0, base_orientation: 1.0, posture: 1.0e-3, wrench: 1.0e-5}\n\n"
+      << simSection(5.0) << "\nevents:\n"
+      << "  - {at_s: " << num(tilt_s) << ", action: set_target, task: base_orientation, value: " << rot9(tilt) << "}   # 0.1 rad nose-down\n"
+      << "  - {at_s: " << num(switch_s) << ", action: set_target, task: base_position, value: " << vec3(out_of_reach, 4) << "}   # out of reach\n"
+      << "\ntrace:\n  every_n_ticks: 1\n  frames: [" << yamlString(root) << "]\n\nchecks:\n"
+      << "  # The base reaches its target (5 mm) before it tilts, then its tilt (0.01 rad) before the switch.\n"
+      << "  - {name: base_reached, type: task_error, tasks: [base_position], statistic: max, from_s: " << num(move_s) << ", to_s: " << num(tilt_s - 0.01)
+      << ", limit: 0.005}\n"
+      << "  - {name: base_tilted, type: task_error, tasks: [base_orientation], statistic: max, from_s: " << num(tilt_s + 6.0) << ", to_s: "
+      << num(switch_s - 0.01) << ", limit: 0.01}\n"
+      << "  - {name: base_settled, type: task_error, tasks: [base_position], statistic: range, from_s: " << num(duration - 10.0) << ", limit: 0.005}\n"
+      << "  - {name: feet_held, type: task_error, tasks: [" << list(contact_tasks) << "], statistic: max, from_s: 0.1, limit: 0.001}\n"
+      << "  - {name: upright, type: frame_height, frame: " << yamlString(root) << ", min_m: " << num(0.5 * h, 3) << "}   # half the base's height in the posture\n"
+      << "  - {name: torques, type: torque_limits, source: both, limit_fraction: 1.0}\n";
+    for (const auto& f : L.feet) {
+      const std::string n = lower(f.surface);
+      c << "  - {name: " << n << "_unilateral, type: contact_unilateral, contact: " << f.surface << ", source: sensed, min_N: 0.0}\n"
+        << "  - {name: " << n << "_friction, type: contact_friction, contact: " << f.surface << ", source: sensed, min_normal_N: " << num(fmin, 2) << "}\n";
+      if (f.points.size() >= 3) {
+        c << "  - {name: " << n << "_cop, type: contact_cop, contact: " << f.surface << ", source: sensed, min_normal_N: " << num(fmin, 2)
+          << ", limit_m: -0.001}\n";
+      }
+    }
+    c << "  - {name: joint_accel_sign_changes, type: joint_acceleration_sign_changes, source: commanded, dead_band_rad_per_s2: 0.05, limit_per_s: 5.0}\n"
+      << "  - {name: joint_velocity_hf, type: joint_velocity_hf_energy, source: measured, cutoff_hz: 5.0, limit_rad2_per_s2: 0.1}\n"
+      << "  - {name: controller_ok, type: controller_status, allowed: [ok, solver_stopped_early], limit_count: 0}\n"
+      << "  - {name: active_set_peak, type: active_set_peak, limit_iterations: 50}\n"
+      << "  - {name: tick_time_p99, type: tick_time, timer: tick, percentile: 99, limit_us: 5000}\n";
+    out.base = c.str();
+  }
   out.summary.push_back("base: " + std::string(d.base == model::BaseType::Fixed ? "fixed" : "free_flyer") + " (" + L.base_reason + ")");
   out.summary.push_back("mass " + num(L.mass, 4) + " kg, height " + num(L.height, 3) + " m in posture '" + posture.name + "' (" + posture.source + ")");
   for (const auto& f : L.feet) {
@@ -630,7 +731,7 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
 // largest. The drafted reach starts there, where the hand cannot move every way.
 std::vector<std::string> armSingularities(const model::RobotDescription& d, const RobotLayout& L, const std::string& posture) {
   std::vector<std::string> out;
-  if (L.arms.empty()) return out;
+  if (L.arms.empty() && L.feet.empty()) return out;
   const model::RobotModel m(d);
   model::ModelData data = m.createData();
   model::Configuration q = m.neutralConfiguration();
@@ -655,6 +756,29 @@ std::vector<std::string> armSingularities(const model::RobotDescription& d, cons
       out.push_back("posture '" + posture + "': the " + (a.side.empty() ? std::string("arm") : lower(a.side) + " arm") +
                     " is near a singularity (its hand's position Jacobian has singular values " + num(sv[0], 3) + ", " + num(sv[1], 3) + ", " +
                     num(sv[2], 3) + " m/rad: stretched out or folded): the drafted reach starts there; another --posture starts it better");
+    }
+  }
+  // A leg so (a straight knee): the base moves slowly, if at all, in the direction the leg cannot
+  // move its foot, and a drafted base case starts there.
+  if (d.base == model::BaseType::FreeFlyer) {
+    for (const auto& f : L.feet) {
+      std::vector<int> cols;
+      for (int b = f.body; b > 0; b = d.parentBody(b)) {
+        if (d.links[static_cast<size_t>(b)].parent_joint >= 0) cols.push_back(m.jointVelocityOffset() + d.links[static_cast<size_t>(b)].parent_joint);
+      }
+      if (cols.size() < 3) continue;
+      const Eigen::Vector3d sole = f.sole_in_body.translation();
+      m.pointJacobian(data, m.frameId(f.link), sole, J);
+      Eigen::MatrixXd Jl(3, static_cast<int>(cols.size()));
+      for (size_t k = 0; k < cols.size(); ++k) Jl.col(static_cast<int>(k)) = J.col(cols[k]);
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Jl);
+      const Eigen::VectorXd sv = svd.singularValues();
+      if (sv[0] > 0.0 && sv[2] < 0.02 * sv[0]) {
+        out.push_back("posture '" + posture + "': the leg of " + f.surface + " is near a singularity (its foot's position Jacobian has singular values " +
+                      num(sv[0], 3) + ", " + num(sv[1], 3) + ", " + num(sv[2], 3) +
+                      " m/rad: a straight knee?): the base can hardly move along the leg; a posture with the knees bent (--posture, an SRDF) "
+                      "moves it");
+      }
     }
   }
   return out;
@@ -749,8 +873,9 @@ InitResult initRobot(const InitOptions& o) {
     writeFile(tmp / dr.robot_file, dr.data);
     writeFile(tmp / "stand.yaml", dr.stand);
     if (!dr.reach.empty()) writeFile(tmp / "reach.yaml", dr.reach);
+    if (!dr.base.empty()) writeFile(tmp / "base.yaml", dr.base);
     // The drafts must load (a failure here is a defect of robot init, named as such).
-    for (const char* f : {"stand.yaml", "reach.yaml"}) {
+    for (const char* f : {"stand.yaml", "reach.yaml", "base.yaml"}) {
       if (!fs::exists(tmp / f)) continue;
       try {
         cases::loadCase((tmp / f).string());
@@ -767,6 +892,7 @@ InitResult initRobot(const InitOptions& o) {
   result.files.push_back((final_dir / dr.robot_file).string());
   result.files.push_back((final_dir / "stand.yaml").string());
   if (!dr.reach.empty()) result.files.push_back((final_dir / "reach.yaml").string());
+  if (!dr.base.empty()) result.files.push_back((final_dir / "base.yaml").string());
   result.summary = dr.summary;
   for (const auto& w : dr.warnings) result.warnings.push_back(w);
   return result;

@@ -320,7 +320,7 @@ void Controller::Impl::finishTick(const RobotState& s) {
     if (!contactActive[z(c)]) continue;
     const tasks::ContactSpec& cs = layout.contact(c);
     const Eigen::Isometry3d X = model->framePlacement(data, cs.frame);
-    tasks::ContactLayout::generators(X.linear(), cs.normal_in_frame, cs.friction, D);
+    tasks::ContactLayout::generators(cs, X.linear(), D);
     for (size_t pt = 0; pt < cs.points.size(); ++pt) {
       const Eigen::Vector3d f = D * cmd.gamma.segment(layout.offset(c) + 4 * static_cast<int>(pt), 4);
       // The point's Jacobian of this tick, from the tasks' Jc^T when it was computed there.

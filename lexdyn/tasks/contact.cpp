@@ -26,6 +26,13 @@ ContactTask::ContactTask(std::string name, const model::RobotModel& model, const
     throwTaskInput(this->name(), "contact", "contact '" + params.contact + "' has no valid frame");
   }
   body_ = model.frameBody(frame_);
+  point_ = layout.contact(contact_).point;
+  if (point_) {
+    if (layout.contact(contact_).points.size() != 1) {
+      throwTaskInput(this->name(), "contact", "point contact '" + params.contact + "' needs exactly one point");
+    }
+    point_in_frame_ = layout.contact(contact_).points[0];
+  }
   pd_ = resolvePd(params.gains, this->name());
 }
 
@@ -51,6 +58,21 @@ void ContactTask::compute(const TickContext& ctx, TaskData& base) const {
   const model::RobotModel& model = *ctx.model;
   const model::ModelData& data = *ctx.data;
   const Eigen::Isometry3d X = model.framePlacement(data, frame_);
+  if (point_) {
+    // A point contact: the point's world position, held where the contact was made.
+    const Eigen::Vector3d p = X * point_in_frame_;
+    if (!d.holding) {
+      d.position = p;
+      d.rotation = X.linear();
+      d.holding = true;
+    }
+    model.pointJacobian(data, frame_, point_in_frame_, d.J);
+    const Eigen::Vector3d bias = model.pointBias(data, frame_, point_in_frame_);  // Jdot u of the point
+    const Eigen::Vector3d e = d.position - p;
+    writePdRows<3>(ctx, pd_, e, bias, nv_, d);
+    std::fill(d.engaged.begin(), d.engaged.end(), 1);
+    return;
+  }
   if (!d.holding) {  // the contact is made: hold this pose
     d.position = X.translation();
     d.rotation = X.linear();
@@ -67,8 +89,12 @@ void ContactTask::compute(const TickContext& ctx, TaskData& base) const {
 void ContactTask::accumulateHessian(const TickContext& ctx, const TaskData& base, const Eigen::Ref<const Eigen::VectorXd>& w,
                                     Eigen::Ref<Eigen::MatrixXd> H) const {
   const auto& d = static_cast<const ContactTaskData&>(base);
-  LEXDYN_ALWAYS_ASSERT(ctx.hessian != nullptr && w.size() == 6, "contact: accumulateHessian needs ctx.hessian, w(6)");
+  LEXDYN_ALWAYS_ASSERT(ctx.hessian != nullptr && w.size() == rows(), "contact: accumulateHessian needs ctx.hessian, one weight per row");
   if (!d.holding) return;
+  if (point_) {
+    hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, point_in_frame_, Eigen::Vector3d(w.head<3>()), H);
+    return;
+  }
   hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, Eigen::Vector3d::Zero(),
                                   Eigen::Vector3d(w.head<3>()), H);
   hessian::accumulateOrientationHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, Eigen::Vector3d(w.tail<3>()), H);

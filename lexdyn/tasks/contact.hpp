@@ -31,7 +31,9 @@ class ContactTask : public TaskModel {
   ContactTask(std::string name, const model::RobotModel& model, const ContactLayout& layout,
               const ContactTaskParams& params);
 
-  int rows() const override { return 6; }
+  /// 6 (the frame's position and orientation), or 3 for a point contact (ContactSpec::point:
+  /// the contact point's position).
+  int rows() const override { return point_ ? 3 : 6; }
   TaskKind kind() const override { return TaskKind::Equality; }
   bool hasFunction() const override { return true; }
   bool geometric() const override { return true; }
@@ -41,8 +43,8 @@ class ContactTask : public TaskModel {
   /// Forgets the held pose (captured again at the next compute() with the contact active).
   void reset(TaskData& d) const override;
   void compute(const TickContext& ctx, TaskData& d) const override;
-  /// Position Hessian of the frame origin (rows 0-2) and orientation Hessian (rows 3-5);
-  /// nothing while the contact is inactive.
+  /// Position Hessian of the frame origin, or of a point contact's point (rows 0-2), and
+  /// orientation Hessian (rows 3-5); nothing while the contact is inactive.
   void accumulateHessian(const TickContext& ctx, const TaskData& d, const Eigen::Ref<const Eigen::VectorXd>& w,
                          Eigen::Ref<Eigen::MatrixXd> H) const override;
   void chainDofs(const model::RobotModel& model, std::vector<char>& mask) const override;
@@ -56,6 +58,8 @@ class ContactTask : public TaskModel {
   int contact_ = -1;
   model::FrameId frame_ = -1;
   int body_ = -1;
+  bool point_ = false;
+  Eigen::Vector3d point_in_frame_ = Eigen::Vector3d::Zero();  ///< a point contact's point
   Pd pd_;
 };
 

@@ -29,7 +29,7 @@ void contactJacobianTranspose(const TickContext& ctx, Eigen::Ref<Eigen::MatrixXd
       continue;
     }
     const Eigen::Matrix3d R = model.framePlacement(*ctx.data, spec.frame).linear();
-    ContactLayout::generators(R, spec.normal_in_frame, spec.friction, D);
+    ContactLayout::generators(spec, R, D);
     for (int p = 0; p < np; ++p) {
       // The point's Jacobian, kept for the caller when asked.
       const size_t point = static_cast<size_t>(layout.offset(c) / 4 + p);

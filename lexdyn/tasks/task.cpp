@@ -35,6 +35,11 @@ void ContactLayout::generators(const Eigen::Matrix3d& R, const Eigen::Vector3d& 
   D.col(3) = (n - mu * t2).normalized();
 }
 
+void ContactLayout::generators(const ContactSpec& spec, const Eigen::Matrix3d& R, Eigen::Ref<Eigen::Matrix<double, 3, 4>> D) {
+  if (spec.point) generators(Eigen::Matrix3d::Identity(), Eigen::Vector3d::UnitZ(), spec.friction, D);
+  else generators(R, spec.normal_in_frame, spec.friction, D);
+}
+
 void TaskModel::requireLayoutNv(const ContactLayout& layout, int nv) const {
   if (layout.nv() != nv) {
     throwTaskInput(name(), "", "built for nv = " + std::to_string(nv) + ", layout has nv = " + std::to_string(layout.nv()));

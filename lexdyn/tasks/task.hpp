@@ -44,6 +44,10 @@ struct ContactSpec {
   double friction = 0.7;          ///< friction coefficient of the pyramid
   /// Contact normal in the frame (direction of the force the environment applies on the robot).
   Eigen::Vector3d normal_in_frame = Eigen::Vector3d::UnitZ();
+  /// A point contact (one point): its contact task holds the point's position only (3 rows) and
+  /// its friction pyramid is about the ground's normal, world +z, whatever the frame's attitude
+  /// (a ball foot on a pitched shank). normal_in_frame is then unused.
+  bool point = false;
 };
 
 /// Layout of the contact generator variables: contact c, point p, generator g (0..3) is variable
@@ -69,6 +73,9 @@ class ContactLayout {
   /// contact frame's world rotation: normalized (n + mu t_k) for t_k = +t1, -t1, +t2, -t2.
   static void generators(const Eigen::Matrix3d& R_world_frame, const Eigen::Vector3d& normal_in_frame,
                          double mu, Eigen::Ref<Eigen::Matrix<double, 3, 4>> D);
+  /// The generators of a contact's points given its frame's world rotation: about the frame's
+  /// normal, or the world's +z for a point contact.
+  static void generators(const ContactSpec& spec, const Eigen::Matrix3d& R_world_frame, Eigen::Ref<Eigen::Matrix<double, 3, 4>> D);
 
  private:
   int nv_ = 0, ng_ = 0;

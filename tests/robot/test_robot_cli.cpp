@@ -334,6 +334,54 @@ TEST(RobotInit, AFixedBaseWithTwoArmsGetsAReachOfBothHands) {
   EXPECT_EQ(s["status"], "completed") << s.dump(2);
 }
 
+// A quadruped on ball feet (tests/data/robot/quadruped: Mini-Cheetah-like figures): robot init
+// drafts a base case; each foot of one point is a point contact (3 rows), and the base moves to
+// its target and tilts. Held as contacts of 6 rows (the frame's pose) the base cannot move.
+TEST(RobotInit, AQuadrupedOnPointFeetMovesItsBase) {
+  const std::string dir = scratch("quadruped");
+  const std::string data = kSrc + "/tests/data/robot/quadruped/";
+  const CliResult init = harness("robot init " + data + "quadruped.urdf --srdf " + data + "quadruped.srdf --out " + dir + "/draft", dir);
+  expectExit(init, 0, {"foot FRONT_LEFT_FOOT on link 'fl_shank': 1 contact point(s)", "wrote " + dir + "/draft/base.yaml"});
+  EXPECT_FALSE(fs::exists(dir + "/draft/reach.yaml"));
+  const std::string base = slurp(dir + "/draft/base.yaml");
+  EXPECT_TRUE(containsAll(base, {"- {name: FRONT_LEFT_FOOT, surface: FRONT_LEFT_FOOT", "- {name: base_position, type: position, frame: base",
+                                 "action: set_target, task: base_orientation", "action: set_target, task: base_position",
+                                 "- {name: base_reached", "- {name: base_tilted"}))
+      << base;
+  // The first 14 s: the base to its target (by 6 s) and tilted (by 14 s).
+  const CliResult run = harness("run " + dir + "/draft/base.yaml --duration 14 --out " + dir + "/base --quiet", dir);
+  EXPECT_EQ(run.code, 0) << run.err;
+  nlohmann::json s = nlohmann::json::parse(slurp(dir + "/base/summary.json"));
+  std::map<std::string, nlohmann::json> checks;
+  for (const auto& c : s["checks"]) checks[c["name"]] = c;
+  ASSERT_TRUE(checks.count("base_reached") && checks.count("base_tilted")) << s["checks"].dump(1);
+  EXPECT_TRUE(checks["base_reached"]["passed"].get<bool>()) << checks["base_reached"].dump();
+  EXPECT_TRUE(checks["base_tilted"]["passed"].get<bool>()) << checks["base_tilted"].dump();
+  EXPECT_LT(checks["feet_held"]["value"].get<double>(), 1e-3);
+  // The same feet as contacts of 6 rows: the feet's frames cannot turn, the base stays.
+  std::string six;
+  for (const char* f : {"FRONT_LEFT_FOOT", "FRONT_RIGHT_FOOT", "HIND_LEFT_FOOT", "HIND_RIGHT_FOOT"}) {
+    six += std::string(" --set controller.contacts[") + f + "].dims=6";
+  }
+  const CliResult held = harness("run " + dir + "/draft/base.yaml --duration 7" + six + " --out " + dir + "/held --quiet", dir);
+  EXPECT_EQ(held.code, 1) << held.err;
+  s = nlohmann::json::parse(slurp(dir + "/held/summary.json"));
+  for (const auto& c : s["checks"]) {
+    if (c["name"] == "base_reached") {
+      EXPECT_FALSE(c["passed"].get<bool>());
+      EXPECT_GT(c["value"].get<double>(), 0.9 * 0.0443) << c.dump();  // where it started: 10 % of the 0.30 m height, three ways
+    }
+  }
+  // Bad input: dims other than 3 or 6; a point contact of several points; a normal on a point contact.
+  expectExit(harness("run " + dir + "/draft/base.yaml --duration 1 --set controller.contacts[FRONT_LEFT_FOOT].dims=4 --out " + dir + "/bad1", dir), 2,
+             {"dims", "expected 3 (a point contact: its position held) or 6 (the frame's pose held)"});
+  EXPECT_FALSE(fs::exists(dir + "/bad1/summary.json") && nlohmann::json::parse(slurp(dir + "/bad1/summary.json"))["status"] == "completed");
+  expectExit(harness("run " + kSrc + "/cases/exp1.yaml --duration 1 --set controller.contacts[RIGHT_FOOT].dims=3 --out " + dir + "/bad2", dir), 2,
+             {"dims 3 is a point contact: it needs exactly one point (this contact has 4)"});
+  expectExit(harness("run " + dir + "/draft/base.yaml --duration 1 --set controller.contacts[FRONT_LEFT_FOOT].normal=[0,0,1] --out " + dir + "/bad3", dir),
+             2, {"a point contact (dims 3) takes the ground's normal"});
+}
+
 // robot check on a case file and on a URDF alone; a fixed-base robot whose posture its servos
 // cannot hold is told so.
 TEST(RobotCheck, ReadsCasesAndUrdfs) {

@@ -167,6 +167,17 @@ TEST_P(TaskHessians, PositionOrientationComAndContactMatchFiniteDifferences) {
   const ComTask com("com", fx.model, cp);
   const ComBoxTask com_box("com_box", fx.model, bp);
   const ContactTask contact("contact", fx.model, fx.layout, kp);
+  // A point contact (3 rows: a point of the contact's frame) in a layout of its own.
+  ContactSpec ball = fx.layout.contact(fx.layout.find(kp.contact));
+  ball.name = "BALL";
+  ball.fixed = false;
+  ball.point = true;
+  ball.points = {Eigen::Vector3d(0.03, -0.02, -0.01)};
+  const ContactLayout ball_layout(fx.model.nv(), {ball});
+  std::vector<char> ball_active = {1};
+  ContactTaskParams bkp;
+  bkp.contact = "BALL";
+  const ContactTask point_contact("point_contact", fx.model, ball_layout, bkp);
   for (int trial = 0; trial < 2; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     fx.set(rs.configuration(fx.model), rs.velocity(fx.model, 1.0));
@@ -201,6 +212,18 @@ TEST_P(TaskHessians, PositionOrientationComAndContactMatchFiniteDifferences) {
       contact.accumulateHessian(fx.ctx, *d, Eigen::VectorXd::Ones(6), Hc);
       EXPECT_EQ(Hc.cwiseAbs().maxCoeff(), 0.0);
       fx.active[static_cast<size_t>(contact.contactIndex())] = 1;
+    }
+    {
+      SCOPED_TRACE("point contact");
+      fx.ctx.contacts = &ball_layout;
+      fx.ctx.contact_active = &ball_active;
+      auto d = point_contact.createData(ball_layout);
+      point_contact.compute(fx.ctx, *d);
+      ASSERT_EQ(point_contact.rows(), 3);
+      const auto H = taskHessiansFd(fx, point_contact, *d, -1, -1);
+      checkTask(fx, point_contact, *d, H, rs);
+      fx.ctx.contacts = &fx.layout;
+      fx.ctx.contact_active = &fx.active;
     }
   }
 }

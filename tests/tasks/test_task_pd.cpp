@@ -321,6 +321,74 @@ TEST_P(PdTasks, ContactHoldsThePoseCapturedWhenTheContactIsMade) {
   EXPECT_THROW(task.setTarget(*d, Eigen::VectorXd::Zero(6)), InputError);
 }
 
+TEST_P(PdTasks, APointContactHoldsItsPointOnlyAndPushesAlongTheGroundsNormal) {
+  // A contact of one point (a ball foot): 3 rows on the point's position, the frame free to turn
+  // about it; its friction pyramid is about the world's +z whatever the frame's attitude.
+  TickFixture fx(GetParam());
+  RandomStates rs(108);
+  const int c0 = fx.model.hasFreeFlyer() ? fx.layout.find("RIGHT_FOOT") : fx.layout.find("TOOL");
+  ContactSpec spec = fx.layout.contact(c0);
+  spec.name = "BALL";
+  spec.fixed = false;
+  spec.point = true;
+  spec.points = {Eigen::Vector3d(0.03, -0.02, -0.01)};
+  const ContactLayout layout(fx.model.nv(), {spec});
+  std::vector<char> active = {1};
+  fx.ctx.contacts = &layout;
+  fx.ctx.contact_active = &active;
+  ContactTaskParams p;
+  p.contact = "BALL";
+  const ContactTask task("ball", fx.model, layout, p);
+  EXPECT_EQ(task.rows(), 3);
+  auto d = task.createData(layout);
+  auto& cd = static_cast<ContactTaskData&>(*d);
+  const model::FrameId f = spec.frame;
+  fx.set(rs.configuration(fx.model), Eigen::VectorXd::Zero(fx.model.nv()));
+  const Eigen::Vector3d p0 = fx.model.pointPosition(fx.data, f, spec.points[0]);
+  task.compute(fx.ctx, *d);
+  EXPECT_TRUE(cd.holding);
+  EXPECT_TRUE(near(cd.position, p0, 1e-15));
+  Eigen::MatrixXd J3(3, fx.model.nv());
+  fx.model.pointJacobian(fx.data, f, spec.points[0], J3);
+  EXPECT_EQ(d->J.rows(), 3);
+  EXPECT_TRUE(near(d->J, J3, 0.0));
+  EXPECT_LT(d->lower.cwiseAbs().maxCoeff(), 1e-15);  // at rest, where it was made
+  // Moved and moving: the PD of eq. 61 on the point's position towards the captured one.
+  fx.set(rs.configuration(fx.model), rs.velocity(fx.model, 1.0));
+  auto position = [&] { return Eigen::MatrixXd(fx.model.pointPosition(fx.data, f, spec.points[0])); };
+  auto jac = [&] {
+    Eigen::MatrixXd J(3, fx.model.nv());
+    fx.model.pointJacobian(fx.data, f, spec.points[0], J);
+    return J;
+  };
+  const Eigen::Vector3d e = p0 - fx.model.pointPosition(fx.data, f, spec.points[0]);
+  task.compute(fx.ctx, *d);
+  EXPECT_TRUE(near(d->error, e, 1e-12));
+  const Eigen::VectorXd u = fx.u;
+  const Eigen::VectorXd edot = -Eigen::VectorXd(centralDifference(fx, u, position));
+  const Eigen::VectorXd Jdot_u = centralDifference(fx, u, jac) * u;
+  const Eigen::VectorXd eddot = -task.gains().kp * e - task.gains().kv * edot;
+  EXPECT_TRUE(near(d->lower, jac() * u - fx.ctx.dt * (eddot + Jdot_u), 1e-6));
+  fx.ctx.domain = Domain::Acceleration;
+  task.compute(fx.ctx, *d);
+  EXPECT_TRUE(near(d->lower, -eddot - Jdot_u, 1e-6));
+  fx.ctx.domain = Domain::Velocity;
+  // The generators: about world +z for the point contact on a turned frame; about the frame's
+  // normal for the same contact of 6 rows.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()).toRotationMatrix();
+  Eigen::Matrix<double, 3, 4> D, Dz, Df;
+  ContactLayout::generators(spec, R, D);
+  ContactLayout::generators(Eigen::Matrix3d::Identity(), Eigen::Vector3d::UnitZ(), spec.friction, Dz);
+  EXPECT_TRUE(near(D, Dz, 0.0));
+  spec.point = false;
+  ContactLayout::generators(spec, R, D);
+  ContactLayout::generators(R, spec.normal_in_frame, spec.friction, Df);
+  EXPECT_TRUE(near(D, Df, 0.0));
+  EXPECT_FALSE(near(D, Dz, 1e-3));
+  fx.ctx.contacts = &fx.layout;
+  fx.ctx.contact_active = &fx.active;
+}
+
 TEST_P(PdTasks, ResetRestoresTheInitialTargetOrHoldsAgain) {
   TickFixture fx(GetParam());
   RandomStates rs(107);
