@@ -121,6 +121,9 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
       found = true;
       c.frame = d.frames[static_cast<size_t>(s.frame)].name;
       c.points = s.points;
+      // Ball feet (radius): the controller holds the point of each sphere below its centre
+      // along the frame's -z (the sole frame is z up in the posture), where it touches the ground.
+      for (auto& p : c.points) p.z() -= s.radius;
     }
     if (!found) surface->fail("unknown contact surface '" + c.surface + "' (surfaces: " + joinNames(names) + ")");
   } else {

@@ -195,10 +195,11 @@ CheckReport checkRobot(const CheckOptions& o) {
     t << "  contact points (world, posture '" << posture << "'):\n";
     for (const auto& s : d.contact_surfaces) {
       const Eigen::Isometry3d X = m.framePlacement(data, s.frame);
-      t << "    " << pad(s.name, 18) << "frame " << d.frames[static_cast<size_t>(s.frame)].name << ":";
+      t << "    " << pad(s.name, 18) << "frame " << d.frames[static_cast<size_t>(s.frame)].name
+        << (s.radius > 0.0 ? " (balls of radius " + num(s.radius, 3) + " m, where they touch)" : std::string()) << ":";
       double zmin = 1e9, zmax = -1e9;
       for (const auto& p : s.points) {
-        const Eigen::Vector3d w = X * p;
+        const Eigen::Vector3d w = X * p - Eigen::Vector3d(0.0, 0.0, s.radius);  // a ball's lowest point
         contacts.push_back(w);
         flat.emplace_back(w.x(), w.y());
         zmin = std::min(zmin, w.z());
@@ -247,8 +248,9 @@ CheckReport checkRobot(const CheckOptions& o) {
       int i = 0;
       Eigen::MatrixXd J(3, m.nv());
       for (const auto& srf : d.contact_surfaces) {
+        const Eigen::Matrix3d R = m.framePlacement(data, srf.frame).linear();
         for (const auto& p : srf.points) {
-          m.pointJacobian(data, srf.frame, p, J);
+          m.pointJacobian(data, srf.frame, p - R.transpose() * Eigen::Vector3d(0.0, 0.0, srf.radius), J);
           tau_full -= J.transpose() * Eigen::Vector3d(0.0, 0.0, f[i++]);
         }
       }

@@ -312,9 +312,16 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       const auto& f = L.feet[k];
       y << "  # guessed: " << f.source << "\n"
         << "  - name: " << f.surface << "\n"
-        << "    frame: " << yamlString(sole_frames[k]) << "\n"
-        << "    points: [";
-      for (size_t i = 0; i < f.points.size(); ++i) y << (i ? ", " : "") << vec3(f.points[i], 5);
+        << "    frame: " << yamlString(sole_frames[k]) << "\n";
+      if (f.radius > 0.0) {
+        // A ball foot: the sphere's centre above the point where it touches, and its radius.
+        y << "    radius: " << num(f.radius, 5) << "   # a ball foot: the point is the sphere's centre (the simulator rolls it)\n"
+          << "    points: [";
+        for (size_t i = 0; i < f.points.size(); ++i) y << (i ? ", " : "") << vec3(f.points[i] + Eigen::Vector3d(0.0, 0.0, f.radius), 5);
+      } else {
+        y << "    points: [";
+        for (size_t i = 0; i < f.points.size(); ++i) y << (i ? ", " : "") << vec3(f.points[i], 5);
+      }
       y << "]\n";
     }
     y << "force_sensors:   # assumed: a 6-axis sensor at each sole (it reads the ground's wrench on the foot; the URDF declares none)\n";

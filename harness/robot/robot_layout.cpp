@@ -418,6 +418,14 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
       c /= static_cast<double>(sole.size());
       c.z() = zmin;
       chosen.push_back(c);
+      // The bottom of a sphere of the foot (a ball foot): the simulator rolls it (its radius).
+      for (const auto& g : d.geometries) {
+        if (g.type != model::GeometryType::Sphere || g.link != f.body) continue;
+        const Eigen::Vector3d centre = (L.body_pose[static_cast<size_t>(g.link)] * g.placement).translation();
+        if (std::abs(centre.z() - g.radius - zmin) < 1e-6 && (centre.head<2>() - c.head<2>()).norm() < 1e-3 && g.radius > f.radius) {
+          f.radius = g.radius;
+        }
+      }
     } else {
       std::vector<Eigen::Vector2d> flat;
       for (const auto& p : sole) flat.push_back(p.head<2>());

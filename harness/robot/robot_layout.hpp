@@ -31,6 +31,7 @@ struct FootLayout {
   std::vector<Eigen::Vector3d> points;   ///< contact points in the sole frame (z = 0)
   std::vector<Eigen::Vector3d> points_world;
   bool point_foot = false;               ///< one contact point (a sphere or a tip)
+  double radius = 0.0;                   ///< a point foot that is the bottom of a collision sphere: its radius
   std::string source;                    ///< which geometry gave the points
 };
 

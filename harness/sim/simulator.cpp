@@ -25,7 +25,8 @@ namespace {
 struct PointInfo {
   int surface = -1;
   int body = -1;
-  Eigen::Vector3d r_body = Eigen::Vector3d::Zero();  // point in its body frame
+  Eigen::Vector3d r_body = Eigen::Vector3d::Zero();  // point in its body frame (a sphere's centre)
+  double radius = 0.0;  // a sphere (ball foot): it touches the ground at its lowest point
 };
 
 struct GraspState {
@@ -178,7 +179,10 @@ struct Simulator::Impl final : public OdeSystem {
   // and velocity v (world).
   static void pointState(const BodyKinematics& d, const PointInfo& P, Eigen::Vector3d& r, Eigen::Vector3d& p,
                          Eigen::Vector3d& v) {
+    // The point of contact: a sphere's lowest point, whose material velocity is the body's
+    // there (a rolling ball does not slip).
     r = d.R[static_cast<size_t>(P.body)] * P.r_body;
+    r.z() -= P.radius;
     p = d.p.col(P.body) + r;
     v = d.v.col(P.body) + d.omega.col(P.body).cross(r);
   }
@@ -291,7 +295,9 @@ struct Simulator::Impl final : public OdeSystem {
       const Eigen::Vector2d vt(v.x(), v.y());
       dF_dv.topLeftCorner<2, 2>() = (-mu * fn / w) * (Eigen::Matrix2d::Identity() - vt * vt.transpose() / (w * w));
       dF_dv.col(2) += dF_dfn * dfn_dvz;
-      model.pointJacobian(data, P.body, P.r_body, jac_point);
+      // At the point of contact (a sphere's lowest point; the point itself otherwise).
+      if (P.radius > 0.0) model.pointJacobian(data, P.body, d.R[static_cast<size_t>(P.body)].transpose() * r, jac_point);
+      else model.pointJacobian(data, P.body, P.r_body, jac_point);
       const auto Jl = jac_point.topRows<3>();
       jac_Kq.noalias() += Jl.transpose() * (dF_dp * Jl);
       jac_Ku.noalias() += Jl.transpose() * (dF_dv * Jl);
@@ -473,6 +479,7 @@ Simulator::Simulator(model::RobotDescription description, SimulatorSettings sett
       P.surface = static_cast<int>(si);
       P.body = F.link;
       P.r_body = F.placement * p;
+      P.radius = surf.radius;
       s.points.push_back(P);
     }
   }
@@ -547,7 +554,7 @@ model::Configuration Simulator::placeOnGround(const Eigen::VectorXd& joints, con
   const BodyKinematics& d = state.bodies();
   double zmin = std::numeric_limits<double>::infinity();
   for (const PointInfo& P : s.points) {
-    zmin = std::min(zmin, (d.p.col(P.body) + d.R[static_cast<size_t>(P.body)] * P.r_body).z());
+    zmin = std::min(zmin, (d.p.col(P.body) + d.R[static_cast<size_t>(P.body)] * P.r_body).z() - P.radius);
   }
   const ContactSettings& c = s.settings.contact;
   const double weight = s.model.totalMass() * s.model.gravity().norm();

@@ -200,6 +200,7 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
     const yaml::Node pts = m.required("points");
     if (pts.size() < 1) pts.fail("a contact surface needs at least one point");
     for (const yaml::Node& p : pts.elements()) s.points.push_back(p.asVector3In(-ranges::kMaxLength_m, ranges::kMaxLength_m, "m"));
+    if (auto r = m.optional("radius")) s.radius = r->asDoubleIn(0.0, 1.0, "m");  // a ball foot: the points are sphere centres
     d.contact_surfaces.push_back(s);
   });
   if (!d.contact_surfaces.empty() && !top.has("friction_coefficient")) {

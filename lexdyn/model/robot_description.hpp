@@ -146,7 +146,10 @@ struct ServoGainGroup {
 struct ContactSurfaceDescription {
   std::string name;
   int frame = -1;
+  /// Corner points in the frame; with radius > 0 the centres of spheres of that radius (ball
+  /// feet), which touch the ground at their lowest points.
   std::vector<Eigen::Vector3d> points;
+  double radius = 0.0;  ///< m; 0: points
 };
 
 /// A 6-axis force/torque sensor. It reports the sum of the external contact wrenches applied to

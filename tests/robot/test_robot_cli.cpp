@@ -343,6 +343,10 @@ TEST(RobotInit, AQuadrupedOnPointFeetMovesItsBase) {
   const CliResult init = harness("robot init " + data + "quadruped.urdf --srdf " + data + "quadruped.srdf --out " + dir + "/draft", dir);
   expectExit(init, 0, {"foot FRONT_LEFT_FOOT on link 'fl_shank': 1 contact point(s)", "wrote " + dir + "/draft/base.yaml"});
   EXPECT_FALSE(fs::exists(dir + "/draft/reach.yaml"));
+  // Ball feet: the collision sphere's centre and radius (the simulator rolls it).
+  EXPECT_TRUE(containsAll(slurp(dir + "/draft/quadruped.yaml"), {"radius: 0.02", "points: [[0, 0, 0.02]]"}));
+  const CliResult check = harness("robot check " + dir + "/draft/quadruped.yaml --png -", dir);
+  EXPECT_TRUE(containsAll(check.out, {"(balls of radius 0.02 m, where they touch)", "support polygon: 4 corners"})) << check.out;
   const std::string base = slurp(dir + "/draft/base.yaml");
   EXPECT_TRUE(containsAll(base, {"- {name: FRONT_LEFT_FOOT, surface: FRONT_LEFT_FOOT", "- {name: base_position, type: position, frame: base",
                                  "action: set_target, task: base_orientation", "action: set_target, task: base_position",

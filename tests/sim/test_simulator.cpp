@@ -108,6 +108,38 @@ TEST(Simulator, FreeFallOfASpinningBodyMatchesClosedForm) {
   }
 }
 
+TEST(Simulator, ASlidingBallEndsRollingAtFiveSeventhsOfItsSpeed) {
+  // A ball foot (a contact surface with a radius): the ground touches the sphere at its lowest
+  // point, so a solid ball thrown sliding (v0, no spin) is braked by friction until it rolls,
+  // then rolls on: angular momentum about the contact point gives v = 5/7 v0, omega r = v. It is
+  // thrown along y: rolling about x keeps the base's Euler angles clear of their singularity
+  // (pitch 90 deg).
+  SimulatorSettings s = tightSettings(0, 0.005);
+  s.integrator.rtol = 1e-8;
+  s.integrator.atol_position = 1e-10;
+  s.integrator.atol_velocity = 1e-10;
+  Simulator sim(src("tests/data/model/ball.urdf"), src("tests/data/model/ball.yaml"), s);
+  ASSERT_EQ(sim.model().description().contact_surfaces.size(), 1u);
+  EXPECT_DOUBLE_EQ(sim.model().description().contact_surfaces[0].radius, 0.1);
+  model::Configuration q = sim.model().neutralConfiguration();
+  const double r = 0.1, v0 = 1.0;
+  q.base_position = Eigen::Vector3d(0.0, 0.0, r);  // resting on the ground
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(6);
+  u[4] = v0;
+  sim.reset(q, u);
+  const JointCommand none{Eigen::VectorXd(0), Eigen::VectorXd(0), Eigen::VectorXd(0)};
+  for (int k = 0; k < 200; ++k) ASSERT_TRUE(stepped(sim, none));  // 1 s: rolling after 2 v0 / (7 mu g) = 0.06 s
+  const Eigen::VectorXd& w = sim.velocity();
+  EXPECT_NEAR(w[4], 5.0 / 7.0 * v0, 2e-4) << w.transpose();
+  EXPECT_NEAR(-w[0] * r, w[4], 1e-5) << w.transpose();  // -omega_x r = v_y: no slip
+  EXPECT_NEAR(sim.configuration().base_position.z(), r, 2e-3);
+  // The recorded contact point is the sphere's lowest point, below the centre.
+  ASSERT_EQ(sim.contactPoints().size(), 1u);
+  const Eigen::Vector3d c = sim.configuration().base_position;
+  EXPECT_NEAR(sim.contactPoints()[0].position.y(), c.y(), 1e-9);
+  EXPECT_NEAR(sim.contactPoints()[0].position.z(), c.z() - r, 1e-12);
+}
+
 class PointMass : public ::testing::Test {
  protected:
   Simulator make(double kp, double kd, SetpointProfile profile, std::vector<GraspSettings> grasps = {}) {
