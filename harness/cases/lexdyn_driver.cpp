@@ -59,6 +59,7 @@ struct LexdynDriver::Impl {
     int grasp = -1;              // simulator grasp
     int sensor = -1;             // index into the simulator's sensor readings
     model::FrameId sensor_frame = -1;
+    bool point = false;          // a point contact: its wrenches in the world's axes (z the ground's normal)
   };
   std::vector<ContactRec> contacts;
 
@@ -108,6 +109,7 @@ struct LexdynDriver::Impl {
       c.index = ctl->contactIndex(ce.name);
       c.frame = sm.frameId(ce.frame);
       c.ctrl_frame = model.frameId(ce.frame);
+      c.point = ce.dims == 3;
       if (!ce.grasp.empty()) c.grasp = simu.graspIndex(ce.grasp);
       if (!ce.sensor.empty()) {
         for (size_t k = 0; k < d.force_sensors.size(); ++k) {
@@ -380,11 +382,14 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
     out[i++] = I.ctl->contactActive(cr.index) ? 1.0 : 0.0;
     // The planned wrench in the contact frame the controller saw (with `integrated` feedback its
     // own state, not the simulator's).
-    const Eigen::Matrix3d Rc = I.model.framePlacement(I.ctl->modelData(), cr.ctrl_frame).linear().transpose();
+    // A point contact's: in the world's axes, whose z is the ground's normal (its frame turns
+    // with the foot).
+    const Eigen::Matrix3d Rc =
+        cr.point ? Eigen::Matrix3d::Identity() : Eigen::Matrix3d(I.model.framePlacement(I.ctl->modelData(), cr.ctrl_frame).linear().transpose());
     const Eigen::Vector3d f = Rc * r.contact_wrench.col(cr.index).head<3>();
     const Eigen::Vector3d m = Rc * r.contact_wrench.col(cr.index).tail<3>();
     const Eigen::Isometry3d X = sm.framePlacement(simu.data(), cr.frame);
-    const Eigen::Matrix3d Rt = X.linear().transpose();
+    const Eigen::Matrix3d Rt = cr.point ? Eigen::Matrix3d::Identity() : Eigen::Matrix3d(X.linear().transpose());
     for (int k = 0; k < 3; ++k) out[i++] = f[k];
     for (int k = 0; k < 3; ++k) out[i++] = m[k];
     if (cr.sensor >= 0) {
