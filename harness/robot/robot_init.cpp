@@ -240,7 +240,7 @@ UpAxisChoice chooseMeshUpAxis(const model::RobotDescription& d, MeshCache& cache
 
 struct Draft {
   std::string robot_file;  // file name of the data file
-  std::string data, stand, reach, base;
+  std::string data, stand, reach, base, lift;
   std::vector<std::string> summary;
   std::vector<std::string> warnings;
 };
@@ -607,18 +607,12 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
 
   // Base: a legged robot without the two arms of a reach (a quadruped, a hexapod) moves its base
   // on its feet: to a target within reach (lower, forward and to the side), tilted, then to one
-  // out of reach (its height higher).
+  // out of reach (its height higher). A robot on four feet also lifts one foot and puts it back
+  // (lift_foot.yaml): its base first moves over the other three.
   if (L.legged && d.base == model::BaseType::FreeFlyer && !humanoid && L.feet.size() >= 2) {
-    std::ostringstream c;
     const double h = L.body_pose[0].translation().z() - L.lowest_z;  // the base's height above the ground
     const Eigen::Vector3d fwd = L.forward, left = Eigen::Vector3d::UnitZ().cross(L.forward);
     const Eigen::Vector3d start(0.0, 0.0, h);
-    const Eigen::Vector3d in_reach = start + h * (0.1 * fwd + 0.05 * left - 0.1 * Eigen::Vector3d::UnitZ());
-    const Eigen::Vector3d out_of_reach = start + Eigen::Vector3d(0.0, 0.0, h);
-    // Tilted: pitched nose-down by 0.1 rad about the robot's left axis, as a body turns to look down.
-    const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.1, left).toRotationMatrix() * L.body_pose[0].linear();
-    // kp 1 (kv 2): 6 s after a step the error is 1.7 % of it.
-    const double move_s = 6.0, tilt_s = 8.0, switch_s = 20.0, duration = 40.0;
     std::vector<std::string> contact_tasks;
     for (const auto& f : L.feet) contact_tasks.push_back(lower(f.surface));
     auto list = [](const std::vector<std::string>& v) {
@@ -626,84 +620,159 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
       return s;
     };
-    auto rot9 = [](const Eigen::Matrix3d& R) {
-      std::string s = "[";
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) s += std::string(i || j ? ", " : "") + num(std::abs(R(i, j)) < 1e-12 ? 0.0 : R(i, j), 6);
-      return s + "]";
-    };
     const double fmin = std::max(1.0, 0.015 * L.mass * 9.81);
-    c << "# " << d.name << ": the base moves on the feet to a target within reach (by 10 % of its height lower, forward\n"
-      << "# and to the side), at " << num(tilt_s) << " s it tilts nose-down by 0.1 rad, at " << num(switch_s)
-      << " s its target moves out of reach (its height\n# above the ground higher); drafted by `lexdyn-harness robot init`. "
-      << "Every method runs it (--method bfgs | ah | gn | wls).\n"
-      << "# Run: lexdyn-harness run base.yaml --out out/base --method bfgs\n"
-      << "name: " << yamlString(d.name + "_base") << "\n"
-      << "description: " << yamlString("On " + std::to_string(L.feet.size()) + " feet; the base to a target within reach, tilted, then out of reach.") << "\n"
-      << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
-      << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: static_equilibrium\n\n"
-      << "controller:\n  type: lexdyn\n  method: bfgs                       # --method overrides it\n  feedforward_torque: true\n"
-      << "  state_feedback: integrated\n"
-      << "  params: {nu_dt2: 1.0e-12, xi_dt2: 1.0e-12, zeta_dt2: 1.0e-3, rho_dt2: 1.0e-12, eps_dt2: 1.0e-3, newton_identity_weight: 1.0e-4, "
-         "stop_after_level: contacts}\n"
-      << "  method_params:\n    wls: {stop_after_level: hard}\n"
-      << "  solver:\n    paper_rules: true\n"
-      << "  contacts:   # a foot of one point is a point contact (3 rows: its position; docs/controller.md)\n";
-    for (const auto& f : L.feet) c << "    - {name: " << f.surface << ", surface: " << f.surface << ", sensor: " << f.surface << "_SENSOR}\n";
-    c << "  initial_contacts: [" << surfaces << "]\n"
-      << "  tasks:\n"
-      << "    - {name: joint_limits, type: joint_limits}\n"
-      << "    - {name: force_bounds, type: contact_force_bounds}\n"
-      << "    - {name: dynamics, type: equation_of_motion}\n"
-      << "    - {name: torque_limits, type: torque_limits}\n"
-      << "    - {name: trust, type: trust_region, delta: 0.01}\n";
-    for (const auto& f : L.feet) c << "    - {name: " << lower(f.surface) << ", type: contact, contact: " << f.surface << "}\n";
-    c << "    - {name: base_position, type: position, frame: " << yamlString(root) << ", target: " << vec3(in_reach, 4)
-      << ", gains: {kp: 1.0}}   # from " << vec3(start, 4) << " (the posture's base " << num(h, 3) << " m above the ground)\n"
-      << "    - {name: base_orientation, type: orientation, frame: " << yamlString(root) << ", gains: {kp: 1.0}}   # holds the start's attitude\n"
-      << "    - {name: velocity, type: velocity_min}\n"
-      << "    - {name: wrench, type: wrench_min}\n"
-      << "    - {name: posture, type: posture, posture: " << yamlString(posture.name) << "}     # WLS only\n"
-      << "  levels:\n"
-      << "    - {name: bounds, tasks: [joint_limits, force_bounds]}\n"
-      << "    - {name: dynamics, tasks: [dynamics, torque_limits]}\n"
-      << "    - {name: trust, tasks: [trust]}\n"
-      << "    - {name: contacts, tasks: [" << list(contact_tasks) << "]}\n"
-      << "    - {name: base, tasks: [base_position, base_orientation]}\n"
-      << "    - {name: velocity, tasks: [velocity]}\n"
-      << "    - {name: wrench, tasks: [wrench]}\n"
-      << "  wls_levels:\n"
-      << "    - {name: hard, tasks: [joint_limits, force_bounds, dynamics, torque_limits, " << list(contact_tasks) << "]}\n"
-      << "    - name: objective\n      tasks: [base_position, base_orientation, posture, wrench]\n"
-      << "      weights: {base_position: 1.0, base_orientation: 1.0, posture: 1.0e-3, wrench: 1.0e-5}\n\n"
-      << simSection(5.0) << "\nevents:\n"
-      << "  - {at_s: " << num(tilt_s) << ", action: set_target, task: base_orientation, value: " << rot9(tilt) << "}   # 0.1 rad nose-down\n"
-      << "  - {at_s: " << num(switch_s) << ", action: set_target, task: base_position, value: " << vec3(out_of_reach, 4) << "}   # out of reach\n"
-      << "\ntrace:\n  every_n_ticks: 1\n  frames: [" << yamlString(root) << "]\n\nchecks:\n"
-      << "  # The base reaches its target (5 mm) before it tilts, then its tilt (0.01 rad) before the switch.\n"
-      << "  - {name: base_reached, type: task_error, tasks: [base_position], statistic: max, from_s: " << num(move_s) << ", to_s: " << num(tilt_s - 0.01)
-      << ", limit: 0.005}\n"
-      << "  - {name: base_tilted, type: task_error, tasks: [base_orientation], statistic: max, from_s: " << num(tilt_s + 6.0) << ", to_s: "
-      << num(switch_s - 0.01) << ", limit: 0.01}\n"
-      << "  - {name: base_settled, type: task_error, tasks: [base_position], statistic: range, from_s: " << num(duration - 10.0) << ", limit: 0.005}\n"
-      << "  - {name: feet_held, type: task_error, tasks: [" << list(contact_tasks) << "], statistic: max, from_s: 0.1, limit: 0.001}\n"
-      << "  - {name: upright, type: frame_height, frame: " << yamlString(root) << ", min_m: " << num(0.5 * h, 3) << "}   # half the base's height in the posture\n"
-      << "  - {name: torques, type: torque_limits, source: both, limit_fraction: 1.0}\n";
-    for (const auto& f : L.feet) {
-      const std::string n = lower(f.surface);
-      c << "  - {name: " << n << "_unilateral, type: contact_unilateral, contact: " << f.surface << ", source: sensed, min_N: 0.0}\n"
-        << "  - {name: " << n << "_friction, type: contact_friction, contact: " << f.surface << ", source: sensed, min_normal_N: " << num(fmin, 2) << "}\n";
-      if (f.points.size() >= 3) {
-        c << "  - {name: " << n << "_cop, type: contact_cop, contact: " << f.surface << ", source: sensed, min_normal_N: " << num(fmin, 2)
-          << ", limit_m: -0.001}\n";
+    // The controller (exp1's parameters and levels, the feet as contacts, the base's position
+    // and attitude), with `extra_task` (a task line) on a level of its own below the base's.
+    auto controller = [&](std::ostream& c, const Eigen::Vector3d& base_target, const std::string& extra_task, const std::string& extra_name) {
+      c << "controller:\n  type: lexdyn\n  method: bfgs                       # --method overrides it\n  feedforward_torque: true\n"
+        << "  state_feedback: integrated\n"
+        << "  params: {nu_dt2: 1.0e-12, xi_dt2: 1.0e-12, zeta_dt2: 1.0e-3, rho_dt2: 1.0e-12, eps_dt2: 1.0e-3, newton_identity_weight: 1.0e-4, "
+           "stop_after_level: contacts}\n"
+        << "  method_params:\n    wls: {stop_after_level: hard}\n"
+        << "  solver:\n    paper_rules: true\n"
+        << "  contacts:   # a foot of one point is a point contact (3 rows: its position; docs/controller.md)\n";
+      for (const auto& f : L.feet) c << "    - {name: " << f.surface << ", surface: " << f.surface << ", sensor: " << f.surface << "_SENSOR}\n";
+      c << "  initial_contacts: [" << surfaces << "]\n"
+        << "  tasks:\n"
+        << "    - {name: joint_limits, type: joint_limits}\n"
+        << "    - {name: force_bounds, type: contact_force_bounds}\n"
+        << "    - {name: dynamics, type: equation_of_motion}\n"
+        << "    - {name: torque_limits, type: torque_limits}\n"
+        << "    - {name: trust, type: trust_region, delta: 0.01}\n";
+      for (const auto& f : L.feet) c << "    - {name: " << lower(f.surface) << ", type: contact, contact: " << f.surface << "}\n";
+      c << "    - {name: base_position, type: position, frame: " << yamlString(root) << ", target: " << vec3(base_target, 4)
+        << ", gains: {kp: 1.0}}   # from " << vec3(start, 4) << " (the posture's base " << num(h, 3) << " m above the ground)\n"
+        << "    - {name: base_orientation, type: orientation, frame: " << yamlString(root) << ", gains: {kp: 1.0}}   # holds the start's attitude\n"
+        << extra_task
+        << "    - {name: velocity, type: velocity_min}\n"
+        << "    - {name: wrench, type: wrench_min}\n"
+        << "    - {name: posture, type: posture, posture: " << yamlString(posture.name) << "}     # WLS only\n"
+        << "  levels:\n"
+        << "    - {name: bounds, tasks: [joint_limits, force_bounds]}\n"
+        << "    - {name: dynamics, tasks: [dynamics, torque_limits]}\n"
+        << "    - {name: trust, tasks: [trust]}\n"
+        << "    - {name: contacts, tasks: [" << list(contact_tasks) << "]}\n"
+        << "    - {name: base, tasks: [base_position, base_orientation]}\n";
+      if (!extra_name.empty()) c << "    - {name: " << extra_name << ", tasks: [" << extra_name << "]}\n";
+      c << "    - {name: velocity, tasks: [velocity]}\n"
+        << "    - {name: wrench, tasks: [wrench]}\n"
+        << "  wls_levels:\n"
+        << "    - {name: hard, tasks: [joint_limits, force_bounds, dynamics, torque_limits, " << list(contact_tasks) << "]}\n"
+        << "    - name: objective\n      tasks: [base_position, base_orientation, " << (extra_name.empty() ? "" : extra_name + ", ")
+        << "posture, wrench]\n"
+        << "      weights: {base_position: 1.0, base_orientation: 1.0, " << (extra_name.empty() ? "" : extra_name + ": 1.0, ")
+        << "posture: 1.0e-3, wrench: 1.0e-5}\n\n";
+    };
+    // The checks every legged case shares: feet, posture, forces, oscillations, solver.
+    auto commonChecks = [&](std::ostream& c) {
+      c << "  - {name: feet_held, type: task_error, tasks: [" << list(contact_tasks) << "], statistic: max, from_s: 0.1, limit: 0.001}\n"
+        << "  - {name: upright, type: frame_height, frame: " << yamlString(root) << ", min_m: " << num(0.5 * h, 3) << "}   # half the base's height in the posture\n"
+        << "  - {name: torques, type: torque_limits, source: both, limit_fraction: 1.0}\n";
+      for (const auto& f : L.feet) {
+        const std::string n = lower(f.surface);
+        c << "  - {name: " << n << "_unilateral, type: contact_unilateral, contact: " << f.surface << ", source: sensed, min_N: 0.0}\n"
+          << "  - {name: " << n << "_friction, type: contact_friction, contact: " << f.surface << ", source: sensed, min_normal_N: " << num(fmin, 2) << "}\n";
+        if (f.points.size() >= 3) {
+          c << "  - {name: " << n << "_cop, type: contact_cop, contact: " << f.surface << ", source: sensed, min_normal_N: " << num(fmin, 2)
+            << ", limit_m: -0.001}\n";
+        }
       }
+      c << "  - {name: joint_accel_sign_changes, type: joint_acceleration_sign_changes, source: commanded, dead_band_rad_per_s2: 0.05, limit_per_s: 5.0}\n"
+        << "  - {name: joint_velocity_hf, type: joint_velocity_hf_energy, source: measured, cutoff_hz: 5.0, limit_rad2_per_s2: 0.1}\n"
+        << "  - {name: controller_ok, type: controller_status, allowed: [ok, solver_stopped_early], limit_count: 0}\n"
+        << "  - {name: active_set_peak, type: active_set_peak, limit_iterations: 50}\n"
+        << "  - {name: tick_time_p99, type: tick_time, timer: tick, percentile: 99, limit_us: 5000}\n";
+    };
+    {
+      std::ostringstream c;
+      const Eigen::Vector3d in_reach = start + h * (0.1 * fwd + 0.05 * left - 0.1 * Eigen::Vector3d::UnitZ());
+      const Eigen::Vector3d out_of_reach = start + Eigen::Vector3d(0.0, 0.0, h);
+      // Tilted: pitched nose-down by 0.1 rad about the robot's left axis, as a body turns to look down.
+      const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.1, left).toRotationMatrix() * L.body_pose[0].linear();
+      // kp 1 (kv 2): 6 s after a step the error is 1.7 % of it.
+      const double move_s = 6.0, tilt_s = 8.0, switch_s = 20.0, duration = 40.0;
+      auto rot9 = [](const Eigen::Matrix3d& R) {
+        std::string s = "[";
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) s += std::string(i || j ? ", " : "") + num(std::abs(R(i, j)) < 1e-12 ? 0.0 : R(i, j), 6);
+        return s + "]";
+      };
+      c << "# " << d.name << ": the base moves on the feet to a target within reach (by 10 % of its height lower, forward\n"
+        << "# and to the side), at " << num(tilt_s) << " s it tilts nose-down by 0.1 rad, at " << num(switch_s)
+        << " s its target moves out of reach (its height\n# above the ground higher); drafted by `lexdyn-harness robot init`. "
+        << "Every method runs it (--method bfgs | ah | gn | wls).\n"
+        << "# Run: lexdyn-harness run base.yaml --out out/base --method bfgs\n"
+        << "name: " << yamlString(d.name + "_base") << "\n"
+        << "description: " << yamlString("On " + std::to_string(L.feet.size()) + " feet; the base to a target within reach, tilted, then out of reach.") << "\n"
+        << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
+        << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: static_equilibrium\n\n";
+      controller(c, in_reach, "", "");
+      c << simSection(5.0) << "\nevents:\n"
+        << "  - {at_s: " << num(tilt_s) << ", action: set_target, task: base_orientation, value: " << rot9(tilt) << "}   # 0.1 rad nose-down\n"
+        << "  - {at_s: " << num(switch_s) << ", action: set_target, task: base_position, value: " << vec3(out_of_reach, 4) << "}   # out of reach\n"
+        << "\ntrace:\n  every_n_ticks: 1\n  frames: [" << yamlString(root) << "]\n\nchecks:\n"
+        << "  # The base reaches its target (5 mm) before it tilts, then its tilt (0.01 rad) before the switch.\n"
+        << "  - {name: base_reached, type: task_error, tasks: [base_position], statistic: max, from_s: " << num(move_s) << ", to_s: " << num(tilt_s - 0.01)
+        << ", limit: 0.005}\n"
+        << "  - {name: base_tilted, type: task_error, tasks: [base_orientation], statistic: max, from_s: " << num(tilt_s + 6.0) << ", to_s: "
+        << num(switch_s - 0.01) << ", limit: 0.01}\n"
+        << "  - {name: base_settled, type: task_error, tasks: [base_position], statistic: range, from_s: " << num(duration - 10.0) << ", limit: 0.005}\n";
+      commonChecks(c);
+      out.base = c.str();
     }
-    c << "  - {name: joint_accel_sign_changes, type: joint_acceleration_sign_changes, source: commanded, dead_band_rad_per_s2: 0.05, limit_per_s: 5.0}\n"
-      << "  - {name: joint_velocity_hf, type: joint_velocity_hf_energy, source: measured, cutoff_hz: 5.0, limit_rad2_per_s2: 0.1}\n"
-      << "  - {name: controller_ok, type: controller_status, allowed: [ok, solver_stopped_early], limit_count: 0}\n"
-      << "  - {name: active_set_peak, type: active_set_peak, limit_iterations: 50}\n"
-      << "  - {name: tick_time_p99, type: tick_time, timer: tick, percentile: 99, limit_us: 5000}\n";
-    out.base = c.str();
+    if (L.feet.size() == 4) {
+      // Lift the first foot: the base over the centroid of the other three, then the foot up by
+      // 15 % of the base's height and down again 1 mm into the ground, then the contact again.
+      const auto& lifted = L.feet[0];
+      Eigen::Vector2d all = Eigen::Vector2d::Zero(), others = Eigen::Vector2d::Zero();
+      for (size_t k = 0; k < 4; ++k) {
+        const Eigen::Vector2d p = L.feet[k].points_world[0].head<2>();
+        all += p / 4.0;
+        if (k > 0) others += p / 3.0;
+      }
+      const Eigen::Vector3d shifted = start + Eigen::Vector3d(others.x() - all.x(), others.y() - all.y(), 0.0);
+      Eigen::Vector3d foot = Eigen::Vector3d::Zero();
+      for (const auto& p : lifted.points_world) foot += p / static_cast<double>(lifted.points_world.size());
+      foot.z() -= L.lowest_z;  // on the ground
+      const Eigen::Vector3d up = foot + Eigen::Vector3d(0.0, 0.0, 0.15 * h), down = foot - Eigen::Vector3d(0.0, 0.0, 0.001);
+      // kp 1 (kv 2): 6 s after a step the error is 1.7 % of it.
+      const double off_s = 6.0, down_s = 14.0, on_s = 22.0, duration = 34.0;
+      const std::string task = lower(lifted.surface) + "_lift";
+      const std::string sole = sole_frames[0];
+      std::ostringstream c;
+      c << "# " << d.name << ": the base moves over the other three feet (to their centroid), at " << num(off_s) << " s foot "
+        << lifted.surface << " leaves the\n# ground and rises by 15 % of the base's height, at " << num(down_s) << " s it goes back down, at "
+        << num(on_s) << " s it is a contact again and the base\n# returns; drafted by `lexdyn-harness robot init`. Every method runs it "
+        << "(--method bfgs | ah | gn | wls).\n"
+        << "# Run: lexdyn-harness run lift_foot.yaml --out out/lift_foot --method bfgs\n"
+        << "name: " << yamlString(d.name + "_lift_foot") << "\n"
+        << "description: " << yamlString("On four feet; one foot lifted and put back.") << "\n"
+        << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
+        << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: static_equilibrium\n\n";
+      controller(c, shifted,
+                 "    - {name: " + task + ", type: position, frame: " + yamlString(sole) + ", gains: {kp: 1.0}}   # holds the foot, then lifts it\n",
+                 task);
+      c << simSection(5.0) << "\nevents:\n"
+        << "  - {at_s: " << num(off_s) << ", action: remove_contact, contact: " << lifted.surface << "}\n"
+        << "  - {at_s: " << num(off_s) << ", action: set_target, task: " << task << ", value: " << vec3(up, 4) << "}   # up\n"
+        << "  - {at_s: " << num(down_s) << ", action: set_target, task: " << task << ", value: " << vec3(down, 4) << "}   # down, 1 mm into the ground\n"
+        << "  - {at_s: " << num(on_s) << ", action: add_contact, contact: " << lifted.surface << "}\n"
+        << "  - {at_s: " << num(on_s) << ", action: set_target, task: base_position, value: " << vec3(start, 4) << "}   # back\n"
+        << "\ntrace:\n  every_n_ticks: 1\n  frames: [" << yamlString(root) << ", " << yamlString(sole) << "]\n\nchecks:\n"
+        << "  # The base is over the other feet (5 mm) before the foot leaves; the foot reaches its height\n"
+        << "  # (5 mm), then the ground (3 mm); the put-back foot carries load again.\n"
+        << "  - {name: base_shifted, type: task_error, tasks: [base_position], statistic: max, from_s: " << num(off_s - 1.0) << ", to_s: "
+        << num(off_s - 0.01) << ", limit: 0.005}\n"
+        << "  - {name: foot_lifted, type: task_error, tasks: [" << task << "], statistic: max, from_s: " << num(off_s + 6.0) << ", to_s: "
+        << num(down_s - 0.01) << ", limit: 0.005}\n"
+        << "  - {name: foot_down, type: task_error, tasks: [" << task << "], statistic: max, from_s: " << num(down_s + 6.0) << ", to_s: "
+        << num(on_s - 0.01) << ", limit: 0.003}\n"
+        << "  - {name: " << lower(lifted.surface) << "_reloaded, type: contact_unilateral, contact: " << lifted.surface
+        << ", source: sensed, from_s: " << num(on_s + 6.0) << ", min_N: " << num(0.25 * 0.25 * L.mass * 9.81, 2)
+        << "}   # a quarter of its share of the weight\n";
+      commonChecks(c);
+      out.lift = c.str();
+    }
   }
   out.summary.push_back("base: " + std::string(d.base == model::BaseType::Fixed ? "fixed" : "free_flyer") + " (" + L.base_reason + ")");
   out.summary.push_back("mass " + num(L.mass, 4) + " kg, height " + num(L.height, 3) + " m in posture '" + posture.name + "' (" + posture.source + ")");
@@ -881,8 +950,9 @@ InitResult initRobot(const InitOptions& o) {
     writeFile(tmp / "stand.yaml", dr.stand);
     if (!dr.reach.empty()) writeFile(tmp / "reach.yaml", dr.reach);
     if (!dr.base.empty()) writeFile(tmp / "base.yaml", dr.base);
+    if (!dr.lift.empty()) writeFile(tmp / "lift_foot.yaml", dr.lift);
     // The drafts must load (a failure here is a defect of robot init, named as such).
-    for (const char* f : {"stand.yaml", "reach.yaml", "base.yaml"}) {
+    for (const char* f : {"stand.yaml", "reach.yaml", "base.yaml", "lift_foot.yaml"}) {
       if (!fs::exists(tmp / f)) continue;
       try {
         cases::loadCase((tmp / f).string());
@@ -900,6 +970,7 @@ InitResult initRobot(const InitOptions& o) {
   result.files.push_back((final_dir / "stand.yaml").string());
   if (!dr.reach.empty()) result.files.push_back((final_dir / "reach.yaml").string());
   if (!dr.base.empty()) result.files.push_back((final_dir / "base.yaml").string());
+  if (!dr.lift.empty()) result.files.push_back((final_dir / "lift_foot.yaml").string());
   result.summary = dr.summary;
   for (const auto& w : dr.warnings) result.warnings.push_back(w);
   return result;

@@ -373,6 +373,17 @@ TEST(RobotInit, AQuadrupedOnPointFeetMovesItsBase) {
   EXPECT_TRUE(checks["base_reached"]["passed"].get<bool>()) << checks["base_reached"].dump();
   EXPECT_TRUE(checks["base_tilted"]["passed"].get<bool>()) << checks["base_tilted"].dump();
   EXPECT_LT(checks["feet_held"]["value"].get<double>(), 1e-3);
+  // On four feet: one foot lifted by 15 % of the base's height and put back (the base first over
+  // the other three); the whole case passes and the foot carries load again.
+  const CliResult lift = harness("run " + dir + "/draft/lift_foot.yaml --out " + dir + "/lift --quiet", dir);
+  EXPECT_EQ(lift.code, 0) << lift.err;
+  s = nlohmann::json::parse(slurp(dir + "/lift/summary.json"));
+  checks.clear();
+  for (const auto& c : s["checks"]) checks[c["name"]] = c;
+  for (const char* n : {"base_shifted", "foot_lifted", "foot_down", "front_left_foot_reloaded"}) {
+    ASSERT_TRUE(checks.count(n)) << n;
+    EXPECT_TRUE(checks[n]["passed"].get<bool>()) << checks[n].dump();
+  }
   // The same feet as contacts of 6 rows: the feet's frames cannot turn, the base stays.
   std::string six;
   for (const char* f : {"FRONT_LEFT_FOOT", "FRONT_RIGHT_FOOT", "HIND_LEFT_FOOT", "HIND_RIGHT_FOOT"}) {
