@@ -402,6 +402,17 @@ TEST(RobotInit, AQuadrupedOnPointFeetMovesItsBase) {
   expectExit(harness("run " + dir + "/draft/base.yaml --duration 1 --set controller.contacts[FRONT_LEFT_FOOT].dims=4 --out " + dir + "/bad1", dir), 2,
              {"dims", "expected 3 (a point contact: its position held) or 6 (the frame's pose held)"});
   EXPECT_FALSE(fs::exists(dir + "/bad1/summary.json") && nlohmann::json::parse(slurp(dir + "/bad1/summary.json"))["status"] == "completed");
+  // A ball of negative radius; a point contact on a frame the robot does not have.
+  std::string bad_data = slurp(dir + "/draft/quadruped_like.yaml");
+  bad_data.replace(bad_data.find("radius: 0.02"), 12, "radius: -0.02");
+  std::ofstream(dir + "/draft/bad_radius.yaml") << bad_data;
+  const CliResult neg = harness("robot check " + dir + "/draft/bad_radius.yaml --png -", dir);
+  EXPECT_EQ(neg.code, 2) << neg.err;
+  EXPECT_TRUE(containsAll(neg.err, {"bad_radius.yaml:", "radius", "expected a number in [0, 1] m, found -0.02"})) << neg.err;
+  std::string bad_case = slurp(dir + "/draft/base.yaml");
+  bad_case.replace(bad_case.find("surface: FRONT_LEFT_FOOT,"), 25, "frame: NO_SUCH_FRAME, points: [[0, 0, 0]],");
+  std::ofstream(dir + "/draft/bad_frame.yaml") << bad_case;
+  expectExit(harness("run " + dir + "/draft/bad_frame.yaml --duration 1 --out " + dir + "/bad4", dir), 2, {"bad_frame.yaml:", "NO_SUCH_FRAME"});
   expectExit(harness("run " + kSrc + "/cases/exp1.yaml --duration 1 --set controller.contacts[RIGHT_FOOT].dims=3 --out " + dir + "/bad2", dir), 2,
              {"dims 3 is a point contact: it needs exactly one point (this contact has 4)"});
   expectExit(harness("run " + dir + "/draft/base.yaml --duration 1 --set controller.contacts[FRONT_LEFT_FOOT].normal=[0,0,1] --out " + dir + "/bad3", dir),

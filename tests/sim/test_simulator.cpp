@@ -477,6 +477,9 @@ TEST_F(Humanoid, NoStaticEquilibriumIsReportedNotReturnedAsAStart) {
   const RestingState r = sim.restingState(one_leg, Settle::StaticEquilibrium);
   EXPECT_FALSE(r.converged);
   EXPECT_NE(r.message.find("no stable static equilibrium"), std::string::npos) << r.message;
+  // The message says where the weight goes: the loaded contact points and the CoM's margin.
+  EXPECT_NE(r.message.find("loaded contact points:"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("support polygon of the loaded points"), std::string::npos) << r.message;
   EXPECT_TRUE(r.q.joints.allFinite());
 }
 
@@ -517,6 +520,8 @@ TEST(SimulatorEquilibrium, ServoHoldsAPendulumAgainstGravity) {
     EXPECT_EQ(up.converged, kp > mgd) << up.message;
     if (kp < mgd) {
       EXPECT_NE(up.message.find("unstable"), std::string::npos) << up.message;
+      // The unstable mode is named by its largest components (here the only joint).
+      EXPECT_NE(up.message.find("the unstable mode is joint swing"), std::string::npos) << up.message;
     }
   }
   // Requests that cannot be met are input errors.
