@@ -736,7 +736,7 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       foot.z() -= L.lowest_z;  // on the ground
       const Eigen::Vector3d up = foot + Eigen::Vector3d(0.0, 0.0, 0.15 * h), down = foot - Eigen::Vector3d(0.0, 0.0, 0.001);
       // kp 1 (kv 2): 6 s after a step the error is 1.7 % of it.
-      const double off_s = 6.0, down_s = 14.0, on_s = 22.0, duration = 34.0;
+      const double off_s = 8.0, down_s = 16.0, on_s = 24.0, duration = 36.0;
       const std::string task = lower(lifted.surface) + "_lift";
       const std::string sole = sole_frames[0];
       std::ostringstream c;
