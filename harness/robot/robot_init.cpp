@@ -93,18 +93,25 @@ struct Posture {
   int given = -1;                    // joints the SRDF state gives (-1: all, not from an SRDF)
 };
 
-// Every joint at 0, clamped into its limits.
+// Every joint at 0; a joint whose range excludes 0 at 10 % of its range inside the nearer limit
+// (a joint started at its limit is held there by the joint-limit task's damper: a quadruped's
+// knee at its stop keeps the base from moving).
 Posture neutralPosture(const model::RobotDescription& d) {
   Posture p;
   p.name = "neutral";
   p.q = Eigen::VectorXd::Zero(static_cast<int>(d.joints.size()));
   for (size_t j = 0; j < d.joints.size(); ++j) {
     const auto& J = d.joints[j];
-    const double v = std::min(std::max(0.0, J.lower), J.upper);
-    if (v != 0.0) p.clamped.push_back(J.name + ": 0 is outside [" + num(J.lower) + ", " + num(J.upper) + "], taken as " + num(v));
+    double v = 0.0;
+    if (0.0 < J.lower || 0.0 > J.upper) {
+      const double margin = std::isfinite(J.upper - J.lower) ? 0.1 * (J.upper - J.lower) : 0.0;
+      v = 0.0 < J.lower ? J.lower + margin : J.upper - margin;
+      p.clamped.push_back(J.name + ": 0 is outside [" + num(J.lower) + ", " + num(J.upper) + "], taken as " + num(v) +
+                          " (10 % of its range inside the limit)");
+    }
     p.q[static_cast<int>(j)] = v;
   }
-  p.source = "every joint at 0 (the URDF's zero configuration), clamped into its limits";
+  p.source = "every joint at 0 (the URDF's zero configuration), one whose range excludes 0 inside its limits";
   return p;
 }
 
@@ -724,13 +731,11 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       // Lift the first foot: the base over the centroid of the other three, then the foot up by
       // 15 % of the base's height and down again 1 mm into the ground, then the contact again.
       const auto& lifted = L.feet[0];
-      Eigen::Vector2d all = Eigen::Vector2d::Zero(), others = Eigen::Vector2d::Zero();
-      for (size_t k = 0; k < 4; ++k) {
-        const Eigen::Vector2d p = L.feet[k].points_world[0].head<2>();
-        all += p / 4.0;
-        if (k > 0) others += p / 3.0;
-      }
-      const Eigen::Vector3d shifted = start + Eigen::Vector3d(others.x() - all.x(), others.y() - all.y(), 0.0);
+      Eigen::Vector2d others = Eigen::Vector2d::Zero();
+      for (size_t k = 1; k < 4; ++k) others += L.feet[k].points_world[0].head<2>() / 3.0;
+      // The base carries the centre of mass with it: moved by the centroid of the other three
+      // less the CoM, it puts the CoM over that centroid.
+      const Eigen::Vector3d shifted = start + Eigen::Vector3d(others.x() - L.com.x(), others.y() - L.com.y(), 0.0);
       Eigen::Vector3d foot = Eigen::Vector3d::Zero();
       for (const auto& p : lifted.points_world) foot += p / static_cast<double>(lifted.points_world.size());
       foot.z() -= L.lowest_z;  // on the ground
@@ -768,8 +773,8 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
         << "  - {name: foot_down, type: task_error, tasks: [" << task << "], statistic: max, from_s: " << num(down_s + 6.0) << ", to_s: "
         << num(on_s - 0.01) << ", limit: 0.003}\n"
         << "  - {name: " << lower(lifted.surface) << "_reloaded, type: contact_unilateral, contact: " << lifted.surface
-        << ", source: sensed, from_s: " << num(on_s + 6.0) << ", min_N: " << num(0.25 * 0.25 * L.mass * 9.81, 2)
-        << "}   # a quarter of its share of the weight\n";
+        << ", source: sensed, from_s: " << num(on_s + 6.0) << ", min_N: " << num(fmin, 2)
+        << "}   # loaded: 1.5 % of the weight, the friction checks' threshold\n";
       commonChecks(c);
       out.lift = c.str();
     }
