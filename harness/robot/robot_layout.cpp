@@ -201,16 +201,20 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     }
   }
   std::vector<double> low(static_cast<size_t>(nb)), high(static_cast<size_t>(nb));
-  for (int b = 0; b < nb; ++b) {
-    low[static_cast<size_t>(b)] = high[static_cast<size_t>(b)] = pts[static_cast<size_t>(b)][0].z();
-    for (const auto& p : pts[static_cast<size_t>(b)]) {
-      low[static_cast<size_t>(b)] = std::min(low[static_cast<size_t>(b)], p.z());
-      high[static_cast<size_t>(b)] = std::max(high[static_cast<size_t>(b)], p.z());
+  // Each body's lowest and highest point, and the robot's (again after the robot is turned).
+  auto measureHeights = [&] {
+    for (int b = 0; b < nb; ++b) {
+      low[static_cast<size_t>(b)] = high[static_cast<size_t>(b)] = pts[static_cast<size_t>(b)][0].z();
+      for (const auto& p : pts[static_cast<size_t>(b)]) {
+        low[static_cast<size_t>(b)] = std::min(low[static_cast<size_t>(b)], p.z());
+        high[static_cast<size_t>(b)] = std::max(high[static_cast<size_t>(b)], p.z());
+      }
     }
-  }
-  L.lowest_z = *std::min_element(low.begin(), low.end());
-  L.highest_z = *std::max_element(high.begin(), high.end());
-  L.height = L.highest_z - L.lowest_z;
+    L.lowest_z = *std::min_element(low.begin(), low.end());
+    L.highest_z = *std::max_element(high.begin(), high.end());
+    L.height = L.highest_z - L.lowest_z;
+  };
+  measureHeights();
 
   // Tree, subtree masses, and limbs. The trunk is the root and every body that branches into two
   // or more subtrees of significant mass (2 % of the robot), with the bodies between them; a limb
@@ -338,16 +342,7 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
         for (auto& p : b) p = C * p;
       }
       L.com = C * L.com;
-      for (int b = 0; b < nb; ++b) {
-        low[static_cast<size_t>(b)] = high[static_cast<size_t>(b)] = pts[static_cast<size_t>(b)][0].z();
-        for (const auto& p : pts[static_cast<size_t>(b)]) {
-          low[static_cast<size_t>(b)] = std::min(low[static_cast<size_t>(b)], p.z());
-          high[static_cast<size_t>(b)] = std::max(high[static_cast<size_t>(b)], p.z());
-        }
-      }
-      L.lowest_z = *std::min_element(low.begin(), low.end());
-      L.highest_z = *std::max_element(high.begin(), high.end());
-      L.height = L.highest_z - L.lowest_z;
+      measureHeights();
       L.notes.push_back("the posture tilts the feet by " + formatNumber(tilt * 180.0 / kPi, 3) +
                         " deg from their zero-configuration attitude: the robot is turned to stand them flat (the base tilted; the start's "
                         "equilibrium finds the same)");
