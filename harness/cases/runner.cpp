@@ -1,5 +1,6 @@
 #include "harness/cases/runner.hpp"
 #include "harness/checks/check_registry.hpp"
+#include "harness/checks/output_files.hpp"
 
 #include "harness/sim/build_info.hpp"
 #include "lexdyn/common/format.hpp"
@@ -14,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 namespace lexdyn::cases {
@@ -236,17 +238,8 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
   return md;
 }
 
-// Written to PATH.partial, then renamed: a killed run never leaves a half-written file.
-void writeFileAtomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".partial";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw InputError(tmp, "cannot open for writing");
-    out << text;
-    if (!out) throw InputError(tmp, "write error");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw InputError(path, "cannot rename into place");
-}
+// Written to PATH.partial, synced and renamed: a killed run never leaves a half-written file.
+void writeFileAtomically(const std::string& path, const std::string& text) { files::writeAtomically(path, text); }
 
 nlohmann::json checksArray(const std::vector<checks::CheckResult>& results) {
   using nlohmann::json;
@@ -340,8 +333,9 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
 
 RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   std::error_code ec;
-  fs::create_directories(options.out_dir, ec);
-  if (ec || !fs::is_directory(options.out_dir)) throw InputError(options.out_dir, "cannot create the output directory");
+  // One job per output folder: a second one exits at once naming this one (docs/architecture.md,
+  // "Faults").
+  const files::FolderLock lock(options.out_dir, "lexdyn-harness run " + spec.name + (methodName(spec).empty() ? "" : " " + methodName(spec)));
 
   if (!spec.robot_warnings.empty()) {
     std::fprintf(stderr, "[%s] the robot files were read with %zu warning(s) (kept in summary.json, robot_warnings):\n", spec.name.c_str(),
@@ -386,9 +380,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     if (!(options.dump_from_s <= options.dump_to_s)) {
       throw InputError(options.dump_problems_dir, "the dump window starts after it ends (" + num(options.dump_from_s) + " > " + num(options.dump_to_s) + " s)");
     }
-    std::error_code dec;
-    fs::create_directories(options.dump_problems_dir, dec);
-    if (dec || !fs::is_directory(options.dump_problems_dir)) throw InputError(options.dump_problems_dir, "cannot create the problem directory");
+    files::createFolder(options.dump_problems_dir);
   }
 
   Recorder recorder(spec, simu, driver.get());
@@ -469,6 +461,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     r.message = std::string(status == std::string("input_error") ? "bad input found at " : "internal error at ") + "t = " +
                 num(simu.time()) + " s: " + what;
   };
+  std::optional<OutputError> output_error;
   try {
   for (; k < n_ticks; ++k) {
     const double t = static_cast<double>(k) * T;
@@ -529,6 +522,12 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     }
     write(k, true);
   }
+  } catch (const OutputError& e) {
+    // The trace cannot be written (a full disk, a file-size limit): the run stops at once; what
+    // can still be written is, and the error ends the run as a run failure (exit code 3).
+    r.status = "output_error";
+    r.message = std::string(e.what()) + " (the run stopped at t = " + num(simu.time()) + " s)";
+    output_error.emplace(e.where(), r.message.substr(e.where().empty() ? 0 : e.where().size() + 2));
   } catch (const InputError& e) {
     stopOnException("input_error", e.what());
   } catch (const std::bad_alloc&) {
@@ -542,7 +541,14 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   r.realtime_factor = r.wall_s > 0.0 ? r.simulated_s / r.wall_s : 0.0;
   r.integrator = simu.integratorStats();
   r.integrator_restarts = simu.integratorRestarts();
-  writer.finish(r.status, r.message);
+  if (output_error) {
+    try {
+      writer.finish(r.status, r.message);
+    } catch (const OutputError&) {
+    }
+  } else {
+    writer.finish(r.status, r.message);
+  }
   if (driver) {
     r.has_controller_stats = true;
     r.controller = driver->stats();
@@ -574,6 +580,13 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
       const bool status_reached = x->status != "completed" && r.status == x->status;
       r.expected_failure_reached = listed_failed || status_reached || (x->checks.empty() && r.status == x->status);
     }
+  }
+  if (output_error) {
+    try {
+      writeSummary(r.summary_path, spec, r, md);
+    } catch (const OutputError&) {
+    }
+    throw *output_error;
   }
   writeSummary(r.summary_path, spec, r, md);
   return r;

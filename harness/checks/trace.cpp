@@ -2,6 +2,8 @@
 
 #include "lexdyn/common/error.hpp"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -40,7 +42,7 @@ int TraceSchema::find(const std::string& name) const {
 TraceWriter::TraceWriter(const std::string& path, TraceSchema schema, const TraceMetadata& metadata, int flush_every_rows)
     : path_(path), partial_(path + ".partial"), schema_(std::move(schema)), flush_every_(flush_every_rows) {
   file_ = std::fopen(partial_.c_str(), "wb");
-  if (!file_) throw InputError(partial_, std::string("cannot open for writing: ") + std::strerror(errno));
+  if (!file_) throw OutputError(partial_, std::string("cannot open for writing: ") + std::strerror(errno));
   buffer_.resize(1 << 16);
   line_.resize(static_cast<size_t>(schema_.size()) * 32);
   last_.assign(static_cast<size_t>(schema_.size()), LastValue{});
@@ -56,7 +58,16 @@ TraceWriter::TraceWriter(const std::string& path, TraceSchema schema, const Trac
     std::fputs(schema_.names()[static_cast<size_t>(i)].c_str(), file_);
     std::fputc(i + 1 < schema_.size() ? ',' : '\n', file_);
   }
-  std::fflush(file_);
+  flushOrThrow();
+}
+
+// A failed write is found at the first flush that fails (every flush_every_rows rows, and when
+// stdio's buffer fills), with the operating system's reason, not at the end of the run.
+void TraceWriter::flushOrThrow() {
+  if (std::fflush(file_) != 0 || std::ferror(file_)) {
+    const int err = errno;
+    throw OutputError(partial_, std::string("cannot write: ") + std::strerror(err) + " (after " + std::to_string(rows_) + " rows)");
+  }
 }
 
 TraceWriter::~TraceWriter() {
@@ -92,9 +103,10 @@ void TraceWriter::write(const double* row) {
     p += c.length;
     *p++ = i + 1 < n ? ',' : '\n';
   }
-  std::fwrite(line_.data(), 1, static_cast<size_t>(p - line_.data()), file_);
+  const size_t len = static_cast<size_t>(p - line_.data());
+  if (std::fwrite(line_.data(), 1, len, file_) != len) flushOrThrow();
   ++rows_;
-  if (flush_every_ > 0 && rows_ % flush_every_ == 0) std::fflush(file_);
+  if (flush_every_ > 0 && rows_ % flush_every_ == 0) flushOrThrow();
 }
 
 void TraceWriter::finish(const std::string& end_status, const std::string& why) {
@@ -104,13 +116,16 @@ void TraceWriter::finish(const std::string& end_status, const std::string& why) 
     if (c == '\n' || c == '\r') c = ' ';
   }
   mark += '\n';
-  std::fwrite(mark.data(), 1, mark.size(), file_);
-  const bool ok = std::fflush(file_) == 0;
-  std::fclose(file_);
+  const bool written = std::fwrite(mark.data(), 1, mark.size(), file_) == mark.size() && std::fflush(file_) == 0 && !std::ferror(file_);
+  int err = errno;
+  const bool synced = written && (::fsync(::fileno(file_)) == 0 || errno == EINVAL);
+  if (written && !synced) err = errno;
+  const bool closed = std::fclose(file_) == 0;
+  if (written && synced && !closed) err = errno;
   file_ = nullptr;
-  if (!ok) throw InputError(partial_, "write error");
+  if (!written || !synced || !closed) throw OutputError(partial_, std::string("cannot write: ") + std::strerror(err));
   if (std::rename(partial_.c_str(), path_.c_str()) != 0) {
-    throw InputError(path_, std::string("cannot rename the finished trace: ") + std::strerror(errno));
+    throw OutputError(path_, std::string("cannot rename the finished trace: ") + std::strerror(errno));
   }
 }
 

@@ -62,6 +62,7 @@ class TraceWriter {
   const std::string& partialPath() const { return partial_; }
 
  private:
+  void flushOrThrow();
   std::string path_, partial_;
   TraceSchema schema_;
   std::FILE* file_ = nullptr;

@@ -1,5 +1,6 @@
 #include "harness/cli/sweep_cmd.hpp"
 
+#include "harness/checks/output_files.hpp"
 #include "harness/sweep/slurm.hpp"
 #include "harness/sweep/sweep_records.hpp"
 #include "harness/sweep/sweep_run.hpp"
@@ -203,6 +204,10 @@ int runSweepCommand(const SweepCommand& c, const std::atomic<int>& signal, const
     return 0;
   }
   sweep::DriverOptions o = driverOptions(c, s, signal);
+  // One job per sweep folder; the tasks of a Slurm array (chunks of disjoint points) share it.
+  const std::string sub = *c.run ? "run" : (*c.merge ? "merge" : (*c.chunk ? "chunk" : "submit"));
+  const files::FolderLock lock(o.out_dir, "lexdyn-harness sweep " + sub + " " + s.name,
+                               *c.chunk ? files::FolderLock::Mode::kShared : files::FolderLock::Mode::kExclusive);
   if (*c.run) return sweep::runSweep(s, o);
   if (*c.merge) return sweep::mergeSweep(s, o);
   if (*c.chunk) {

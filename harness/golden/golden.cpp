@@ -259,6 +259,17 @@ void writeGolden(const std::string& path, const checks::TraceTable& t, const che
   w.finish();
 }
 
+std::vector<std::string> goldenFileProblems(const checks::TraceTable& golden) {
+  if (golden.end_status.empty()) {
+    return {"the golden file has no end mark ('# end: completed'): it was cut or damaged after " + std::to_string(golden.rows.size()) +
+            " rows; restore it (git checkout) or regenerate it"};
+  }
+  if (golden.end_status != checks::TraceWriter::kTraceCompleted) {
+    return {"the golden file ends with '# end: " + golden.end_status + "', not written by `golden update`"};
+  }
+  return {};
+}
+
 Comparison compare(const checks::TraceTable& golden, const checks::TraceTable& fresh, const Tolerance& tolerance,
                    const std::vector<ChannelTolerance>& channel_tolerances) {
   Comparison c;

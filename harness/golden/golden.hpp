@@ -89,6 +89,11 @@ struct Comparison {
   std::string report() const;
 };
 
+/// What is wrong with a golden file read back (empty when nothing): one without its end mark
+/// ('# end: completed', written last by `golden update`) was cut, also when it was cut at a line
+/// end and would otherwise differ only in its row count.
+std::vector<std::string> goldenFileProblems(const checks::TraceTable& golden);
+
 /// Compares a fresh trace with a golden one. Rows are matched in order (their times must agree
 /// to 1e-9 s); every golden channel must be in the fresh trace. Wall-clock channels (time.*)
 /// are never compared, in whichever trace they are.

@@ -1,5 +1,7 @@
 #include "harness/sweep/sweep_records.hpp"
 
+#include "harness/checks/output_files.hpp"
+
 #include "lexdyn/common/error.hpp"
 
 #include <algorithm>
@@ -44,19 +46,7 @@ std::string shellQuote(const std::string& a) {
   return q + "'";
 }
 
-void writeAtomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".partial";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw InputError(tmp, "cannot open for writing");
-    out << text;
-    out.flush();
-    if (!out) throw InputError(tmp, "write error");
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) throw InputError(path, "cannot rename into place: " + ec.message());
-}
+void writeAtomically(const std::string& path, const std::string& text) { files::writeAtomically(path, text); }
 
 json toJson(const RunResult& r) {
   json checks = json::array();
@@ -98,6 +88,75 @@ RunResult fromJson(const json& j) {
   const json fe = j.value("final_errors", json::object());
   for (auto it = fe.begin(); it != fe.end(); ++it) r.final_errors[it.key()] = num(it.value());
   return r;
+}
+
+std::optional<RunResult> recordedResult(const json& j, std::string& why) {
+  // The statuses of runs that ended on their own, and the driver's own verdicts on a process.
+  static const std::set<std::string> kRecorded = {"completed", "integrator_failure", "controller_failure", "internal_error",
+                                                  "input_error", "timeout", "bad_input"};
+  if (!j.is_object()) {
+    why = "not a JSON object";
+    return std::nullopt;
+  }
+  if (!j.contains("status") || !j["status"].is_string()) {
+    why = "no status";
+    return std::nullopt;
+  }
+  const std::string status = j["status"].get<std::string>();
+  if (!kRecorded.count(status)) {
+    // "interrupted", "crashed", "no_summary": stored by older drivers for runs killed from
+    // outside, which are never results.
+    why = "status '" + status + "' is not the end of a run";
+    return std::nullopt;
+  }
+  for (const char* key : {"checks", "statistics", "final_errors"}) {
+    if (!j.contains(key) || (std::string(key) == "checks" ? !j[key].is_array() : !j[key].is_object())) {
+      why = std::string("no ") + key;
+      return std::nullopt;
+    }
+  }
+  for (const char* key : {"exit_code", "simulated_s", "peak_iterations"}) {
+    if (!j.contains(key) || !j[key].is_number()) {
+      why = std::string("no number ") + key;
+      return std::nullopt;
+    }
+  }
+  for (const auto& c : j["checks"]) {
+    if (!c.is_object() || !c.contains("name") || !c["name"].is_string() || !c.contains("passed") || !c["passed"].is_boolean()) {
+      why = "a check without its name or verdict";
+      return std::nullopt;
+    }
+  }
+  return fromJson(j);
+}
+
+std::optional<json> readJsonFile(const std::string& path, std::string& why) {
+  const std::optional<std::string> text = files::readWhole(path);
+  if (!text) {
+    why = "cannot be read";
+    return std::nullopt;
+  }
+  try {
+    return json::parse(*text);
+  } catch (const std::exception& e) {
+    why = std::string("damaged: ") + e.what();
+    return std::nullopt;
+  }
+}
+
+std::string pointRecordProblem(const SweepSpec& s, long index, const json& j) {
+  if (!j.is_object()) return "not a JSON object";
+  if (!j.contains("point") || !j["point"].is_number_integer() || j["point"].get<long>() != index) return "not the record of point " + std::to_string(index);
+  if (!j.contains("runs") || !j["runs"].is_object()) return "no runs";
+  for (const auto& m : s.methods) {
+    if (!j["runs"].contains(m)) return "no run of " + m;
+    std::string why;
+    if (!recordedResult(j["runs"][m], why)) return "the run of " + m + ": " + why;
+  }
+  for (const char* key : {"values", "comparisons", "failures"}) {
+    if (!j.contains(key)) return std::string("no ") + key;
+  }
+  return "";
 }
 
 json pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string, RunResult>& runs) {
@@ -380,6 +439,8 @@ void printSummary(const SweepSpec& s, const json& summary, std::FILE* out) {
 // The failure database.
 
 void recordFailures(const SweepSpec& s, const std::vector<json>& failures, const std::string& db_path) {
+  // The database is shared by every sweep of this name (each night's): one writer at a time.
+  const files::FileLock lock(db_path, "lexdyn-harness sweep " + s.name);
   std::set<std::string> known;
   std::string text = readFileText(db_path);
   std::istringstream in(text);
@@ -391,21 +452,25 @@ void recordFailures(const SweepSpec& s, const std::vector<json>& failures, const
     } catch (const std::exception&) {
     }
   }
+  if (!text.empty() && text.back() != '\n') text += '\n';  // a cut last line stays skipped, apart
   std::string add;
   for (const auto& f : failures) {
     const json e = {{"sweep", s.name}, {"method", f["method"]}, {"check", f["check"]}, {"values", f["values"]}, {"duration_s", f["duration_s"]}};
     if (known.insert(e.dump()).second) add += e.dump() + "\n";
   }
   if (add.empty()) return;
-  std::error_code ec;
-  if (fs::path(db_path).has_parent_path()) fs::create_directories(fs::path(db_path).parent_path(), ec);
   writeAtomically(db_path, text + add);
 }
 
-void replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& run) {
+bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& run, std::vector<std::string>& lost) {
   const std::string out = (fs::path(o.out_dir) / "replays.jsonl").string();
-  if (fs::is_regular_file(out)) return;  // done by an earlier, interrupted run of this sweep
-  std::istringstream in(readFileText(o.db_path));
+  if (fs::is_regular_file(out)) return true;  // done by an earlier, interrupted run of this sweep
+  std::string db;
+  {
+    const files::FileLock lock(o.db_path, "lexdyn-harness sweep " + s.name);
+    db = readFileText(o.db_path);
+  }
+  std::istringstream in(db);
   std::string line, records;
   int k = 0, replayed = 0, still = 0;
   while (std::getline(in, line)) {
@@ -430,8 +495,13 @@ void replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
     if (!usable) continue;  // the sweep no longer has that parameter
     c.duration_s = num(e.value("duration_s", json()));
     if (!std::isfinite(c.duration_s)) c.duration_s = 0.0;
-    const std::optional<RunResult> r = run(c, (fs::path(o.out_dir) / "replay" / std::to_string(k++) / c.method).string());
-    if (!r) return;  // interrupted: replayed again next time
+    const Trial t = run(c, (fs::path(o.out_dir) / "replay" / std::to_string(k++) / c.method).string());
+    if (t.end == Trial::End::kInterrupted) return false;  // replayed again next time
+    if (t.end == Trial::End::kLost) {
+      lost.push_back("the replay of " + c.method + " " + e.value("check", "") + " from " + o.db_path + ": " + t.why);
+      return false;
+    }
+    const RunResult* r = &t.result;
     const std::string check = e.value("check", "");
     const std::vector<std::string> f = r->failures();
     const bool fails = std::find(f.begin(), f.end(), check) != f.end();
@@ -450,6 +520,7 @@ void replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
   if (o.progress && replayed > 0) {
     std::fprintf(stderr, "[sweep %s] replayed %d earlier failure(s) from %s: %d still fail\n", s.name.c_str(), replayed, o.db_path.c_str(), still);
   }
+  return true;
 }
 
 }  // namespace lexdyn::sweep

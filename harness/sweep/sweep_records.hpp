@@ -28,26 +28,48 @@ nlohmann::json toJson(const RunResult& r);
 /// A check's result as summary.json and result.json write it.
 CheckOutcome checkFromJson(const nlohmann::json& c);
 RunResult fromJson(const nlohmann::json& j);
+/// A run's result read back from OUT (result.json, a shrink-cache line): nullopt, with `why`,
+/// when `j` is not a whole result of a run that ended on its own or by the driver's timeout
+/// (a damaged file, or a run the driver never records: killed, interrupted).
+std::optional<RunResult> recordedResult(const nlohmann::json& j, std::string& why);
+/// The file parsed as JSON, or nullopt with `why` (missing, unreadable, damaged).
+std::optional<nlohmann::json> readJsonFile(const std::string& path, std::string& why);
+/// "" when `j` is the whole record of point `index` (every method's run); otherwise why not.
+std::string pointRecordProblem(const SweepSpec& s, long index, const nlohmann::json& j);
 
 /// One point's record: index, parameter values, overrides, per method the run's result and its
 /// reproducer command, the comparisons, the failures ("method:check").
 nlohmann::json pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string, RunResult>& runs);
 
-/// Runs one configuration in its own process in `dir`; nullopt when interrupted.
-using RunOne = std::function<std::optional<RunResult>(const RunConfig&, const std::string& dir)>;
+/// What became of one configuration run in its own process.
+struct Trial {
+  enum class End {
+    kRecorded,     ///< it ended on its own (or by the driver's timeout): `result` holds it
+    kInterrupted,  ///< the driver was asked to stop: nothing recorded, run again next time
+    kLost,         ///< killed by something else twice (`why`): nothing recorded
+  };
+  End end = End::kRecorded;
+  RunResult result;
+  std::string why;
+};
+/// Runs one configuration in its own process in `dir`.
+using RunOne = std::function<Trial(const RunConfig&, const std::string& dir)>;
 
 /// Shrinks each distinct (method, check) failure of the records to the simplest configuration
 /// that still fails it (docs/sweeps.md, "Shrinking"); writes OUT/failures/. Returns the list
 /// of failures for summary.json.
+/// A trial lost twice is not cached and leaves its failure unshrunk; its reason is added to `lost`
+/// (the caller writes no summary then: the sweep is not finished).
 std::vector<nlohmann::json> shrinkFailures(const SweepSpec& s, const std::vector<nlohmann::json>& records, const DriverOptions& o,
-                                           const RunOne& run);
+                                           const RunOne& run, std::vector<std::string>& lost);
 /// The same list without shrinking (each failure at its simplest failing point).
 std::vector<nlohmann::json> minimalFailures(const SweepSpec& s, const std::vector<nlohmann::json>& records, const DriverOptions& o);
 
 /// Appends the failures to the database (one JSON line each, without duplicates).
 void recordFailures(const SweepSpec& s, const std::vector<nlohmann::json>& failures, const std::string& db_path);
-/// Runs the database's failures of this sweep first; writes OUT/replays.jsonl.
-void replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& run);
+/// Runs the database's failures of this sweep first; writes OUT/replays.jsonl. False when a
+/// replay was interrupted or lost (`lost` says why): replayed again next time.
+bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& run, std::vector<std::string>& lost);
 
 /// summary.json: pass rates and worst margins per check and method, win rates of the
 /// comparisons, maps, failures.

@@ -1,6 +1,7 @@
 #include "harness/sweep/sweep_run.hpp"
 
 #include "harness/cases/runner.hpp"
+#include "harness/checks/output_files.hpp"
 #include "harness/sweep/process.hpp"
 #include "harness/sweep/sweep_records.hpp"
 #include "lexdyn/common/error.hpp"
@@ -12,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <exception>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -60,44 +62,49 @@ std::vector<cases::Override> runOverrides(const SweepSpec& s, const RunConfig& c
   return o;
 }
 
-// The result of a finished process, from its summary.json.
-RunResult readRunResult(const SweepSpec& s, const std::string& method, const std::string& dir, const ProcessOutcome& p) {
-  RunResult r;
+// What the driver makes of a finished process (docs/architecture.md, "Faults"): a result to
+// record when the run ended on its own (completed, failed a check, failed in the integrator or
+// the controller, bad input) or by the driver's timeout; otherwise (killed or stopped from
+// outside, no summary, an output it could not write) nothing is recorded and `why` says what
+// happened.
+Trial classify(const SweepSpec& s, const std::string& method, const std::string& dir, const ProcessOutcome& p) {
+  Trial t;
+  RunResult& r = t.result;
   r.exit_code = p.exit_code;
   r.wall_s = p.wall_s;
   const std::string summary = (fs::path(dir) / "summary.json").string();
   const std::string log = (fs::path(dir) / "log.txt").string();
+  auto lost = [&](const std::string& why) {
+    t.end = Trial::End::kLost;
+    std::string tail = lastLines(p.output_tail, 2);
+    for (char& c : tail) c = c == '\n' ? ' ' : c;
+    t.why = why + (tail.empty() ? "" : " (" + tail + ")") + (p.log_error.empty() ? "" : " (the log could not be written: " + p.log_error + ")");
+    return t;
+  };
   if (p.timed_out) {
     r.status = "timeout";
     r.message = "killed after the timeout";
-    return r;
+    return t;
   }
-  if (p.signal != 0) {
-    r.status = "crashed";
-    r.message = "ended by signal " + std::to_string(p.signal) + ": " + tailOfFile(log, 3);
-    return r;
-  }
+  if (p.signal != 0) return lost("killed by " + signalName(p.signal));
   if (p.exit_code == 2) {
     r.status = "bad_input";
-    r.message = tailOfFile(log, 1);
-    return r;
+    r.message = lastLines(p.output_tail, 1);
+    return t;
   }
-  if (!fs::is_regular_file(summary)) {
-    r.status = "no_summary";
-    r.message = "exit code " + std::to_string(p.exit_code) + ", no summary.json: " + tailOfFile(log, 3);
-    return r;
-  }
-  json j;
-  try {
-    j = json::parse(readFileText(summary));
-  } catch (const std::exception& e) {
-    r.status = "no_summary";
-    r.message = std::string("unreadable summary.json: ") + e.what();
-    return r;
-  }
+  std::string why;
+  const std::optional<json> read = readJsonFile(summary, why);
+  if (!read) return lost("exit code " + std::to_string(p.exit_code) + ", summary.json " + (fs::exists(summary) ? why : "not written"));
+  const json& j = *read;
   auto num = [](const json& v) { return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN(); };
-  r.status = j.value("status", "no_summary");
-  r.message = j.value("message", "");
+  r.status = j.is_object() ? j.value("status", "") : "";
+  r.message = j.is_object() ? j.value("message", "") : "";
+  if (r.status == "interrupted") return lost("stopped by a signal from outside (exit code " + std::to_string(p.exit_code) + ": " + r.message + ")");
+  if (r.status == "output_error") return lost("could not write its outputs: " + r.message);
+  if (r.status != "completed" && r.status != "integrator_failure" && r.status != "controller_failure" && r.status != "internal_error" &&
+      r.status != "input_error") {
+    return lost("summary.json has no status of a finished run ('" + r.status + "')");
+  }
   r.simulated_s = j.value("simulated_s", 0.0);
   const std::vector<std::string> wanted = propertyChecks(s, method);
   for (const auto& c : j.value("checks", json::array())) {
@@ -121,7 +128,7 @@ RunResult readRunResult(const SweepSpec& s, const std::string& method, const std
     for (auto it = j["tasks"].begin(); it != j["tasks"].end(); ++it) r.final_errors[it.key()] = num(it.value().value("final_error", json()));
   }
   if (j.contains("solver")) r.peak_iterations = j["solver"].value("peak_iterations", 0);
-  return r;
+  return t;
 }
 
 std::string pointName(long i) {
@@ -160,11 +167,24 @@ std::string reproduceCommand(const SweepSpec& s, const RunConfig& c) {
 // ---------------------------------------------------------------------------------------------
 // The driver.
 
+namespace {
+
+// FNV-1a of a text, as 16 hex digits: sweep.txt's check that it was not cut or edited.
+std::string textDigest(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  char buf[24];
+  std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+constexpr const char* kSweepRecordHeader = "# lexdyn sweep record, digest ";
+
+}  // namespace
+
 void prepareOutDir(const SweepSpec& s, const std::string& out_dir) {
-  std::error_code ec;
-  fs::create_directories(fs::path(out_dir) / "points", ec);
-  fs::create_directories(fs::path(out_dir) / "runs", ec);
-  if (ec || !fs::is_directory(out_dir)) throw InputError(out_dir, "cannot create the output directory");
+  files::createFolder((fs::path(out_dir) / "points").string());
+  files::createFolder((fs::path(out_dir) / "runs").string());
   // What decides the results: the sweep file (but its description and shrink settings, which
   // only change the summary) and its base case. Resuming with other ones would mix results.
   YAML::Node doc = YAML::LoadFile(s.path);
@@ -175,11 +195,29 @@ void prepareOutDir(const SweepSpec& s, const std::string& out_dir) {
   const std::string text = std::string(e.c_str()) + "\n# base case " + s.base_case + ":\n" + readFileText(s.base_case);
   const std::string recorded = (fs::path(out_dir) / "sweep.txt").string();
   if (fs::is_regular_file(recorded)) {
-    if (readFileText(recorded) != text) {
-      throw InputError(out_dir, "holds the results of another version of " + s.path + " or of its base case; use another --out or remove it");
+    std::string stored = readFileText(recorded);
+    // sweep.txt starts with the digest of what follows: a file that was cut or edited is told
+    // from the record of another sweep (files written before the digest have none).
+    const std::string header = kSweepRecordHeader;
+    if (stored.compare(0, header.size(), header) == 0) {
+      const size_t eol = stored.find('\n');
+      const std::string digest = eol == std::string::npos ? "" : stored.substr(header.size(), eol - header.size());
+      const std::string body = eol == std::string::npos ? "" : stored.substr(eol + 1);
+      if (digest != textDigest(body)) {
+        throw InputError(recorded, "is damaged (cut or edited: its digest does not match its text), so the results in " + out_dir +
+                                       " cannot be matched to a sweep file; restore it, or remove " + out_dir + " (or use another --out) and run again");
+      }
+      stored = body;
+    } else if (stored.empty()) {
+      throw InputError(recorded, "is empty (damaged), so the results in " + out_dir + " cannot be matched to a sweep file; remove " + out_dir +
+                                     " (or use another --out) and run again");
+    }
+    if (stored != text) {
+      throw InputError(out_dir, "holds the results of another version of " + s.path + " or of its base case (" + recorded +
+                                    " differs); use another --out or remove it");
     }
   } else {
-    writeAtomically(recorded, text);
+    writeAtomically(recorded, kSweepRecordHeader + textDigest(text) + "\n" + text);
   }
 }
 
@@ -192,7 +230,9 @@ struct Job {
 };
 
 // Runs the jobs on `jobs` threads, each running one process at a time. Calls `done` (under a
-// lock) with each finished job and its result; an interrupted job is not reported.
+// lock) with each finished job and what became of it; an interrupted job is not reported. An
+// exception in a thread (an output that cannot be written, a process that cannot be started)
+// stops the other processes and is rethrown here, in the caller's thread.
 class Pool {
  public:
   Pool(const SweepSpec& s, const DriverOptions& o) : s_(s), o_(o) {}
@@ -201,33 +241,56 @@ class Pool {
   void run(const std::vector<Job>& jobs, Done done) {
     std::mutex m;
     size_t next = 0;
+    std::exception_ptr error;
     const int n = std::max(1, std::min<int>(o_.jobs > 0 ? o_.jobs : 1, static_cast<int>(jobs.size())));
     std::vector<std::thread> threads;
     for (int t = 0; t < n; ++t) {
       threads.emplace_back([&]() {
-        for (;;) {
-          size_t k;
-          {
+        try {
+          for (;;) {
+            size_t k;
+            {
+              std::lock_guard<std::mutex> lock(m);
+              if (next >= jobs.size() || abort_.load() != 0 || (o_.interrupt && o_.interrupt->load() != 0)) return;
+              k = next++;
+            }
+            const Job& job = jobs[k];
+            const Trial r = execute(job);
+            if (r.end == Trial::End::kInterrupted) continue;  // left for the next run
             std::lock_guard<std::mutex> lock(m);
-            if (next >= jobs.size() || (o_.interrupt && o_.interrupt->load() != 0)) return;
-            k = next++;
+            done(job, r);
           }
-          const Job& job = jobs[k];
-          RunResult r;
-          if (!execute(job, r)) continue;  // interrupted: left for the next run
+        } catch (...) {
           std::lock_guard<std::mutex> lock(m);
-          done(job, r);
+          if (!error) error = std::current_exception();
+          abort_.store(1);
         }
       });
     }
     for (auto& t : threads) t.join();
+    if (error) std::rethrow_exception(error);
   }
 
-  // One job in a process. False when it was interrupted (nothing recorded).
-  bool execute(const Job& job, RunResult& r) {
+  // One job in a process, run once more when something from outside killed it.
+  Trial execute(const Job& job) {
+    const Trial first = attempt(job);
+    if (first.end != Trial::End::kLost) return first;
+    if (o_.progress) std::fprintf(stderr, "[sweep %s] %s: %s; running it again\n", s_.name.c_str(), label(job).c_str(), first.why.c_str());
+    Trial second = attempt(job);
+    if (second.end == Trial::End::kLost) second.why = first.why + "; run again: " + second.why;
+    return second;
+  }
+
+  std::string label(const Job& job) const {
+    return (job.point >= 0 ? "point " + std::to_string(job.point) + " " : "trial " + job.dir + " ") + job.config.method;
+  }
+
+ private:
+  Trial attempt(const Job& job) {
     std::error_code ec;
     fs::remove_all(job.dir, ec);
-    fs::create_directories(job.dir, ec);
+    if (ec) throw OutputError(job.dir, "cannot remove an earlier attempt: " + ec.message());
+    files::createFolder(job.dir);
     std::vector<std::string> argv = {o_.harness_exe, "sweep", "point", s_.path, "--method", job.config.method, "--out", job.dir, "--quiet"};
     if (job.point >= 0) {
       argv.insert(argv.end(), {"--index", std::to_string(job.point)});
@@ -238,19 +301,23 @@ class Pool {
     }
     if (job.config.duration_s > 0.0) argv.insert(argv.end(), {"--duration", numberText(job.config.duration_s)});
     const std::string log = (fs::path(job.dir) / "log.txt").string();
-    const ProcessOutcome p = runProcess(argv, log, o_.timeout_s > 0.0 ? o_.timeout_s : s_.timeout_s, o_.interrupt);
-    if (!p.started) throw std::runtime_error("cannot start " + o_.harness_exe + ": " + p.error);
-    if (p.interrupted) return false;
-    r = readRunResult(s_, job.config.method, job.dir, p);
-    writeAtomically((fs::path(job.dir) / "result.json").string(), toJson(r).dump(1) + "\n");
+    const ProcessOutcome p = runProcess(argv, log, o_.timeout_s > 0.0 ? o_.timeout_s : s_.timeout_s, o_.interrupt, &abort_);
+    if (!p.started) {
+      if (p.error_errno != 0) throw OutputError(log, p.error);
+      throw std::runtime_error("cannot start " + o_.harness_exe + ": " + p.error);
+    }
+    if (p.interrupted) return Trial{Trial::End::kInterrupted, {}, ""};
+    Trial t = classify(s_, job.config.method, job.dir, p);
+    if (t.end != Trial::End::kRecorded) return t;
+    writeAtomically((fs::path(job.dir) / "result.json").string(), toJson(t.result).dump(1) + "\n");
     // Traces of passing runs go (their summaries stay); a failure keeps its trace.
-    if (!o_.keep_traces && r.failures().empty()) fs::remove(fs::path(job.dir) / "trace.csv", ec);
-    return true;
+    if (!o_.keep_traces && t.result.failures().empty()) fs::remove(fs::path(job.dir) / "trace.csv", ec);
+    return t;
   }
 
- private:
   const SweepSpec& s_;
   const DriverOptions& o_;
+  std::atomic<int> abort_{0};
 };
 
 class Progress {
@@ -283,36 +350,62 @@ long totalPoints(const SweepSpec& s, long points) { return points >= 0 ? std::mi
 std::string pointFile(const std::string& out, long i) { return (fs::path(out) / "points" / (pointName(i) + ".json")).string(); }
 std::string runDir(const std::string& out, long i, const std::string& m) { return (fs::path(out) / "runs" / pointName(i) / m).string(); }
 
-// Runs what is missing of `points`; writes the point records. Returns false when interrupted.
-bool runMissing(const SweepSpec& s, const std::vector<long>& points, const DriverOptions& o) {
+// A stored point record or run result that does not read back whole is removed with a warning
+// and made again (docs/architecture.md, "Faults").
+void dropDamaged(const std::string& path, const std::string& why, const DriverOptions& o, const SweepSpec& s, const char* what) {
+  if (o.progress) std::fprintf(stderr, "[sweep %s] warning: %s: %s; %s\n", s.name.c_str(), path.c_str(), why.c_str(), what);
+  std::error_code ec;
+  fs::remove(path, ec);
+  if (ec) throw OutputError(path, "cannot remove a damaged file: " + ec.message());
+}
+
+// The stored record of point i when it reads back whole (a damaged one is removed).
+bool validPointFile(const SweepSpec& s, const DriverOptions& o, long i) {
+  const std::string f = pointFile(o.out_dir, i);
+  if (!fs::is_regular_file(f)) return false;
+  std::string why;
+  const std::optional<json> j = readJsonFile(f, why);
+  if (j) why = pointRecordProblem(s, i, *j);
+  if (why.empty()) return true;
+  dropDamaged(f, why, o, s, "made again");
+  return false;
+}
+
+// Runs what is missing of `points`; writes the point records. Returns false when interrupted;
+// runs lost twice are added to `lost` (their points get no record).
+bool runMissing(const SweepSpec& s, const std::vector<long>& points, const DriverOptions& o, std::vector<std::string>& lost) {
   std::vector<Job> jobs;
   std::map<long, int> left;  // runs still to do per point
+  std::map<long, std::map<std::string, RunResult>> have;
   long done_runs = 0;
   for (long i : points) {
-    if (fs::is_regular_file(pointFile(o.out_dir, i))) {
+    if (validPointFile(s, o, i)) {
       done_runs += static_cast<long>(s.methods.size());
       continue;
     }
     const Point pt = pointAt(s, i);
     for (const auto& m : s.methods) {
       const std::string dir = runDir(o.out_dir, i, m);
-      if (fs::is_regular_file(fs::path(dir) / "result.json")) {
-        ++done_runs;
-        continue;
+      const std::string result = (fs::path(dir) / "result.json").string();
+      if (fs::is_regular_file(result)) {
+        std::string why;
+        const std::optional<json> j = readJsonFile(result, why);
+        const std::optional<RunResult> r = j ? recordedResult(*j, why) : std::nullopt;
+        if (r) {
+          have[i][m] = *r;
+          ++done_runs;
+          continue;
+        }
+        dropDamaged(result, why, o, s, "the run is run again");
       }
       jobs.push_back({i, {m, pt.values, 0.0}, dir});
       ++left[i];
     }
   }
-  auto writePoint = [&](long i) {
-    const Point pt = pointAt(s, i);
-    std::map<std::string, RunResult> runs;
-    for (const auto& m : s.methods) runs[m] = fromJson(json::parse(readFileText((fs::path(runDir(o.out_dir, i, m)) / "result.json").string())));
-    writeAtomically(pointFile(o.out_dir, i), pointRecord(s, pt, runs).dump() + "\n");
-  };
+  auto writePoint = [&](long i) { writeAtomically(pointFile(o.out_dir, i), pointRecord(s, pointAt(s, i), have[i]).dump() + "\n"); };
   // Points whose runs are all done but whose record is not (killed in between).
   for (long i : points) {
-    if (!fs::is_regular_file(pointFile(o.out_dir, i)) && left.find(i) == left.end()) writePoint(i);
+    if (left.find(i) == left.end() && have.count(i)) writePoint(i);
   }
   const long total_runs = static_cast<long>(points.size() * s.methods.size());
   long points_done = static_cast<long>(points.size() - left.size()), points_failed = 0;
@@ -321,27 +414,38 @@ bool runMissing(const SweepSpec& s, const std::vector<long>& points, const Drive
     std::fprintf(stderr, "[sweep %s] %zu points x %zu methods: %ld runs done, %zu to run on %d processes\n", s.name.c_str(), points.size(),
                  s.methods.size(), done_runs, jobs.size(), std::max(1, o.jobs));
   }
-  std::map<long, bool> point_failed;
+  std::map<long, bool> point_failed, point_lost;
   Pool pool(s, o);
-  pool.run(jobs, [&](const Job& job, const RunResult& r) {
-    point_failed[job.point] = point_failed[job.point] || !r.failures().empty();
-    if (--left[job.point] == 0) {
+  pool.run(jobs, [&](const Job& job, const Trial& t) {
+    if (t.end == Trial::End::kLost) {
+      point_lost[job.point] = true;
+      lost.push_back(pool.label(job) + ": " + t.why);
+      std::fprintf(stderr, "[sweep %s] %s lost: %s\n", s.name.c_str(), pool.label(job).c_str(), t.why.c_str());
+    } else {
+      have[job.point][job.config.method] = t.result;
+      point_failed[job.point] = point_failed[job.point] || !t.result.failures().empty();
+    }
+    if (--left[job.point] == 0 && !point_lost[job.point]) {
       writePoint(job.point);
       ++points_done;
       points_failed += point_failed[job.point] ? 1 : 0;
     }
-    progress.finished(!r.failures().empty(), points_done, static_cast<long>(points.size()), points_failed);
+    progress.finished(t.end == Trial::End::kRecorded && !t.result.failures().empty(), points_done, static_cast<long>(points.size()), points_failed);
   });
   return !(o.interrupt && o.interrupt->load() != 0);
 }
 
+// The end of a sweep command that lost runs: what was lost, and the run failure's exit code.
+int reportLost(const SweepSpec& s, const std::vector<std::string>& lost) {
+  std::fprintf(stderr, "[sweep %s] %zu run(s) lost: killed or stopped from outside twice, or unable to write their outputs; nothing was "
+                       "recorded for them (run the same command again to run them):\n", s.name.c_str(), lost.size());
+  for (const auto& l : lost) std::fprintf(stderr, "  %s\n", l.c_str());
+  return cases::kExitRunFailure;
+}
+
 // One configuration at a time through the pool's process runner (shrinking, replays).
 RunOne runnerOf(Pool& pool) {
-  return [&pool](const RunConfig& c, const std::string& dir) -> std::optional<RunResult> {
-    RunResult r;
-    if (!pool.execute({-1, c, dir}, r)) return std::nullopt;
-    return r;
-  };
+  return [&pool](const RunConfig& c, const std::string& dir) -> Trial { return pool.execute({-1, c, dir}); };
 }
 
 int interruptedCode(const DriverOptions& o) {
@@ -354,41 +458,53 @@ int interruptedCode(const DriverOptions& o) {
 std::vector<long> missingPoints(const SweepSpec& s, const std::string& out_dir, long points) {
   std::vector<long> out;
   const long n = totalPoints(s, points);
+  DriverOptions o;
+  o.out_dir = out_dir;
   for (long i = 0; i < n; ++i) {
-    if (!fs::is_regular_file(pointFile(out_dir, i))) out.push_back(i);
+    if (!validPointFile(s, o, i)) out.push_back(i);
   }
   return out;
 }
 
 int runPoints(const SweepSpec& s, const std::vector<long>& points, const DriverOptions& o) {
   prepareOutDir(s, o.out_dir);
-  return runMissing(s, points, o) ? 0 : interruptedCode(o);
+  std::vector<std::string> lost;
+  if (!runMissing(s, points, o, lost)) return interruptedCode(o);
+  return lost.empty() ? 0 : reportLost(s, lost);
 }
 
 int mergeSweep(const SweepSpec& s, const DriverOptions& o) {
   prepareOutDir(s, o.out_dir);
+  // The summary is written again from the records; until then there is none, so that a merge
+  // that stops (interrupted, a lost trial, a full disk) never leaves the summary of other records.
+  const std::string summary_path = (fs::path(o.out_dir) / "summary.json").string();
+  std::error_code ec;
+  fs::remove(summary_path, ec);
+  if (ec) throw OutputError(summary_path, "cannot remove the earlier summary: " + ec.message());
   const long n = totalPoints(s, o.points);
   std::vector<json> records;
   long missing = 0;
   for (long i = 0; i < n; ++i) {
-    const std::string f = pointFile(o.out_dir, i);
-    if (!fs::is_regular_file(f)) {
+    if (!validPointFile(s, o, i)) {
       ++missing;
       continue;
     }
-    records.push_back(json::parse(readFileText(f)));
+    std::string why;
+    records.push_back(*readJsonFile(pointFile(o.out_dir, i), why));
   }
   std::string lines;
   for (const auto& r : records) lines += r.dump() + "\n";
   writeAtomically((fs::path(o.out_dir) / "results.jsonl").string(), lines);
   // Shrinking, the failure database, the summary and the maps.
   Pool pool(s, o);
-  std::vector<json> failures = o.shrink && s.shrink.enabled ? shrinkFailures(s, records, o, runnerOf(pool)) : minimalFailures(s, records, o);
+  std::vector<std::string> lost;
+  std::vector<json> failures = o.shrink && s.shrink.enabled ? shrinkFailures(s, records, o, runnerOf(pool), lost) : minimalFailures(s, records, o);
   if (o.interrupt && o.interrupt->load() != 0) return interruptedCode(o);
+  if (!lost.empty()) return reportLost(s, lost);
   if (!o.db_path.empty()) recordFailures(s, failures, o.db_path);
   const std::vector<json> maps = writeMaps(s, records, o.out_dir, o.plot_command);
   const json summary = summarize(s, records, n, failures, maps);
-  writeAtomically((fs::path(o.out_dir) / "summary.json").string(), summary.dump(2) + "\n");
+  writeAtomically(summary_path, summary.dump(2) + "\n");
   printSummary(s, summary, stderr);
   if (missing > 0) {
     std::fprintf(stderr, "[sweep %s] %ld of %ld points have no result yet (run the same command again)\n", s.name.c_str(), missing, n);
@@ -399,14 +515,18 @@ int mergeSweep(const SweepSpec& s, const DriverOptions& o) {
 
 int runSweep(const SweepSpec& s, const DriverOptions& o) {
   prepareOutDir(s, o.out_dir);
+  std::vector<std::string> lost;
   if (!o.db_path.empty()) {
     Pool pool(s, o);
-    replayFailures(s, o, runnerOf(pool));
-    if (o.interrupt && o.interrupt->load() != 0) return interruptedCode(o);
+    if (!replayFailures(s, o, runnerOf(pool), lost) && o.interrupt && o.interrupt->load() != 0) return interruptedCode(o);
   }
   std::vector<long> all;
   for (long i = 0; i < totalPoints(s, o.points); ++i) all.push_back(i);
-  if (!runMissing(s, all, o)) return interruptedCode(o);
+  if (!runMissing(s, all, o, lost)) return interruptedCode(o);
+  if (!lost.empty()) {
+    // The records of the points that were run are kept; the merge waits for the whole sweep.
+    return reportLost(s, lost);
+  }
   return mergeSweep(s, o);
 }
 

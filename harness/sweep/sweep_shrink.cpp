@@ -4,11 +4,14 @@
 // twice, also across runs of the driver.
 #include "harness/sweep/sweep_records.hpp"
 
+#include "harness/checks/output_files.hpp"
+
 #include "lexdyn/common/error.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <condition_variable>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -54,30 +57,34 @@ class TrialCache {
       : dir_(fs::path(out_dir) / "shrink"), run_(run), free_(slots), left_(max_total_runs) {
     std::error_code ec;
     fs::create_directories(dir_, ec);
-    std::ifstream in(dir_ / "cache.jsonl");
+    // A line that does not read back whole (cut by a crash of the machine, damaged) or holds no
+    // recorded result is skipped: that trial is run again.
+    std::istringstream in(readFileText((dir_ / "cache.jsonl").string()));
     std::string line;
     while (std::getline(in, line)) {
       try {
         const json j = json::parse(line);
-        results_[j.at("key").get<std::string>()] = fromJson(j.at("result"));
+        std::string why;
+        const std::optional<RunResult> r = recordedResult(j.at("result"), why);
+        if (r) results_[j.at("key").get<std::string>()] = *r;
       } catch (const std::exception&) {
       }
     }
   }
 
-  /// The result of a configuration; `fresh` tells whether it was run now. nullopt: interrupted,
-  /// or the sweep's total budget of trials is spent (`exhausted`).
-  std::optional<RunResult> get(const RunConfig& c, bool& fresh, bool& exhausted) {
+  /// The result of a configuration; `fresh` tells whether it was run now. A trial that is
+  /// interrupted or lost is not cached; `exhausted`: the sweep's total budget of trials is spent.
+  Trial get(const RunConfig& c, bool& fresh, bool& exhausted) {
     const std::string key = configKey(c);
     fresh = false;
     exhausted = false;
     {
       std::lock_guard<std::mutex> lock(m_);
       auto it = results_.find(key);
-      if (it != results_.end()) return it->second;
+      if (it != results_.end()) return Trial{Trial::End::kRecorded, it->second, ""};
       if (left_ <= 0) {
         exhausted = true;
-        return std::nullopt;
+        return Trial{Trial::End::kInterrupted, {}, ""};
       }
       --left_;
     }
@@ -86,16 +93,23 @@ class TrialCache {
       cv_.wait(lock, [&] { return free_ > 0; });
       --free_;
     }
-    const std::optional<RunResult> r = run_(c, (dir_ / "runs" / keyHash(key) / c.method).string());
+    Trial t;
+    try {
+      t = run_(c, (dir_ / "runs" / keyHash(key) / c.method).string());
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(m_);
+      ++free_;
+      cv_.notify_one();
+      throw;
+    }
     std::lock_guard<std::mutex> lock(m_);
     ++free_;
     cv_.notify_one();
-    if (!r) return r;
+    if (t.end != Trial::End::kRecorded) return t;
     fresh = true;
-    results_[key] = *r;
-    std::ofstream out(dir_ / "cache.jsonl", std::ios::app);
-    out << json{{"key", key}, {"result", toJson(*r)}}.dump() << "\n";
-    return r;
+    results_[key] = t.result;
+    files::appendDurably((dir_ / "cache.jsonl").string(), json{{"key", key}, {"result", toJson(t.result)}}.dump() + "\n");
+    return t;
   }
 
  private:
@@ -218,7 +232,9 @@ class Shrinker {
   }
 
  private:
-  // 1: fails the same way (best_ becomes c), 0: does not (or over budget), -1: interrupted.
+  // 1: fails the same way (best_ becomes c), 0: does not (or over budget), -1: interrupted or
+  // lost (lost_ says why). Every trial counts, from the cache or run now, so that `runs` and the
+  // budget do not depend on what an earlier, interrupted driver ran or on the other shrinks.
   int tryConfig(const RunConfig& c) {
     bool fresh = false;
     if (runs_ >= s_.shrink.max_runs) {
@@ -226,16 +242,17 @@ class Shrinker {
       return 0;
     }
     bool spent = false;
-    const std::optional<RunResult> r = cache_.get(c, fresh, spent);
+    const Trial t = cache_.get(c, fresh, spent);
     if (spent) {
       exhausted_ = true;
       return 0;
     }
-    if (!r) return -1;
-    runs_ += fresh ? 1 : 0;
-    if (!sameFailure(*r)) return 0;
+    if (t.end == Trial::End::kLost) lost_ = t.why;
+    if (t.end != Trial::End::kRecorded) return -1;
+    ++runs_;
+    if (!sameFailure(t.result)) return 0;
     best_ = c;
-    best_result_ = *r;
+    best_result_ = t.result;
     return 1;
   }
 
@@ -330,6 +347,9 @@ class Shrinker {
   RunResult best_result_;
   int runs_ = 0;
   bool exhausted_ = false;
+
+ public:
+  std::string lost_;  ///< why a trial was lost ("" when none was)
 };
 
 }  // namespace
@@ -347,33 +367,50 @@ std::vector<json> minimalFailures(const SweepSpec& s, const std::vector<json>& r
   return out;
 }
 
-std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& records, const DriverOptions& o, const RunOne& run) {
+std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& records, const DriverOptions& o, const RunOne& run,
+                                 std::vector<std::string>& lost) {
   std::vector<Failure> failures = collect(s, records);
   std::vector<json> out(failures.size());
   if (failures.empty()) return out;
   TrialCache cache(o.out_dir, run, std::max(1, o.jobs), s.shrink.max_total_runs);
   std::vector<char> ok(failures.size(), 0);
+  std::vector<std::string> lost_by(failures.size());
+  std::mutex error_m;
+  std::exception_ptr error;
   // One thread per failure; the cache lets at most `jobs` trials run at once. Each shrink is
-  // sequential, so its outcome does not depend on the others' timing.
+  // sequential, so its outcome does not depend on the others' timing. An exception in a thread
+  // (an output that cannot be written) is carried to the caller.
   std::vector<std::thread> threads;
   for (size_t i = 0; i < failures.size(); ++i) {
     threads.emplace_back([&, i]() {
-      const Failure& f = failures[i];
-      // Timeouts and crashes are not shrunk (each trial could cost the whole timeout).
-      const std::string status = f.first["runs"][f.method].value("status", "");
-      if (f.check == kRunCompleted && (status == "timeout" || status == "crashed")) return;
-      Shrinker sh(s, f, cache);
-      if (!sh.run()) return;
-      out[i] = sh.result(o.out_dir);
-      ok[i] = 1;
-      if (o.progress) {
-        std::fprintf(stderr, "[sweep %s] shrunk %s %s: %s\n", s.name.c_str(), f.method.c_str(), f.check.c_str(),
-                     out[i].value("command", "").c_str());
+      try {
+        const Failure& f = failures[i];
+        // Timeouts are not shrunk (each trial could cost the whole timeout).
+        const std::string status = f.first["runs"][f.method].value("status", "");
+        if (f.check == kRunCompleted && (status == "timeout" || status == "crashed")) return;
+        Shrinker sh(s, f, cache);
+        if (!sh.run()) {
+          lost_by[i] = sh.lost_;
+          return;
+        }
+        out[i] = sh.result(o.out_dir);
+        ok[i] = 1;
+        if (o.progress) {
+          std::fprintf(stderr, "[sweep %s] shrunk %s %s: %s\n", s.name.c_str(), f.method.c_str(), f.check.c_str(),
+                       out[i].value("command", "").c_str());
+        }
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_m);
+        if (!error) error = std::current_exception();
       }
     });
   }
   for (auto& t : threads) t.join();
-  // Failures that were not shrunk (interrupted, or not shrinkable) keep their point.
+  if (error) std::rethrow_exception(error);
+  for (size_t i = 0; i < failures.size(); ++i) {
+    if (!lost_by[i].empty()) lost.push_back("shrinking " + failures[i].method + " " + failures[i].check + ": " + lost_by[i]);
+  }
+  // Failures that were not shrunk (interrupted, lost, or not shrinkable) keep their point.
   const std::vector<json> plain = minimalFailures(s, records, o);
   for (size_t i = 0; i < out.size(); ++i) {
     if (!ok[i]) out[i] = plain[i];

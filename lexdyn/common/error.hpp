@@ -24,6 +24,19 @@ class InputError : public std::runtime_error {
   std::string what_;
 };
 
+/// A failure to write an output (a full disk, a read-only or unwritable folder, a file-size
+/// limit): a run failure (exit code 3), never bad input. `where` names the file, `what` says
+/// what was being done and the operating system's reason ("No space left on device").
+class OutputError : public std::runtime_error {
+ public:
+  OutputError(const std::string& where, const std::string& what)
+      : std::runtime_error(where.empty() ? what : where + ": " + what), where_(where) {}
+  const std::string& where() const noexcept { return where_; }
+
+ private:
+  std::string where_;
+};
+
 [[noreturn]] void abortWithMessage(const char* file, int line, const char* cond, const std::string& msg);
 
 /// Throws std::out_of_range ("FUNCTION: index I out of range [0, N)") unless 0 <= i < n: public

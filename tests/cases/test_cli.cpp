@@ -231,6 +231,15 @@ TEST(HarnessCli, GoldenUpdateThenCheckAndAMismatchNamesTimeAndChannel) {
       << r.err;
   EXPECT_NE(r.err.find("ok   minimal.wls"), std::string::npos) << r.err;
   EXPECT_EQ(harness("golden check --only minimal.wls" + g, dir).code, 0);
+  // The wls golden cut at a line end (its end mark gone) is named as cut, not as a row count.
+  {
+    std::ifstream win(dir + "/golden/minimal.wls.csv");
+    std::string w((std::istreambuf_iterator<char>(win)), std::istreambuf_iterator<char>());
+    win.close();
+    std::ofstream(dir + "/golden/minimal.wls.csv") << w.substr(0, w.rfind("# end:"));
+    r = harness("golden check --only minimal.wls" + g, dir);
+    expectExit(r, 1, {"FAIL minimal.wls", "no end mark", "cut"});
+  }
   EXPECT_EQ(harness("golden check --only minimal.gn" + g, dir).code, 2);  // not in the manifest
   std::ofstream(dir + "/golden/bad.yaml") << "format: lexdyn-golden-manifest/1\nentries: [{case: ../case.yaml}]\n";
   r = harness("golden check --manifest " + dir + "/golden/bad.yaml", dir);

@@ -6,6 +6,8 @@
 #include "lexdyn/common/error.hpp"
 #include "case_test_utils.hpp"
 
+#include "../common/cli_test_utils.hpp"
+
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -150,6 +152,26 @@ TEST(ExpectedFailures, ThePointMassWlsRunFailsAsItsCaseSays) {
       runWls(pointMassWith("expected_failures_partial", "[{method: wls, checks: [no_overshoot], reason: r}]"), "expected_failures_pm_partial");
   EXPECT_EQ(partial.expectation_mismatches, (std::vector<std::string>{"closed_form_eq49 failed (not expected)"}));
   EXPECT_EQ(exitCode(partial), kExitCheckFailed);
+}
+
+// `check` on the stored trace of such a run judges it as `run` did: exit 0 when it failed exactly
+// as declared, 1 with the mismatch otherwise.
+TEST(ExpectedFailures, CheckJudgesAStoredTraceAsRunDid) {
+  const std::string dir = outputDir("expected_failures_check");
+  const std::string declared = pointMassWith("expected_failures_check_case", "[{method: wls, checks: [closed_form_eq49, no_overshoot], reason: r}]");
+  lexdyn::testing::CliResult r = lexdyn::testing::harness("run " + declared + " --method wls --duration 10 --out " + dir + "/out --quiet", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = lexdyn::testing::harness("check " + dir + "/out/trace.csv --case " + declared, dir);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("expected failure, as the case says"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("xfail no_overshoot"), std::string::npos) << r.err;
+  const std::string partial = pointMassWith("expected_failures_check_partial", "[{method: wls, checks: [no_overshoot], reason: r}]");
+  r = lexdyn::testing::harness("check " + dir + "/out/trace.csv --case " + partial, dir);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("NOT the expected failure"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("closed_form_eq49 failed (not expected)"), std::string::npos) << r.err;
+  const std::string plain = pointMassWith("expected_failures_check_plain", "");
+  EXPECT_EQ(lexdyn::testing::harness("check " + dir + "/out/trace.csv --case " + plain, dir).code, 1);
 }
 
 }  // namespace

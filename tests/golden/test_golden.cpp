@@ -142,6 +142,30 @@ TEST(Golden, SelectionDropsTheWallTimeChannelsAndFilesKeepProvenance) {
   }
   EXPECT_EQ(*checks::findMetadata(r.metadata, "golden_method"), "bfgs");
   EXPECT_TRUE(compare(r, s, Tolerance{0.0, 0.0}, {}).ok);  // the file round-trips exactly
+  EXPECT_TRUE(goldenFileProblems(r).empty());
+}
+
+TEST(Golden, AGoldenFileCutAtALineEndIsNamedAsCut) {
+  checks::TraceTable t = table();
+  const std::string dir = tempDir("golden_cut");
+  Entry e;
+  e.case_name = "c";
+  e.duration_s = 1.0;
+  e.every_n_ticks = 1;
+  writeGolden(dir + "/c.csv", t, provenance(e, "", "completed", dir));
+  std::ifstream in(dir + "/c.csv");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Cut after its last row (the end mark gone) and after its fifth row: both at a line end.
+  const size_t mark = text.rfind("# end:");
+  ASSERT_NE(mark, std::string::npos);
+  for (const size_t cut : {mark, text.rfind('\n', text.rfind('\n', mark - 1) - 1) + 1}) {
+    std::ofstream(dir + "/cut.csv") << text.substr(0, cut);
+    const checks::TraceTable r = checks::readTrace(dir + "/cut.csv");
+    const std::vector<std::string> p = goldenFileProblems(r);
+    ASSERT_EQ(p.size(), 1u) << cut;
+    EXPECT_NE(p[0].find("no end mark"), std::string::npos) << p[0];
+    EXPECT_NE(p[0].find("cut"), std::string::npos) << p[0];
+  }
 }
 
 TEST(Golden, ManifestErrorsNameFileLineAndKey) {

@@ -1,7 +1,7 @@
 // The sweep driver on a real sweep (cases/sweeps/pointmass-damping.yaml, the sec. V-A point
 // mass over the damping mu and the gain kp): one record per point, resumption after SIGKILL
-// giving the same records as an uninterrupted run, a crash and a hang recorded as that run's
-// failure, and the shrinker finding the failure boundary known in closed form (eq. 51: the
+// giving the same records as an uninterrupted run, a hang recorded as that run's failure (its
+// timeout; a process killed from outside is run again, tests/faults), and the shrinker finding the failure boundary known in closed form (eq. 51: the
 // acceleration-domain PD overshoots by exp(-pi/mu) for every kp).
 #include <nlohmann/json.hpp>
 
@@ -164,7 +164,7 @@ TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
   EXPECT_NE(readText(dir + "/c.log").find("replayed 1 earlier failure(s)"), std::string::npos);
 }
 
-TEST(SweepDriver, ACrashOrAHangIsThatRunsRecordedFailure) {
+TEST(SweepDriver, AHangIsThatRunsRecordedFailure) {
   // A run that overruns its timeout is killed and recorded; the sweep goes on.
   const std::string dir = dirFor("sweep_driver_timeout");
   ASSERT_EQ(run("sweep run " + kSweep + " --out " + dir + "/out --points 1 --timeout 0.05 --no-db --no-shrink", dir + "/log"), 1)
