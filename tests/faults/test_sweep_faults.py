@@ -100,6 +100,7 @@ def resume_until_done(env, out, tries=3):
 
 
 def test_worker_kills(env, base, rng):
+    shrink_kills = [0]
     for k in range(6):
         sig = signal.SIGKILL if k % 2 == 0 else signal.SIGTERM
         out = env.fresh(f"worker-kill-{k}")
@@ -114,10 +115,13 @@ def test_worker_kills(env, base, rng):
                 break
             pids = workers_of(out)
             if pids:
+                pid = rng.choice(pids)
                 try:
-                    os.kill(rng.choice(pids), sig)
+                    during_shrink = b"/shrink/" in open(f"/proc/{pid}/cmdline", "rb").read()
+                    os.kill(pid, sig)
                     kills += 1
-                except ProcessLookupError:
+                    shrink_kills[0] += 1 if during_shrink else 0
+                except (ProcessLookupError, FileNotFoundError):
                     pass
         _, err = p.communicate(timeout=300)
         check(p.returncode in (0, 1, 3), f"{sig.name} to {kills} worker(s) #{k}: exit {p.returncode} (no abort)")
@@ -125,6 +129,7 @@ def test_worker_kills(env, base, rng):
         r = resume_until_done(env, out) if p.returncode == 3 else p
         check(outcome(out) == base["outcome"], f"{sig.name} to {kills} worker(s) #{k}: records, failures and database as uninterrupted")
         check(r.returncode == base["code"], f"{sig.name} #{k}: exit code {r.returncode} as uninterrupted ({base['code']})")
+    check(shrink_kills[0] > 0, f"{shrink_kills[0]} of the kills hit a shrinking trial")
 
 
 def test_driver_kills(env, base, rng):
