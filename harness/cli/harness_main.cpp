@@ -28,6 +28,7 @@
 //   0          the run completed and every check that decides passed (wall-clock checks decide
 //              only with --wall-clock-checks).
 #include "harness/cases/runner.hpp"
+#include "harness/checks/output_files.hpp"
 #include "harness/cli/exception_exit.hpp"
 #include "harness/cli/robot_cmd.hpp"
 #include "harness/cli/sweep_cmd.hpp"
@@ -163,7 +164,11 @@ int runCheck(const std::vector<std::string>& positional, const std::string& case
   printChecks(results, x ? x->checks : std::vector<std::string>{});
   if (json) std::printf("%s\n", lexdyn::cases::checkResultsJson(results).c_str());
   if (x && !table.end_status.empty() && table.end_status != "interrupted") {
-    const bool cut_short = spec.duration_s < spec.scenario_duration_s - 1e-9;
+    // Cut short as the run was: the trace's last time, not the case file's duration (a run given
+    // --duration keeps the case's own stop).
+    const int tc = table.column(lexdyn::checks::kTimeChannel);
+    const double last_t = tc >= 0 && !table.rows.empty() ? table.rows.back()[static_cast<size_t>(tc)] : 0.0;
+    const bool cut_short = last_t < spec.scenario_duration_s - 1e-6;
     const std::vector<std::string> mismatches = lexdyn::cases::expectationMismatches(*x, table.end_status, results, cut_short);
     if (mismatches.empty()) {
       std::fprintf(stderr, "  expected failure, as the case says (%s): %s\n", x->where.c_str(), x->reason.c_str());
@@ -440,11 +445,7 @@ int main(int argc, char** argv) {
       }
       const fs::path dir = fs::path(case_out).parent_path().empty() ? fs::path(".") : fs::path(case_out).parent_path();
       const std::string text = lexdyn::cases::effectiveCaseText(spec, dir.string());
-      const std::string tmp = case_out + ".partial";
-      std::FILE* f = std::fopen(tmp.c_str(), "wb");
-      if (!f) throw lexdyn::InputError(case_out, "cannot open for writing");
-      const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-      if (std::fclose(f) != 0 || !ok || std::rename(tmp.c_str(), case_out.c_str()) != 0) throw lexdyn::InputError(case_out, "cannot write");
+      lexdyn::files::writeAtomically(case_out, text);
       std::fprintf(stderr, "wrote %s\n", case_out.c_str());
       return 0;
     }

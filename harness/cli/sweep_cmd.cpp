@@ -10,6 +10,8 @@
 
 #include <unistd.h>
 
+#include <optional>
+
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -205,9 +207,13 @@ int runSweepCommand(const SweepCommand& c, const std::atomic<int>& signal, const
   }
   sweep::DriverOptions o = driverOptions(c, s, signal);
   // One job per sweep folder; the tasks of a Slurm array (chunks of disjoint points) share it.
-  const std::string sub = *c.run ? "run" : (*c.merge ? "merge" : (*c.chunk ? "chunk" : "submit"));
-  const files::FolderLock lock(o.out_dir, "lexdyn-harness sweep " + sub + " " + s.name,
-                               *c.chunk ? files::FolderLock::Mode::kShared : files::FolderLock::Mode::kExclusive);
+  // `submit` holds it while it prepares the folder, not while Slurm starts the tasks.
+  std::optional<files::FolderLock> lock;
+  if (!*c.submit) {
+    const std::string sub = *c.run ? "run" : (*c.merge ? "merge" : "chunk");
+    lock.emplace(o.out_dir, "lexdyn-harness sweep " + sub + " " + s.name,
+                 *c.chunk ? files::FolderLock::Mode::kShared : files::FolderLock::Mode::kExclusive);
+  }
   if (*c.run) return sweep::runSweep(s, o);
   if (*c.merge) return sweep::mergeSweep(s, o);
   if (*c.chunk) {

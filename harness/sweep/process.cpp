@@ -117,15 +117,27 @@ ProcessOutcome runProcess(const std::vector<std::string>& argv, const std::strin
   };
   int status = 0;
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  // Time the process spends stopped (SIGSTOP, a suspended job) does not count toward its timeout.
+  double stopped_s = 0.0, stopped_at = -1.0;
   bool killed = false;
   for (;;) {
-    const pid_t r = ::waitpid(pid, &status, WNOHANG);
+    const pid_t r = ::waitpid(pid, &status, WNOHANG | WUNTRACED | WCONTINUED);
+    if (r == pid && WIFSTOPPED(status)) {
+      if (stopped_at < 0.0) stopped_at = elapsed();
+      continue;
+    }
+    if (r == pid && WIFCONTINUED(status)) {
+      if (stopped_at >= 0.0) stopped_s += elapsed() - stopped_at;
+      stopped_at = -1.0;
+      continue;
+    }
     if (r == pid) break;
     if (r < 0 && errno != EINTR) {
       out.error = std::string("waitpid: ") + std::strerror(errno);
       break;
     }
-    if (!killed && timeout_s > 0.0 && elapsed() > timeout_s) {
+    const double running_s = elapsed() - stopped_s - (stopped_at >= 0.0 ? elapsed() - stopped_at : 0.0);
+    if (!killed && timeout_s > 0.0 && running_s > timeout_s) {
       out.timed_out = true;
       ::kill(-pid, SIGKILL);
       killed = true;

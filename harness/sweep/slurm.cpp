@@ -1,10 +1,13 @@
 #include "harness/sweep/slurm.hpp"
 
+#include "harness/checks/output_files.hpp"
+
 #include "harness/sweep/sweep_records.hpp"
 #include "lexdyn/common/error.hpp"
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 namespace lexdyn::sweep {
 
@@ -30,6 +33,8 @@ std::string capture(const std::string& cmd, bool& ok) {
 }  // namespace
 
 int submitSweep(const SweepSpec& s, const DriverOptions& o, const SlurmOptions& so) {
+  // The folder is locked while its scripts are written, and free before sbatch starts the tasks.
+  std::optional<files::FolderLock> lock(std::in_place, o.out_dir, "lexdyn-harness sweep submit " + s.name);
   prepareOutDir(s, o.out_dir);
   const fs::path out = fs::absolute(o.out_dir).lexically_normal();
   const std::string file = fs::absolute(s.path).lexically_normal().string();
@@ -59,6 +64,7 @@ int submitSweep(const SweepSpec& s, const DriverOptions& o, const SlurmOptions& 
   writeAtomically((dir / "merge.sh").string(), merge);
   std::fprintf(stderr, "[sweep %s] %zu missing points in %ld array tasks of %d; scripts in %s\n", s.name.c_str(), missing.size(), tasks, so.chunk,
                dir.string().c_str());
+  lock.reset();
   if (so.dry_run) return 0;
   bool ok = true;
   std::string dependency;

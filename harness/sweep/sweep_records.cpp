@@ -93,7 +93,7 @@ RunResult fromJson(const json& j) {
 std::optional<RunResult> recordedResult(const json& j, std::string& why) {
   // The statuses of runs that ended on their own, and the driver's own verdicts on a process.
   static const std::set<std::string> kRecorded = {"completed", "integrator_failure", "controller_failure", "internal_error",
-                                                  "input_error", "timeout", "bad_input"};
+                                                  "input_error", "timeout", "bad_input", "crashed"};
   if (!j.is_object()) {
     why = "not a JSON object";
     return std::nullopt;
@@ -104,8 +104,8 @@ std::optional<RunResult> recordedResult(const json& j, std::string& why) {
   }
   const std::string status = j["status"].get<std::string>();
   if (!kRecorded.count(status)) {
-    // "interrupted", "crashed", "no_summary": stored by older drivers for runs killed from
-    // outside, which are never results.
+    // "interrupted", "no_summary": stored by older drivers for runs killed from outside, which
+    // are never results.
     why = "status '" + status + "' is not the end of a run";
     return std::nullopt;
   }
@@ -473,11 +473,28 @@ bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
   std::istringstream in(db);
   std::string line, records;
   int k = 0, replayed = 0, still = 0;
+  long line_no = 0;
   while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty()) continue;
     json e;
+    std::string bad;
     try {
       e = json::parse(line);
-    } catch (const std::exception&) {
+      if (!e.is_object()) bad = "not a JSON object";
+      else if (!e.contains("sweep") || !e["sweep"].is_string() || !e.contains("method") || !e["method"].is_string() || !e.contains("check") ||
+               !e["check"].is_string() || !e.contains("values") || !e["values"].is_object()) {
+        bad = "expected sweep, method, check and values";
+      } else {
+        for (auto it = e["values"].begin(); it != e["values"].end(); ++it) {
+          if (!it.value().is_string()) bad = "values." + it.key() + ": expected a string";
+        }
+      }
+    } catch (const std::exception& ex) {
+      bad = std::string("damaged: ") + ex.what();
+    }
+    if (!bad.empty()) {
+      std::fprintf(stderr, "[sweep %s] warning: %s:%ld: %s; the line is skipped\n", s.name.c_str(), o.db_path.c_str(), line_no, bad.c_str());
       continue;
     }
     if (e.value("sweep", "") != s.name) continue;

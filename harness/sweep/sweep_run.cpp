@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <csignal>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -87,6 +88,10 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
     return t;
   }
   if (p.signal != 0) return lost("killed by " + signalName(p.signal));
+  if (!p.log_error.empty()) return lost("its log could not be written");
+  if (p.exit_code == 2 && p.output_tail.find("in use by another lexdyn job") != std::string::npos) {
+    return lost("its folder was in use by another job");
+  }
   if (p.exit_code == 2) {
     r.status = "bad_input";
     r.message = lastLines(p.output_tail, 1);
@@ -101,6 +106,8 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
   r.message = j.is_object() ? j.value("message", "") : "";
   if (r.status == "interrupted") return lost("stopped by a signal from outside (exit code " + std::to_string(p.exit_code) + ": " + r.message + ")");
   if (r.status == "output_error") return lost("could not write its outputs: " + r.message);
+  // Out of memory says nothing of the configuration: the machine's state, like a kill.
+  if (r.status == "internal_error" && r.message.find("out of memory") != std::string::npos) return lost(r.message);
   if (r.status != "completed" && r.status != "integrator_failure" && r.status != "controller_failure" && r.status != "internal_error" &&
       r.status != "input_error") {
     return lost("summary.json has no status of a finished run ('" + r.status + "')");
@@ -217,7 +224,13 @@ void prepareOutDir(const SweepSpec& s, const std::string& out_dir) {
                                     " differs); use another --out or remove it");
     }
   } else {
-    writeAtomically(recorded, kSweepRecordHeader + textDigest(text) + "\n" + text);
+    const std::string record = kSweepRecordHeader + textDigest(text) + "\n" + text;
+    try {
+      writeAtomically(recorded, record);
+    } catch (const OutputError&) {
+      // Slurm array tasks starting at once write the same record: one rename wins.
+      if (readFileText(recorded) != record) throw;
+    }
   }
 }
 
@@ -244,7 +257,11 @@ class Pool {
     std::exception_ptr error;
     const int n = std::max(1, std::min<int>(o_.jobs > 0 ? o_.jobs : 1, static_cast<int>(jobs.size())));
     std::vector<std::thread> threads;
+    auto joinAll = [&] {
+      for (auto& t : threads) t.join();
+    };
     for (int t = 0; t < n; ++t) {
+      try {
       threads.emplace_back([&]() {
         try {
           for (;;) {
@@ -266,8 +283,13 @@ class Pool {
           abort_.store(1);
         }
       });
+      } catch (...) {  // no thread could be created: stop, and let the running ones end first
+        abort_.store(1);
+        joinAll();
+        throw;
+      }
     }
-    for (auto& t : threads) t.join();
+    joinAll();
     if (error) std::rethrow_exception(error);
   }
 
@@ -277,7 +299,19 @@ class Pool {
     if (first.end != Trial::End::kLost) return first;
     if (o_.progress) std::fprintf(stderr, "[sweep %s] %s: %s; running it again\n", s_.name.c_str(), label(job).c_str(), first.why.c_str());
     Trial second = attempt(job);
-    if (second.end == Trial::End::kLost) second.why = first.why + "; run again: " + second.why;
+    if (second.end != Trial::End::kLost) return second;
+    second.why = first.why + "; run again: " + second.why;
+    // A crash of the run itself (not a signal from outside) that repeats is the run's result.
+    auto crashed = [](const Trial& t) {
+      const int sig = t.result.exit_code - 128;
+      return sig == SIGSEGV || sig == SIGABRT || sig == SIGBUS || sig == SIGFPE || sig == SIGILL;
+    };
+    if (crashed(first) && crashed(second)) {
+      second.end = Trial::End::kRecorded;
+      second.result.status = "crashed";
+      second.result.message = second.why;
+      writeAtomically((fs::path(job.dir) / "result.json").string(), toJson(second.result).dump(1) + "\n");
+    }
     return second;
   }
 
@@ -515,6 +549,14 @@ int mergeSweep(const SweepSpec& s, const DriverOptions& o) {
 
 int runSweep(const SweepSpec& s, const DriverOptions& o) {
   prepareOutDir(s, o.out_dir);
+  // Until the merge writes it again there is no summary: a sweep that stops (lost runs, a full
+  // disk) never leaves the summary of fewer records.
+  {
+    const std::string summary_path = (fs::path(o.out_dir) / "summary.json").string();
+    std::error_code ec;
+    fs::remove(summary_path, ec);
+    if (ec) throw OutputError(summary_path, "cannot remove the earlier summary: " + ec.message());
+  }
   std::vector<std::string> lost;
   if (!o.db_path.empty()) {
     Pool pool(s, o);

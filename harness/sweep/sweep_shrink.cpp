@@ -17,6 +17,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -79,7 +80,10 @@ class TrialCache {
     fresh = false;
     exhausted = false;
     {
-      std::lock_guard<std::mutex> lock(m_);
+      std::unique_lock<std::mutex> lock(m_);
+      // Two shrinks may ask for the same configuration at once: the second waits for the first's
+      // trial (one process per trial folder), and takes its result.
+      cv_.wait(lock, [&] { return running_.count(key) == 0; });
       auto it = results_.find(key);
       if (it != results_.end()) return Trial{Trial::End::kRecorded, it->second, ""};
       if (left_ <= 0) {
@@ -87,28 +91,33 @@ class TrialCache {
         return Trial{Trial::End::kInterrupted, {}, ""};
       }
       --left_;
-    }
-    {
-      std::unique_lock<std::mutex> lock(m_);
+      running_.insert(key);
       cv_.wait(lock, [&] { return free_ > 0; });
       --free_;
     }
+    auto release = [&] {
+      std::lock_guard<std::mutex> lock(m_);
+      ++free_;
+      running_.erase(key);
+      cv_.notify_all();
+    };
     Trial t;
     try {
       t = run_(c, (dir_ / "runs" / keyHash(key) / c.method).string());
+      if (t.end == Trial::End::kRecorded) {
+        files::appendDurably((dir_ / "cache.jsonl").string(), json{{"key", key}, {"result", toJson(t.result)}}.dump() + "\n");
+        std::lock_guard<std::mutex> lock(m_);
+        results_[key] = t.result;
+      } else {
+        std::lock_guard<std::mutex> lock(m_);
+        ++left_;  // nothing was learnt: the trial is run again next time
+      }
     } catch (...) {
-      std::lock_guard<std::mutex> lock(m_);
-      ++free_;
-      cv_.notify_one();
+      release();
       throw;
     }
-    std::lock_guard<std::mutex> lock(m_);
-    ++free_;
-    cv_.notify_one();
-    if (t.end != Trial::End::kRecorded) return t;
-    fresh = true;
-    results_[key] = t.result;
-    files::appendDurably((dir_ / "cache.jsonl").string(), json{{"key", key}, {"result", toJson(t.result)}}.dump() + "\n");
+    release();
+    fresh = t.end == Trial::End::kRecorded;
     return t;
   }
 
@@ -120,6 +129,7 @@ class TrialCache {
   int free_;
   int left_;  ///< fresh trials the sweep may still run
   std::map<std::string, RunResult> results_;
+  std::set<std::string> running_;  ///< configurations whose trial is running
 };
 
 // A failure: a check (or run_completed) of a method, first seen failing at some points.
@@ -381,7 +391,11 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
   // sequential, so its outcome does not depend on the others' timing. An exception in a thread
   // (an output that cannot be written) is carried to the caller.
   std::vector<std::thread> threads;
+  auto joinAll = [&] {
+    for (auto& t : threads) t.join();
+  };
   for (size_t i = 0; i < failures.size(); ++i) {
+    try {
     threads.emplace_back([&, i]() {
       try {
         const Failure& f = failures[i];
@@ -404,8 +418,12 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
         if (!error) error = std::current_exception();
       }
     });
+    } catch (...) {  // no thread could be created: the ones running end first
+      joinAll();
+      throw;
+    }
   }
-  for (auto& t : threads) t.join();
+  joinAll();
   if (error) std::rethrow_exception(error);
   for (size_t i = 0; i < failures.size(); ++i) {
     if (!lost_by[i].empty()) lost.push_back("shrinking " + failures[i].method + " " + failures[i].check + ": " + lost_by[i]);

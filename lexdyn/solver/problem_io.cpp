@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -266,17 +268,21 @@ std::string problemToJson(const Problem& problem) {
 }
 
 void writeFileAtomic(const std::string& path, const std::string& text) {
+  // An output that cannot be written is a run failure with the system's reason, not bad input.
   const std::string tmp = path + ".tmp";
-  {
-    std::ofstream o(tmp, std::ios::binary | std::ios::trunc);
-    if (!o) throw InputError(path, "cannot write file");
-    o << text;
-    o.flush();
-    if (!o) throw InputError(path, "write failed");
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw OutputError(tmp, std::string("cannot open for writing: ") + std::strerror(errno));
+  const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size() && std::fflush(f) == 0;
+  const int err = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (!written || !closed) {
+    std::remove(tmp.c_str());
+    throw OutputError(tmp, std::string("cannot write: ") + std::strerror(written ? errno : err));
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int e = errno;
     std::remove(tmp.c_str());
-    throw InputError(path, "cannot rename temporary file into place");
+    throw OutputError(path, std::string("cannot rename into place: ") + std::strerror(e));
   }
 }
 

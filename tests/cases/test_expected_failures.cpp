@@ -170,6 +170,11 @@ TEST(ExpectedFailures, CheckJudgesAStoredTraceAsRunDid) {
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_NE(r.err.find("NOT the expected failure"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("closed_form_eq49 failed (not expected)"), std::string::npos) << r.err;
+  // A run cut short by --duration: judged as cut short from the trace itself.
+  r = lexdyn::testing::harness("run " + declared + " --method wls --duration 3 --out " + dir + "/short --quiet", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = lexdyn::testing::harness("check " + dir + "/short/trace.csv --case " + declared, dir);
+  EXPECT_EQ(r.code, 0) << r.err;
   const std::string plain = pointMassWith("expected_failures_check_plain", "");
   EXPECT_EQ(lexdyn::testing::harness("check " + dir + "/out/trace.csv --case " + plain, dir).code, 1);
 }

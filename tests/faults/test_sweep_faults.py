@@ -53,7 +53,7 @@ def outcome(out):
 
 class Env:
     def __init__(self, a):
-        self.h, self.src, self.work = a.harness, a.source, a.work
+        self.h, self.src, self.work = os.path.abspath(a.harness), os.path.abspath(a.source), a.work
 
     def sweep_cmd(self, out, *extra):
         return [self.h, "sweep", "run", os.path.join(self.src, SWEEP), "--out", out, "-j", "2", "--points", POINTS,
@@ -203,6 +203,15 @@ def test_damaged_state(env, base):
     open(os.path.join(out, "shrink", "cache.jsonl"), "w").write("\n".join(lines[:3] + ['{"key": "cut'] + lines[5:]))
     r = env.sweep(out)
     check(r.returncode == base["code"] and outcome(out) == base["outcome"], f"a damaged shrink cache: as uninterrupted (exit {r.returncode})")
+    # Lines of the failure database that are not failures are named (file and line) and skipped.
+    out = env.fresh("damaged-db")
+    with open(out + ".db", "w") as f:
+        f.write(open(src + ".db").read() + '7\n{"sweep": "pointmass-damping", "method": "wls", "check": "no_overshoot", "values": {"controller.params.damping": 0.5}}\n{"sweep"')
+    r = env.sweep(out)
+    got = outcome(out)
+    check(r.returncode == base["code"] and got["records"] == base["outcome"]["records"] and got["summary"] == base["outcome"]["summary"]
+          and f"{out}.db:2:" in r.stderr and f"{out}.db:3:" in r.stderr and f"{out}.db:4:" in r.stderr,
+          f"a damaged failure database: its bad lines named and skipped (exit {r.returncode})")
     # A damaged sweep.txt is named as damaged, not as another sweep.
     out = env.fresh("damaged-sweeptxt")
     shutil.copytree(src, out)
@@ -211,6 +220,40 @@ def test_damaged_state(env, base):
     open(st, "w").write(text[: len(text) - 40])
     r = env.sweep(out)
     check(r.returncode == 2 and "damaged" in r.stderr and "sweep.txt" in r.stderr, f"a cut sweep.txt is refused as damaged: {r.stderr.strip()[:200]}")
+
+
+def test_concurrent_shrinks(env):
+    """Two failures of one method shrink at once and may ask for the same trial: it runs once."""
+    text = open(os.path.join(env.src, SWEEP)).read()
+    text = text.replace("base: ../pointmass-damping.yaml", "base: " + os.path.join(env.src, "cases/pointmass-damping.yaml"))
+    text = text.replace("checks: [no_overshoot, controller_ok]", "checks: [no_overshoot, closed_form_eq49, controller_ok]")
+    sweep = os.path.join(env.work, "two-failures.yaml")
+    open(sweep, "w").write(text)
+    outs = []
+    for k in range(2):
+        out = env.fresh(f"two-failures-{k}")
+        r = subprocess.run([env.h, "sweep", "run", sweep, "--out", out, "-j", "2", "--points", POINTS, "--no-db", "--quiet"],
+                           capture_output=True, text=True, cwd=env.work)
+        cache = open(os.path.join(out, "shrink", "cache.jsonl")).read()
+        check(r.returncode == 1 and "bad_input" not in cache and "in use" not in cache, f"two shrinks of one method #{k}: no trial refused (exit {r.returncode})")
+        outs.append(outcome(out))
+    check(outs[0] == outs[1], "two shrinks of one method: the same shrunk failures every time")
+
+
+def test_stopped_worker(env, base):
+    """A worker stopped (SIGSTOP) for longer than the timeout, then continued: not a timeout."""
+    out = env.fresh("stopped-worker")
+    p = env.start(out, "--timeout", "3")
+    pids = []
+    while p.poll() is None and not pids:
+        time.sleep(0.05)
+        pids = workers_of(out)
+    if pids:
+        os.kill(pids[0], signal.SIGSTOP)
+        time.sleep(4.5)
+        os.kill(pids[0], signal.SIGCONT)
+    p.communicate(timeout=300)
+    check(bool(pids) and p.returncode == base["code"] and outcome(out) == base["outcome"], f"a worker stopped for 4.5 s of a 3 s timeout: as uninterrupted (exit {p.returncode})")
 
 
 def small_fs(path, size):
@@ -314,6 +357,8 @@ def main():
         "two_sweeps": lambda: test_two_sweeps(env, base),
         "damaged_state": lambda: test_damaged_state(env, base),
         "full_disk": lambda: test_full_disk(env, base),
+        "concurrent_shrinks": lambda: test_concurrent_shrinks(env),
+        "stopped_worker": lambda: test_stopped_worker(env, base),
         "worker_kills": lambda: test_worker_kills(env, base, rng),
         "driver_kills": lambda: test_driver_kills(env, base, rng),
     }
