@@ -31,7 +31,6 @@ std::optional<std::string> readWhole(const std::string& path);
 /// DIR/.lexdyn.lock, locked with flock(2) and holding one line `pid=P started=T host=H
 /// command=C` of its holder. A lock of a process that ended is free (the kernel releases it),
 /// so a stale file is taken over. The file is never removed (a third job would lock a new one).
-/// The same format is used by report.py and nightly.sh.
 class FolderLock {
  public:
   enum class Mode { kExclusive, kShared };
