@@ -8,7 +8,8 @@
 #                                   [--no-build] [--no-ctest]
 #   --out DIR       this night's directory (default out/nightly/<UTC date>); running again with
 #                   the same DIR resumes: a run whose summary.json exists (and is not
-#                   "interrupted") is done, a stored ctest result and sweep output are kept
+#                   "interrupted") is done, a stored ctest result and sweep output are kept.
+#                   Locked while the job runs (DIR/.lexdyn.lock): a second job on DIR exits 2
 #   --history FILE  JSON Lines history (default out/nightly/history.jsonl)
 #   -j JOBS         runs at a time (default LEXDYN_JOBS or the number of cores)
 #   --config FILE   nightly configuration (default harness/nightly.yaml): the sweeps
@@ -19,9 +20,10 @@
 # ctest/{junit.xml,log.txt}, sweeps/<name>/, report/index.html}.
 # Exit codes: 0 every run completed and every check, comparison, golden and test passed; 1 a
 # check, comparison, golden or test failed; 2 bad input (options, configuration, a resumed
-# directory of another commit); 3 a run stopped early (integrator or controller failure, no
-# summary) or a step failed (build, report); 130 / 143 interrupted by SIGINT / SIGTERM (what was
-# done is kept; run the same command again to resume).
+# directory of another commit, DIR in use by another job; the report's bad input); 3 a run
+# stopped early (integrator or controller failure, no summary) or a step failed (build, report);
+# 130 / 143 interrupted by SIGINT / SIGTERM (what was done is kept; run the same command again
+# to resume).
 set -uo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 OUT=""
@@ -59,9 +61,45 @@ done
 [ -f "$CONFIG" ] || die "--config: $CONFIG: no such file"
 OUT="${OUT:-$ROOT/out/nightly/$(date -u +%Y-%m-%d)}"
 HISTORY="${HISTORY:-$ROOT/out/nightly/history.jsonl}"
-mkdir -p "$OUT" || die "--out: cannot create $OUT"
+# A path through a file is bad input (2); a refusal of the system (permissions, a full or
+# read-only file system) a run failure (3).
+if ! err="$(mkdir -p "$OUT" 2>&1)"; then
+  case "$err" in
+    *"File exists"*|*"Not a directory"*) die "$OUT: cannot create the output folder: ${err##*: }" ;;
+    *) echo "nightly: error: $OUT: cannot create the output folder: ${err##*: }" >&2; exit 3 ;;
+  esac
+fi
 OUT="$(cd "$OUT" && pwd)"
 HARNESS="$BUILD/bin/lexdyn-harness"
+
+# ------------------------------------------------------------------ the folder's lock
+# One lock format for every lexdyn tool (docs/report.md, "Locks"): OUT/.lexdyn.lock, flocked
+# for the job's lifetime, holding "pid=P started=T host=H command=C". A job that died holds no
+# flock: its file is taken over. The file is never removed. The runs, the report and the sweeps
+# lock their own subfolders; the background commands below do not inherit this one (each gets
+# {LOCK_FD}>&-), so it ends with the job.
+lock_holder() {  # "pid P, C, started T on H" from a lock file's line, or "holder unknown"
+  local line="" text
+  IFS= read -r line < "$1" 2>/dev/null
+  if [[ "$line" =~ ^pid=([0-9]+)(\ started=([^ ]*))?(\ host=([^ ]*))?(\ command=(.*))?$ ]]; then
+    text="pid ${BASH_REMATCH[1]}"
+    [ -n "${BASH_REMATCH[7]}" ] && text+=", ${BASH_REMATCH[7]}"
+    [ -n "${BASH_REMATCH[3]}" ] && text+=", started ${BASH_REMATCH[3]}"
+    [ -n "${BASH_REMATCH[5]}" ] && text+=" on ${BASH_REMATCH[5]}"
+    echo "$text"
+  else
+    echo "holder unknown"
+  fi
+}
+{ exec {LOCK_FD}<>"$OUT/.lexdyn.lock"; } 2>/dev/null \
+  || { echo "nightly: error: $OUT/.lexdyn.lock: cannot open the lock file" >&2; exit 3; }
+if ! flock -n -x "$LOCK_FD"; then
+  die "$OUT: in use by another lexdyn job ($(lock_holder "$OUT/.lexdyn.lock")); wait for it to end or give another --out"
+fi
+# Best effort: the lock is the flock; the line only names its holder in others' messages.
+{ truncate -s 0 "$OUT/.lexdyn.lock" \
+    && printf 'pid=%s started=%s host=%s command=nightly.sh\n' "$$" "$(date -u +%Y-%m-%dT%H:%M:%SZ)" "$(hostname)" \
+       >> "$OUT/.lexdyn.lock"; } 2>/dev/null
 
 # ------------------------------------------------------------------ signals: keep what was done
 RUNNING=()          # pids of the runs in flight
@@ -78,7 +116,7 @@ trap 'on_signal 143' TERM
 # `wait` returns at once on a signal: the runs in flight are told to stop immediately, not
 # after the sleep (a short run could otherwise complete in that second and not be marked).
 pause() {
-  sleep 1 &
+  sleep 1 {LOCK_FD}>&- &
   wait $! 2>/dev/null || true
 }
 stop_if_interrupted() {
@@ -178,7 +216,7 @@ if [ "$DO_CTEST" -eq 1 ]; then
     say "ctest: done earlier ($OUT/ctest/junit.xml)"
   else
     say "ctest: the whole suite, $JOBS at a time (log: $OUT/ctest/log.txt)"
-    (cd "$BUILD" && exec ctest -j "$JOBS" --output-junit "$OUT/ctest/junit.xml.partial") > "$OUT/ctest/log.txt" 2>&1 &
+    (cd "$BUILD" && exec ctest -j "$JOBS" --output-junit "$OUT/ctest/junit.xml.partial") > "$OUT/ctest/log.txt" 2>&1 {LOCK_FD}>&- &
     RUNNING=($!)
     since=$SECONDS
     while kill -0 "${RUNNING[0]}" 2>/dev/null && [ "$INTERRUPTED" -eq 0 ]; do
@@ -224,7 +262,7 @@ start_run() {
   [ "$method" != "-" ] && args+=(--method "$method")
   [ -n "$DURATION" ] && args+=(--duration "$DURATION")
   mkdir -p "$dir"
-  "$HARNESS" "${args[@]}" > "$dir/log.txt" 2>&1 &
+  "$HARNESS" "${args[@]}" > "$dir/log.txt" 2>&1 {LOCK_FD}>&- &
   RUNNING+=($!)
   RUN_OF[$!]="$id"
   say "start $id"
@@ -297,7 +335,7 @@ else
     say "sweep $name: $file, $points points, $JOBS at a time (log: $OUT/sweeps/$name.log)"
     # The failure database lives beside the history: every night replays the failures found before.
     "$HARNESS" sweep run "$ROOT/$file" --out "$dir" -j "$JOBS" --points "$points" \
-      --db "$(dirname "$HISTORY")/sweep-failures/$name.jsonl" > "$OUT/sweeps/$name.log" 2>&1 &
+      --db "$(dirname "$HISTORY")/sweep-failures/$name.jsonl" > "$OUT/sweeps/$name.log" 2>&1 {LOCK_FD}>&- &
     RUNNING=($!)
     RUN_OF[$!]="sweep $name"
     wait "${RUNNING[0]}"
@@ -310,11 +348,18 @@ fi
 
 # ------------------------------------------------------------------ 6. the report and the history
 say "report: $OUT/report (history $HISTORY)"
+# A damaged history line does not stop it: the report skips the line with a warning on the page.
 "$PY" "$ROOT/harness/scripts/report.py" --runs "$OUT" "${SWEEP_ARGS[@]}" --history "$HISTORY" --append-history \
   --out "$OUT/report" >&2
 rstatus=$?
 stop_if_interrupted
-[ $rstatus -eq 0 ] || { say "the report failed (exit code $rstatus)"; exit 3; }
+if [ $rstatus -ne 0 ]; then
+  # The report's own code: 2 bad input (its folder in use, a damaged summary), 3 anything else
+  # (a full disk, an internal error); the previous report is left as it was.
+  say "the report failed (exit code $rstatus)"
+  code=$(lexdyn_code "$rstatus")
+  case "$code" in 2|130|143) exit "$code" ;; *) exit 3 ;; esac
+fi
 
 # ------------------------------------------------------------------ exit code of the night
 "$PY" - "$OUT" <<'EOF'

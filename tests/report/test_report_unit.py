@@ -1,9 +1,11 @@
 #!/usr/bin/python3
 """Unit tests of the nightly report's parts (harness/scripts/lexdyn_report; docs/report.md):
-noise bands and "since last night", the history file, trace reading, the replay model and its
-quantisation, and the sweep section rendered from a hand-made fixture of the sweep output
-contract. ctest: report.unit (label report)."""
+noise bands and "since last night", the history file (date order, skipped lines, damaged
+figures, the lock line), trace reading, the replay model and its quantisation, and the sweep
+section rendered from a hand-made fixture of the sweep output contract. ctest: report.unit
+(label report)."""
 import base64
+import datetime
 import json
 import math
 import os
@@ -20,16 +22,21 @@ ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 sys.path.insert(0, os.path.join(ROOT, "harness", "scripts"))
 
 from lexdyn_report import history as hist  # noqa: E402
-from lexdyn_report import page, replay, runs, sweeps, trace  # noqa: E402
-from lexdyn_report.common import ReportInputError  # noqa: E402
+from lexdyn_report import locks, page, replay, runs, sweeps, trace  # noqa: E402
+from lexdyn_report.common import DAMAGED, DamagedNumber, ReportInputError, fnum, fpercent  # noqa: E402
 
 
 def metric(key):
     return next(m for m in hist.METRICS if m.key == key)
 
 
-def record(night, run_figures, goldens_failed=None):
-    rec = {"format": hist.FORMAT, "night": night, "commit": "c" + night, "date": night, "runs": run_figures}
+def day(i):
+    """The date of the i-th night of a test history (ISO-8601, UTC)."""
+    return (datetime.datetime(2026, 1, 1, 2, 30, tzinfo=datetime.timezone.utc) + datetime.timedelta(days=i)).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def record(night, run_figures, goldens_failed=None, i=0):
+    rec = {"format": hist.FORMAT, "night": night, "commit": "c" + night, "date": day(i), "runs": run_figures}
     if goldens_failed is not None:
         rec["goldens"] = {"total": 3, "failed": goldens_failed}
     return rec
@@ -37,8 +44,8 @@ def record(night, run_figures, goldens_failed=None):
 
 class NoiseBand(unittest.TestCase):
     def flag(self, key, prior, value):
-        recs = [record(f"n{i}", {"r": {key: v, "failed_checks": []}}) for i, v in enumerate(prior)]
-        cur = record("now", {"r": {key: value, "failed_checks": []}})
+        recs = [record(f"n{i}", {"r": {key: v, "failed_checks": []}}, i=i) for i, v in enumerate(prior)]
+        cur = record("now", {"r": {key: value, "failed_checks": []}}, i=len(prior))
         return hist.trend(recs, cur)["r"][key]
 
     def test_deterministic_figure_flags_any_change(self):
@@ -78,20 +85,34 @@ class NoiseBand(unittest.TestCase):
         self.assertIsNone(self.flag("final_error", prior, 1.0)["flag"])
 
     def test_failed_check_count(self):
-        recs = [record("a", {"r": {"failed_checks": []}})]
-        cur = record("b", {"r": {"failed_checks": ["x", "y"]}})
+        recs = [record("a", {"r": {"failed_checks": []}}, i=0)]
+        cur = record("b", {"r": {"failed_checks": ["x", "y"]}}, i=1)
         self.assertEqual(hist.trend(recs, cur)["r"]["failed_check_count"]["flag"], "worse")
+
+    def test_only_nights_dated_before_count_and_damaged_figures_are_no_points(self):
+        # Nights after this one (a rebuilt older night) are not its past; a NaN of an earlier
+        # night is no point of the series, and this night's NaN is "damaged", not a value.
+        recs = [record("n0", {"r": {"final_error": 1.0}}, i=0),
+                record("n1", {"r": {"final_error": DamagedNumber("NaN")}}, i=1),
+                record("n3", {"r": {"final_error": 9.0}}, i=3)]
+        d = hist.trend(recs, record("n2", {"r": {"final_error": 1.0}}, i=2))["r"]["final_error"]
+        self.assertEqual([(n, v) for n, _, v in d["values"]], [("n0", 1.0), ("n2", 1.0)])
+        self.assertIsNone(d["flag"])
+        d = hist.trend(recs, record("n2", {"r": {"final_error": DamagedNumber("Infinity")}}, i=2))["r"]["final_error"]
+        self.assertTrue(d["damaged"])
+        self.assertIsNone(d["value"])
+        self.assertEqual([n for n, _, _ in d["values"]], ["n0"])
 
 
 class SinceLastNight(unittest.TestCase):
     def test_new_failures_fixed_status_goldens_added_missing(self):
         prev = record("n1", {"exp1.bfgs": {"status": "completed", "failed_checks": ["a", "c"]},
                              "exp1.wls": {"status": "completed", "failed_checks": []},
-                             "exp2.gn": {"status": "completed", "failed_checks": []}}, goldens_failed=["exp3.ah"])
+                             "exp2.gn": {"status": "completed", "failed_checks": []}}, goldens_failed=["exp3.ah"], i=1)
         cur = record("n2", {"exp1.bfgs": {"status": "completed", "failed_checks": ["b", "c"]},
                             "exp1.wls": {"status": "controller_failure", "failed_checks": []},
-                            "exp1.gn": {"status": "completed", "failed_checks": []}}, goldens_failed=["exp1.bfgs", "exp3.ah"])
-        ch = hist.changes([record("n0", {}), prev], cur)
+                            "exp1.gn": {"status": "completed", "failed_checks": []}}, goldens_failed=["exp1.bfgs", "exp3.ah"], i=2)
+        ch = hist.changes([record("n0", {}, i=0), prev], cur)
         self.assertEqual(ch["previous"]["night"], "n1")
         self.assertEqual(ch["new_failures"], [("exp1.bfgs", "b")])
         self.assertEqual(ch["fixed"], [("exp1.bfgs", "a")])
@@ -109,38 +130,124 @@ class SinceLastNight(unittest.TestCase):
         self.assertIsNone(ch["previous"])
         self.assertEqual(ch["new_failures"], [])
 
+    def test_the_previous_night_is_the_latest_dated_before(self):
+        # In file order n5, n1, n3: for n4 the previous night is n3, for n2 it is n1, for n0 none.
+        recs = [record("n5", {}, i=5), record("n1", {}, i=1), record("n3", {}, i=3)]
+        self.assertEqual(hist.changes(recs, record("n4", {}, i=4))["previous"]["night"], "n3")
+        self.assertEqual(hist.changes(recs, record("n2", {}, i=2))["previous"]["night"], "n1")
+        self.assertIsNone(hist.changes(recs, record("n0", {}, i=0))["previous"])
+        # The same date: the night id decides.
+        self.assertEqual(hist.changes(recs, record("n4", {}, i=3))["previous"]["night"], "n3")
+        self.assertEqual(hist.changes(recs, record("n2", {}, i=3))["previous"]["night"], "n1")
+
 
 class HistoryFile(unittest.TestCase):
-    def test_append_replaces_the_same_night(self):
+    def write(self, path, lines, end="\n"):
+        with open(path, "w") as f:
+            f.write("\n".join(lines) + end)
+
+    def test_append_replaces_the_same_night_in_date_order(self):
         with tempfile.TemporaryDirectory() as d:
             path = os.path.join(d, "sub", "history.jsonl")
-            recs = hist.append_record(path, [], record("n1", {}))
-            recs = hist.append_record(path, recs, record("n2", {}))
-            hist.append_record(path, hist.load_history(path), record("n1", {"r": {}}))
+            hist.append_record(path, record("n3", {}, i=3))
+            hist.append_record(path, record("n1", {}, i=1))
+            hist.append_record(path, record("n2", {"r": {}}, i=2))
+            hist.append_record(path, record("n1", {"r": {"final_error": 0.5}}, i=1))   # n1 rebuilt
             loaded = hist.load_history(path)
-            self.assertEqual([r["night"] for r in loaded], ["n2", "n1"])
-            self.assertEqual(loaded[-1]["runs"], {"r": {}})
+            self.assertEqual([r["night"] for r in loaded.records], ["n1", "n2", "n3"])
+            self.assertEqual(loaded.records[0]["runs"], {"r": {"final_error": 0.5}})
+            with open(path) as f:
+                self.assertEqual([json.loads(l)["night"] for l in f], ["n1", "n2", "n3"])
+            self.assertEqual(loaded.warnings, [])
             self.assertFalse([n for n in os.listdir(os.path.dirname(path)) if "partial" in n])
+            # The history's lock file stays, with the line of its last holder.
+            with open(path + ".lock") as f:
+                self.assertRegex(f.read(), r"^pid=%d started=\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ host=\S+ command=report.py\n$" % os.getpid())
 
-    def test_errors_name_the_file_and_line(self):
+    def test_bad_lines_are_skipped_with_a_warning_and_kept(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "h.jsonl")
+            good = json.dumps(record("n1", {"r": {"final_error": 1.0}}, i=1))
+            bad = [json.dumps(record("n2", [], i=2)),                                  # runs as a list
+                   "not json at all",
+                   json.dumps(dict(record("n3", {}, i=3), format="lexdyn-nightly-history/0")),
+                   json.dumps(record("n4", {"r": {"failed_checks": "a"}}, i=4)),      # a string, not a list
+                   json.dumps(dict(record("n5", {}, i=5), date="yesterday")),
+                   good[:40]]                                                         # cut, last
+            self.write(path, [good] + bad, end="")
+            h = hist.load_history(path)
+            self.assertEqual([r["night"] for r in h.records], ["n1"])
+            self.assertEqual(len(h.warnings), 6)
+            self.assertIn(f"{path}:2: runs: expected an object of runs by id, found a list", h.warnings[0])
+            self.assertIn(f"{path}:3: expected one JSON record per line, found a syntax error", h.warnings[1])
+            self.assertIn(f"{path}:4: format: expected 'lexdyn-nightly-history/1', found 'lexdyn-nightly-history/0'", h.warnings[2])
+            self.assertIn(f"{path}:5: runs.r.failed_checks: expected a list of names, found a string", h.warnings[3])
+            self.assertIn(f"{path}:6: date: expected an ISO-8601 time", h.warnings[4])
+            self.assertIn(f"{path}:7: expected one JSON record per line", h.warnings[5])
+            self.assertIn("the file's last line has no end: cut", h.warnings[5])
+            # Appending keeps the skipped lines, as they were, after the records.
+            hist.append_record(path, record("n0", {}, i=0))
+            with open(path) as f:
+                lines = f.read().split("\n")
+            self.assertEqual(lines[2:], bad + [""])
+            self.assertEqual([json.loads(l)["night"] for l in lines[:2]], ["n0", "n1"])
+            # strict: the first problem is an error naming file, line and field.
+            with self.assertRaises(ReportInputError) as e:
+                hist.load_history(path, strict=True)
+            self.assertIn(f"{path}:3: runs: expected an object of runs by id, found a list", str(e.exception))
+            with self.assertRaises(ReportInputError):
+                hist.append_record(path, record("n9", {}, i=9), strict=True)
+
+    def test_damaged_figures_are_left_out_with_a_warning(self):
         with tempfile.TemporaryDirectory() as d:
             path = os.path.join(d, "h.jsonl")
             with open(path, "w") as f:
-                f.write(json.dumps(record("n1", {})) + "\n\n{not json\n")
+                f.write('{"format": "%s", "night": "n1", "date": "%s", "runs": {"r": {"final_error": NaN, '
+                        '"tick_p50_us": "fast", "realtime_factor": -Infinity, "mean_error": 2.0}}}\n' % (hist.FORMAT, day(1)))
+            h = hist.load_history(path)
+            self.assertEqual(len(h.records), 1)
+            self.assertEqual([w.split(": ", 1)[1] for w in h.warnings],
+                             ["runs.r.final_error: expected a finite number, found NaN: left out of the trend",
+                              "runs.r.tick_p50_us: expected a finite number, found \"fast\": left out of the trend",
+                              "runs.r.realtime_factor: expected a finite number, found -Infinity: left out of the trend"])
             with self.assertRaises(ReportInputError) as e:
-                hist.load_history(path)
-            self.assertIn(f"{path}:3", str(e.exception))
-            with open(path, "w") as f:
-                f.write(json.dumps({"format": "other/1", "night": "x", "runs": {}}) + "\n")
-            with self.assertRaises(ReportInputError) as e:
-                hist.load_history(path)
-            self.assertIn(f"{path}:1", str(e.exception))
-            self.assertIn("lexdyn-nightly-history/1", str(e.exception))
-            with open(path, "w") as f:
-                f.write(json.dumps({"format": hist.FORMAT, "night": "x"}) + "\n")
-            with self.assertRaises(ReportInputError) as e:
-                hist.load_history(path)
-            self.assertIn("'runs'", str(e.exception))
+                hist.load_history(path, strict=True)
+            self.assertIn(f"{path}:1: runs.r.final_error: expected a finite number, found NaN", str(e.exception))
+            # This night's damaged figures are written as null: the file stays JSON.
+            hist.append_record(path, record("n2", {"r": {"final_error": DamagedNumber("NaN"), "mean_error": float("inf")}}, i=2))
+            with open(path) as f:
+                lines = f.read().splitlines()
+            self.assertIn("NaN", lines[0])                      # the earlier line as it was
+            last = json.loads(lines[1])
+            self.assertEqual(last["runs"]["r"], {"final_error": None, "mean_error": None})
+
+    def test_no_file_and_a_folder(self):
+        with tempfile.TemporaryDirectory() as d:
+            self.assertEqual(hist.load_history(os.path.join(d, "none.jsonl")).records, [])
+            with self.assertRaises(ReportInputError):
+                hist.load_history(d)
+
+
+class Numbers(unittest.TestCase):
+    def test_damaged_figures_never_show_as_nan(self):
+        n = DamagedNumber("NaN")
+        self.assertTrue(math.isnan(n))
+        for text in (fnum(n), fnum(float("nan")), fnum(float("inf"), ".0f"), fnum("fast"), str(n), f"{n:.3f}", fpercent(n)):
+            self.assertEqual(text, DAMAGED)
+        self.assertEqual(fnum(None), "-")
+        self.assertEqual(fnum(2.5, ".1f"), "2.5")
+        self.assertEqual(fpercent(0.75), "75.0 %")
+        self.assertEqual(fpercent(None), "-")
+
+
+class LockLine(unittest.TestCase):
+    def test_holder_line_and_its_description(self):
+        line = locks.holder_line("report.py")
+        self.assertRegex(line, r"^pid=%d started=\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ host=\S+ command=report.py\n$" % os.getpid())
+        self.assertEqual(locks.describe_holder("pid=1234 started=2026-11-28T07:01:02Z host=vm command=lexdyn-harness run\n"),
+                         "pid 1234, lexdyn-harness run, started 2026-11-28T07:01:02Z on vm")
+        self.assertEqual(locks.describe_holder(""), "holder unknown")
+        self.assertEqual(locks.describe_holder("\x00garbage"), "holder unknown")
 
 
 class TraceReading(unittest.TestCase):
@@ -448,6 +555,26 @@ class SweepSection(unittest.TestCase):
             self.assertIn("maps[0].png", warnings[0])
             self.assertIn("the map image is missing", html)
 
+    def test_damaged_figures_of_a_sweep(self):
+        # NaN where a sweep summary has numbers (Python's json writes and reads it): "not a
+        # number (damaged)", never "nan" nor "- %"; a missing rate is "-".
+        with tempfile.TemporaryDirectory() as d:
+            s = sweep_fixture(os.path.join(d, "one"), png=False)
+            s["checks"][0]["pass_rate"] = float("nan")
+            s["checks"][1]["pass_rate"] = None
+            s["comparisons"][0]["win_rate"] = float("inf")
+            s["checks"][1]["worst_margin"] = float("nan")
+            with open(os.path.join(d, "one", "summary.json"), "w") as f:
+                json.dump(s, f)
+            sws = sweeps.load_sweeps(os.path.join(d, "one"))
+            html = page.sweeps_section(sws, page.sweep_assets(sws, os.path.join(d, "out"))[0])
+            self.assertEqual(html.count(DAMAGED), 3)
+            self.assertNotRegex(html, r"(?i)\bnan\b|\binf\b|- %")
+            self.assertIn("<td>-</td>", html)
+            rec = {"runs": {}}
+            hist.add_sweeps(rec, sws)
+            self.assertEqual(rec["sweeps"], {"gains": {}})
+
     def test_one_sweep_directory_and_errors(self):
         with tempfile.TemporaryDirectory() as d:
             s = sweep_fixture(os.path.join(d, "one"), png=False)
@@ -537,6 +664,14 @@ class CommandLine(unittest.TestCase):
             self.assertIn("--history", r.stderr)
             r = self.run_report("--out", os.path.join(d, "out"))
             self.assertEqual(r.returncode, 2)
+            # Bad options: one line, no usage block, no traceback.
+            self.assertEqual(r.stderr.strip().splitlines(), ["report: error: the following arguments are required: --runs (--help for the options)"])
+            r = self.run_report("--runs", os.path.join(d, "empty"), "--out", os.path.join(d, "out"), "--strict-history")
+            self.assertEqual((r.returncode, r.stderr), (2, "report: error: --strict-history: expected --history FILE as well, found none\n"))
+            r = self.run_report("--runs", os.path.join(d, "empty"), "--out", os.path.join(d, "out"), "--frobnicate")
+            self.assertEqual(r.returncode, 2)
+            self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+            self.assertIn("--frobnicate", r.stderr)
 
 
 if __name__ == "__main__":

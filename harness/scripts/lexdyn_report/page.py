@@ -1,12 +1,15 @@
 """Builds the report folder (docs/report.md): OUT/index.html with figures/, replay/, three.js
-beside it. Everything is read from stored results (runs, sweeps, history)."""
+beside it. Everything is read from stored results (runs, sweeps, history). The report is built
+in a staging folder inside OUT and swapped in whole (ReportBuilder.build)."""
 import json
 import os
 import shutil
+import signal
 
 from . import figures, history as hist, replay
-from .common import (ReportInputError, copy_atomic, esc, finite, fnum, method_colour, method_label,
-                     method_sort_key, write_atomic)
+from .common import (DAMAGED, ReportInputError, ReportOutputError, copy_atomic, esc, finite, fnum, fpercent,
+                     method_colour, method_label, method_sort_key, non_finite_fields, os_reason, write_atomic)
+from .locks import LOCK_NAME
 from .runs import detail_time, resolve, run_key_errors
 from .trace import read_trace
 
@@ -14,6 +17,11 @@ THREE_DIR = "/usr/share/javascript/three"
 ASSETS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "assets")
 # Paths stored relative to where a run was started (usually the repository root).
 REPO_ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
+# Inside the report folder: the report being built (OUT/.staging-PID) and the entries of the
+# previous report while they are swapped out (OUT/.old-PID). A job holding the folder's lock
+# removes those of a job that died.
+STAGING_PREFIX = ".staging-"
+ASIDE_PREFIX = ".old-"
 
 CSS = """
 body{font-family:sans-serif;font-size:14px;margin:0 auto;max-width:1180px;padding:0 16px;color:#222}
@@ -59,9 +67,9 @@ def _cut_text(run):
     scenario's end (run --duration, stop_at_s), else ''."""
     s = run.summary or {}
     scenario, stop = s.get("scenario_duration_s"), s.get("duration_s")
-    if scenario is None or stop is None or stop >= scenario:
+    if not finite(scenario) or not finite(stop) or stop >= scenario:
         return ""
-    k = len(s.get("skipped_checks", []))
+    k = len(s.get("skipped_checks", []) or [])
     return f", run to {stop:g} of the scenario's {scenario:g} s, {k} check{'s' if k != 1 else ''} skipped"
 
 
@@ -92,24 +100,53 @@ def _failing_rows(run):
 
 
 class ReportBuilder:
-    def __init__(self, results, sweeps, history_path, out_dir, append_history=False, title=None):
+    def __init__(self, results, sweeps, history_path, out_dir, append_history=False, title=None, strict_history=False):
         self.results = results
         self.sweeps = sweeps
         self.history_path = history_path
-        self.out = os.path.abspath(out_dir)
+        self.out = os.path.abspath(out_dir)   # where files are written: the staging folder while building
         self.append_history = append_history
+        self.strict_history = strict_history
         self.title = title or "lexdyn nightly report"
         self.models = {}          # (urdf, data file) -> (model dict, script file, model name)
         self.replays = {}         # run id -> {run, model, model_name}
         self.case_figures = {}    # case -> [figure dicts]
         self.warnings = []
+        self.history_warnings = []
 
     # ------------------------------------------------------------------ building
     def build(self):
-        os.makedirs(self.out, exist_ok=True)
+        """Builds the whole report into OUT/.staging-PID, writes the night into the history when
+        asked (append_history), then swaps the report in: each entry replaces the previous
+        report's of the same name, index.html last. A failure (a full disk, an interruption)
+        removes the staging folder and leaves the previous report as it was. OUT exists and is
+        locked by the caller (locks.FolderLock)."""
+        final = self.out
+        remove_leftovers(final)
+        staging = os.path.join(final, f"{STAGING_PREFIX}{os.getpid()}")
+        aside = os.path.join(final, f"{ASIDE_PREFIX}{os.getpid()}")
+        try:
+            # Both folders made now: on a full disk the swap would not get one.
+            os.mkdir(staging)
+            os.mkdir(aside)
+            self.out = staging
+            self._build_into()
+            if self.append_history and self.history_path:
+                h, _ = hist.append_record(self.history_path, self.record, strict=self.strict_history)
+                self.warnings.extend(w for w in h.warnings if w not in self.warnings)
+            swap_in(staging, final, aside)
+        except OSError as e:
+            _remove_staging(staging, aside)
+            raise ReportOutputError(e.filename or final, os_reason(e)) from e
+        except BaseException:
+            _remove_staging(staging, aside)
+            raise
+        finally:
+            self.out = final
+        return os.path.join(final, "index.html")
+
+    def _build_into(self):
         for sub in ("figures", "replay", "sweeps"):
-            # The report's own subfolders start empty: a rebuilt report holds no stale file.
-            shutil.rmtree(os.path.join(self.out, sub), ignore_errors=True)
             os.makedirs(os.path.join(self.out, sub))
         for f in ("three.min.js", "examples/js/controls/OrbitControls.js"):
             src = os.path.join(THREE_DIR, f)
@@ -118,9 +155,21 @@ class ReportBuilder:
             copy_atomic(src, os.path.join(self.out, os.path.basename(f)))
         copy_atomic(os.path.join(ASSETS, "replay.js"), os.path.join(self.out, "replay.js"))
 
+        for run in self.results.runs:
+            for field, text in run.damaged:
+                self.warnings.append(f"{run.summary_path}: {field}: expected a finite number, found {text} "
+                                     f"(a damaged file): shown as \"{DAMAGED}\"")
+        for sw in self.sweeps:
+            for field, text in non_finite_fields(sw.summary):
+                self.warnings.append(f"{os.path.join(sw.dir, 'summary.json')}: {field}: expected a finite number, found {text} "
+                                     f"(a damaged file): shown as \"{DAMAGED}\"")
         self.record = hist.night_record(self.results)
         hist.add_sweeps(self.record, self.sweeps)
-        self.records = hist.load_history(self.history_path)
+        history = hist.load_history(self.history_path, strict=self.strict_history)
+        self.records = history.records
+        self.history_warnings = history.warnings
+        self.warnings.extend(history.warnings)
+        self.earlier = hist.earlier_records(self.records, self.record)
         self.changes = hist.changes(self.records, self.record)
         self.trend = hist.trend(self.records, self.record)
 
@@ -130,9 +179,6 @@ class ReportBuilder:
         self.sweep_assets = self._sweep_assets()
         page = self._page()
         write_atomic(os.path.join(self.out, "index.html"), page)
-        if self.append_history and self.history_path:
-            hist.append_record(self.history_path, self.records, self.record)
-        return os.path.join(self.out, "index.html")
 
     def _model_for(self, run):
         h = run.header.get("model", "")
@@ -215,7 +261,7 @@ class ReportBuilder:
         self.case_figures[case] = figs
 
     def _trend_figures(self):
-        if len(hist.previous_records(self.records, self.record["night"])) < 1:
+        if not self.earlier:
             return []
         out = []
         for m in hist.METRICS:
@@ -273,7 +319,9 @@ class ReportBuilder:
                        + ("" if self.history_path else " (no --history file given)") + ": nothing to compare with.</p>")
         else:
             p = ch["previous"]
-            out.append(f"<p>Compared with night <b>{esc(p['night'])}</b> (commit <code>{esc(p.get('commit'))}</code>, {esc(p.get('date'))}).</p>")
+            out.append(f"<p>Compared with night <b>{esc(p['night'])}</b> (commit <code>{esc(p.get('commit'))}</code>, {esc(p.get('date'))}): "
+                       "the latest night of the history dated before this one.</p>")
+        out.append(self._history_warnings_html())
         rows = []
         for rid, c in ch["new_failures"]:
             rows.append(("new failure", rid, c, "fail"))
@@ -311,6 +359,16 @@ class ReportBuilder:
             out.append("<p id='no-changes'>No new failures, nothing fixed, no golden drift, no figure outside its noise band.</p>")
         out.append("</section>")
         return "\n".join(out)
+
+    def _history_warnings_html(self):
+        """The history's lines that were skipped and its figures left out of the trend."""
+        w = self.history_warnings
+        if not w:
+            return ""
+        return (f"<div id='history-warnings' class='stop'><p>The history file <code>{esc(self.history_path)}</code> has "
+                f"{len(w)} damaged entr{'y' if len(w) == 1 else 'ies'}: a line that is no record is skipped (and kept as it "
+                "is at the end of the file), a figure that is not a number is left out of the trend "
+                "(docs/report.md, \"History and trend\").</p><ul>" + "".join(f"<li>{esc(x)}</li>" for x in w) + "</ul></div>")
 
     def _golden_message(self, gid):
         for g in self.results.ctest.goldens:
@@ -417,17 +475,18 @@ class ReportBuilder:
             s = run.summary or {}
             names, final, mean = run_key_errors(run, info)
             tasks = tasks or names
-            tick = s.get("timing_us", {}).get("tick", {})
-            aug = s.get("controller", {}).get("augmented_ticks", {})
-            sol = s.get("solver", {})
-            peak = f"{sol['peak_iterations']} ({fnum(sol.get('peak_iterations_at_s'), '.4g')})" if "peak_iterations" in sol else "-"
+            tick = _mapping(_mapping(s.get("timing_us")).get("tick"))
+            aug = _mapping(_mapping(s.get("controller")).get("augmented_ticks"))
+            sol = _mapping(s.get("solver"))
+            peak = f"{fnum(sol['peak_iterations'], '.0f')} ({fnum(sol.get('peak_iterations_at_s'), '.4g')})" if "peak_iterations" in sol else "-"
+            newton = fnum(sum(aug.values()), ".0f") if all(finite(v) for v in aug.values()) else DAMAGED
             rows.append(f"<tr><td><span class='swatch' style='background:{method_colour(run.method)}'></span>{esc(run.id)}</td>"
                         f"<td class='{'' if run.status == 'completed' else 'stop'}'>{esc(run.status)}</td><td class='num'>{fnum(s.get('simulated_s'), '.1f')}</td>"
                         f"<td class='num'>{fnum(final, '.4f')}</td><td class='num'>{fnum(mean, '.4f')}</td>"
                         f"<td class='num'>{esc(peak)}</td>"
                         f"<td class='num'>{fnum(tick.get('median'), '.0f')} / {fnum(tick.get('p99'), '.0f')} / {fnum(tick.get('max'), '.0f')}</td>"
                         f"<td class='num'>{fnum(s.get('realtime_factor'), '.1f')}</td>"
-                        f"<td class='num'>{sum(aug.values()) if aug else '-'}</td>"
+                        f"<td class='num'>{newton if aug else '-'}</td>"
                         f"<td class='num'>{len(run.checks) - len(run.failed_checks) if run.summary else '-'} / {len(run.checks) if run.summary else '-'}</td></tr>")
         note = f"<p class='note'>Errors: sum of {esc(' + '.join(tasks))}.</p>" if tasks else ""
         return (f"<table class='method-table' id='methods-{esc(case)}'><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head)
@@ -438,11 +497,15 @@ class ReportBuilder:
 
     def _trend_html(self):
         out = ["<section id='trend'><h2>Trend</h2>"]
-        earlier = hist.previous_records(self.records, self.record["night"])
+        earlier = self.earlier
         if not self.history_path:
             out.append("<p class='note' id='no-history'>No history file given (--history): no trend.</p></section>")
             return "\n".join(out)
-        out.append(f"<p>{len(earlier)} earlier night(s) in <code>{esc(self.history_path)}</code>. A figure is flagged when it leaves "
+        if self.history_warnings:
+            out.append(f"<p class='stop' id='trend-history-note'>{len(self.history_warnings)} damaged entr"
+                       f"{'y' if len(self.history_warnings) == 1 else 'ies'} of the history left out "
+                       "(<a href='#history-warnings'>listed under Since last night</a>).</p>")
+        out.append(f"<p>{len(earlier)} earlier night(s) in <code>{esc(self.history_path)}</code> (dated before this one). A figure is flagged when it leaves "
                    f"median &plusmn; max({hist.K:g} &times; 1.4826 &times; MAD, floor) of the same run's last {hist.WINDOW} nights "
                    "(wall-clock figures on a log scale; docs/report.md, \"Noise bands\").</p>")
         if not earlier:
@@ -455,7 +518,7 @@ class ReportBuilder:
                 d = per[m.key]
                 cls = f" class='flag-{d['flag']}'" if d["flag"] else ""
                 band = f" (band {fnum(d['band'][0], '.4g')} .. {fnum(d['band'][1], '.4g')})" if d["band"] else ""
-                cells.append(f"<td{cls}>{fnum(d['value'], m.fmt)}{band}</td>")
+                cells.append(f"<td{cls}>{DAMAGED if d.get('damaged') else fnum(d['value'], m.fmt)}{band}</td>")
             out.append(f"<tr><td>{esc(rid)}</td>{''.join(cells)}</tr>")
         out.append("</table>")
         for m, f in self.trend_figs:
@@ -542,7 +605,7 @@ def sweeps_section(sweeps, assets):
             pr = c.get("pass_rate")
             bar = (f"<span class='bar-bg'><span class='bar' style='width:{80 * pr:.0f}px'></span></span> " if finite(pr) else "")
             out.append(f"<tr><td>{esc(c.get('check'))}</td><td><span class='swatch' style='background:{method_colour(c.get('method', ''))}'>"
-                       f"</span>{esc(c.get('method'))}</td><td>{bar}{fnum(100 * pr if finite(pr) else None, '.1f')} %</td>"
+                       f"</span>{esc(c.get('method'))}</td><td>{bar}{fpercent(pr)}</td>"
                        f"<td class='num'>{esc(c.get('passed'))} / {esc(c.get('runs'))}</td>"
                        f"<td class='num'>{fnum(c.get('worst_margin'), '.4g')} {esc(c.get('unit', ''))}</td>"
                        f"<td>{esc(c.get('worst_point'))}</td></tr>")
@@ -554,7 +617,7 @@ def sweeps_section(sweeps, assets):
             for c in comps:
                 d = c.get("diff", {})
                 out.append(f"<tr><td>{esc(c.get('name'))}</td><td>{esc(c.get('better'))}</td><td>{esc(c.get('worse'))}</td>"
-                           f"<td class='num'>{fnum(100 * c['win_rate'] if finite(c.get('win_rate')) else None, '.1f')} %</td>"
+                           f"<td class='num'>{fpercent(c.get('win_rate'))}</td>"
                            f"<td class='num'>{esc(c.get('wins'))} / {esc(c.get('points'))}</td><td class='num'>"
                            + " / ".join(fnum(d.get(k), '.3g') for k in ("min", "p10", "median", "p90", "max")) + "</td></tr>")
             out.append("</table>")
@@ -599,10 +662,74 @@ def _plot_or_replay_channel(n):
             and not n.startswith("q_cmd."))
 
 
+def _mapping(x):
+    return x if isinstance(x, dict) else {}
+
+
+def remove_leftovers(out):
+    """Removes the staging and set-aside folders of a report job that died in OUT (the caller
+    holds OUT's lock, so no living job owns them)."""
+    try:
+        names = os.listdir(out)
+    except OSError:
+        return
+    for n in names:
+        if n.startswith((STAGING_PREFIX, ASIDE_PREFIX)):
+            shutil.rmtree(os.path.join(out, n), ignore_errors=True)
+
+
+def _remove_staging(staging, aside):
+    shutil.rmtree(staging, ignore_errors=True)
+    try:
+        os.rmdir(aside)   # empty unless a swap was undone only in part: then kept
+    except OSError:
+        pass
+
+
+def swap_in(staging, out, aside):
+    """Moves the finished report from STAGING into OUT: every entry but index.html (the previous
+    report's entry of the same name moved into ASIDE first), then index.html in one rename, then
+    ASIDE removed. SIGINT and SIGTERM wait until the swap is done; a failure puts back what was
+    moved and raises."""
+    names = sorted(n for n in os.listdir(staging) if n != "index.html")
+    moved, placed = [], []
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        try:
+            for n in names:
+                dst = os.path.join(out, n)
+                if os.path.lexists(dst):
+                    os.rename(dst, os.path.join(aside, n))
+                    moved.append(n)
+                os.rename(os.path.join(staging, n), dst)
+                placed.append(n)
+            os.replace(os.path.join(staging, "index.html"), os.path.join(out, "index.html"))
+        except OSError:
+            for n in reversed(placed):
+                _try_rename(os.path.join(out, n), os.path.join(staging, n))
+            for n in reversed(moved):
+                _try_rename(os.path.join(aside, n), os.path.join(out, n))
+            raise
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+    os.rmdir(staging)
+    shutil.rmtree(aside, ignore_errors=True)
+
+
+def _try_rename(src, dst):
+    try:
+        os.rename(src, dst)
+    except OSError:
+        pass
+
+
 def folder_size(path):
+    """(bytes, files) of a report folder; its lock file is not counted."""
     total, files = 0, 0
     for root, _, names in os.walk(path):
         for n in names:
+            if root == path and n == LOCK_NAME:
+                continue
             total += os.path.getsize(os.path.join(root, n))
             files += 1
     return total, files

@@ -15,7 +15,7 @@ import os
 import re
 import xml.etree.ElementTree as ET
 
-from .common import ReportInputError, finite, method_sort_key, read_yaml
+from .common import ReportInputError, finite, json_constant, method_sort_key, non_finite_fields, read_yaml
 
 # Paths stored relative to where a run was started (usually the repository root).
 REPO_ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
@@ -27,11 +27,16 @@ except ImportError:  # pragma: no cover - Debian's python3-yaml is a dependency 
 
 
 def load_json(path):
+    """The JSON document of PATH. NaN, Infinity and -Infinity (not JSON, but read by Python's json)
+    are read as DamagedNumbers: shown as "not a number (damaged)", never taken as figures
+    (common.non_finite_fields lists them)."""
     try:
-        with open(path) as f:
-            return json.load(f)
+        with open(path, encoding="utf-8") as f:
+            return json.load(f, parse_constant=json_constant)
     except json.JSONDecodeError as e:
         raise ReportInputError(f"{path}:{e.lineno}", f"expected JSON, found a syntax error ({e.msg})")
+    except UnicodeDecodeError as e:
+        raise ReportInputError(path, f"expected JSON (UTF-8 text), found binary data (byte {e.start})")
 
 
 def tail(path, lines=5):
@@ -66,6 +71,10 @@ class Run:
         self.dir = directory
         self.summary_path = os.path.join(directory, "summary.json")
         self.summary = load_json(self.summary_path) if os.path.isfile(self.summary_path) else None
+        if self.summary is not None and not isinstance(self.summary, dict):
+            raise ReportInputError(self.summary_path, f"expected a JSON object, found {type(self.summary).__name__}")
+        # Figures stored as NaN or Infinity (a damaged file: the harness writes null): (field, text).
+        self.damaged = non_finite_fields(self.summary)
         s = self.summary or {}
         self.case = s.get("case") or case or run_id.split(".")[0]
         self.method = s.get("method", method if method not in (None, "-") else "")
@@ -193,6 +202,9 @@ class Results:
         ids = list(planned)
         for name in sorted(os.listdir(self.dir)):
             d = os.path.join(self.dir, name)
+            # Dot names are not runs: the folder's lock (.lexdyn.lock), a report's staging folder.
+            if name.startswith("."):
+                continue
             if name not in planned and os.path.isfile(os.path.join(d, "summary.json")):
                 ids.append(name)
         self.runs = []

@@ -4,7 +4,7 @@ names one such directory or a directory whose subdirectories are."""
 import json
 import os
 
-from .common import ReportInputError
+from .common import ReportInputError, json_constant
 from .runs import load_json
 
 FORMAT = "lexdyn-sweep-summary/1"
@@ -40,7 +40,7 @@ class Sweep:
                     if not line.strip():
                         continue
                     try:
-                        self.records.append(json.loads(line))
+                        self.records.append(json.loads(line, parse_constant=json_constant))
                     except json.JSONDecodeError as e:
                         raise ReportInputError(f"{results}:{lineno}", f"expected one JSON record per line ({e.msg})")
 
@@ -75,6 +75,6 @@ def load_sweeps(path):
     out = []
     for name in sorted(os.listdir(path)):
         d = os.path.join(path, name)
-        if os.path.isfile(os.path.join(d, "summary.json")):
+        if not name.startswith(".") and os.path.isfile(os.path.join(d, "summary.json")):
             out.append(Sweep(d))
     return out
