@@ -74,6 +74,19 @@ class Env:
         return d
 
 
+def wait_for_lock(out, pid, limit_s=60):
+    """Waits until the job PID holds OUT's lock (a loaded machine may take seconds to start it)."""
+    t0 = time.time()
+    while time.time() - t0 < limit_s:
+        try:
+            if open(os.path.join(out, ".lexdyn.lock")).read().startswith(f"pid={pid} "):
+                return True
+        except OSError:
+            pass
+        time.sleep(0.01)
+    return False
+
+
 def workers_of(out):
     """The pids of the `sweep point` processes writing into OUT."""
     pids = []
@@ -151,7 +164,7 @@ def test_driver_kills(env, base, rng):
 def test_two_sweeps(env, base):
     out = env.fresh("two-sweeps")
     p = env.start(out)
-    time.sleep(0.5)
+    check(wait_for_lock(out, p.pid), "the first sweep holds the folder's lock")
     r = env.sweep(out)
     check(r.returncode == 2 and f"pid {p.pid}" in r.stderr and "in use by another lexdyn job" in r.stderr,
           f"a second sweep on one folder exits 2 naming the first ({r.returncode}: {r.stderr.strip()[:200]})")
@@ -162,8 +175,8 @@ def test_two_sweeps(env, base):
 def test_two_runs(env):
     out = env.fresh("two-runs")
     case = os.path.join(env.src, "cases/exp1.yaml")
-    p = subprocess.Popen([env.h, "run", case, "--out", out, "--duration", "2", "--quiet"], stderr=subprocess.PIPE, text=True)
-    time.sleep(0.4)
+    p = subprocess.Popen([env.h, "run", case, "--out", out, "--duration", "20", "--quiet"], stderr=subprocess.PIPE, text=True)
+    check(wait_for_lock(out, p.pid), "the first run holds the folder's lock")
     r = subprocess.run([env.h, "run", os.path.join(env.src, "cases/stand.yaml"), "--out", out, "--quiet"], capture_output=True, text=True)
     p.communicate(timeout=300)
     check(r.returncode == 2 and f"pid {p.pid}" in r.stderr, f"a second run on one folder exits 2 naming the first: {r.stderr.strip()[:200]}")
