@@ -24,6 +24,9 @@ std::string readFileText(const std::string& path);
 /// A word for the shell: as it is when it is plain, in single quotes otherwise.
 std::string shellQuote(const std::string& word);
 
+// FNV-1a of a text, as 16 hex digits (a trial's folder name, sweep.txt's digest).
+std::string textDigest(const std::string& text);
+
 nlohmann::json toJson(const RunResult& r);
 /// A check's result as summary.json and result.json write it.
 CheckOutcome checkFromJson(const nlohmann::json& c);

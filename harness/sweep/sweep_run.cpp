@@ -176,15 +176,6 @@ std::string reproduceCommand(const SweepSpec& s, const RunConfig& c) {
 
 namespace {
 
-// FNV-1a of a text, as 16 hex digits: sweep.txt's check that it was not cut or edited.
-std::string textDigest(const std::string& text) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
-  char buf[24];
-  std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
-
 constexpr const char* kSweepRecordHeader = "# lexdyn sweep record, digest ";
 
 }  // namespace

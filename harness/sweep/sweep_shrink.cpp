@@ -42,15 +42,6 @@ std::string configKey(const RunConfig& c) {
   return k;
 }
 
-// FNV-1a of a key: the folder of a trial.
-std::string keyHash(const std::string& k) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : k) h = (h ^ c) * 1099511628211ull;
-  char buf[24];
-  std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
-
 // Trials shared by the shrinks (thread-safe), persisted to OUT/shrink/cache.jsonl.
 class TrialCache {
  public:
@@ -103,7 +94,7 @@ class TrialCache {
     };
     Trial t;
     try {
-      t = run_(c, (dir_ / "runs" / keyHash(key) / c.method).string());
+      t = run_(c, (dir_ / "runs" / textDigest(key) / c.method).string());
       if (t.end == Trial::End::kRecorded) {
         files::appendDurably((dir_ / "cache.jsonl").string(), json{{"key", key}, {"result", toJson(t.result)}}.dump() + "\n");
         std::lock_guard<std::mutex> lock(m_);

@@ -107,7 +107,24 @@ def _read_holder(fd):
         return ""
 
 
-class FolderLock:
+class _HeldLock:
+    """A lock file held open; closing it releases the flock (the file stays)."""
+
+    fd = None
+
+    def release(self):
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.release()
+
+
+class FolderLock(_HeldLock):
     """The lock of an output folder, held until release() (or the end of the process). Creates
     the folder. Another job holding it: ReportInputError (exit code 2) 'DIR: in use by another
     lexdyn job (pid P, C, started T on H); wait for it to end or give another --out'."""
@@ -129,19 +146,8 @@ class FolderLock:
         _record_holder(fd, command)
         self.fd = fd
 
-    def release(self):
-        if self.fd is not None:
-            os.close(self.fd)  # closing releases the flock; the file stays
-            self.fd = None
 
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.release()
-
-
-class FileLock:
+class FileLock(_HeldLock):
     """The lock of a file shared by many jobs (FILE.lock), waited for, held until release()."""
 
     def __init__(self, file, command):
@@ -156,14 +162,3 @@ class FileLock:
             raise ReportOutputError(self.path, os_reason(e)) from e
         _record_holder(fd, command)
         self.fd = fd
-
-    def release(self):
-        if self.fd is not None:
-            os.close(self.fd)
-            self.fd = None
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.release()
