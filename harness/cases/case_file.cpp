@@ -542,7 +542,7 @@ void readExpectedFailures(CaseSpec& c, const yaml::Node& list, const checks::Che
     } else if (auto mn = m.optional("method")) {
       mn->fail("a case without methods (controller type " + c.controller.type + ") names no method");
     }
-    if (auto st = m.optional("status")) x.status = st->asEnum({"completed", "controller_failure", "integrator_failure"});
+    if (auto st = m.optional("status")) x.status = st->asEnum({"completed", "controller_failure", "integrator_failure", "diverged"});
     if (auto cn = m.optional("checks")) {
       for (const yaml::Node& n : cn->elements()) {
         const std::string name = n.asString();

@@ -122,7 +122,7 @@ struct SimModelPerturbation {
 /// listed check that passes, is reported as a mismatch.
 struct ExpectedFailure {
   std::string method;              ///< "" for a case without methods
-  std::string status = "completed";  ///< completed | controller_failure | integrator_failure
+  std::string status = "completed";  ///< completed | controller_failure | integrator_failure | diverged
   std::vector<std::string> checks;   ///< the checks expected to fail (sorted)
   std::string reason;
   std::string where;                 ///< file:line of the entry

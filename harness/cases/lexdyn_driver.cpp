@@ -10,6 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+
+#include <Eigen/Geometry>
 
 namespace lexdyn::cases {
 
@@ -60,6 +63,9 @@ struct LexdynDriver::Impl {
     int sensor = -1;             // index into the simulator's sensor readings
     model::FrameId sensor_frame = -1;
     bool point = false;          // a point contact: its wrenches in the world's axes (z the ground's normal)
+    bool fixed = false;
+    int surface = -1;            // the simulator's contact surface (description order); -1: none
+    double lost_since = std::numeric_limits<double>::quiet_NaN();  // divergence guard
   };
   std::vector<ContactRec> contacts;
 
@@ -73,6 +79,10 @@ struct LexdynDriver::Impl {
     Eigen::VectorXd from, to;  ///< ramp: entries not finite at either end take `to` at once
   };
   std::vector<Generator> generators;
+  // Divergence guard: the configuration the last command planned for this tick.
+  model::Configuration expected;
+  bool have_expected = false;
+  double weight = 0.0;  // N
   Eigen::VectorXd target3 = Eigen::VectorXd::Zero(3);
   Eigen::VectorXd rampValue;
 
@@ -110,6 +120,10 @@ struct LexdynDriver::Impl {
       c.frame = sm.frameId(ce.frame);
       c.ctrl_frame = model.frameId(ce.frame);
       c.point = ce.dims == 3;
+      c.fixed = ce.fixed;
+      for (size_t k = 0; k < d.contact_surfaces.size(); ++k) {
+        if (!ce.surface.empty() && d.contact_surfaces[k].name == ce.surface) c.surface = static_cast<int>(k);
+      }
       if (!ce.grasp.empty()) c.grasp = simu.graspIndex(ce.grasp);
       if (!ce.sensor.empty()) {
         for (size_t k = 0; k < d.force_sensors.size(); ++k) {
@@ -121,6 +135,8 @@ struct LexdynDriver::Impl {
       }
       contacts.push_back(c);
     }
+    weight = model.totalMass() * model.gravity().norm();
+    expected = state.q;
     error_sum.assign(tasks.size(), 0.0);
     error_last.assign(tasks.size(), 0.0);
     status_counts.assign(checks::controllerStatusNames().size(), 0);
@@ -298,6 +314,8 @@ bool LexdynDriver::tick(double t, const sim::Simulator& simu, sim::JointCommand&
     I.target3 = g.kind == Impl::Generator::Kind::Swing ? g.sw.at(tau) : g.trajectory.at(tau);
     I.ctl->setTaskTarget(g.task, I.target3);
   }
+  I.have_expected = I.ticks > 0;
+  if (I.have_expected) I.expected = I.ctl->command().q;
   if (I.lx.state_feedback == "measured" || I.ticks == 0) {
     I.state.q = simu.configuration();
     I.state.u = simu.velocity();
@@ -344,6 +362,84 @@ bool LexdynDriver::tick(double t, const sim::Simulator& simu, sim::JointCommand&
   if (I.lx.feedforward_torque) cmd.tau_ff = c.tau;
   else cmd.tau_ff.setZero();
   return true;
+}
+
+std::string LexdynDriver::divergence(double t, const sim::Simulator& simu) {
+  Impl& I = *impl_;
+  const DivergenceGuard& g = I.lx.guard;
+  if (!g.enabled) return {};
+  const std::string at = "diverged at t = " + num(t) + " s: ";
+  const model::Configuration& q = simu.configuration();
+  if (I.have_expected) {
+    // The plan's configuration for this tick (the last command) against the simulator's.
+    Eigen::Index worst = -1;
+    double dq = 0.0;
+    for (Eigen::Index j = 0; j < q.joints.size(); ++j) {
+      const double e = std::abs(I.expected.joints[j] - q.joints[j]);
+      if (!(e <= dq)) {
+        dq = e;
+        worst = j;
+      }
+    }
+    if (worst >= 0 && !(dq <= g.angle_rad)) {
+      return at + "joint " + I.model.jointNames()[static_cast<size_t>(worst)] + " is " + num(dq) + " from the plan's position (limit " +
+             num(g.angle_rad) + ", divergence_guard.angle_rad)";
+    }
+    if (I.model.hasFreeFlyer()) {
+      const double dp = (I.expected.base_position - q.base_position).norm();
+      if (!(dp <= g.position_m)) {
+        return at + "the base is " + num(dp) + " m from the plan's position (limit " + num(g.position_m) + " m, divergence_guard.position_m)";
+      }
+      const double da = Eigen::AngleAxisd(I.expected.base_rotation.transpose() * q.base_rotation).angle();
+      if (!(da <= g.angle_rad)) {
+        return at + "the base is turned " + num(da) + " rad from the plan's attitude (limit " + num(g.angle_rad) +
+               " rad, divergence_guard.angle_rad)";
+      }
+    }
+  }
+  // Contacts the plan holds that the simulated robot has left.
+  const double fmin = g.contact_lost_fraction * I.weight;
+  for (auto& c : I.contacts) {
+    if (c.surface < 0 || c.fixed || !I.ctl->contactActive(c.index)) {
+      c.lost_since = std::numeric_limits<double>::quiet_NaN();
+      continue;
+    }
+    double fz = 0.0;
+    for (const sim::ContactPoint& p : simu.contactPoints()) {
+      if (p.surface == c.surface) fz += p.force.z();
+    }
+    if (fz >= fmin) {
+      c.lost_since = std::numeric_limits<double>::quiet_NaN();
+    } else if (std::isnan(c.lost_since)) {
+      c.lost_since = t;
+    } else if (t - c.lost_since >= g.contact_lost_s - 1e-9) {
+      return at + "the plan holds contact " + c.name + " but the simulated robot has left it since t = " + num(c.lost_since) +
+             " s (normal force " + num(fz) + " N, below " + num(fmin) + " N = " + num(g.contact_lost_fraction) +
+             " of the weight, for divergence_guard.contact_lost_s = " + num(g.contact_lost_s) + " s)";
+    }
+  }
+  // Torques beyond any actuator and task errors beyond any workspace.
+  const control::Command& cmd = I.ctl->command();
+  const Eigen::VectorXd& lim = I.model.jointTorqueLimits();
+  for (Eigen::Index j = 0; j < cmd.tau.size() && j < lim.size(); ++j) {
+    if (lim[j] > 0.0 && std::isfinite(lim[j]) && !(std::abs(cmd.tau[j]) <= g.torque_factor * lim[j])) {
+      return at + "the plan commands " + num(cmd.tau[j]) + " N m at joint " + I.model.jointNames()[static_cast<size_t>(j)] + ", " +
+             num(std::abs(cmd.tau[j]) / lim[j]) + " times its effort limit " + num(lim[j]) + " (limit " + num(g.torque_factor) +
+             " times, divergence_guard.torque_factor)";
+    }
+  }
+  const control::TickRecord& r = I.ctl->record();
+  for (const auto& tr : I.tasks) {
+    // Tasks with a target (equality rows); an inequality's distance-like error is infinite
+    // where the task does not bound (a CoM box open in z).
+    const tasks::TaskModel& task = I.ctl->task(tr.index);
+    if (!task.hasFunction() || task.kind() != tasks::TaskKind::Equality) continue;
+    const double e = r.task_error_norm(tr.index);
+    if (!(e <= g.task_error)) {
+      return at + "task " + tr.name + " has an error of " + num(e) + " (limit " + num(g.task_error) + ", divergence_guard.task_error)";
+    }
+  }
+  return {};
 }
 
 int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {

@@ -61,6 +61,9 @@ class LexdynDriver {
   /// state and fills `cmd` (set-point for t + dt). False when the controller failed
   /// (Command::ok() false); `failure` then says how.
   bool tick(double t, const sim::Simulator& simu, sim::JointCommand& cmd, std::string& failure);
+  /// The divergence guard after a successful tick at time t (docs/cases.md, "Divergence guard"):
+  /// empty while the simulated robot follows the plan, otherwise why the run must stop.
+  std::string divergence(double t, const sim::Simulator& simu);
   /// Writes this tick's controller channels (addChannels' order) from `out` on; returns the
   /// number of values written.
   int fill(const sim::Simulator& simu, double* out) const;

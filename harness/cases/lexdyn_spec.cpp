@@ -102,7 +102,23 @@ solver::Options readSolver(yaml::StrictMap& sm, double dt) {
   return o;
 }
 
-ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& d) {
+// A contact_margins map (controller.contact_margins or a contact's `margins`): the keys it gives
+// replace those of `m`.
+tasks::ContactMargins readMargins(const yaml::Node& node, tasks::ContactMargins m) {
+  yaml::StrictMap mm(node);
+  if (auto v = mm.optional("friction")) {
+    m.friction = v->asDouble();
+    if (!(m.friction >= 0.0 && m.friction < 1.0)) v->fail("expected the fraction of the friction coefficient kept in reserve, in [0, 1)");
+  }
+  if (auto v = mm.optional("cop_m")) m.cop_m = v->asDoubleIn(0.0, R::kMaxLength_m, "m");
+  if (auto v = mm.optional("min_normal_N")) m.min_normal_N = v->asDoubleIn(0.0, 1.0e5, "N");
+
+  mm.finish();
+  return m;
+}
+
+ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& d, const tasks::ContactMargins& margins,
+                         const std::optional<yaml::Node>& margins_node) {
   yaml::StrictMap m(node);
   ContactEntry c;
   c.where = node.where();
@@ -154,6 +170,24 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
     c.friction = d.friction_coefficient;
   } else {
     m.node().fail("the robot data file has no friction_coefficient; give friction here");
+  }
+  c.margins = margins;
+  std::optional<yaml::Node> own = m.optional("margins");
+  if (own) c.margins = readMargins(*own, margins);
+  {
+    // The margins must fit the contact (a CoP margin smaller than its support polygon).
+    tasks::ContactSpec planned;
+    planned.name = c.name;
+    planned.points = c.points;
+    planned.fixed = c.fixed;
+    planned.friction = c.friction;
+    planned.normal_in_frame = c.normal;
+    planned.point = c.dims == 3;
+    const std::vector<std::string> problems = tasks::applyContactMargins(planned, c.margins);
+    if (!problems.empty()) {
+      const yaml::Node& at = own ? *own : (margins_node ? *margins_node : m.node());
+      at.fail(problems.front() + (own ? "" : " (the margins of controller.contact_margins; give this contact its own `margins`)"));
+    }
   }
   if (auto v = m.optional("grasp")) c.grasp = v->asString();  // checked against sim.grasps by loadCase
   if (auto v = m.optional("sensor")) {
@@ -291,9 +325,26 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
     }
   }
   s.params = s.params_by_method.at(s.method);
+  if (auto g = m.optional("divergence_guard")) {
+    if (g->isScalar()) {
+      if (g->asEnum({"off", "on"}) == "off") s.guard.enabled = false;
+    } else {
+      yaml::StrictMap gm(*g);
+      DivergenceGuard& q = s.guard;
+      if (auto v = gm.optional("position_m")) q.position_m = v->asPositiveDouble();
+      if (auto v = gm.optional("angle_rad")) q.angle_rad = v->asPositiveDouble();
+      if (auto v = gm.optional("contact_lost_s")) q.contact_lost_s = v->asPositiveDouble();
+      if (auto v = gm.optional("contact_lost_fraction")) q.contact_lost_fraction = v->asDoubleIn(0.0, 1.0);
+      if (auto v = gm.optional("torque_factor")) q.torque_factor = v->asDoubleIn(1.0, 1.0e6);
+      if (auto v = gm.optional("task_error")) q.task_error = v->asPositiveDouble();
+      gm.finish();
+    }
+  }
+  const std::optional<yaml::Node> margins_node = m.optional("contact_margins");
+  if (margins_node) s.contact_margins = readMargins(*margins_node, kDefaultContactMargins);
   if (auto cn = m.optional("contacts")) {
     for (const yaml::Node& c : cn->elements()) {
-      ContactEntry e = readContact(c, d);
+      ContactEntry e = readContact(c, d, s.contact_margins, margins_node);
       if (s.findContact(e.name) >= 0) c.fail("duplicate contact name '" + e.name + "'");
       s.contacts.push_back(std::move(e));
     }
@@ -351,6 +402,7 @@ control::ControllerConfig buildControllerConfig(const LexdynSpec& spec, const mo
     cs.friction = c.friction;
     cs.normal_in_frame = c.normal;
     cs.point = c.dims == 3;
+    tasks::applyContactMargins(cs, c.margins);  // checked when the case was read
     cfg.contacts.push_back(cs);
   }
   cfg.initial_contacts = spec.initial_contacts;

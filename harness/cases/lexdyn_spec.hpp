@@ -7,9 +7,11 @@
 #include "harness/cases/task_registry.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
 #include "lexdyn/control/config.hpp"
+#include "lexdyn/tasks/contact_margins.hpp"
 
 #include <Eigen/Core>
 
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -17,6 +19,23 @@
 namespace lexdyn::cases {
 
 /// A contact the controller may use: a robot data contact surface, or a frame with points.
+/// The contact margins of a case that does not give controller.contact_margins
+/// (docs/controller.md, "Contact margins": how they were chosen).
+inline constexpr tasks::ContactMargins kDefaultContactMargins{0.0, 0.0, 0.0};
+
+/// The divergence guard (docs/cases.md, "Divergence guard"): ends a run whose plan the simulated
+/// robot no longer follows, with status `diverged` and the reason. Thresholds far from any
+/// healthy run (measured on the committed cases: docs/cases.md).
+struct DivergenceGuard {
+  bool enabled = true;
+  double position_m = 0.25;        ///< base position: the plan's (last command) against the simulator's
+  double angle_rad = 0.5;          ///< base attitude and every joint: plan against simulator
+  double contact_lost_s = 1.0;     ///< a contact the plan holds without force in the simulator this long
+  double contact_lost_fraction = 0.01;  ///< "without force": below this fraction of the robot's weight
+  double torque_factor = 10.0;     ///< a commanded torque beyond this multiple of its effort limit
+  double task_error = 100.0;       ///< a task error norm beyond this (m or rad): beyond any workspace
+};
+
 struct ContactEntry {
   std::string name;
   std::string where;
@@ -31,6 +50,9 @@ struct ContactEntry {
   int dims = 6;
   std::string grasp;   ///< linked simulator grasp (switched with the contact); empty: none
   std::string sensor;  ///< linked force/torque sensor (traced for comparison); empty: none
+  /// The plan's contact margins (controller.contact_margins, then the contact's `margins`);
+  /// points and friction above are the real contact's (the checks judge against them).
+  tasks::ContactMargins margins;
 };
 
 struct LevelEntry {
@@ -53,6 +75,9 @@ struct LexdynSpec {
   /// only tracking the joint set-points; reset from the measured initial state).
   std::string state_feedback = "measured";  ///< measured | integrated | measured_position
   std::vector<ContactEntry> contacts;
+  /// controller.contact_margins: every friction contact's margins unless it gives its own.
+  tasks::ContactMargins contact_margins = kDefaultContactMargins;
+  DivergenceGuard guard;               ///< controller.divergence_guard
   std::vector<std::string> initial_contacts;
   std::vector<TaskSpec> tasks;
   std::vector<LevelEntry> levels;      ///< methods with the strict hierarchy: bfgs, ah, gn

@@ -479,10 +479,17 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     } else {
       servo->command(static_cast<double>(k + 1) * T, cmd);
     }
-    write(k, k == 0 || !ok);
+    std::string diverged;
+    if (ok && driver) diverged = driver->divergence(t, simu);
+    write(k, k == 0 || !ok || !diverged.empty());
     if (!ok) {
       r.status = "controller_failure";
       r.message = failure;
+      break;
+    }
+    if (!diverged.empty()) {
+      r.status = "diverged";
+      r.message = diverged;
       break;
     }
     if (options.interrupt && options.interrupt->load()) {

@@ -38,7 +38,7 @@ struct RunOptions {
 };
 
 struct RunSummary {
-  /// completed | integrator_failure | controller_failure | internal_error | interrupted
+  /// completed | integrator_failure | controller_failure | diverged | internal_error | interrupted
   std::string status;
   std::string message;  ///< what stopped the run early
   std::string method;   ///< lexdyn: bfgs | ah | gn | wls ("" for other controllers)

@@ -84,7 +84,7 @@ struct TraceTable {
   TraceMetadata metadata;
   std::vector<std::string> names;
   std::vector<std::vector<double>> rows;
-  /// The end mark: "completed", "interrupted", "integrator_failure", "controller_failure",
+  /// The end mark: "completed", "interrupted", "integrator_failure", "controller_failure", "diverged",
   /// "internal_error", ... and why; empty when the file has none (cut, or an older writer).
   std::string end_status, end_message;
   int column(const std::string& name) const;  ///< -1 when absent

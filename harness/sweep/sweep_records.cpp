@@ -102,7 +102,7 @@ RunResult fromJson(const json& j) {
 
 std::optional<RunResult> recordedResult(const json& j, std::string& why) {
   // The statuses of runs that ended on their own, and the driver's own verdicts on a process.
-  static const std::set<std::string> kRecorded = {"completed", "integrator_failure", "controller_failure", "internal_error",
+  static const std::set<std::string> kRecorded = {"completed", "integrator_failure", "controller_failure", "diverged", "internal_error",
                                                   "input_error", "timeout", "bad_input", "crashed"};
   if (!j.is_object()) {
     why = "not a JSON object";

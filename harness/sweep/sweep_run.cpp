@@ -108,8 +108,8 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
   if (r.status == "output_error") return lost("could not write its outputs: " + r.message);
   // Out of memory says nothing of the configuration: the machine's state, like a kill.
   if (r.status == "internal_error" && r.message.find("out of memory") != std::string::npos) return lost(r.message);
-  if (r.status != "completed" && r.status != "integrator_failure" && r.status != "controller_failure" && r.status != "internal_error" &&
-      r.status != "input_error") {
+  if (r.status != "completed" && r.status != "integrator_failure" && r.status != "controller_failure" && r.status != "diverged" &&
+      r.status != "internal_error" && r.status != "input_error") {
     return lost("summary.json has no status of a finished run ('" + r.status + "')");
   }
   r.simulated_s = j.value("simulated_s", 0.0);

@@ -33,7 +33,7 @@ struct CheckOutcome {
 
 /// What one simulation gave (OUT/runs/.../result.json).
 struct RunResult {
-  /// completed | integrator_failure | controller_failure | interrupted (the run's own), or
+  /// completed | integrator_failure | controller_failure | diverged | interrupted (the run's own), or
   /// timeout | crashed | bad_input | no_summary (what the driver saw of the process).
   std::string status;
   std::string message;

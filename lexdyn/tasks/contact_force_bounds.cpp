@@ -1,5 +1,6 @@
 #include "lexdyn/tasks/contact_force_bounds.hpp"
 
+#include <cmath>
 #include <limits>
 
 #include "lexdyn/common/error.hpp"
@@ -23,14 +24,20 @@ void ContactForceBoundsTask::compute(const TickContext& ctx, TaskData& d) const 
     // but the last (wrench minimisation) would fix; early-stopped solves then let it drift from
     // tick to tick without bound. Generators 0..2 alone span R^3 (n +- mu t1 and n + mu t2), so
     // the set of contact forces is unchanged.
-    const double lo = active ? (spec.fixed ? -kInf : 0.0) : 0.0;
+    // The minimum normal force of a point (its contact margin): each generator's normal
+    // component is 1 / sqrt(1 + mu^2), so 4 generators at min_normal_force sqrt(1 + mu^2) / 4
+    // give it. The velocity domain's variables are impulses dt gamma.
+    const double share = std::sqrt(1.0 + spec.friction * spec.friction) / 4.0;
+    const double scale = ctx.domain == Domain::Velocity ? ctx.dt : 1.0;
+    const double g_min = spec.min_normal_force * share;
+    const double lo = active ? (spec.fixed ? -kInf : g_min) : 0.0;
     const double hi = active ? kInf : 0.0;
     const int n = 4 * static_cast<int>(spec.points.size());
     for (int j = 0; j < n; ++j) {
       const int k = layout.offset(c) + j;
       const bool gauge = active && spec.fixed && j % 4 == 3;
-      d.lower[k] = gauge ? 0.0 : lo;
-      d.upper[k] = gauge ? 0.0 : hi;
+      d.lower[k] = gauge ? 0.0 : lo * scale;
+      d.upper[k] = gauge ? 0.0 : hi * scale;
       d.engaged[static_cast<size_t>(k)] = (active && spec.fixed && !gauge) ? 0 : 1;
     }
   }

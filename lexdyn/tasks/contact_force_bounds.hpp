@@ -1,7 +1,8 @@
 // contact_force_bounds (bounds level, ng rows): one row per contact wrench generator variable
 // (docs/controller.md). Active friction contact: gamma >= 0 (paper sec. V-C, linearised friction
-// cone); active fixed (grasp) contact: free; inactive contact: gamma = 0. Velocity domain bounds
-// dt gamma, acceleration domain gamma: the bounds (0 or infinite) are the same.
+// cone), or gamma >= the share of the contact's minimum normal force (its contact margin,
+// contact_margins.hpp); active fixed (grasp) contact: free; inactive contact: gamma = 0. The
+// velocity domain bounds dt gamma, the acceleration domain gamma.
 #pragma once
 
 #include "lexdyn/tasks/variable_rows.hpp"

@@ -8,6 +8,7 @@ target_sources(lexdyn PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/variable_rows.cpp
   ${CMAKE_CURRENT_LIST_DIR}/contact_jacobian.cpp
   ${CMAKE_CURRENT_LIST_DIR}/contact_force_bounds.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/contact_margins.cpp
   ${CMAKE_CURRENT_LIST_DIR}/joint_limits.cpp
   ${CMAKE_CURRENT_LIST_DIR}/equation_of_motion.cpp
   ${CMAKE_CURRENT_LIST_DIR}/torque_limits.cpp

@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include <limits>
+
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/model/robot_model.hpp"
 
@@ -48,6 +50,10 @@ struct ContactSpec {
   /// its friction pyramid is about the ground's normal, world +z, whatever the frame's attitude
   /// (a ball foot on a pitched shank). normal_in_frame is then unused.
   bool point = false;
+  /// Minimum normal force of each point of the active friction contact, N (the plan's contact
+  /// margin, tasks/contact_margins.hpp): each of the point's generators is at least
+  /// min_normal_force sqrt(1 + mu^2) / 4.
+  double min_normal_force = 0.0;
 };
 
 /// Layout of the contact generator variables: contact c, point p, generator g (0..3) is variable

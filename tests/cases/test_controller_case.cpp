@@ -222,6 +222,23 @@ TEST(ControllerCase, ErrorsNameFileLineAndKeyPath) {
   expectError(with("initial_contacts: [RIGHT_FOOT, LEFT_FOOT]", "initial_contacts: [RIGHT_FOOT, LEFT_FOOT, POLE]"),
               {"controller.contacts[2].grasp", "switch together"});
   expectError(with("  levels:\n", "  levels_unused:\n"), {"controller.levels_unused", "unknown key"});
+  // Contact margins (docs/controller.md, "Contact margins"): ranges, and a CoP margin the sole
+  // cannot give, named at the key that gave it.
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  contact_margins: {friction: 1.0}\n"),
+              {"case.yaml:12: controller.contact_margins.friction", "[0, 1)"});
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  contact_margins: {cop_m: -0.01}\n"),
+              {"controller.contact_margins.cop_m", "-0.01"});
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  contact_margins: {min_normal_N: .nan}\n"),
+              {"controller.contact_margins.min_normal_N"});
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  contact_margins: {cop_m: 0.08, tilt: 1}\n"),
+              {"controller.contact_margins.tilt", "unknown key"});
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  contact_margins: {cop_m: 0.08}\n"),
+              {"case.yaml:12: controller.contact_margins", "cop_m: 0.08 m leaves no support polygon of contact RIGHT_FOOT",
+               "less than 0.07 m", "give this contact its own `margins`"});
+  expectError(with("surface: RIGHT_FOOT, sensor", "surface: RIGHT_FOOT, margins: {min_normal_N: -1}, sensor"),
+              {"controller.contacts[0].margins.min_normal_N"});
+  expectError(with("surface: RIGHT_FOOT, sensor", "surface: RIGHT_FOOT, margins: {cop_m: 0.1}, sensor"),
+              {"controller.contacts[0].margins", "leaves no support polygon of contact RIGHT_FOOT"});
   // A task the controller cannot run in a domain: trust_region has no acceleration form.
   expectError(with("{name: hard, tasks: [joint_limits,", "{name: hard, tasks: [trust, joint_limits,"),
               {"controller.wls_levels", "(method wls)", "task \"trust\"", "acceleration"});

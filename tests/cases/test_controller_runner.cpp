@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <fstream>
@@ -207,6 +208,66 @@ TEST(ControllerRunner, ControllerFailureStopsTheRunKeepingTheTrace) {
   const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/out/summary.json"));
   EXPECT_EQ(j["status"], "controller_failure");
   EXPECT_EQ(j["controller"]["status_counts"]["infeasible"].get<long>(), 1);
+}
+
+// The divergence guard (docs/cases.md, "Divergence guard"): exp1 with an upper body four times
+// heavier in the simulator than in the controller's model sinks away from its plan; the guard
+// ends the run with status `diverged` while the robot still stands (the waist above 0.7 m),
+// keeping the trace. Without the guard the same run goes on until the robot has collapsed (the
+// waist at 0.15 m) and the integrator fails.
+TEST(ControllerRunner, DivergenceGuardStopsARunThatLeavesItsPlan) {
+  const std::string exp1 = std::string(LEXDYN_SOURCE_DIR) + "/cases/exp1.yaml";
+  const std::vector<Override> heavy = {{"sim.model", "{mass_scale: [{match: \"CHEST*\", scale: 4}, {match: \"*ARM*\", scale: 4}]}", ""},
+                                       {"stop_at_s", "5", ""}};
+  const std::string dir = outputDir("ctl_runner_diverged");
+  const RunSummary s = run(loadCase(exp1, heavy), dir + "/on");
+  EXPECT_EQ(s.status, "diverged") << s.message;
+  EXPECT_NE(s.message.find("from the plan's position (limit 0.25 m, divergence_guard.position_m)"), std::string::npos) << s.message;
+  EXPECT_EQ(exitCode(s), kExitRunFailure);
+  EXPECT_LT(s.simulated_s, 3.0);
+  const checks::TraceTable t = checks::readTrace(dir + "/on/trace.csv");
+  EXPECT_EQ(t.end_status, "diverged");
+  EXPECT_EQ(t.end_message, s.message);
+  double lowest = INFINITY;
+  for (size_t r = 0; r < t.rows.size(); ++r) lowest = std::min(lowest, at(t, r, "frame.WAIST.z"));
+  EXPECT_GT(lowest, 0.7);
+  EXPECT_NEAR(at(t, t.rows.size() - 1, "t"), s.simulated_s, 1e-12);
+  std::vector<Override> off = heavy;
+  off.push_back({"controller.divergence_guard", "off", ""});
+  const RunSummary s_off = run(loadCase(exp1, off), dir + "/off");
+  EXPECT_NE(s_off.status, "diverged");
+  EXPECT_GT(s_off.simulated_s, s.simulated_s);
+  const checks::TraceTable t_off = checks::readTrace(dir + "/off/trace.csv");
+  lowest = INFINITY;
+  for (size_t r = 0; r < t_off.rows.size(); ++r) lowest = std::min(lowest, at(t_off, r, "frame.WAIST.z"));
+  EXPECT_LT(lowest, 0.3);
+}
+
+// Each criterion of the guard, driven by a threshold no healthy run meets, names its key.
+TEST(ControllerRunner, DivergenceGuardCriteriaNameTheirThresholds) {
+  const std::string exp1 = std::string(LEXDYN_SOURCE_DIR) + "/cases/exp1.yaml";
+  struct Case {
+    const char* guard;
+    const char* message;
+    double before_s;  // the run stops before this time
+  };
+  for (const Case& c : {Case{"{angle_rad: 1.0e-9}", "from the plan's position (limit 1e-09, divergence_guard.angle_rad)", 0.1},
+                        Case{"{contact_lost_fraction: 0.9, contact_lost_s: 0.2}",
+                             "but the simulated robot has left it since t = 0 s", 0.25},
+                        Case{"{torque_factor: 1.0, angle_rad: 10}", "", 0.0},
+                        Case{"{task_error: 0.01}", "task right_hand has an error of", 0.01}}) {
+    const std::string dir = outputDir("ctl_runner_guard");
+    const RunSummary s = run(loadCase(exp1, {{"controller.divergence_guard", c.guard, ""}, {"stop_at_s", "1", ""}}), dir);
+    if (*c.message == 0) {
+      // The plan keeps its torques within their limits (the torque_limits level): a factor of 1
+      // never fires on a healthy run.
+      EXPECT_EQ(s.status, "completed") << c.guard << ": " << s.message;
+      continue;
+    }
+    EXPECT_EQ(s.status, "diverged") << c.guard;
+    EXPECT_NE(s.message.find(c.message), std::string::npos) << c.guard << ": " << s.message;
+    EXPECT_LT(s.simulated_s, c.before_s) << c.guard;
+  }
 }
 
 TEST(ControllerRunner, StoredTraceChecksEqualTheLiveOnes) {
