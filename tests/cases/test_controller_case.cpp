@@ -56,7 +56,8 @@ TEST(ControllerCase, RepositoryCasesLoadWithEveryMethod) {
                           Expect{"cases/exp1-wls-unbiased.yaml", "wls", {"bfgs", "ah", "gn", "wls"}},
                           Expect{"cases/exp2.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
                           Expect{"cases/exp3.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
-                          Expect{"cases/pointmass-damping.yaml", "gn", {"bfgs", "ah", "gn", "wls"}}}) {
+                          Expect{"cases/pointmass-damping.yaml", "gn", {"bfgs", "ah", "gn", "wls"}},
+                          Expect{"cases/hrp2kai_heavy/exp1.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}}}) {
     CaseSpec c = loadCase(src(e.file));
     EXPECT_EQ(c.controller.type, "lexdyn") << e.file;
     EXPECT_EQ(methodName(c), e.method) << e.file;
