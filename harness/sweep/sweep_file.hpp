@@ -49,7 +49,7 @@ using Comparison = checks::ComparisonSpec;
 struct ShrinkSettings {
   bool enabled = true;
   int max_runs = 40;            ///< simulations per shrunk failure
-  int max_total_runs = 200;     ///< simulations for all the sweep's failures together
+  int max_total_runs = 200;     ///< trials for all the sweep's failures together, shared evenly (at most max_runs each)
   int bisection_steps = 6;      ///< per numeric parameter
   double min_duration_s = 1.0;  ///< the duration is shrunk to this resolution
 };

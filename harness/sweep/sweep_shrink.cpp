@@ -45,8 +45,7 @@ std::string configKey(const RunConfig& c) {
 // Trials shared by the shrinks (thread-safe), persisted to OUT/shrink/cache.jsonl.
 class TrialCache {
  public:
-  TrialCache(const std::string& out_dir, const RunOne& run, int slots, int max_total_runs)
-      : dir_(fs::path(out_dir) / "shrink"), run_(run), free_(slots), left_(max_total_runs) {
+  TrialCache(const std::string& out_dir, const RunOne& run, int slots) : dir_(fs::path(out_dir) / "shrink"), run_(run), free_(slots) {
     std::error_code ec;
     fs::create_directories(dir_, ec);
     // A line that does not read back whole (cut by a crash of the machine, damaged) or holds no
@@ -65,11 +64,10 @@ class TrialCache {
   }
 
   /// The result of a configuration; `fresh` tells whether it was run now. A trial that is
-  /// interrupted or lost is not cached; `exhausted`: the sweep's total budget of trials is spent.
-  Trial get(const RunConfig& c, bool& fresh, bool& exhausted) {
+  /// interrupted or lost is not cached.
+  Trial get(const RunConfig& c, bool& fresh) {
     const std::string key = configKey(c);
     fresh = false;
-    exhausted = false;
     {
       std::unique_lock<std::mutex> lock(m_);
       // Two shrinks may ask for the same configuration at once: the second waits for the first's
@@ -77,11 +75,6 @@ class TrialCache {
       cv_.wait(lock, [&] { return running_.count(key) == 0; });
       auto it = results_.find(key);
       if (it != results_.end()) return Trial{Trial::End::kRecorded, it->second, ""};
-      if (left_ <= 0) {
-        exhausted = true;
-        return Trial{Trial::End::kInterrupted, {}, ""};
-      }
-      --left_;
       running_.insert(key);
       cv_.wait(lock, [&] { return free_ > 0; });
       --free_;
@@ -99,9 +92,6 @@ class TrialCache {
         files::appendDurably((dir_ / "cache.jsonl").string(), json{{"key", key}, {"result", toJson(t.result)}}.dump() + "\n");
         std::lock_guard<std::mutex> lock(m_);
         results_[key] = t.result;
-      } else {
-        std::lock_guard<std::mutex> lock(m_);
-        ++left_;  // nothing was learnt: the trial is run again next time
       }
     } catch (...) {
       release();
@@ -118,7 +108,6 @@ class TrialCache {
   std::mutex m_;
   std::condition_variable cv_;
   int free_;
-  int left_;  ///< fresh trials the sweep may still run
   std::map<std::string, RunResult> results_;
   std::set<std::string> running_;  ///< configurations whose trial is running
 };
@@ -185,7 +174,8 @@ json failureRecord(const SweepSpec& s, const Failure& f, const RunConfig& c, con
 
 class Shrinker {
  public:
-  Shrinker(const SweepSpec& s, const Failure& f, TrialCache& cache) : s_(s), f_(f), cache_(cache) {
+  /// `cap`: the trials this shrink may count (cached or run now).
+  Shrinker(const SweepSpec& s, const Failure& f, TrialCache& cache, int cap) : s_(s), f_(f), cache_(cache), cap_(cap) {
     const RunResult orig = fromJson(f.first["runs"][f.method]);
     status_ = orig.status;
     if (const CheckOutcome* c = orig.check(f.check)) value_was_nan_ = std::isnan(c->value);
@@ -238,16 +228,11 @@ class Shrinker {
   // budget do not depend on what an earlier, interrupted driver ran or on the other shrinks.
   int tryConfig(const RunConfig& c) {
     bool fresh = false;
-    if (runs_ >= s_.shrink.max_runs) {
+    if (runs_ >= cap_) {
       exhausted_ = true;
       return 0;
     }
-    bool spent = false;
-    const Trial t = cache_.get(c, fresh, spent);
-    if (spent) {
-      exhausted_ = true;
-      return 0;
-    }
+    const Trial t = cache_.get(c, fresh);
     if (t.end == Trial::End::kLost) lost_ = t.why;
     if (t.end != Trial::End::kRecorded) return -1;
     ++runs_;
@@ -348,6 +333,7 @@ class Shrinker {
   RunResult best_result_;
   int runs_ = 0;
   bool exhausted_ = false;
+  int cap_ = 0;
 
  public:
   std::string lost_;  ///< why a trial was lost ("" when none was)
@@ -373,7 +359,18 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
   std::vector<Failure> failures = collect(s, records);
   std::vector<json> out(failures.size());
   if (failures.empty()) return out;
-  TrialCache cache(o.out_dir, run, std::max(1, o.jobs), s.shrink.max_total_runs);
+  TrialCache cache(o.out_dir, run, std::max(1, o.jobs));
+  // The sweep's total budget, shared evenly by the failures that shrink (at most max_runs each):
+  // a fixed share, counted over cached and fresh trials alike, so that which failures a small
+  // budget leaves less shrunk depends neither on the shrinks' timing nor on what an earlier,
+  // interrupted driver ran.
+  auto shrinks = [&](const Failure& f) {
+    const std::string status = f.first["runs"][f.method].value("status", "");
+    return !(f.check == kRunCompleted && (status == "timeout" || status == "crashed"));
+  };
+  long shrinking = 0;
+  for (const Failure& f : failures) shrinking += shrinks(f) ? 1 : 0;
+  const int cap = static_cast<int>(std::min<long>(s.shrink.max_runs, s.shrink.max_total_runs / std::max(1L, shrinking)));
   std::vector<char> ok(failures.size(), 0);
   std::vector<std::string> lost_by(failures.size());
   std::mutex error_m;
@@ -391,9 +388,8 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
       try {
         const Failure& f = failures[i];
         // Timeouts are not shrunk (each trial could cost the whole timeout).
-        const std::string status = f.first["runs"][f.method].value("status", "");
-        if (f.check == kRunCompleted && (status == "timeout" || status == "crashed")) return;
-        Shrinker sh(s, f, cache);
+        if (!shrinks(f)) return;
+        Shrinker sh(s, f, cache, cap);
         if (!sh.run()) {
           lost_by[i] = sh.lost_;
           return;

@@ -164,6 +164,35 @@ TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
   EXPECT_NE(readText(dir + "/c.log").find("replayed 1 earlier failure(s)"), std::string::npos);
 }
 
+// The total shrink budget is shared evenly by the failures: with two failures of WLS and
+// max_total_runs 6, each shrink counts exactly 3 trials and says its budget ended, and the
+// shrunk failures are the same with one process or two (whatever the shrinks' timing).
+TEST(SweepDriver, TheTotalShrinkBudgetIsSharedEvenly) {
+  const std::string dir = dirFor("sweep_budget");
+  std::string text = readText(kSweep);
+  text.replace(text.find("base: ../pointmass-damping.yaml"), 31, "base: " + std::string(LEXDYN_SOURCE_DIR) + "/cases/pointmass-damping.yaml");
+  text.replace(text.find("sampling: {points: 12}"), 22, "sampling: {points: 4}");
+  text.replace(text.find("checks: [no_overshoot, controller_ok]"), 37, "checks: [no_overshoot, closed_form_eq49, controller_ok]");
+  text.replace(text.find("shrink: {max_runs: 30,"), 22, "shrink: {max_runs: 30, max_total_runs: 6,");
+  const std::string file = dir + "/budget.yaml";
+  std::ofstream(file) << text;
+  std::string failures[2];
+  for (int k = 0; k < 2; ++k) {
+    const std::string out = dir + "/j" + std::to_string(k + 1);
+    ASSERT_EQ(run("sweep run " + file + " --out " + out + " -j " + std::to_string(k + 1), out + ".log"), 1) << readText(out + ".log");
+    json summary = json::parse(readText(out + "/summary.json"));
+    ASSERT_EQ(summary["failures"].size(), 2u) << summary.dump(1);
+    for (auto& f : summary["failures"]) {
+      EXPECT_EQ(f["method"], "wls");
+      EXPECT_EQ(f["runs"].get<int>(), 3) << f.dump(1);
+      EXPECT_TRUE(f["budget_exhausted"].get<bool>()) << f.dump(1);
+      f.erase("wall_s");
+    }
+    failures[k] = summary["failures"].dump();
+  }
+  EXPECT_EQ(failures[0], failures[1]);
+}
+
 TEST(SweepDriver, AHangIsThatRunsRecordedFailure) {
   // A run that overruns its timeout is killed and recorded; the sweep goes on.
   const std::string dir = dirFor("sweep_driver_timeout");
