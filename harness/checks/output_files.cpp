@@ -202,13 +202,22 @@ FolderLock& FolderLock::operator=(FolderLock&& o) noexcept {
   return *this;
 }
 
-FileLock::FileLock(const std::string& file, const std::string& command) {
+FileLock::FileLock(const std::string& file, const std::string& command, const std::atomic<int>* interrupt) {
   const fs::path parent = fs::path(file).parent_path();
   if (!parent.empty()) createFolder(parent.string());
   const std::string path = file + ".lock";
   fd_ = openLockFile(path);
-  while (::flock(fd_, LOCK_EX) != 0) {
-    if (errno == EINTR) continue;
+  // Polled, so that a signal (whose handler restarts a blocking flock) ends the wait.
+  while (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    if (errno == EWOULDBLOCK || errno == EINTR) {
+      if (interrupt != nullptr && interrupt->load() != 0) {
+        ::close(fd_);
+        fd_ = -1;
+        return;
+      }
+      ::usleep(20000);
+      continue;
+    }
     const int err = errno;
     ::close(fd_);
     fd_ = -1;

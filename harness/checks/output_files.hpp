@@ -4,6 +4,7 @@
 #pragma once
 
 #include <optional>
+#include <atomic>
 #include <string>
 
 namespace lexdyn::files {
@@ -55,10 +56,13 @@ class FolderLock {
 /// for: FILE.lock, the same format as FolderLock's.
 class FileLock {
  public:
-  FileLock(const std::string& file, const std::string& command);
+  /// Waits for the lock; with `interrupt`, gives up when it becomes nonzero (a signal asked the
+  /// job to stop): held() is then false.
+  FileLock(const std::string& file, const std::string& command, const std::atomic<int>* interrupt = nullptr);
   ~FileLock();
   FileLock(const FileLock&) = delete;
   FileLock& operator=(const FileLock&) = delete;
+  bool held() const { return fd_ >= 0; }
 
  private:
   int fd_ = -1;

@@ -448,9 +448,10 @@ void printSummary(const SweepSpec& s, const json& summary, std::FILE* out) {
 // ---------------------------------------------------------------------------------------------
 // The failure database.
 
-void recordFailures(const SweepSpec& s, const std::vector<json>& failures, const std::string& db_path) {
+bool recordFailures(const SweepSpec& s, const std::vector<json>& failures, const std::string& db_path, const std::atomic<int>* interrupt) {
   // The database is shared by every sweep of this name (each night's): one writer at a time.
-  const files::FileLock lock(db_path, "lexdyn-harness sweep " + s.name);
+  const files::FileLock lock(db_path, "lexdyn-harness sweep " + s.name, interrupt);
+  if (!lock.held()) return false;
   std::set<std::string> known;
   std::string text = readFileText(db_path);
   std::istringstream in(text);
@@ -468,8 +469,9 @@ void recordFailures(const SweepSpec& s, const std::vector<json>& failures, const
     const json e = {{"sweep", s.name}, {"method", f["method"]}, {"check", f["check"]}, {"values", f["values"]}, {"duration_s", f["duration_s"]}};
     if (known.insert(e.dump()).second) add += e.dump() + "\n";
   }
-  if (add.empty()) return;
+  if (add.empty()) return true;
   writeAtomically(db_path, text + add);
+  return true;
 }
 
 bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& run, std::vector<std::string>& lost) {
@@ -477,7 +479,8 @@ bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
   if (fs::is_regular_file(out)) return true;  // done by an earlier, interrupted run of this sweep
   std::string db;
   {
-    const files::FileLock lock(o.db_path, "lexdyn-harness sweep " + s.name);
+    const files::FileLock lock(o.db_path, "lexdyn-harness sweep " + s.name, o.interrupt);
+    if (!lock.held()) return false;
     db = readFileText(o.db_path);
   }
   std::istringstream in(db);

@@ -68,8 +68,10 @@ std::vector<nlohmann::json> shrinkFailures(const SweepSpec& s, const std::vector
 /// The same list without shrinking (each failure at its simplest failing point).
 std::vector<nlohmann::json> minimalFailures(const SweepSpec& s, const std::vector<nlohmann::json>& records, const DriverOptions& o);
 
-/// Appends the failures to the database (one JSON line each, without duplicates).
-void recordFailures(const SweepSpec& s, const std::vector<nlohmann::json>& failures, const std::string& db_path);
+/// Appends the failures to the database (one JSON line each, without duplicates), under its lock.
+/// False when `interrupt` became nonzero while waiting for the lock (nothing written).
+bool recordFailures(const SweepSpec& s, const std::vector<nlohmann::json>& failures, const std::string& db_path,
+                    const std::atomic<int>* interrupt = nullptr);
 /// Runs the database's failures of this sweep first; writes OUT/replays.jsonl. False when a
 /// replay was interrupted or lost (`lost` says why): replayed again next time.
 bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& run, std::vector<std::string>& lost);

@@ -526,7 +526,7 @@ int mergeSweep(const SweepSpec& s, const DriverOptions& o) {
   std::vector<json> failures = o.shrink && s.shrink.enabled ? shrinkFailures(s, records, o, runnerOf(pool), lost) : minimalFailures(s, records, o);
   if (o.interrupt && o.interrupt->load() != 0) return interruptedCode(o);
   if (!lost.empty()) return reportLost(s, lost);
-  if (!o.db_path.empty()) recordFailures(s, failures, o.db_path);
+  if (!o.db_path.empty() && !recordFailures(s, failures, o.db_path, o.interrupt)) return interruptedCode(o);
   const std::vector<json> maps = writeMaps(s, records, o.out_dir, o.plot_command);
   const json summary = summarize(s, records, n, failures, maps);
   writeAtomically(summary_path, summary.dump(2) + "\n");

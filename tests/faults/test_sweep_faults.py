@@ -235,6 +235,37 @@ def test_damaged_state(env, base):
     check(r.returncode == 2 and "damaged" in r.stderr and "sweep.txt" in r.stderr, f"a cut sweep.txt is refused as damaged: {r.stderr.strip()[:200]}")
 
 
+def test_database_lock_wait(env, base):
+    """A sweep waiting for the failure database's lock (another job writes it) ends on SIGTERM
+    at once (exit 143, the database untouched); once the lock is free it finishes as usual."""
+    import fcntl
+    src = os.path.join(env.work, "base")
+    out = env.fresh("db-lock")
+    shutil.copytree(src, out)
+    os.remove(os.path.join(out, "summary.json"))  # the merge (shrink from the cache, database) is left
+    shutil.copy(src + ".db", out + ".db")
+    before = open(out + ".db").read()
+    holder = open(out + ".db.lock", "a+")
+    fcntl.flock(holder, fcntl.LOCK_EX)
+    p = env.start(out)
+    time.sleep(3.0)  # the points and the shrinks come from what is stored: the driver now waits for the lock
+    waiting = p.poll() is None
+    t0 = time.time()
+    p.send_signal(signal.SIGTERM)
+    try:
+        p.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        p.wait()
+    took = time.time() - t0
+    check(waiting and p.returncode == 143 and took < 2.0 and open(out + ".db").read() == before,
+          f"a sweep waiting for the database's lock ends on SIGTERM (exit {p.returncode} after {took:.2f} s), the database untouched")
+    fcntl.flock(holder, fcntl.LOCK_UN)
+    holder.close()
+    r = env.sweep(out)
+    check(r.returncode == base["code"] and outcome(out) == base["outcome"], f"then, with the lock free, as uninterrupted (exit {r.returncode})")
+
+
 def test_concurrent_shrinks(env):
     """Two failures of one method shrink at once and may ask for the same trial: it runs once."""
     text = open(os.path.join(env.src, SWEEP)).read()
@@ -369,6 +400,7 @@ def main():
         "output_errors": lambda: test_output_errors(env),
         "two_sweeps": lambda: test_two_sweeps(env, base),
         "damaged_state": lambda: test_damaged_state(env, base),
+        "database_lock_wait": lambda: test_database_lock_wait(env, base),
         "full_disk": lambda: test_full_disk(env, base),
         "concurrent_shrinks": lambda: test_concurrent_shrinks(env),
         "stopped_worker": lambda: test_stopped_worker(env, base),
