@@ -404,10 +404,7 @@ std::string LexdynDriver::divergence(double t, const sim::Simulator& simu) {
       c.lost_since = std::numeric_limits<double>::quiet_NaN();
       continue;
     }
-    double fz = 0.0;
-    for (const sim::ContactPoint& p : simu.contactPoints()) {
-      if (p.surface == c.surface) fz += p.force.z();
-    }
+    const double fz = simu.surfaceNormalForce(c.surface);
     if (fz >= fmin) {
       c.lost_since = std::numeric_limits<double>::quiet_NaN();
     } else if (std::isnan(c.lost_since)) {

@@ -117,6 +117,18 @@ tasks::ContactMargins readMargins(const yaml::Node& node, tasks::ContactMargins 
   return m;
 }
 
+// The controller's contact of an entry, margins applied (the frame id is the caller's: it needs
+// the model). Returns the margins' problems (empty when they fit the contact).
+std::vector<std::string> plannedContact(const ContactEntry& c, tasks::ContactSpec& cs) {
+  cs.name = c.name;
+  cs.points = c.points;
+  cs.fixed = c.fixed;
+  cs.friction = c.friction;
+  cs.normal_in_frame = c.normal;
+  cs.point = c.dims == 3;
+  return tasks::applyContactMargins(cs, c.margins);
+}
+
 ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& d, const tasks::ContactMargins& margins,
                          const std::optional<yaml::Node>& margins_node) {
   yaml::StrictMap m(node);
@@ -177,13 +189,7 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
   {
     // The margins must fit the contact (a CoP margin smaller than its support polygon).
     tasks::ContactSpec planned;
-    planned.name = c.name;
-    planned.points = c.points;
-    planned.fixed = c.fixed;
-    planned.friction = c.friction;
-    planned.normal_in_frame = c.normal;
-    planned.point = c.dims == 3;
-    const std::vector<std::string> problems = tasks::applyContactMargins(planned, c.margins);
+    const std::vector<std::string> problems = plannedContact(c, planned);
     if (!problems.empty()) {
       const yaml::Node& at = own ? *own : (margins_node ? *margins_node : m.node());
       at.fail(problems.front() + (own ? "" : " (the margins of controller.contact_margins; give this contact its own `margins`)"));
@@ -395,14 +401,8 @@ control::ControllerConfig buildControllerConfig(const LexdynSpec& spec, const mo
   cfg.params.method = spec.method;
   for (const ContactEntry& c : spec.contacts) {
     tasks::ContactSpec cs;
-    cs.name = c.name;
+    plannedContact(c, cs);  // its margins were checked when the case was read
     cs.frame = model.frameId(c.frame);
-    cs.points = c.points;
-    cs.fixed = c.fixed;
-    cs.friction = c.friction;
-    cs.normal_in_frame = c.normal;
-    cs.point = c.dims == 3;
-    tasks::applyContactMargins(cs, c.margins);  // checked when the case was read
     cfg.contacts.push_back(cs);
   }
   cfg.initial_contacts = spec.initial_contacts;

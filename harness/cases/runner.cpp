@@ -131,10 +131,9 @@ class Recorder {
     }
     const auto& cps = simu_.contactPoints();
     size_t p = 0;
-    for (const auto& surf : d.contact_surfaces) {
-      double fz = 0.0;
-      for (size_t k = 0; k < surf.points.size(); ++k) fz += cps[p + k].force.z();
-      row_[i++] = fz;
+    for (size_t s = 0; s < d.contact_surfaces.size(); ++s) {
+      const auto& surf = d.contact_surfaces[s];
+      row_[i++] = simu_.surfaceNormalForce(static_cast<int>(s));
       for (size_t k = 0; k < surf.points.size(); ++k) {
         row_[i++] = cps[p + k].position.x();
         row_[i++] = cps[p + k].position.y();

@@ -914,6 +914,13 @@ const SensorReadings& Simulator::sensors() const { return impl_->sensors; }
 const model::Configuration& Simulator::configuration() const { return impl_->config; }
 const Eigen::VectorXd& Simulator::velocity() const { return impl_->u; }
 const std::vector<ContactPoint>& Simulator::contactPoints() const { return impl_->contact_points; }
+double Simulator::surfaceNormalForce(int surface) const {
+  double fz = 0.0;
+  for (const ContactPoint& p : impl_->contact_points) {
+    if (p.surface == surface) fz += p.force.z();
+  }
+  return fz;
+}
 const MultibodyState& Simulator::data() const { return impl_->observed; }
 const Eigen::VectorXd& Simulator::commandedPosition() const { return impl_->q1; }
 Wrench Simulator::graspWrenchWorld(int grasp) const { return impl_->grasp_world.at(static_cast<size_t>(grasp)); }

@@ -218,6 +218,9 @@ class Simulator {
   const model::Configuration& configuration() const;
   const Eigen::VectorXd& velocity() const;
   const std::vector<ContactPoint>& contactPoints() const;
+  /// The ground's normal force on a contact surface (description order): the sum of its
+  /// points' force z, N.
+  double surfaceNormalForce(int surface) const;
   /// The simulator's state at time() (for model().framePlacement(data(), f), centerOfMass, the
   /// body kinematics). Each tick sets it with Multibody::setKinematicState: realized through
   /// Simbody's Position stage only, so not for coordinateRates(), netForce() or biasForces().
