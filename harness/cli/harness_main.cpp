@@ -422,6 +422,12 @@ int main(int argc, char** argv) {
       std::error_code self_ec;
       const fs::path self = fs::canonical("/proc/self/exe", self_ec);
       if (!self_ec) ::setenv("LEXDYN_HARNESS", self.c_str(), 1);
+      // report.py reads the stored results with the lexdyn Python package of this checkout
+      // (python/lexdyn; docs/python.md, "Where Python finds the package").
+      const char* python_path = std::getenv("PYTHONPATH");
+      const std::string package_path =
+          std::string(LEXDYN_SOURCE_DIR) + "/python" + (python_path && *python_path ? std::string(":") + python_path : std::string());
+      ::setenv("PYTHONPATH", package_path.c_str(), 1);
       ::execv(argv_c[0], argv_c.data());
       throw std::runtime_error(std::string("cannot run ") + script + ": " + std::strerror(errno));
     }

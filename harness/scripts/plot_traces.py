@@ -19,13 +19,17 @@ them); run it with /usr/bin/python3. Writes PNG files into DIR:
                         (level.<L>.second_order_ratio solid, .curvature_ratio dashed; log scale),
                         when a trace has those channels
 Files are written to a temporary name first and renamed, so an interrupted run leaves no
-half-written figure. Traces are read with their '#' header lines skipped.
+half-written figure. Traces are read by the lexdyn package (python/lexdyn; PYTHONPATH=python from
+the repository's root, or the installed package: docs/python.md); a trace that is not one is an
+error naming the file, the line and the channel (exit code 2).
 """
 import argparse
 import os
 import sys
 
 import numpy as np
+
+import lexdyn
 
 import matplotlib
 
@@ -35,39 +39,25 @@ import matplotlib.pyplot as plt  # noqa: E402
 FIGURES = ["errors", "velocities", "torques", "timing", "augmentation", "wrench", "second_order"]
 
 
-def read_trace(path):
-    with open(path) as f:
-        lines = [l for l in f if not l.startswith("#")]
-    if not lines:
-        sys.exit(f"plot_traces: {path}: no header line")
-    header = lines[0].strip().split(",")
-    if len(lines) < 2:
-        return header, np.zeros((0, len(header)))
-    data = np.genfromtxt(lines[1:], delimiter=",")
-    if data.ndim == 1:
-        data = data.reshape(1, -1)
-    return header, data
-
-
 class Trace:
+    """A trace (lexdyn.read_trace) with the label of its run."""
+
     def __init__(self, label, path):
         self.label = label
         self.path = path
-        self.header, self.data = read_trace(path)
-        self.index = {n: i for i, n in enumerate(self.header)}
-        self.t = self.col("t")
+        self.trace = lexdyn.read_trace(path)
+        self.header = self.trace.names
+        self.t = self.trace.t
 
     def has(self, name):
-        return name in self.index
+        return self.trace.has(name)
 
     def col(self, name):
-        if name not in self.index:
-            sys.exit(f"plot_traces: {self.path}: no channel '{name}'")
-        return self.data[:, self.index[name]]
+        return self.trace.col(name)
 
     def cols(self, prefix):
-        names = [n for n in self.header if n.startswith(prefix)]
-        return names, (self.data[:, [self.index[n] for n in names]] if names else np.zeros((len(self.t), 0)))
+        names = self.trace.matching(prefix)
+        return names, self.trace.cols(names)
 
 
 def save(fig, out, name):
@@ -243,7 +233,11 @@ def main():
         label, path = r.split("=", 1)
         if not os.path.isfile(path):
             sys.exit(f"plot_traces: {path}: no such file")
-        traces.append(Trace(label, path))
+        try:
+            traces.append(Trace(label, path))
+        except lexdyn.FormatError as e:
+            print(f"plot_traces: {e}", file=sys.stderr)
+            sys.exit(2)
     os.makedirs(a.out, exist_ok=True)
     title = a.title or os.path.basename(os.path.dirname(os.path.abspath(traces[0].path)))
     if "errors" in figures:

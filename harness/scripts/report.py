@@ -20,7 +20,9 @@ Usage: /usr/bin/python3 harness/scripts/report.py --runs DIR [--sweeps DIR] [--h
                     a second job on DIR exits 2); the report is built in DIR/.staging-PID and
                     swapped in whole, so a failed build leaves the previous report as it was
 
-Built from stored results alone, so a report can be rebuilt at any time. Needs Debian's
+Built from stored results alone, so a report can be rebuilt at any time. Reads them with the
+lexdyn Python package (python/lexdyn; PYTHONPATH=python from the repository's root, as the
+scripts of harness/scripts set it, or the installed package: docs/python.md). Needs Debian's
 python3-numpy, python3-matplotlib, python3-yaml and libjs-three (install-deps.sh).
 Exit codes: 0 the report was written; 2 bad input or options (the message names the file, the
 line and the key), --out in use by another job or not a folder; 3 a file that cannot be written
@@ -28,14 +30,12 @@ or read (a full disk: "DIR: No space left on device"), an internal error (with i
 130 / 143 interrupted by SIGINT / SIGTERM.
 """
 import argparse
-import os
 import signal
 import sys
 import traceback
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-
-from lexdyn_report.common import ReportInputError, ReportOutputError, os_reason  # noqa: E402
+from lexdyn import FormatError
+from lexdyn_report.common import ReportOutputError, os_reason
 
 
 class BadOptions(Exception):
@@ -88,7 +88,7 @@ def main(argv=None):
                                strict_history=a.strict_history)
         index = b.build()
         size, files = page.folder_size(a.out)
-    except ReportInputError as e:
+    except FormatError as e:   # bad input (lexdyn's readers and the report's own checks)
         print(f"report: error: {e}", file=sys.stderr)
         return 2
     except ReportOutputError as e:

@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Table of the runs of second-order-runs.sh (docs/results.md, "The second-order term").
 
 Usage: second_order_table.py OUT [--level hands] [--json FILE]
@@ -18,25 +18,17 @@ import sys
 
 import numpy as np
 
+import lexdyn
+
 HANDS = {"exp1": ["right_hand", "left_hand"], "exp2": ["right_hand"], "exp3": ["right_hand"],
          "pointmass-damping": ["position"]}
 LEVEL = {"pointmass-damping": "position"}
 
 
 def load_trace(path, wanted):
-    # The first non-comment line holds the names; loadtxt must skip it.
-    with open(path) as f:
-        n_comments = 0
-        for line in f:
-            if line.startswith("#"):
-                n_comments += 1
-                continue
-            names = line.strip().split(",")
-            break
-    idx = [names.index(w) for w in wanted if w in names]
-    present = [w for w in wanted if w in names]
-    data = np.loadtxt(path, delimiter=",", comments="#", skiprows=n_comments + 1, usecols=idx, ndmin=2)
-    return {w: data[:, i] for i, w in enumerate(present)}
+    """{channel: values} of the channels WANTED that the trace has."""
+    tr = lexdyn.read_trace(path, channels=wanted)
+    return {w: tr.col(w) for w in wanted if tr.has(w)}
 
 
 def fmt(v, spec=".3g"):
@@ -54,17 +46,17 @@ def analyse(d):
     if not os.path.exists(sp):
         r["status"] = "no summary"
         return r
-    s = json.load(open(sp))
-    r["status"] = s.get("status")
+    s = lexdyn.read_summary(sp)
+    r["status"] = s.status
     hands = HANDS.get(case, ["right_hand"])
     te = s.get("tasks", {})
     r["final"] = {h: te.get(h, {}).get("final_error") for h in hands}
     r["mean"] = {h: te.get(h, {}).get("mean_error") for h in hands}
     r["peak_iterations"] = s.get("solver", {}).get("peak_iterations")
     r["peak_iterations_at_s"] = s.get("solver", {}).get("peak_iterations_at_s")
-    checks = {c["name"]: c for c in s.get("checks", [])}
-    # Wall-clock checks (machine-dependent, reported only) are left out.
-    r["failed"] = [n for n, c in checks.items() if not c.get("passed", False) and not c.get("machine_dependent", False)]
+    checks = {c.name: c for c in s.checks}
+    # Wall-clock checks (machine-dependent, reported only: decides false) are left out.
+    r["failed"] = [c.name for c in s.failed_checks]
     for key, name in (("sign_changes", "joint_accel_sign_changes"), ("hf_energy", "joint_velocity_hf")):
         r[key] = checks.get(name, {}).get("value")
     lvl = LEVEL.get(case, "hands")
@@ -103,7 +95,11 @@ def main():
     ap.add_argument("--json")
     a = ap.parse_args()
     runs = sorted(os.path.join(a.out, x) for x in os.listdir(a.out) if os.path.isdir(os.path.join(a.out, x)))
-    rows = [analyse(d) for d in runs]
+    try:
+        rows = [analyse(d) for d in runs]
+    except lexdyn.FormatError as e:
+        print(f"second_order_table: {e}", file=sys.stderr)
+        return 2
     if a.json:
         json.dump(rows, open(a.json, "w"), indent=1)
     print("| case | method | reading | alpha | status | final hand errors (m) | err 45 s / 90 s | converged (s) "

@@ -130,7 +130,7 @@ PY
   ref="$OUT/$name.reference.yaml $OUT/$name.reference"
   if [ "$NPERT" = 0 ]; then
     printf '%s\n' "$c $OUT/$name.default ${SETS[*]+${SETS[*]}}" "$ref" | run_all
-    python3 "$PY" single "$name" "$OUT/$name.default/trace.csv" "$OUT/$name.reference/trace.csv"
+    /usr/bin/python3 "$PY" single "$name" "$OUT/$name.default/trace.csv" "$OUT/$name.reference/trace.csv"
     continue
   fi
   # The case as written (with -s / -a) first: its trace header gives the case's own rtol.
@@ -169,7 +169,7 @@ PY
   check=()
   [ "$CHECK" = 0 ] || check=(--check)
   rc=0
-  python3 "$PY" perturbed "$name" "$OUT/$name.reference/trace.csv" "$OUT/$name.0" "${runs[@]}" ${check[@]+"${check[@]}"} || rc=$?
+  /usr/bin/python3 "$PY" perturbed "$name" "$OUT/$name.reference/trace.csv" "$OUT/$name.0" "${runs[@]}" ${check[@]+"${check[@]}"} || rc=$?
   status=$(lexdyn_worse "$status" "$rc")
 done
 exit "$status"

@@ -38,11 +38,10 @@ import sys
 import time
 import unittest
 
+import suite_options  # tests/report (PYTHONPATH: tests/faults/CMakeLists.txt)
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
-sys.path.insert(0, os.path.join(ROOT, "tests", "report"))
-
-import suite_options  # noqa: E402
 
 REPORT = os.path.join(ROOT, "harness", "scripts", "report.py")
 NIGHTLY = os.path.join(ROOT, "harness", "scripts", "nightly.sh")

@@ -4,7 +4,9 @@
 #   1. only public headers: nothing under a detail/ directory, no header of the library's internals;
 #   2. every installed header compiles on its own (nothing it needs was left out);
 #   3. a consumer project (consumer/) configures with find_package(lexdyn), builds, and runs: it
-#      solves a two-level problem and runs controller ticks on the point mass.
+#      solves a two-level problem and runs controller ticks on the point mass;
+#   4. the lexdyn Python package is installed (LEXDYN_PYTHON_INSTALL_DIR, every module of
+#      python/lexdyn) and, imported from there, reads a golden trace.
 # Usage: install_test.sh BUILD_DIR SOURCE_DIR CXX WORK
 set -euo pipefail
 BUILD="$1"; SRC="$2"; CXX="$3"; WORK="$4"
@@ -44,3 +46,20 @@ cmake -S "$SRC/tests/packaging/consumer" -B "$WORK/consumer" -DCMAKE_BUILD_TYPE=
   -DCMAKE_CXX_COMPILER="$CXX" > "$WORK/consumer-configure.log" 2>&1 || { cat "$WORK/consumer-configure.log" >&2; exit 1; }
 cmake --build "$WORK/consumer" -j 2 > "$WORK/consumer-build.log" 2>&1 || { tail -40 "$WORK/consumer-build.log" >&2; exit 1; }
 "$WORK/consumer/lexdyn_consumer" "$SRC/models/point_mass/point_mass.urdf" "$SRC/models/point_mass/point_mass.yaml"
+
+# 4. The Python package.
+PYDIR="$(sed -n 's/^LEXDYN_PYTHON_INSTALL_DIR:[A-Z]*=//p' "$BUILD/CMakeCache.txt")"
+case "$PYDIR" in /*) ;; *) PYDIR="$PREFIX/$PYDIR" ;; esac
+for f in "$SRC"/python/lexdyn/*.py; do
+  [ -f "$PYDIR/lexdyn/$(basename "$f")" ] || { echo "install_test: $PYDIR/lexdyn/$(basename "$f") not installed" >&2; exit 1; }
+done
+golden="$(ls "$SRC"/golden/*.csv | head -1)"
+(cd "$WORK" && env PYTHONPATH="$PYDIR" /usr/bin/python3 -c '
+import os, sys
+import lexdyn
+where = os.path.dirname(os.path.abspath(lexdyn.__file__))
+assert where == os.path.join(sys.argv[1], "lexdyn"), where
+tr = lexdyn.read_trace(sys.argv[2])
+assert tr.rows > 0 and tr.names[0] == "t" and tr.ended, sys.argv[2]
+print(f"install_test: lexdyn (Python) imported from {where}: {os.path.basename(sys.argv[2])} {tr.rows} rows")
+' "$PYDIR" "$golden")

@@ -1,40 +1,34 @@
 #!/usr/bin/python3
-"""plot_traces.py's second-order figure: drawn from the level.<L>.second_order_ratio and
-.curvature_ratio channels, one panel per level that was ever augmented, nothing without them."""
+"""plot_traces.py's figures from traces the harness wrote in this ctest run (LEXDYN_TEST_OUTPUTS,
+tests/python/write_outputs.sh: the point mass with LexDynBFGS, whose level is augmented on every
+tick, and with WLS, which has no second-order term). The second-order figure is drawn from the
+level.<L>.second_order_ratio and .curvature_ratio channels, one panel per level that was ever
+augmented, nothing without them; a damaged trace is an error naming its file and line. plot_traces
+and lexdyn are found through PYTHONPATH (tests/CMakeLists.txt)."""
 import os
 import subprocess
-import sys
 import tempfile
 import unittest
+
+import plot_traces
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 SCRIPT = os.path.join(ROOT, "harness", "scripts", "plot_traces.py")
-sys.path.insert(0, os.path.join(ROOT, "harness", "scripts"))
-
-import plot_traces  # noqa: E402
 
 
-def write_trace(path, levels_augmented):
-    cols = ["t", "task.right_hand.error", "task.left_hand.error", "cmd.qd.J0", "cmd.tau.J0",
-            "level.hands.augmented", "level.hands.second_order_ratio", "level.hands.curvature_ratio",
-            "level.posture.augmented", "level.posture.second_order_ratio", "level.posture.curvature_ratio"]
-    with open(path, "w") as f:
-        f.write("# a comment line\n" + ",".join(cols) + "\n")
-        for k in range(50):
-            on = levels_augmented and k >= 20
-            ratio = f"{2.5e-4 + 1e-6 * k:.9g}" if on else "nan"
-            curv = f"{3e-5:.9g}" if on else "nan"
-            f.write(",".join([f"{0.005 * k:.3f}", "0.5", "0.5", "0.1", "1.0", "1" if on else "0", ratio, curv,
-                              "0", "nan", "nan"]) + "\n")
+def trace(method):
+    base = os.environ.get("LEXDYN_TEST_OUTPUTS")
+    if not base or not os.path.isdir(base):
+        raise AssertionError("LEXDYN_TEST_OUTPUTS names the harness's outputs of this run (ctest fixture lexdyn_outputs)")
+    return os.path.join(base, "runs", f"pointmass-damping.{method}", "trace.csv")
 
 
 class SecondOrderFigure(unittest.TestCase):
     def test_figure_from_the_ratio_channels(self):
         with tempfile.TemporaryDirectory() as d:
-            trace = os.path.join(d, "trace.csv")
-            write_trace(trace, True)
-            tr = plot_traces.Trace("bfgs", trace)
+            tr = plot_traces.Trace("bfgs", trace("bfgs"))
+            self.assertTrue(tr.has("level.position.second_order_ratio"))
             plot_traces.plot_second_order([tr], d, "t")
             png = os.path.join(d, "second_order.png")
             self.assertTrue(os.path.isfile(png))
@@ -43,35 +37,46 @@ class SecondOrderFigure(unittest.TestCase):
 
     def test_no_figure_without_augmentation(self):
         with tempfile.TemporaryDirectory() as d:
-            trace = os.path.join(d, "trace.csv")
-            write_trace(trace, False)
-            plot_traces.plot_second_order([plot_traces.Trace("gn", trace)], d, "t")
+            tr = plot_traces.Trace("wls", trace("wls"))
+            self.assertTrue([n for n in tr.header if n.endswith(".second_order_ratio")])
+            plot_traces.plot_second_order([tr], d, "t")
             self.assertFalse(os.path.exists(os.path.join(d, "second_order.png")))
 
     def test_command_line_writes_it(self):
         with tempfile.TemporaryDirectory() as d:
-            trace = os.path.join(d, "trace.csv")
-            write_trace(trace, True)
-            r = subprocess.run(["/usr/bin/python3", SCRIPT, "--out", os.path.join(d, "fig"), f"bfgs={trace}"],
-                               capture_output=True, text=True, timeout=120)
+            r = subprocess.run(["/usr/bin/python3", SCRIPT, "--out", os.path.join(d, "fig"), "--errors", "position",
+                                f"bfgs={trace('bfgs')}", f"wls={trace('wls')}"], capture_output=True, text=True, timeout=120)
             self.assertEqual(r.returncode, 0, r.stderr)
             self.assertIn("second_order.png", r.stdout)
-            self.assertTrue(os.path.isfile(os.path.join(d, "fig", "second_order.png")))
-            self.assertTrue(os.path.isfile(os.path.join(d, "fig", "task_errors.png")))
+            for name in ("second_order.png", "task_errors.png", "joint_velocities.png", "torques.png", "timing.png"):
+                self.assertTrue(os.path.isfile(os.path.join(d, "fig", name)), name)
 
     def test_figures_option(self):
         with tempfile.TemporaryDirectory() as d:
-            trace = os.path.join(d, "trace.csv")
-            write_trace(trace, True)
             fig = os.path.join(d, "fig")
-            r = subprocess.run(["/usr/bin/python3", SCRIPT, "--out", fig, "--figures", "second_order", f"bfgs={trace}"],
+            r = subprocess.run(["/usr/bin/python3", SCRIPT, "--out", fig, "--figures", "second_order", f"bfgs={trace('bfgs')}"],
                                capture_output=True, text=True, timeout=120)
             self.assertEqual(r.returncode, 0, r.stderr)
             self.assertEqual(sorted(os.listdir(fig)), ["second_order.png"])
-            r = subprocess.run(["/usr/bin/python3", SCRIPT, "--out", fig, "--figures", "second-order", f"bfgs={trace}"],
+            r = subprocess.run(["/usr/bin/python3", SCRIPT, "--out", fig, "--figures", "second-order", f"bfgs={trace('bfgs')}"],
                                capture_output=True, text=True, timeout=120)
             self.assertNotEqual(r.returncode, 0)
             self.assertIn("unknown figure 'second-order'", r.stderr)
+
+    def test_a_damaged_trace_is_an_error_naming_the_line(self):
+        with tempfile.TemporaryDirectory() as d:
+            with open(trace("bfgs")) as f:
+                lines = f.read().split("\n")
+            k = next(i for i, l in enumerate(lines) if l and not l.startswith("#")) + 3   # the third row
+            lines[k] = lines[k].replace(",", ",x", 1)
+            bad = os.path.join(d, "trace.csv")
+            with open(bad, "w") as f:
+                f.write("\n".join(lines))
+            r = subprocess.run(["/usr/bin/python3", SCRIPT, "--out", os.path.join(d, "fig"), f"bfgs={bad}"],
+                               capture_output=True, text=True, timeout=120)
+            self.assertEqual(r.returncode, 2, r.stderr)
+            self.assertIn(f"plot_traces: {bad}:{k + 1}: ", r.stderr)
+            self.assertNotIn("Traceback", r.stderr)
 
 
 if __name__ == "__main__":

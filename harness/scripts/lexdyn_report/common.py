@@ -4,6 +4,8 @@ import html
 import math
 import os
 
+from lexdyn import FormatError
+
 try:
     import yaml
 except ImportError:  # pragma: no cover
@@ -17,11 +19,12 @@ METHOD_ORDER = ["bfgs", "ah", "gn", "wls", ""]
 METHOD_LABELS = {"bfgs": "LexDynBFGS", "ah": "LexDynAH", "gn": "GN", "wls": "WLS", "": "posture servo"}
 
 
-class ReportInputError(Exception):
-    """Bad input: what was expected, what was found, where (file, line, key). Exit code 2."""
+class ReportInputError(FormatError):
+    """Bad input: what was expected, what was found, where (file, line, key). Exit code 2, as
+    for a FormatError of the readers (lexdyn), of which it is one."""
 
     def __init__(self, where, what):
-        super().__init__(f"{where}: {what}")
+        super().__init__(where, what)
 
 
 class ReportOutputError(Exception):

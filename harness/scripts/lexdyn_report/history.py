@@ -1,19 +1,12 @@
-"""The history of nights (docs/report.md, "History and trend").
-
-A JSON Lines file, one record per night:
-
-  {"format": "lexdyn-nightly-history/1", "night": ID, "commit": SHA, "date": ISO-8601 UTC,
-   "machine": {...}, "runs": {RUN_ID: {"case", "method", "status", "error_tasks",
-   "final_error", "mean_error", "peak_iterations", "tick_p50_us", "tick_p99_us",
-   "realtime_factor", "failed_checks": [names], "checks"}},
-   "goldens": {"total", "failed": [ids]}, "tests": {"total", "failed": [names]},
-   "sweeps": {NAME: {"CHECK/METHOD": pass_rate}}}
+"""The history of nights (docs/report.md, "History and trend"): this night's record, writing it
+into the history file, the trend and "since last night". The file's format and its reader are
+lexdyn.history's (a JSON Lines file, one record per night).
 
 The records are taken in the order of their nights' dates (`date`, ties by `night`), not in the
 order of the file. A line that is not such a record (cut, garbage, another format version, a
 key of the wrong type) is skipped with a warning, and kept as it was at the end of the file when
 the file is rewritten; a figure that is not a finite number (NaN, Infinity, a string) is left
-out of the trend with a warning. strict=True refuses both instead (ReportInputError naming the
+out of the trend with a warning. strict=True refuses both instead (lexdyn.FormatError naming the
 file, the line and the field).
 
 A figure "moves beyond its noise band" when it leaves the band of the same run's figure over
@@ -25,11 +18,14 @@ import json
 import math
 import os
 
-from .common import DamagedNumber, ReportInputError, finite, json_constant, write_atomic
+from lexdyn import history as lexdyn_history
+from lexdyn.history import DATE_EXAMPLE, Record, night_key, parse_date
+
+from .common import ReportInputError, finite, json_constant, write_atomic
 from .locks import FileLock
 from .runs import run_key_errors
 
-FORMAT = "lexdyn-nightly-history/1"
+FORMAT = lexdyn_history.HISTORY_FORMAT
 WINDOW = 14
 K = 3.0
 
@@ -64,7 +60,7 @@ METRICS = [
 # The figures of a run's record (the metrics' own keys, and its number of checks): a value that
 # is not a finite number is "damaged", never a point of the trend.
 FIGURES = [m.key for m in METRICS if m.key != "failed_check_count"] + ["checks"]
-DATE_EXAMPLE = "2026-11-24T20:24:35Z"
+assert FIGURES == lexdyn_history.RUN_FIGURES, "the history's figures are those lexdyn.history reads"
 
 
 def metric_value(run_record, key):
@@ -75,29 +71,8 @@ def metric_value(run_record, key):
     return v if finite(v) else None
 
 
-def parse_date(text):
-    """An ISO-8601 time (a string) as an aware UTC datetime (no zone: UTC), or None."""
-    if not isinstance(text, str):
-        return None
-    try:
-        d = datetime.datetime.fromisoformat(text.strip())
-    except ValueError:
-        return None
-    if d.tzinfo is None:
-        d = d.replace(tzinfo=datetime.timezone.utc)
-    return d.astimezone(datetime.timezone.utc)
-
-
-_EARLIEST = datetime.datetime.min.replace(tzinfo=datetime.timezone.utc)
-
-
-def night_key(rec):
-    """The order of the nights: the night's date, then its id."""
-    return (parse_date(rec.get("date")) or _EARLIEST, str(rec.get("night")))
-
-
 def night_record(results):
-    """This night's record from the stored results. Figures are taken as stored (a damaged one
+    """This night's record from the stored results ("failed_checks": the checks that decide). Figures are taken as stored (a damaged one
     stays what it is, for the page to say so); storable() makes the record that is written."""
     meta = results.meta
     date = meta.get("date")
@@ -179,170 +154,11 @@ def storable(rec):
 
 
 # ------------------------------------------------------------------ reading the history file
-class Record(dict):
-    """A record of the history file: `where` (FILE:LINE) and `line`, its bytes as read (written
-    back unchanged when the file is rewritten)."""
-    where = None
-    line = None
-
-
-def _kind(x):
-    if x is None:
-        return "null"
-    if isinstance(x, bool):
-        return "true / false"
-    if isinstance(x, (int, float)):
-        return "a number"
-    if isinstance(x, str):
-        return "a string"
-    if isinstance(x, list):
-        return "a list"
-    if isinstance(x, dict):
-        return "an object"
-    return type(x).__name__
-
-
-def _damaged_text(v):
-    if isinstance(v, DamagedNumber):
-        return v.text
-    text = json.dumps(v)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _figure_problem(v):
-    """None when V is a figure (null or a finite number), else how it looks."""
-    if v is None or finite(v):
-        return None
-    return _damaged_text(v)
-
-
-def check_record(rec):
-    """((field, what) of the first problem that makes REC no record of this format, or None;
-    [(field, text)] of its figures that are not finite numbers)."""
-    if not isinstance(rec, dict):
-        return ("", f"expected a record (a JSON object), found {_kind(rec)}"), []
-    fmt = rec.get("format")
-    if fmt != FORMAT:
-        return ("format", f"expected '{FORMAT}', found " + (repr(fmt) if fmt is not None else "none")), []
-    night = rec.get("night")
-    if not isinstance(night, str) or not night:
-        return ("night", f"expected the night's id (a string), found {_kind(night) if 'night' in rec else 'none'}"), []
-    if parse_date(rec.get("date")) is None:
-        d = rec.get("date")
-        return ("date", f"expected an ISO-8601 time ({DATE_EXAMPLE}), found "
-                + (repr(d) if isinstance(d, str) else _kind(d) if "date" in rec else "none")), []
-    if "commit" in rec and not isinstance(rec["commit"], str):
-        return ("commit", f"expected a string, found {_kind(rec['commit'])}"), []
-    if "machine" in rec and not isinstance(rec["machine"], dict):
-        return ("machine", f"expected an object, found {_kind(rec['machine'])}"), []
-    runs = rec.get("runs")
-    if not isinstance(runs, dict):
-        return ("runs", f"expected an object of runs by id, found {_kind(runs) if 'runs' in rec else 'none'}"), []
-    damaged = []
-    for rid, rr in runs.items():
-        where = f"runs.{rid}"
-        if not isinstance(rr, dict):
-            return (where, f"expected an object of the run's figures, found {_kind(rr)}"), []
-        for key in ("case", "method", "status"):
-            if rr.get(key) is not None and not isinstance(rr[key], str):
-                return (f"{where}.{key}", f"expected a string, found {_kind(rr[key])}"), []
-        for key in ("failed_checks", "error_tasks"):
-            v = rr.get(key)
-            if v is not None and not (isinstance(v, list) and all(isinstance(x, str) for x in v)):
-                return (f"{where}.{key}", f"expected a list of names, found {_kind(v)}"
-                        + (" holding something else" if isinstance(v, list) else "")), []
-        for key in FIGURES:
-            bad = _figure_problem(rr.get(key))
-            if bad is not None:
-                damaged.append((f"{where}.{key}", bad))
-    for group in ("goldens", "tests"):
-        if group not in rec:
-            continue
-        g = rec[group]
-        if not isinstance(g, dict):
-            return (group, f"expected an object (total, failed), found {_kind(g)}"), []
-        f = g.get("failed")
-        if not (isinstance(f, list) and all(isinstance(x, str) for x in f)):
-            return (f"{group}.failed", f"expected a list of names, found {_kind(f) if 'failed' in g else 'none'}"), []
-        bad = _figure_problem(g.get("total"))
-        if bad is not None:
-            damaged.append((f"{group}.total", bad))
-    if "sweeps" in rec:
-        sw = rec["sweeps"]
-        if not isinstance(sw, dict) or not all(isinstance(v, dict) for v in sw.values()):
-            return ("sweeps", f"expected an object of pass rates by sweep, found {_kind(sw)}"), []
-        for name, rates in sw.items():
-            for k, v in rates.items():
-                bad = _figure_problem(v)
-                if bad is not None:
-                    damaged.append((f"sweeps.{name}.{k}", bad))
-    return None, damaged
-
-
-class History:
-    """The history file PATH as read: `records` in date order (ties by night id), `skipped` (the
-    lines that are no record, as read) and `warnings` (one per problem: FILE:LINE: FIELD: what).
-    strict=True: ReportInputError at the first problem instead. No file: no record."""
-
-    def __init__(self, path, strict=False):
-        self.path = path
-        self.records = []
-        self.skipped = []
-        self.warnings = []
-        if not path or not os.path.lexists(path):
-            return
-        if os.path.isdir(path):
-            raise ReportInputError(path, "expected a history file (JSON Lines, --history), found a folder")
-        with open(path, "rb") as f:
-            data = f.read()
-        lines = data.split(b"\n")
-        cut = lines[-1] != b""          # the last line has no end
-        if not cut:
-            lines.pop()
-        for lineno, raw in enumerate(lines, 1):
-            if not raw.strip():
-                continue
-            where = f"{path}:{lineno}"
-            rec, damaged = self._parse(raw, lineno == len(lines) and cut)
-            if not isinstance(rec, Record):
-                field, what = rec
-                if strict:
-                    raise ReportInputError(f"{where}: {field}" if field else where, what)
-                self.skipped.append(raw)
-                self.warnings.append(f"{where}: {field + ': ' if field else ''}{what}: the line is skipped")
-                continue
-            for field, text in damaged:
-                if strict:
-                    raise ReportInputError(f"{where}: {field}", f"expected a finite number, found {text}")
-                self.warnings.append(f"{where}: {field}: expected a finite number, found {text}: left out of the trend")
-            rec.where = where
-            rec.line = raw
-            self.records.append(rec)
-        self.records.sort(key=night_key)
-
-    @staticmethod
-    def _parse(raw, last_and_cut):
-        """(Record, damaged) or ((field, what), [])."""
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError as e:
-            return ("", f"expected one JSON record per line (UTF-8 text), found binary data (byte {e.start + 1})"), []
-        try:
-            doc = json.loads(text, parse_constant=json_constant)
-        except json.JSONDecodeError as e:
-            what = f"expected one JSON record per line, found a syntax error ({e.msg} at column {e.colno})"
-            if last_and_cut:
-                what += "; the file's last line has no end: cut"
-            return ("", what), []
-        problem, damaged = check_record(doc)
-        if problem is not None:
-            return problem, []
-        return Record(doc), damaged
-
-
 def load_history(path, strict=False):
-    """The History of PATH (see History)."""
-    return History(path, strict)
+    """The history file PATH as lexdyn.history reads it: `records` in date order, `skipped` lines
+    and `warnings`; strict=True refuses the first problem (lexdyn.FormatError naming the file,
+    the line and the field). Figures stored as NaN or Infinity are DamagedNumbers."""
+    return lexdyn_history.History(path, strict=strict, constant=json_constant)
 
 
 def append_record(path, rec, strict=False, command="report.py"):
@@ -352,7 +168,7 @@ def append_record(path, rec, strict=False, command="report.py"):
     kept at the end as they were; written to a temporary name, synced, renamed. Returns the
     History as read under the lock and the records as written."""
     with FileLock(path, command):
-        h = History(path, strict)
+        h = load_history(path, strict)
         new = Record(storable(rec))
         new.line = json.dumps(new, sort_keys=True, allow_nan=False).encode()
         kept = sorted([r for r in h.records if r.get("night") != rec["night"]] + [new], key=night_key)

@@ -6,12 +6,13 @@ import os
 import shutil
 import signal
 
+from lexdyn import FormatError, read_trace
+
 from . import figures, history as hist, replay
 from .common import (DAMAGED, ReportInputError, ReportOutputError, copy_atomic, esc, finite, fnum, fpercent,
                      method_colour, method_label, method_sort_key, non_finite_fields, os_reason, write_atomic)
 from .locks import LOCK_NAME
 from .runs import detail_time, resolve, run_key_errors
-from .trace import read_trace
 
 THREE_DIR = "/usr/share/javascript/three"
 ASSETS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "assets")
@@ -29,7 +30,7 @@ h1{font-size:22px}h2{font-size:18px;border-bottom:1px solid #ccd;padding-bottom:
 h3{font-size:15px;margin-top:22px}table{border-collapse:collapse;margin:8px 0;font-size:12.5px}
 th,td{border:1px solid #d0d4da;padding:3px 6px;text-align:left;vertical-align:top}th{background:#eef1f5}
 td.num{text-align:right;font-variant-numeric:tabular-nums}.pass{background:#e3f4e1}.fail{background:#fbe0dc}
-.stop{background:#fff0c2}.xfail{background:#e8e8f4}.miss{background:#eee;color:#666}.flag-worse{background:#fbe0dc}.flag-better{background:#e3f4e1}
+.stop{background:#fff0c2}.xfail{background:#e8e8f4}.info{background:#eef4fb;color:#555}.miss{background:#eee;color:#666}.flag-worse{background:#fbe0dc}.flag-better{background:#e3f4e1}
 figure{margin:10px 0 18px}figure img{max-width:100%;border:1px solid #e0e3e8}figcaption{font-size:12px;color:#555}
 nav a{margin-right:12px}.swatch{display:inline-block;width:12px;height:12px;border-radius:2px;vertical-align:middle;margin:0 4px 0 10px}
 pre,code{font-size:12px;background:#f4f6f8}pre{padding:6px;overflow-x:auto;white-space:pre-wrap}
@@ -46,20 +47,28 @@ def _cls(run):
         return "xfail"
     if run.status != "completed":
         return "stop"
-    return "pass" if not run.failed_checks else "fail"
+    return "pass" if run.passed else "fail"
 
 
 def _verdict_text(run):
+    """The run's own verdict (its exit code: summary.json exit_code) with the checks that decide
+    passed / total; the checks reported only (decides: false, wall-clock) are counted apart as
+    "info" and never make a run fail."""
     if run.summary is None:
         return "no summary" if run.status == "no_summary" else "not run"
-    n, f = len(run.checks), len(run.failed_checks)
-    head = "pass" if run.status == "completed" and not f else ("FAIL" if run.status == "completed" else run.status)
+    n, f = len(run.deciding_checks), len(run.failed_checks)
+    if run.status != "completed":
+        head = run.status
+    else:
+        head = "pass" if run.passed else "FAIL"
     x = run.expected_failure
     if x:
         # The case expects this failure (expected_failures): as expected, or a different outcome.
         head = ("expected failure" if x.get("met") else "NOT the expected failure") + \
             ("" if run.status == "completed" else f": {run.status}")
-    return f"{head} ({n - f}/{n} checks){_cut_text(run)}"
+    k = len(run.info_checks)
+    info = f", {k} info" if k else ""
+    return f"{head} ({n - f}/{n} checks{info}){_cut_text(run)}"
 
 
 def _cut_text(run):
@@ -76,7 +85,8 @@ def _cut_text(run):
 def _failing_rows(run):
     """The rows of the failing-checks table for one run: a stopped or summary-less run, the
     expected-failure verdict, then each failing check; a check the case expects to fail
-    (expected_failures) in the xfail colour, any other in the failure colour."""
+    (expected_failures) in the xfail colour, any other in the failure colour; a check reported
+    only (decides: false) above its limit in the info colour."""
     out = []
     if run.summary is None:
         return [f"<tr class='miss'><td>{esc(run.id)}</td><td colspan='7'>{esc(_verdict_text(run))}"
@@ -90,10 +100,14 @@ def _failing_rows(run):
         out.append(f"<tr class='stop'><td>{esc(run.id)}</td><td colspan='7'>run stopped: {esc(run.status)}: "
                    f"{esc(run.summary.get('message', ''))} (at t = {fnum(run.summary.get('simulated_s'), '.4g')} s)</td></tr>")
     expected = set(x.get("checks", [])) if x else set()
-    for c in run.failed_checks:
+    # The checks that decide and failed, then those reported only (decides: false) that are
+    # above their limit here: "info", never a failure of the run.
+    info = [c for c in run.info_checks if not c.get("passed", False)]
+    for c in run.failed_checks + info:
         t = detail_time(c.get("detail"))
-        cls = "xfail" if c.get("name") in expected else "fail"
-        out.append(f"<tr class='{cls}'><td>{esc(run.id)}</td><td>{esc(c.get('name'))}</td><td>{esc(c.get('type'))}</td>"
+        cls = "info" if not c.decides else ("xfail" if c.get("name") in expected else "fail")
+        name = c.get("name") + (" (info: machine-dependent, reported only)" if cls == "info" else "")
+        out.append(f"<tr class='{cls}'><td>{esc(run.id)}</td><td>{esc(name)}</td><td>{esc(c.get('type'))}</td>"
                    f"<td class='num'>{fnum(c.get('value'), '.6g')}</td><td class='num'>{fnum(c.get('limit'), '.6g')}</td>"
                    f"<td>{esc(c.get('unit', ''))}</td><td class='num'>{fnum(t, '.4g')}</td><td>{esc(c.get('detail', ''))}</td></tr>")
     return out
@@ -223,8 +237,8 @@ class ReportBuilder:
             if not run.trace_path:
                 continue
             try:
-                tr = read_trace(run.trace_path, wanted=_plot_or_replay_channel)
-            except ReportInputError as e:
+                tr = read_trace(run.trace_path, channels=_plot_or_replay_channel)
+            except FormatError as e:
                 # One unreadable trace leaves its run without figures and replay, not the night
                 # without a report; the warning says where.
                 self.warnings.append(f"{run.id}: {e}")
@@ -285,14 +299,14 @@ class ReportBuilder:
         machine = rec.get("machine") or {}
         mtext = ", ".join(f"{k} {v}" for k, v in machine.items()) if isinstance(machine, dict) else str(machine)
         n_runs = len(r.runs)
-        n_ok = sum(1 for x in r.runs if x.ok)
+        n_ok = sum(1 for x in r.runs if x.passed)
         parts = [
             "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
             f"<title>{esc(self.title)}: {esc(rec['night'])}</title><style>{CSS}</style></head><body>",
             f"<h1>{esc(self.title)}</h1>",
             f"<p id='meta'>night <b>{esc(rec['night'])}</b>, commit <code>{esc(rec.get('commit'))}</code>, "
             f"{esc(rec.get('date'))}{', ' + esc(mtext) if mtext else ''}. "
-            f"{n_ok} of {n_runs} runs completed with every check passing."
+            f"{n_ok} of {n_runs} runs passed (exit code 0: every check that decides passed, or the failure the case expects)."
             + (f" <a href='#warnings'>{len(self.warnings)} warning(s)</a>." if self.warnings else "") + "</p>",
             f"<p id='legend'>Method colours (every figure):{swatches}</p>",
             "<nav><a href='#changes'>Since last night</a><a href='#verdicts'>Verdicts</a><a href='#goldens'>Goldens and tests</a>"
@@ -487,7 +501,8 @@ class ReportBuilder:
                         f"<td class='num'>{fnum(tick.get('median'), '.0f')} / {fnum(tick.get('p99'), '.0f')} / {fnum(tick.get('max'), '.0f')}</td>"
                         f"<td class='num'>{fnum(s.get('realtime_factor'), '.1f')}</td>"
                         f"<td class='num'>{newton if aug else '-'}</td>"
-                        f"<td class='num'>{len(run.checks) - len(run.failed_checks) if run.summary else '-'} / {len(run.checks) if run.summary else '-'}</td></tr>")
+                        f"<td class='num'>{len(run.deciding_checks) - len(run.failed_checks) if run.summary else '-'} / {len(run.deciding_checks) if run.summary else '-'}"
+                        f"{f' (+{len(run.info_checks)} info)' if run.info_checks else ''}</td></tr>")
         note = f"<p class='note'>Errors: sum of {esc(' + '.join(tasks))}.</p>" if tasks else ""
         return (f"<table class='method-table' id='methods-{esc(case)}'><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head)
                 + "</tr>" + "".join(rows) + "</table>" + note)

@@ -9,11 +9,13 @@ RUNS/                      a nightly output (harness/scripts/nightly.sh) or full
   compare/<case>.json      optional: `lexdyn-harness compare --json` of the case's comparisons
   ctest/junit.xml          optional: ctest's JUnit output (the golden checks among it)
 """
-import json
 import math
 import os
 import re
 import xml.etree.ElementTree as ET
+
+from lexdyn import _json as lexdyn_json
+from lexdyn import read_summary
 
 from .common import ReportInputError, finite, json_constant, method_sort_key, non_finite_fields, read_yaml
 
@@ -30,13 +32,7 @@ def load_json(path):
     """The JSON document of PATH. NaN, Infinity and -Infinity (not JSON, but read by Python's json)
     are read as DamagedNumbers: shown as "not a number (damaged)", never taken as figures
     (common.non_finite_fields lists them)."""
-    try:
-        with open(path, encoding="utf-8") as f:
-            return json.load(f, parse_constant=json_constant)
-    except json.JSONDecodeError as e:
-        raise ReportInputError(f"{path}:{e.lineno}", f"expected JSON, found a syntax error ({e.msg})")
-    except UnicodeDecodeError as e:
-        raise ReportInputError(path, f"expected JSON (UTF-8 text), found binary data (byte {e.start})")
+    return lexdyn_json.load(path, "JSON", constant=json_constant)
 
 
 def tail(path, lines=5):
@@ -70,9 +66,8 @@ class Run:
         self.id = run_id
         self.dir = directory
         self.summary_path = os.path.join(directory, "summary.json")
-        self.summary = load_json(self.summary_path) if os.path.isfile(self.summary_path) else None
-        if self.summary is not None and not isinstance(self.summary, dict):
-            raise ReportInputError(self.summary_path, f"expected a JSON object, found {type(self.summary).__name__}")
+        # lexdyn.RunSummary: the run's own verdict (exit code) and which checks decide.
+        self.summary = read_summary(self.summary_path, constant=json_constant) if os.path.isfile(self.summary_path) else None
         # Figures stored as NaN or Infinity (a damaged file: the harness writes null): (field, text).
         self.damaged = non_finite_fields(self.summary)
         s = self.summary or {}
@@ -97,7 +92,18 @@ class Run:
 
     @property
     def failed_checks(self):
-        return [c for c in self.checks if not c.get("passed", False)]
+        """The checks that decide and failed (a wall-clock check marked decides: false is
+        reported only: info_checks)."""
+        return self.summary.failed_checks if self.summary is not None else []
+
+    @property
+    def info_checks(self):
+        """The checks reported only (decides: false: machine-dependent, wall-clock)."""
+        return self.summary.info_checks if self.summary is not None else []
+
+    @property
+    def deciding_checks(self):
+        return self.summary.deciding_checks if self.summary is not None else []
 
     @property
     def expected_failure(self):
@@ -113,8 +119,10 @@ class Run:
         return bool(x and x.get("met"))
 
     @property
-    def ok(self):
-        return self.status == "completed" and not self.failed_checks
+    def passed(self):
+        """The run's own verdict: its exit code was 0 (completed with every check that decides
+        passing, or failed exactly as its case expects)."""
+        return self.summary is not None and self.summary.passed
 
     def log_tail(self, lines=5):
         return tail(self.log_path, lines)

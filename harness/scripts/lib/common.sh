@@ -3,6 +3,9 @@
 # of a build directory, the runs of a golden manifest and the cases' method comparisons.
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 source "$ROOT/harness/scripts/exit-codes.sh"
+# The Python scripts the scripts run import the lexdyn package of this checkout (python/lexdyn;
+# docs/python.md, "Where Python finds the package").
+export PYTHONPATH="$ROOT/python${PYTHONPATH:+:$PYTHONPATH}"
 
 # lexdyn_options USAGE LETTER=VARIABLE ... -- "$@": reads the options -LETTER VALUE into their
 # variables (the ones not given keep their defaults); LETTER=VARIABLE+ collects every value of a

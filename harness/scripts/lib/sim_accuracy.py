@@ -9,12 +9,12 @@ and its tight reference run, over the traces (docs/simulator.md, "Integrator").
       one counts only if it is among them); the integrator's work. With
       --check, exits 1 when a median exceeds its bound (BOUNDS), 2 when the case has none.
 """
-import csv
-import json
 import math
 import os
 import statistics
 import sys
+
+import lexdyn
 
 # Bounds on the median over 9 rtol perturbations (sim-accuracy.sh -p 9) at the cases' own
 # tolerances, 10 s runs (docs/simulator.md, "Integrator"; keys as in QUANTITIES): the 99th
@@ -43,12 +43,12 @@ _kept = {}
 
 
 def load(path, keep=False):
-    """(channel names, rows) of a trace; keep: remember it (the reference, read once)."""
+    """(channel names, rows) of a trace (lexdyn.read_trace); keep: remember it (the reference,
+    read once)."""
     if path in _kept:
         return _kept[path]
-    rows = [l for l in open(path) if not l.startswith("#")]
-    r = list(csv.reader(rows))
-    t = r[0], [list(map(float, x)) for x in r[1:]]
+    tr = lexdyn.read_trace(path)
+    t = tr.names, tr.data.tolist()
     if keep:
         _kept[path] = t
     return t
@@ -128,9 +128,8 @@ def single(name, trace, reference):
 
 def integrator_stats(run_dir):
     try:
-        j = json.load(open(os.path.join(run_dir, "summary.json")))
-        return j.get("integrator", {})
-    except (OSError, ValueError):
+        return lexdyn.read_summary(run_dir).get("integrator", {})
+    except (OSError, lexdyn.FormatError):
         return {}
 
 
@@ -188,6 +187,14 @@ def perturbed(name, reference, unperturbed_dir, runs, check):
 
 
 def main(argv):
+    try:
+        return run(argv)
+    except lexdyn.FormatError as e:
+        print(f"sim_accuracy: {e}", file=sys.stderr)
+        return 3
+
+
+def run(argv):
     if len(argv) >= 1 and argv[0] == "single" and len(argv) == 4:
         return single(argv[1], argv[2], argv[3])
     if len(argv) >= 5 and argv[0] == "perturbed":
