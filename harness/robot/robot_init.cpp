@@ -20,6 +20,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -483,7 +484,28 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       << "  state_feedback: integrated\n"
       << "  params: {nu_dt2: 1.0e-12, xi_dt2: 1.0e-12, zeta_dt2: 1.0e-3, rho_dt2: 1.0e-12, eps_dt2: 1.0e-3, newton_identity_weight: 1.0e-4"
       << (humanoid ? ", stop_after_level: contacts}" : "}") << "\n";
-    if (humanoid) c << "  method_params:\n    wls: {stop_after_level: hard}\n";
+    if (humanoid) {
+      // exp1's contact margins (10 % friction, 1 cm of CoP, 10 N per corner of HRP-2's 0.22 x
+      // 0.14 m soles for 637 N; docs/results.md, "exp1 variants nobody tuned for") scaled: the CoP
+      // margin 14 % of the narrowest sole's half extent, at most 1 cm; the minimum per point 6.3 %
+      // of the weight per foot, shared by its points.
+      double half_min = std::numeric_limits<double>::infinity();
+      size_t foot_points = 1;
+      for (const auto& f : L.feet) {
+        Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+        for (const auto& p : f.points) {
+          lo = lo.cwiseMin(p.head<2>());
+          hi = hi.cwiseMax(p.head<2>());
+        }
+        if (f.points.size() >= 3) half_min = std::min(half_min, 0.5 * (hi - lo).minCoeff());
+        foot_points = std::max(foot_points, f.points.size());
+      }
+      const double cop = std::isfinite(half_min) ? std::min(0.01, std::floor(0.14 * half_min * 1000.0) / 1000.0) : 0.0;
+      const double fmin_point = std::round(10.0 * 0.063 * L.mass * 9.81 / static_cast<double>(foot_points)) / 10.0;
+      c << "  contact_margins: {friction: 0.1, cop_m: " << num(cop, 3) << ", min_normal_N: " << num(fmin_point, 3)
+        << "}   # exp1's, scaled to these soles and this weight (docs/results.md)\n";
+      c << "  method_params:\n    wls: {stop_after_level: hard}\n";
+    }
     c << "  solver:\n    paper_rules: true\n";
     if (humanoid) {
       c << "  contacts:\n";
@@ -502,7 +524,7 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
         contact_tasks.push_back(lower(f.surface));
         c << "    - {name: " << lower(f.surface) << ", type: contact, contact: " << f.surface << "}\n";
       }
-      // The CoM box of exp1 relative to the support: +-28 % of the soles' half length, +-57 % of
+      // The CoM box of exp1 relative to the support: +-28 % of the soles' half length, +-34 % of
       // the half width, about the CoM of the posture.
       const std::vector<Eigen::Vector2d> poly = supportPolygon(L);
       Eigen::Vector2d lo = poly.empty() ? Eigen::Vector2d::Zero() : poly[0], hi = lo;
@@ -511,10 +533,10 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
         hi = hi.cwiseMax(p);
       }
       const Eigen::Vector2d half = 0.5 * (hi - lo);
-      const Eigen::Vector2d box(std::max(0.005, 0.28 * half.x()), std::max(0.005, 0.57 * half.y()));
+      const Eigen::Vector2d box(std::max(0.005, 0.28 * half.x()), std::max(0.005, 0.34 * half.y()));
       const Eigen::Vector2d c0 = L.com.head<2>();
-      c << "    # exp1's CoM box (+-0.03 x +-0.1 m on HRP-2's 0.22 x 0.35 m support) scaled to this support: +-28 % of its half length,\n"
-        << "    # +-57 % of its half width, about the posture's centre of mass.\n"
+      c << "    # exp1's CoM box (+-0.03 x +-0.06 m on HRP-2's 0.22 x 0.35 m support) scaled to this support: +-28 % of its half length,\n"
+        << "    # +-34 % of its half width, about the posture's centre of mass.\n"
         << "    - {name: com_box, type: com_box, lower: [" << num(c0.x() - box.x(), 4) << ", " << num(c0.y() - box.y(), 4) << ", -.inf], upper: ["
         << num(c0.x() + box.x(), 4) << ", " << num(c0.y() + box.y(), 4) << ", .inf]}\n";
     }
