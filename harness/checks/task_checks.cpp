@@ -279,6 +279,7 @@ ComparisonSpec readComparison(const yaml::Node& node, const CheckContext& contex
   if (auto v = m.optional("margin")) c.margin = v->asDouble();
   if (auto f = m.optional("from_s")) c.from_s = f->asDoubleIn(0.0, ranges::kMaxTime_s, "s");
   if (auto t = m.optional("to_s")) c.to_s = t->asNonNegativeDouble();
+  if (auto x = m.optional("expected_to_fail")) c.expected_failure_reason = x->asString();  // the reason, non-empty
   m.finish();
   return c;
 }

@@ -9,9 +9,13 @@
 # Writes OUT_DIR/<method>/{trace.csv,summary.json,log.txt}, OUT_DIR/compare.txt, OUT_DIR/table.txt
 # and OUT_DIR/plots/*.png. A run that is interrupted keeps the trace written so far (the
 # harness flushes it and writes summary.json with status "interrupted").
-# Exit codes (harness/scripts/exit-codes.sh): the worst of the three runs and the comparisons;
-# WLS fails checks and the final-error comparisons at the committed gains (docs/results.md), so a
-# complete main job exits 1. 3: a run stopped early or wrote no summary.
+# Exit codes (harness/scripts/exit-codes.sh): the worst of the three runs and the comparisons.
+# The case declares what is documented to differ from the paper here (docs/results.md, "Exp. 1"):
+# the WLS baseline's failing checks (`expected_failures`) and the final-error comparisons that do
+# not reproduce the paper's ordering (`expected_to_fail`). 0: every outcome as documented (the
+# last line says so); 1: an outcome changed, better or worse (a check or comparison that fails
+# and is not documented, or a documented failure that went away); 3: a run stopped early or
+# wrote no summary.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib/common.sh"
 BUILD="$ROOT/build"
@@ -52,7 +56,7 @@ echo
 echo "exp1: comparison (paper, HRP-2Kai: final sums 1.86 LexDynBFGS, 1.87 LexDynAH, 1.90 m WLS)"
 cat "$OUT/table.txt"
 echo
-grep -E "^  (ok|FAIL)" "$OUT/compare.txt" || cat "$OUT/compare.txt"
+grep -E "^  (ok|FAIL|xfail|expected failure|NOT)|^compare:" "$OUT/compare.txt" || cat "$OUT/compare.txt"
 
 if /usr/bin/python3 -c "import numpy, matplotlib" 2>/dev/null; then
   /usr/bin/python3 "$ROOT/harness/scripts/plot_traces.py" --out "$OUT/plots" --title exp1 --contact LEFT_FOOT \
@@ -62,5 +66,9 @@ else
   echo "exp1: no plots (Debian's python3-numpy and python3-matplotlib are missing; harness/scripts/install-deps.sh installs them)" >&2
 fi
 echo "exp1: traces and summaries in $OUT/{bfgs,ah,wls}, table in $OUT/table.txt"
-echo "exp1: exit code $status (0 every check and comparison passed, 1 one failed, 3 a run stopped early)"
+case "$status" in
+  0) echo "exp1: exit code 0: every check and comparison as documented (what differs from the paper: docs/results.md, \"Exp. 1\")" ;;
+  1) echo "exp1: exit code 1: an outcome is NOT as documented (a check or comparison above changed, better or worse; docs/results.md, \"Exp. 1\")" ;;
+  *) echo "exp1: exit code $status: a run stopped early or failed (see the runs' log.txt)" ;;
+esac
 exit "$status"

@@ -124,6 +124,42 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
   // Two traces of one method: bad input.
   cmp = harness("compare --case " + c + " " + dir + "/gn/trace.csv " + dir + "/gn/trace.csv", dir);
   expectExit(cmp, 2, {"a second trace of method gn"});
+
+  // A comparison the case documents as failing (expected_to_fail): its failure is the outcome
+  // "as documented" (exit 0); documented on the comparison that passes, the pass is a change
+  // (exit 1); with runs cut short of the case's duration a pass is not a change.
+  const std::string text = slurp(c);
+  auto withExpected = [&](const std::string& name, const std::string& file) {
+    std::string t = text;
+    const std::string key = "{name: " + name + ", ";
+    const size_t at = t.find(key);
+    EXPECT_NE(at, std::string::npos);
+    const size_t end = t.find("}\n", at);
+    t.insert(end, ", expected_to_fail: \"documented: " + name + " fails here\"");
+    const std::string path = dir + "/" + file;
+    std::ofstream(path) << t;
+    return path;
+  };
+  const std::string documented_fail = withExpected("wls_not_worse_than_gn", "expected_fail.yaml");
+  cmp = harness("compare --case " + documented_fail + " " + dir + "/gn/trace.csv " + dir + "/wls/trace.csv", dir);
+  expectExit(cmp, 0, {"xfail wls_not_worse_than_gn", "expected failure of wls_not_worse_than_gn, as the case says",
+                      "documented: wls_not_worse_than_gn fails here", "every comparison as documented"});
+  const std::string documented_pass = withExpected("gn_not_worse_than_wls", "expected_pass.yaml");
+  cmp = harness("compare --case " + documented_pass + " " + dir + "/gn/trace.csv " + dir + "/wls/trace.csv", dir);
+  expectExit(cmp, 1, {"NOT as the case says: gn_not_worse_than_wls passed", "the outcome changed"});
+  for (const char* method : {"gn", "wls"}) {
+    const CliResult run = harness("run " + c + " --out " + dir + "/cut_" + method + " --method " + method + " --duration 1 --quiet", dir);
+    ASSERT_TRUE(run.code == 0 || run.code == 1) << run.err;
+  }
+  cmp = harness("compare --case " + documented_pass + " " + dir + "/cut_gn/trace.csv " + dir + "/cut_wls/trace.csv", dir);
+  EXPECT_NE(cmp.err.find("its documented failure is not reached by runs of 1 s of the case's 3 s"), std::string::npos) << cmp.err;
+  EXPECT_EQ(cmp.code, 1) << cmp.err;  // wls_not_worse_than_gn still fails, undocumented
+  // An empty reason is bad input naming the key.
+  std::string empty = text;
+  empty.insert(empty.find("}\n", empty.find("{name: gn_not_worse_than_wls, ")), ", expected_to_fail: \"\"");
+  std::ofstream(dir + "/expected_empty.yaml") << empty;
+  cmp = harness("compare --case " + dir + "/expected_empty.yaml " + dir + "/gn/trace.csv " + dir + "/wls/trace.csv", dir);
+  expectExit(cmp, 2, {"expected_empty.yaml:", "comparisons[0].expected_to_fail: expected a non-empty string"});
 }
 
 // A run stopped early (run --duration, stop_at_s): a check whose window starts after the end, or
