@@ -829,6 +829,42 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
   return out;
 }
 
+// An arm whose shoulder cannot hold it stretched out level: the gravity torque of the arm (its
+// subtree's mass at the distance of its centre of mass from the joint, that distance scaled by
+// the arm's reach over the posture's shoulder-to-hand distance: the arm straightened) against the
+// effort limit of each of the arm's first two joints. Out-of-reach targets stretch the arms; a
+// shoulder (or a trunk) at its limit then leaves the plan no authority over the trunk, and the
+// drafted reach folds such a robot forward (docs/results.md, "A heavier humanoid").
+std::vector<std::string> armsThatCannotHold(const model::RobotDescription& d, const RobotLayout& L) {
+  std::vector<std::string> out;
+  for (const auto& a : L.arms) {
+    std::vector<int> chain;  // the arm's joints from the shoulder out
+    const int first_body = d.joints[static_cast<size_t>(a.first_joint)].child_link;
+    for (int b = a.end_body; b > 0; b = d.parentBody(b)) {
+      const int j = d.links[static_cast<size_t>(b)].parent_joint;
+      if (j >= 0) chain.insert(chain.begin(), j);
+      if (b == first_body) break;
+    }
+    const double span = (a.grasp_world - a.shoulder).norm();
+    const double stretch = span > 1e-6 ? std::max(1.0, a.reach / span) : 1.0;
+    for (size_t k = 0; k < std::min<size_t>(2, chain.size()); ++k) {
+      const int j = chain[k];
+      const auto& J = d.joints[static_cast<size_t>(j)];
+      if (J.type == model::JointType::Prismatic || !std::isfinite(J.effort_limit) || static_cast<size_t>(j) >= L.loads.size()) continue;
+      const JointLoad& load = L.loads[static_cast<size_t>(j)];
+      const double lever = std::min(a.reach, load.lever * stretch);
+      const double torque = load.mass * 9.81 * lever;
+      if (torque > J.effort_limit) {
+        out.push_back("the " + (a.side.empty() ? std::string("arm") : lower(a.side) + " arm") + "'s joint '" + J.name + "' cannot hold the arm " +
+                      "stretched out level: that takes about " + num(torque, 3) + " N m (" + num(load.mass, 3) + " kg at " + num(lever, 2) +
+                      " m), its effort limit is " + num(J.effort_limit, 3) + " N m; targets out of reach saturate it and the drafted reach " +
+                      "may fold the robot (docs/results.md, \"A heavier humanoid\")");
+      }
+    }
+  }
+  return out;
+}
+
 // An arm near a singularity in the posture (stretched out, or folded onto its axis): the
 // smallest singular value of its hand's position Jacobian over the arm's joints under 2 % of the
 // largest. The drafted reach starts there, where the hand cannot move every way.
@@ -958,6 +994,7 @@ InitResult initRobot(const InitOptions& o) {
                               "(another --posture, or complete it in the data file)");
   }
   for (const auto& w : armSingularities(d, L, posture.name)) result.warnings.push_back(w);
+  for (const auto& w : armsThatCannotHold(d, L)) result.warnings.push_back(w);
   for (const auto& w : L.warnings) result.warnings.push_back("posture '" + posture.name + "': " + w);
   if (d.base == model::BaseType::FreeFlyer && L.feet.size() < 2) {
     throw InputError(o.urdf, "the robot has a floating base but no two chains reach the ground in posture '" + posture.name + "' (" +
