@@ -261,6 +261,7 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
   using nlohmann::json;
   auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   json j;
+  j["format"] = kRunSummaryFormat;
   j["case"] = spec.name;
   j["case_file"] = spec.path;
   j["status"] = r.status;

@@ -37,6 +37,10 @@ struct RunOptions {
   double dump_to_s = 1e300;  // the end of any run
 };
 
+/// The format key of summary.json (docs/file-formats.md, "Run summary"): readers refuse other
+/// versions and name the key.
+inline constexpr const char* kRunSummaryFormat = "lexdyn-run-summary/1";
+
 struct RunSummary {
   /// completed | integrator_failure | controller_failure | diverged | internal_error | interrupted
   std::string status;

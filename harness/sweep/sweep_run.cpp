@@ -101,6 +101,12 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
   const std::optional<json> read = readJsonFile(summary, why);
   if (!read) return lost("exit code " + std::to_string(p.exit_code) + ", summary.json " + (fs::exists(summary) ? why : "not written"));
   const json& j = *read;
+  // A summary of another format (a folder written by another build) is not this run's.
+  const std::string format = j.is_object() && j.contains("format") && j["format"].is_string() ? j["format"].get<std::string>() : "";
+  if (format != cases::kRunSummaryFormat) {
+    return lost("summary.json is " + (format.empty() ? std::string("of no format (written by an older build)") : "of format '" + format + "'") +
+                ", this build reads '" + cases::kRunSummaryFormat + "'");
+  }
   auto num = [](const json& v) { return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN(); };
   r.status = j.is_object() ? j.value("status", "") : "";
   r.message = j.is_object() ? j.value("message", "") : "";

@@ -13,7 +13,7 @@ first thing that is not what the format says.
 """
 from .errors import FormatError
 from .history import HISTORY_FORMAT, History, read_history
-from .summary import Check, RunSummary, read_summary
+from .summary import SUMMARY_FORMAT, Check, RunSummary, read_summary
 from .sweeps import SWEEP_SUMMARY_FORMAT, Sweep, read_sweep, read_sweep_results, read_sweep_summary, sweep_dataframe
 from .trace import TRACE_VERSION, Trace, read_trace, read_trace_header, trace_array, trace_dataframe
 
@@ -21,6 +21,6 @@ __version__ = "0.1.0"
 
 __all__ = [
     "FormatError", "Trace", "read_trace", "read_trace_header", "trace_array", "trace_dataframe", "TRACE_VERSION",
-    "RunSummary", "Check", "read_summary", "Sweep", "read_sweep", "read_sweep_summary", "read_sweep_results",
+    "RunSummary", "Check", "read_summary", "SUMMARY_FORMAT", "Sweep", "read_sweep", "read_sweep_summary", "read_sweep_results",
     "sweep_dataframe", "SWEEP_SUMMARY_FORMAT", "History", "read_history", "HISTORY_FORMAT",
 ]

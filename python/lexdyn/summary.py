@@ -9,11 +9,15 @@ docs/cases.md, "summary.json").
 A check marked `"decides": false` (a wall-clock `tick_time` check without
 `--wall-clock-checks`) is reported, never part of the verdict.
 """
+import warnings
+
 from . import _json
 from .errors import FormatError
 
-# summary.json has no format key yet: a file with one is of a version this reader does not know.
-SUMMARY_FORMATS = ()
+# The format key of summary.json (C++: kRunSummaryFormat). Files written before the key existed
+# have none: they are read with a warning saying so.
+SUMMARY_FORMAT = "lexdyn-run-summary/1"
+SUMMARY_FORMATS = (SUMMARY_FORMAT,)
 
 
 class Check(dict):
@@ -84,9 +88,11 @@ def check_summary(doc, path):
     """Raises FormatError (naming the field) unless DOC is a run summary this reader knows."""
     if not isinstance(doc, dict):
         raise FormatError(path, f"expected a run summary (a JSON object), found {_json.kind(doc)}")
-    if "format" in doc and doc["format"] not in SUMMARY_FORMATS:
-        raise FormatError(path, f"expected no format key (summary.json of this version has none), found {doc['format']!r}",
-                          field="format")
+    if "format" not in doc:
+        warnings.warn(f"{path}: summary.json without a format key (written by a build before {SUMMARY_FORMAT}): read as that "
+                      "format", stacklevel=3)
+    elif doc["format"] not in SUMMARY_FORMATS:
+        raise FormatError(path, f"expected format {SUMMARY_FORMAT!r}, found {doc['format']!r}", field="format")
     st = doc.get("status")
     if not isinstance(st, str) or not st:
         raise FormatError(path, f"expected the run's status (a string), found {_json.kind(st) if 'status' in doc else 'none'}",

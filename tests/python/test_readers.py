@@ -154,6 +154,22 @@ def test_run_summaries_and_their_verdicts(outputs):
     assert "closed_form_eq49" in [c.name for c in wls.failed_checks]
 
 
+def test_the_summary_format_key(outputs, copy_of):
+    # The harness writes the format key; a summary written before it existed is read with a
+    # warning saying so; another version is refused (test_damaged_summaries).
+    with open(os.path.join(outputs, BFGS, "summary.json")) as f:
+        assert json.load(f)["format"] == lexdyn.SUMMARY_FORMAT == "lexdyn-run-summary/1"
+    path = copy_of(os.path.join(BFGS, "summary.json"))
+    with open(path) as f:
+        s = json.load(f)
+    del s["format"]
+    with open(path, "w") as f:
+        json.dump(s, f)
+    with pytest.warns(UserWarning, match="without a format key"):
+        old = lexdyn.read_summary(path)
+    assert old.status == "completed"
+
+
 @pytest.mark.parametrize("edit, field, what", [
     (lambda s: s.update(realtime_factor=float("nan")), "realtime_factor", "expected a finite number or null, found NaN"),
     (lambda s: s["checks"][0].update(value=float("inf")), "checks[0].value", "found Infinity"),
