@@ -14,6 +14,8 @@ PACKAGES=(
   # Meshes of robot descriptions (robot init, robot check; docs/model.md).
   libassimp-dev
   python3-numpy python3-matplotlib
+  # The Python package's compiled module lexdyn._core (docs/python.md, "Bindings").
+  pybind11-dev python3-pybind11 python3-dev
   # Sweeps on Slurm (docs/sweeps.md) and their test's own single-node cluster.
   slurm-wlm munge
   # The nightly report (docs/report.md): its scripts, its 3D replay and its browser test.

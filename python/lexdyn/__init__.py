@@ -10,17 +10,44 @@
 
 Every reader raises FormatError (a ValueError) naming the file, the line and the field of the
 first thing that is not what the format says.
+
+The compiled module lexdyn._core (built with the package: build/python/lexdyn, or installed)
+adds the C++ side (docs/python.md, "Bindings"):
+
+    Problem, Options, Solver, Result, solve(problem), load_problem(path), result_to_json(...)
+    RobotModel.load(urdf, data)   update(q, u), com(), com_jacobian(), mass_matrix(), Jacobians
+    run_case(case_path, method=None, overrides=None, duration=None, out_dir=None) -> CaseRun
+    InputError, OutputError       what the C++ side raises for bad input / an unwritable output
+
+Without it (the source tree's python/ on PYTHONPATH) the readers work alone and `BINDINGS` is
+False.
 """
+import importlib.util
+
 from .errors import FormatError
 from .history import HISTORY_FORMAT, History, read_history
 from .summary import SUMMARY_FORMAT, Check, RunSummary, read_summary
 from .sweeps import SWEEP_SUMMARY_FORMAT, Sweep, read_sweep, read_sweep_results, read_sweep_summary, sweep_dataframe
 from .trace import TRACE_VERSION, Trace, read_trace, read_trace_header, trace_array, trace_dataframe
 
+if importlib.util.find_spec(__name__ + "._core") is not None:
+    from . import _core  # a module that is there but does not load is an error, not "no bindings"
+else:  # the pure-Python package (the source tree's python/): readers only
+    _core = None
+
 __version__ = "0.1.0"
+BINDINGS = _core is not None
 
 __all__ = [
     "FormatError", "Trace", "read_trace", "read_trace_header", "trace_array", "trace_dataframe", "TRACE_VERSION",
     "RunSummary", "Check", "read_summary", "SUMMARY_FORMAT", "Sweep", "read_sweep", "read_sweep_summary", "read_sweep_results",
     "sweep_dataframe", "SWEEP_SUMMARY_FORMAT", "History", "read_history", "HISTORY_FORMAT",
 ]
+
+if BINDINGS:
+    from ._core import InputError, Options, OutputError, Problem, Result, RobotModel, Solver, load_problem, parse_problem, \
+        result_to_json, solve
+    from .runs import CaseRun, run_case
+
+    __all__ += ["InputError", "OutputError", "Problem", "Options", "Solver", "Result", "solve", "load_problem", "parse_problem",
+                "result_to_json", "RobotModel", "run_case", "CaseRun"]

@@ -6,7 +6,8 @@
 #   3. a consumer project (consumer/) configures with find_package(lexdyn), builds, and runs: it
 #      solves a two-level problem and runs controller ticks on the point mass;
 #   4. the lexdyn Python package is installed (LEXDYN_PYTHON_INSTALL_DIR, every module of
-#      python/lexdyn) and, imported from there, reads a golden trace.
+#      python/lexdyn, and the compiled lexdyn._core unless LEXDYN_BUILD_PYTHON_BINDINGS is off)
+#      and, imported from there, reads a golden trace and solves a problem.
 # Usage: install_test.sh BUILD_DIR SOURCE_DIR CXX WORK
 set -euo pipefail
 BUILD="$1"; SRC="$2"; CXX="$3"; WORK="$4"
@@ -53,6 +54,11 @@ case "$PYDIR" in /*) ;; *) PYDIR="$PREFIX/$PYDIR" ;; esac
 for f in "$SRC"/python/lexdyn/*.py; do
   [ -f "$PYDIR/lexdyn/$(basename "$f")" ] || { echo "install_test: $PYDIR/lexdyn/$(basename "$f") not installed" >&2; exit 1; }
 done
+BINDINGS="$(sed -n 's/^LEXDYN_BUILD_PYTHON_BINDINGS:[A-Z]*=//p' "$BUILD/CMakeCache.txt")"
+case "$BINDINGS" in OFF|off|0|FALSE|false|NO|no) BINDINGS=0 ;; *) BINDINGS=1 ;; esac
+if [ "$BINDINGS" = 1 ] && ! ls "$PYDIR"/lexdyn/_core.*so > /dev/null 2>&1; then
+  echo "install_test: $PYDIR/lexdyn/_core.*.so (the compiled module) not installed" >&2; exit 1
+fi
 golden="$(ls "$SRC"/golden/*.csv | head -1)"
 (cd "$WORK" && env PYTHONPATH="$PYDIR" /usr/bin/python3 -c '
 import os, sys
@@ -62,4 +68,9 @@ assert where == os.path.join(sys.argv[1], "lexdyn"), where
 tr = lexdyn.read_trace(sys.argv[2])
 assert tr.rows > 0 and tr.names[0] == "t" and tr.ended, sys.argv[2]
 print(f"install_test: lexdyn (Python) imported from {where}: {os.path.basename(sys.argv[2])} {tr.rows} rows")
-' "$PYDIR" "$golden")
+if sys.argv[3] == "1":
+    assert lexdyn.BINDINGS and os.path.dirname(os.path.abspath(lexdyn._core.__file__)) == where, "lexdyn._core"
+    r = lexdyn.solve(lexdyn.Problem(2, [([[1.0, 1.0]], [1.0], [1.0]), ([[1.0, -1.0]], [0.0], [0.0])]))
+    assert r.status == "solved" and list(r.x) == [0.5, 0.5], (r.status, r.x)
+    print(f"install_test: lexdyn._core imported from {where}: a two-level problem solved")
+' "$PYDIR" "$golden" "$BINDINGS")

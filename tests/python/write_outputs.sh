@@ -9,6 +9,10 @@
 #   OUT/sweep/                               a 2 x 2 grid sweep of the point mass, wls and bfgs
 #   OUT/report/, OUT/history.jsonl           report.py over those runs and the sweep, with the
 #                                            night's record appended to the history
+#   OUT/problems/exp1.gn/tick_NNNNNN.json    the controller's solver problems of the humanoid
+#                                            (cases/exp1.yaml, GN) at 0.01 .. 0.015 s (--dump-problems;
+#                                            the run itself in OUT/problems/exp1.gn.run/), for the
+#                                            bindings' tests (lexdyn-solve against lexdyn.solve)
 # Usage: write_outputs.sh HARNESS SOURCE_DIR OUT
 set -euo pipefail
 HARNESS="$1"; SRC="$2"; OUT="$3"
@@ -36,6 +40,18 @@ run pointmass-damping.gn 0 --method gn --duration 2 --set 'expected_failures=[]'
                  {name: tick_time_p99, type: tick_time, timer: tick, percentile: 99, limit_us: 0.001}]'
 printf '%s %s %s\n' pointmass-damping.bfgs "$CASE" bfgs pointmass-damping.wls "$CASE" wls \
   pointmass-damping.gn "$CASE" gn > "$OUT/runs/runs.txt"
+
+# Solver problems of a humanoid's controller: two consecutive ticks (outside OUT/runs: the
+# report reads every run there).
+mkdir -p "$OUT/problems"
+rc=0
+"$HARNESS" run "$SRC/cases/exp1.yaml" --out "$OUT/problems/exp1.gn.run" --quiet --method gn --duration 0.02 \
+  --dump-problems "$OUT/problems/exp1.gn" --dump-window 0.01:0.015 > "$OUT/problems/exp1.gn.log" 2>&1 || rc=$?
+if [ "$rc" != 0 ] || [ "$(ls "$OUT/problems/exp1.gn" | wc -l)" != 2 ]; then
+  echo "write_outputs: exp1.gn with --dump-problems: exit code $rc, $(ls "$OUT/problems/exp1.gn" 2>/dev/null | wc -l) problems (expected 0, 2)" >&2
+  cat "$OUT/problems/exp1.gn.log" >&2
+  exit 1
+fi
 
 # A grid sweep: wls overshoots at damping 1 with kp 2 within 5 s (no_overshoot fails there).
 cat > "$OUT/pm-grid.yaml" <<YAML
