@@ -535,10 +535,18 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       const Eigen::Vector2d half = 0.5 * (hi - lo);
       const Eigen::Vector2d box(std::max(0.005, 0.28 * half.x()), std::max(0.005, 0.34 * half.y()));
       const Eigen::Vector2d c0 = L.com.head<2>();
+      // Each face at least 1.5 times the box's half extent inside the support's edge (a posture
+      // whose CoM sits near a heel would otherwise put the face near that edge, and the plan, held
+      // there, rolls or folds the robot), but never nearer the posture's CoM than a quarter of it.
+      Eigen::Vector2d box_lo = c0 - box, box_hi = c0 + box;
+      for (int i = 0; i < 2; ++i) {
+        box_lo[i] = std::max(box_lo[i], std::min(lo[i] + 1.5 * box[i], c0[i] - 0.25 * box[i]));
+        box_hi[i] = std::min(box_hi[i], std::max(hi[i] - 1.5 * box[i], c0[i] + 0.25 * box[i]));
+      }
       c << "    # exp1's CoM box (+-0.03 x +-0.06 m on HRP-2's 0.22 x 0.35 m support) scaled to this support: +-28 % of its half length,\n"
-        << "    # +-34 % of its half width, about the posture's centre of mass.\n"
-        << "    - {name: com_box, type: com_box, lower: [" << num(c0.x() - box.x(), 4) << ", " << num(c0.y() - box.y(), 4) << ", -.inf], upper: ["
-        << num(c0.x() + box.x(), 4) << ", " << num(c0.y() + box.y(), 4) << ", .inf]}\n";
+        << "    # +-34 % of its half width, about the posture's centre of mass, each face at least 1.5 times that inside the support's edge.\n"
+        << "    - {name: com_box, type: com_box, lower: [" << num(box_lo.x(), 4) << ", " << num(box_lo.y(), 4) << ", -.inf], upper: ["
+        << num(box_hi.x(), 4) << ", " << num(box_hi.y(), 4) << ", .inf]}\n";
     }
     for (size_t k = 0; k < L.arms.size(); ++k) {
       c << "    - {name: " << hand_tasks[k] << ", type: position, frame: " << yamlString(grasp_frames[k]) << ", target: " << vec3(in_reach[k], 4)
@@ -986,6 +994,38 @@ InitResult initRobot(const InitOptions& o) {
   ProblemList mesh_problems(o.urdf);
   RobotLayout L = analyseLayout(d, posture.q, mesh_problems, &meshes);
   mesh_problems.throwIfErrors();
+  // An arm joint exactly at a limit in the posture (a straight elbow on its stop) goes 25 % of its
+  // range inside: a reach that starts there cannot move the hand every way with the arm, takes
+  // the motion from the legs and trunk and folds the robot (docs/model.md). The layout is
+  // analysed again in the moved posture.
+  {
+    Posture& chosen = postures[static_cast<size_t>(&posture - postures.data())];
+    std::vector<std::string> moved;
+    for (const auto& a : L.arms) {
+      const int first_body = d.joints[static_cast<size_t>(a.first_joint)].child_link;
+      for (int b = a.end_body; b > 0; b = d.parentBody(b)) {
+        const int j = d.links[static_cast<size_t>(b)].parent_joint;
+        if (j >= 0) {
+          const auto& J = d.joints[static_cast<size_t>(j)];
+          const double range = J.upper - J.lower, v = chosen.q[j];
+          const double tol = 1e-9 + 1e-6 * (std::isfinite(range) ? range : 0.0);
+          if (std::isfinite(range) && range > 0.0 && (std::abs(v - J.lower) <= tol || std::abs(v - J.upper) <= tol)) {
+            const double w = std::abs(v - J.lower) <= tol ? J.lower + 0.25 * range : J.upper - 0.25 * range;
+            chosen.q[j] = w;
+            moved.push_back(J.name + ": at its limit " + num(v) + " (the arm starts stretched or folded on a stop), taken as " + num(w) +
+                            " (25 % of its range inside)");
+          }
+        }
+        if (b == first_body) break;
+      }
+    }
+    if (!moved.empty()) {
+      for (const auto& m : moved) result.warnings.push_back("posture '" + chosen.name + "': " + m);
+      ProblemList again(o.urdf);
+      L = analyseLayout(d, chosen.q, again, &meshes);
+      again.throwIfErrors();
+    }
+  }
   for (const auto& w : mesh_problems.warnings()) result.warnings.push_back(w.text());
   if (!base_note.empty()) L.base_reason = base_note;
   if (posture.given >= 0 && 2 * posture.given < static_cast<int>(d.joints.size())) {

@@ -144,6 +144,28 @@ TEST(RobotInit, AShoulderThatCannotHoldTheArmOutIsAWarning) {
   EXPECT_EQ(init.err.find("right_shoulder_roll_joint' cannot hold"), std::string::npos) << init.err;
 }
 
+// An arm joint exactly at a limit in the posture (an elbow on its stop: the arm starts straight,
+// and the drafted reach folds the robot) is moved 25 % of its range inside, with a warning; the
+// CoM box of the reach keeps its faces 1.5 times its half extent inside the support's edge.
+TEST(RobotInit, AnArmJointOnItsStopIsMovedInside) {
+  const std::string dir = scratch("elbow_on_stop");
+  const std::string pkg = dir + "/g1_like";
+  fs::remove_all(pkg);
+  fs::copy(kSrc + "/models/g1_like", pkg, fs::copy_options::recursive);
+  std::string srdf = slurp(pkg + "/srdf/g1_like.srdf");
+  const std::string state = "<joint name=\"left_elbow_joint\" value=\"0.9\"/>";
+  ASSERT_NE(srdf.find(state), std::string::npos);
+  srdf.replace(srdf.find(state), state.size(), "<joint name=\"left_elbow_joint\" value=\"-1.0472\"/>");
+  std::ofstream(pkg + "/srdf/g1_like.srdf") << srdf;
+  const CliResult init = harness("robot init " + pkg + "/urdf/g1_like.urdf --srdf " + pkg + "/srdf/g1_like.srdf --out " + dir + "/draft", dir);
+  // -1.0472 + 0.25 * (2.0944 + 1.0472) = -0.2618
+  expectExit(init, 0, {"left_elbow_joint: at its limit -1.0472", "taken as -0.2618 (25 % of its range inside)"});
+  EXPECT_EQ(init.err.find("right_elbow_joint: at its limit"), std::string::npos) << init.err;
+  const std::string data = slurp(dir + "/draft/g1_like.yaml");
+  EXPECT_NE(data.find("left_elbow_joint: -0.2618"), std::string::npos) << data;
+  EXPECT_TRUE(containsAll(slurp(dir + "/draft/reach.yaml"), {"each face at least 1.5 times that inside the support's edge"}));
+}
+
 // A COLLADA box (8 vertices, 12 triangles) of half extents `h` about `c`, in the file's
 // coordinates, declaring `up` (Y_UP, Z_UP) as its up axis.
 std::string colladaBox(const std::string& up, const std::array<double, 3>& c, const std::array<double, 3>& h) {
@@ -272,10 +294,11 @@ TEST(RobotInit, PerGroupSrdfStatesMergeAndPostureProblemsAreWarned) {
                      // The right knee bent 0.1 rad further than half-sitting: that foot lifts.
                      state("lifted", "right_leg", "RLEG", {{"RLEG_JOINT3", "0.9727"}}) + state("lifted", "left_leg", "LLEG") +
                      state("lifted", "right_arm", "RARM") + state("lifted", "left_arm", "LARM") +
-                     // Both legs half-sitting, the arms stretched down (elbows straight).
+                     // Both legs half-sitting, the arms stretched down (elbows straight, 1 mrad off their
+                     // stops at 0: an elbow on its stop would be moved inside, AnArmJointOnItsStopIsMovedInside).
                      state("arms_straight", "right_leg", "RLEG") + state("arms_straight", "left_leg", "LLEG") +
-                     state("arms_straight", "right_arm", "RARM", {{"RARM_JOINT0", "0"}, {"RARM_JOINT1", "0"}, {"RARM_JOINT3", "0"}}) +
-                     state("arms_straight", "left_arm", "LARM", {{"LARM_JOINT0", "0"}, {"LARM_JOINT1", "0"}, {"LARM_JOINT3", "0"}}) +
+                     state("arms_straight", "right_arm", "RARM", {{"RARM_JOINT0", "0"}, {"RARM_JOINT1", "0"}, {"RARM_JOINT3", "-0.001"}}) +
+                     state("arms_straight", "left_arm", "LARM", {{"LARM_JOINT0", "0"}, {"LARM_JOINT1", "0"}, {"LARM_JOINT3", "-0.001"}}) +
                      "</robot>\n";
   std::ofstream(dir + "/r.srdf") << srdf;
   const CliResult init = harness("robot init " + urdf + " --srdf " + dir + "/r.srdf --out " + dir + "/ready", dir);
