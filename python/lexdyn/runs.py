@@ -9,24 +9,44 @@ import math
 import os
 import shutil
 import tempfile
-from typing import NamedTuple, Optional
+import weakref
 
 from .summary import RunSummary, read_summary
-from .trace import Trace, read_trace
+from .trace import read_trace
 
 
-class CaseRun(NamedTuple):
+class CaseRun:
     """What run_case returns: `summary` (summary.json as a RunSummary: status, exit_code, checks,
-    passed ...) and `trace` (trace.csv as a Trace). `out_dir` is the run's directory, None when it
-    was a temporary one (deleted)."""
-    summary: RunSummary
-    trace: Trace
-    out_dir: Optional[str] = None
+    passed ...), `trace` (trace.csv as a Trace, read on first access: a run costs what the
+    command line's does until its trace is wanted) and `out_dir` (the run's directory; None for a
+    temporary one, which is deleted once the trace has been read, or when the CaseRun goes away).
+    Unpacks as (summary, trace, out_dir)."""
+
+    def __init__(self, summary, trace_path, out_dir=None, temporary_dir=None):
+        self.summary = summary
+        self.out_dir = out_dir
+        self._trace_path = trace_path
+        self._trace = None
+        self._cleanup = weakref.finalize(self, shutil.rmtree, temporary_dir, True) if temporary_dir else None
+
+    @property
+    def trace(self):
+        if self._trace is None:
+            self._trace = read_trace(self._trace_path)
+            if self._cleanup is not None:
+                self._cleanup()   # the temporary directory, once the trace is in memory
+        return self._trace
 
     @property
     def exit_code(self):
         """The exit code `lexdyn-harness run` gives this run (docs/architecture.md)."""
         return self.summary["exit_code"]
+
+    def __iter__(self):
+        return iter((self.summary, self.trace, self.out_dir))
+
+    def __repr__(self):
+        return f"CaseRun(status={self.summary.status!r}, exit_code={self.exit_code}, out_dir={self.out_dir!r})"
 
 
 def _yaml_value(value):
@@ -65,8 +85,9 @@ def run_case(case_path, method=None, overrides=None, duration=None, out_dir=None
         "Overrides"); a str value is YAML text as given, other values are written as YAML.
     duration: simulate at most this long, in s (`--duration`: the override stop_at_s, first).
     out_dir: where trace.csv, summary.json and case.yaml are written. When None the run writes
-        into a temporary directory that is deleted once the summary and the trace have been read
-        back (the returned Trace's and RunSummary's `path` then name files that no longer exist).
+        into a temporary directory that is deleted once the trace has been read (on the first
+        access to `.trace`) or the returned CaseRun goes away (the Trace's and RunSummary's `path`
+        then name files that no longer exist).
     wall_clock_checks: tick_time checks decide pass/fail (`--wall-clock-checks`).
     progress: progress lines on stderr (off by default, as `--quiet`).
     dump_problems, dump_window: `--dump-problems DIR` and `--dump-window FROM:TO` as (from, to)
@@ -98,8 +119,8 @@ def run_case(case_path, method=None, overrides=None, duration=None, out_dir=None
         written = _core._run_case(os.fspath(case_path), method or "", ov, run_dir, bool(progress), bool(wall_clock_checks),
                                   os.fspath(dump_problems) if dump_problems is not None else "", dump_from, dump_to)
         summary = read_summary(written["summary_path"])
-        trace = read_trace(written["trace_path"])
-    finally:
+    except BaseException:
         if temporary:
             shutil.rmtree(run_dir, ignore_errors=True)
-    return CaseRun(summary, trace, None if temporary else run_dir)
+        raise
+    return CaseRun(summary, written["trace_path"], None if temporary else run_dir, run_dir if temporary else None)
