@@ -131,6 +131,25 @@ nlohmann::json benchOnCopies(const std::string& options, int count, CliRun* out 
   return r.code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
 }
 
+// --repeats: each tick's best time over the repeats (tick_best_*) next to the pooled figures; the
+// best of a tick is never above its pooled max, and its median never above the pooled max.
+TEST(SolveCli, BenchReportsEachTicksBestOverTheRepeats) {
+  const nlohmann::json j = benchOnCopies("--repeats 5", 4);
+  for (const char* k : {"cold", "warm"}) {
+    const nlohmann::json& s = j[k];
+    for (const char* f : {"tick_best_median_us", "tick_best_p99_us", "tick_best_max_us", "tick_best_p99_qr_units", "tick_best_max_qr_units"}) {
+      ASSERT_TRUE(s.contains(f) && s[f].is_number()) << k << "." << f << ": " << s.dump();
+    }
+    EXPECT_EQ(s["count"].get<int>(), std::string(k) == "cold" ? 20 : 15) << k;
+    EXPECT_LE(s["tick_best_max_us"].get<double>(), s["max_us"].get<double>()) << k;
+    EXPECT_LE(s["tick_best_median_us"].get<double>(), s["tick_best_max_us"].get<double>()) << k;
+    EXPECT_GT(s["tick_best_median_us"].get<double>(), 0.0) << k;
+  }
+  // One file: no warm tick, the figures null.
+  const nlohmann::json one = benchOnCopies("--repeats 2", 1);
+  EXPECT_TRUE(one["warm"]["tick_best_max_us"].is_null()) << one.dump();
+}
+
 TEST(SolveCli, BenchReportsColdAndWarmStatistics) {
   const std::string a = writeFile("t0.json", kValid);
   const std::string b = writeFile("t1.json", kValid);
