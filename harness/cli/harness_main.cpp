@@ -220,7 +220,7 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
   std::string cut;
   for (const auto& [method, t] : by_method) {
     const std::string* d = lexdyn::checks::findMetadata(t.metadata, "duration_s");
-    const std::string* sd = lexdyn::checks::findMetadata(t.metadata, "scenario_duration_s");
+    const std::string* sd = lexdyn::checks::findMetadata(t.metadata, lexdyn::checks::kScenarioDurationMetadata);
     if (d && sd && std::strtod(d->c_str(), nullptr) < std::strtod(sd->c_str(), nullptr)) cut = *d + " s of the case's " + *sd + " s";
   }
   std::vector<std::string> expected;

@@ -256,7 +256,7 @@ struct Draft {
 // Contact stiffness for a static penetration of 1 mm under an even share of the weight on each
 // contact point: k d^1.5 = m g / n.
 double contactStiffness(double mass, int points) {
-  const double share = mass * 9.81 / std::max(points, 1);
+  const double share = mass * kGravity / std::max(points, 1);
   return std::clamp(share / std::pow(1e-3, 1.5), 1e3, 1e9);
 }
 
@@ -501,7 +501,7 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
         foot_points = std::max(foot_points, f.points.size());
       }
       const double cop = std::isfinite(half_min) ? std::min(0.01, std::floor(0.14 * half_min * 1000.0) / 1000.0) : 0.0;
-      const double fmin_point = std::round(10.0 * 0.063 * L.mass * 9.81 / static_cast<double>(foot_points)) / 10.0;
+      const double fmin_point = std::round(10.0 * 0.063 * L.mass * kGravity / static_cast<double>(foot_points)) / 10.0;
       c << "  contact_margins: {friction: 0.1, cop_m: " << num(cop, 3) << ", min_normal_N: " << num(fmin_point, 3)
         << "}   # exp1's, scaled to these soles and this weight (docs/results.md)\n";
       c << "  method_params:\n    wls: {stop_after_level: hard}\n";
@@ -627,10 +627,10 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
         const std::string n = lower(f.surface);
         c << "  - {name: " << n << "_unilateral, type: contact_unilateral, contact: " << f.surface << ", source: sensed, min_N: 0.0}\n"
           << "  - {name: " << n << "_friction, type: contact_friction, contact: " << f.surface << ", source: sensed, min_normal_N: "
-          << num(std::max(1.0, 0.015 * L.mass * 9.81), 2) << "}\n";
+          << num(std::max(1.0, 0.015 * L.mass * kGravity), 2) << "}\n";
         if (f.points.size() >= 3) {
           c << "  - {name: " << n << "_cop, type: contact_cop, contact: " << f.surface << ", source: sensed, min_normal_N: "
-            << num(std::max(1.0, 0.015 * L.mass * 9.81), 2) << ", limit_m: -0.001}\n";
+            << num(std::max(1.0, 0.015 * L.mass * kGravity), 2) << ", limit_m: -0.001}\n";
         }
       }
     }
@@ -657,7 +657,7 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
       return s;
     };
-    const double fmin = std::max(1.0, 0.015 * L.mass * 9.81);
+    const double fmin = std::max(1.0, 0.015 * L.mass * kGravity);
     // The controller (exp1's parameters and levels, the feet as contacts, the base's position
     // and attitude), with `extra_task` (a task line) on a level of its own below the base's.
     auto controller = [&](std::ostream& c, const Eigen::Vector3d& base_target, const std::string& extra_task, const std::string& extra_name) {
@@ -837,6 +837,18 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
   return out;
 }
 
+// The arm's joints (model joint indices) from the shoulder (its first joint) out to its hand.
+std::vector<int> armJoints(const model::RobotDescription& d, const ArmLayout& a) {
+  std::vector<int> chain;
+  const int first_body = d.joints[static_cast<size_t>(a.first_joint)].child_link;
+  for (int b = a.end_body; b > 0; b = d.parentBody(b)) {
+    const int j = d.links[static_cast<size_t>(b)].parent_joint;
+    if (j >= 0) chain.insert(chain.begin(), j);
+    if (b == first_body) break;
+  }
+  return chain;
+}
+
 // An arm whose shoulder cannot hold it stretched out level: the gravity torque of the arm (its
 // subtree's mass at the distance of its centre of mass from the joint, that distance scaled by
 // the arm's reach over the posture's shoulder-to-hand distance: the arm straightened) against the
@@ -846,13 +858,7 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
 std::vector<std::string> armsThatCannotHold(const model::RobotDescription& d, const RobotLayout& L) {
   std::vector<std::string> out;
   for (const auto& a : L.arms) {
-    std::vector<int> chain;  // the arm's joints from the shoulder out
-    const int first_body = d.joints[static_cast<size_t>(a.first_joint)].child_link;
-    for (int b = a.end_body; b > 0; b = d.parentBody(b)) {
-      const int j = d.links[static_cast<size_t>(b)].parent_joint;
-      if (j >= 0) chain.insert(chain.begin(), j);
-      if (b == first_body) break;
-    }
+    const std::vector<int> chain = armJoints(d, a);
     const double span = (a.grasp_world - a.shoulder).norm();
     const double stretch = span > 1e-6 ? std::max(1.0, a.reach / span) : 1.0;
     for (size_t k = 0; k < std::min<size_t>(2, chain.size()); ++k) {
@@ -861,7 +867,7 @@ std::vector<std::string> armsThatCannotHold(const model::RobotDescription& d, co
       if (J.type == model::JointType::Prismatic || !std::isfinite(J.effort_limit) || static_cast<size_t>(j) >= L.loads.size()) continue;
       const JointLoad& load = L.loads[static_cast<size_t>(j)];
       const double lever = std::min(a.reach, load.lever * stretch);
-      const double torque = load.mass * 9.81 * lever;
+      const double torque = load.mass * kGravity * lever;
       if (torque > J.effort_limit) {
         out.push_back("the " + (a.side.empty() ? std::string("arm") : lower(a.side) + " arm") + "'s joint '" + J.name + "' cannot hold the arm " +
                       "stretched out level: that takes about " + num(torque, 3) + " N m (" + num(load.mass, 3) + " kg at " + num(lever, 2) +
@@ -886,13 +892,9 @@ std::vector<std::string> armSingularities(const model::RobotDescription& d, cons
   m.update(data, q, Eigen::VectorXd::Zero(m.nv()));
   Eigen::MatrixXd J(3, m.nv());
   for (const auto& a : L.arms) {
-    // The arm's joints: from the hand up to the body its first joint moves.
+    // The arm's joints' velocity columns.
     std::vector<int> cols;
-    const int first_body = d.joints[static_cast<size_t>(a.first_joint)].child_link;
-    for (int b = a.end_body; b > 0; b = d.parentBody(b)) {
-      if (d.links[static_cast<size_t>(b)].parent_joint >= 0) cols.push_back(m.jointVelocityOffset() + d.links[static_cast<size_t>(b)].parent_joint);
-      if (b == first_body) break;
-    }
+    for (const int j : armJoints(d, a)) cols.push_back(m.jointVelocityOffset() + j);
     if (cols.size() < 3) continue;
     m.pointJacobian(data, m.frameId(a.end_link), a.grasp_in_body, J);
     Eigen::MatrixXd Ja(3, static_cast<int>(cols.size()));
@@ -1002,21 +1004,16 @@ InitResult initRobot(const InitOptions& o) {
     Posture& chosen = postures[static_cast<size_t>(&posture - postures.data())];
     std::vector<std::string> moved;
     for (const auto& a : L.arms) {
-      const int first_body = d.joints[static_cast<size_t>(a.first_joint)].child_link;
-      for (int b = a.end_body; b > 0; b = d.parentBody(b)) {
-        const int j = d.links[static_cast<size_t>(b)].parent_joint;
-        if (j >= 0) {
-          const auto& J = d.joints[static_cast<size_t>(j)];
-          const double range = J.upper - J.lower, v = chosen.q[j];
-          const double tol = 1e-9 + 1e-6 * (std::isfinite(range) ? range : 0.0);
-          if (std::isfinite(range) && range > 0.0 && (std::abs(v - J.lower) <= tol || std::abs(v - J.upper) <= tol)) {
-            const double w = std::abs(v - J.lower) <= tol ? J.lower + 0.25 * range : J.upper - 0.25 * range;
-            chosen.q[j] = w;
-            moved.push_back(J.name + ": at its limit " + num(v) + " (the arm starts stretched or folded on a stop), taken as " + num(w) +
-                            " (25 % of its range inside)");
-          }
+      for (const int j : armJoints(d, a)) {
+        const auto& J = d.joints[static_cast<size_t>(j)];
+        const double range = J.upper - J.lower, v = chosen.q[j];
+        const double tol = 1e-9 + 1e-6 * (std::isfinite(range) ? range : 0.0);
+        if (std::isfinite(range) && range > 0.0 && (std::abs(v - J.lower) <= tol || std::abs(v - J.upper) <= tol)) {
+          const double w = std::abs(v - J.lower) <= tol ? J.lower + 0.25 * range : J.upper - 0.25 * range;
+          chosen.q[j] = w;
+          moved.push_back(J.name + ": at its limit " + num(v) + " (the arm starts stretched or folded on a stop), taken as " + num(w) +
+                          " (25 % of its range inside)");
         }
-        if (b == first_body) break;
       }
     }
     if (!moved.empty()) {

@@ -15,7 +15,6 @@ namespace lexdyn::robot {
 
 namespace {
 
-constexpr double kGravity = 9.81;
 constexpr double kPi = 3.14159265358979323846;
 /// The band above a foot's lowest point whose points make its sole (m).
 constexpr double kSoleBand_m = 0.003;

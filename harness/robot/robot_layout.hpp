@@ -47,6 +47,9 @@ struct ArmLayout {
   std::string source;
 };
 
+/// Standard gravity (m/s^2), for the loads, servo sizes and contact forces robot init drafts.
+inline constexpr double kGravity = 9.81;
+
 struct JointLoad {
   double mass = 0.0;                     ///< kg the joint holds (its subtree, or the rest of the robot for a leg joint)
   double lever = 0.0;                    ///< m, from the joint to that mass's centre of mass

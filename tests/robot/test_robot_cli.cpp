@@ -127,17 +127,26 @@ TEST(RobotInit, AHumanoidsDraftComesFromItsGeometry) {
 // A shoulder whose effort limit cannot hold the arm stretched out level (as on a public 95 kg
 // humanoid, whose drafted reach folds forward at the out-of-reach switch: docs/results.md, "A
 // heavier humanoid") is a warning naming the joint, the torque it takes and its limit.
-TEST(RobotInit, AShoulderThatCannotHoldTheArmOutIsAWarning) {
-  const std::string dir = scratch("weak_shoulder");
+// A copy of models/g1_like in DIR/g1_like whose file REL (urdf/g1_like.urdf, srdf/g1_like.srdf)
+// has `from` replaced by `to` once after `after` (a description package as a user edits it).
+// Returns the package's folder.
+std::string editedG1Like(const std::string& dir, const std::string& rel, const std::string& after, const std::string& from,
+                         const std::string& to) {
   const std::string pkg = dir + "/g1_like";
   fs::remove_all(pkg);
   fs::copy(kSrc + "/models/g1_like", pkg, fs::copy_options::recursive);
-  std::string urdf = slurp(pkg + "/urdf/g1_like.urdf");
-  const std::string joint = "<joint name=\"left_shoulder_roll_joint\"";
-  const size_t at = urdf.find("effort=\"25\"", urdf.find(joint));
-  ASSERT_NE(at, std::string::npos);
-  urdf.replace(at, 12, "effort=\"2\"");
-  std::ofstream(pkg + "/urdf/g1_like.urdf") << urdf;
+  std::string text = slurp(pkg + "/" + rel);
+  const size_t at = text.find(from, text.find(after));
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  std::ofstream(pkg + "/" + rel) << text;
+  return pkg;
+}
+
+TEST(RobotInit, AShoulderThatCannotHoldTheArmOutIsAWarning) {
+  const std::string dir = scratch("weak_shoulder");
+  const std::string pkg =
+      editedG1Like(dir, "urdf/g1_like.urdf", "<joint name=\"left_shoulder_roll_joint\"", "effort=\"25\"", "effort=\"2\"");
   const CliResult init = harness("robot init " + pkg + "/urdf/g1_like.urdf --srdf " + pkg + "/srdf/g1_like.srdf --out " + dir + "/draft", dir);
   expectExit(init, 0, {"the left arm's joint 'left_shoulder_roll_joint' cannot hold the arm stretched out level: that takes about",
                        "its effort limit is 2 N m", "A heavier humanoid"});
@@ -149,14 +158,8 @@ TEST(RobotInit, AShoulderThatCannotHoldTheArmOutIsAWarning) {
 // CoM box of the reach keeps its faces 1.5 times its half extent inside the support's edge.
 TEST(RobotInit, AnArmJointOnItsStopIsMovedInside) {
   const std::string dir = scratch("elbow_on_stop");
-  const std::string pkg = dir + "/g1_like";
-  fs::remove_all(pkg);
-  fs::copy(kSrc + "/models/g1_like", pkg, fs::copy_options::recursive);
-  std::string srdf = slurp(pkg + "/srdf/g1_like.srdf");
-  const std::string state = "<joint name=\"left_elbow_joint\" value=\"0.9\"/>";
-  ASSERT_NE(srdf.find(state), std::string::npos);
-  srdf.replace(srdf.find(state), state.size(), "<joint name=\"left_elbow_joint\" value=\"-1.0472\"/>");
-  std::ofstream(pkg + "/srdf/g1_like.srdf") << srdf;
+  const std::string pkg = editedG1Like(dir, "srdf/g1_like.srdf", "<joint name=\"left_elbow_joint\" value=", "value=\"0.9\"",
+                                       "value=\"-1.0472\"");
   const CliResult init = harness("robot init " + pkg + "/urdf/g1_like.urdf --srdf " + pkg + "/srdf/g1_like.srdf --out " + dir + "/draft", dir);
   // -1.0472 + 0.25 * (2.0944 + 1.0472) = -0.2618
   expectExit(init, 0, {"left_elbow_joint: at its limit -1.0472", "taken as -0.2618 (25 % of its range inside)"});
