@@ -542,7 +542,13 @@ void readExpectedFailures(CaseSpec& c, const yaml::Node& list, const checks::Che
     } else if (auto mn = m.optional("method")) {
       mn->fail("a case without methods (controller type " + c.controller.type + ") names no method");
     }
-    if (auto st = m.optional("status")) x.status = st->asEnum({"completed", "controller_failure", "integrator_failure", "diverged"});
+    if (auto st = m.optional("status")) {
+      using records::RunStatus;
+      const RunStatus allowed[] = {RunStatus::Completed, RunStatus::ControllerFailure, RunStatus::IntegratorFailure, RunStatus::Diverged};
+      std::vector<std::string> names;
+      for (RunStatus a : allowed) names.push_back(records::toString(a));
+      x.status = *records::parseRunStatus(st->asEnum(names));
+    }
     if (auto cn = m.optional("checks")) {
       for (const yaml::Node& n : cn->elements()) {
         const std::string name = n.asString();
@@ -561,7 +567,7 @@ void readExpectedFailures(CaseSpec& c, const yaml::Node& list, const checks::Che
     const yaml::Node reason = m.required("reason");
     x.reason = reason.asString();
     m.finish();
-    if (x.status == "completed" && x.checks.empty()) en.fail("expected a failure: a status other than completed, or checks");
+    if (x.status == records::RunStatus::Completed && x.checks.empty()) en.fail("expected a failure: a status other than completed, or checks");
     for (const ExpectedFailure& o : c.expected_failures) {
       if (o.method == x.method) en.fail(x.method.empty() ? "a second entry (one at most)" : "a second entry for method " + x.method);
     }

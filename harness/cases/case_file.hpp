@@ -16,6 +16,7 @@
 #include "harness/cases/target_path.hpp"
 #include "harness/checks/check_registry.hpp"
 #include "harness/checks/checks.hpp"
+#include "harness/records/run_status.hpp"
 #include "harness/sim/simulator.hpp"
 
 #include <cstdint>
@@ -122,7 +123,7 @@ struct SimModelPerturbation {
 /// listed check that passes, is reported as a mismatch.
 struct ExpectedFailure {
   std::string method;              ///< "" for a case without methods
-  std::string status = "completed";  ///< completed | controller_failure | integrator_failure | diverged
+  records::RunStatus status = records::RunStatus::Completed;  ///< completed | controller_failure | integrator_failure | diverged
   std::vector<std::string> checks;   ///< the checks expected to fail (sorted)
   std::string reason;
   std::string where;                 ///< file:line of the entry

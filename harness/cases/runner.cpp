@@ -264,7 +264,7 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
   j["format"] = kRunSummaryFormat;
   j["case"] = spec.name;
   j["case_file"] = spec.path;
-  j["status"] = r.status;
+  j["status"] = records::toString(r.status);
   j["message"] = r.message;
   if (!r.method.empty()) j["method"] = r.method;
   j["duration_s"] = r.duration_s;
@@ -298,7 +298,7 @@ void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummar
   j["all_checks_passed"] = r.all_checks_passed;
   if (r.expected_failure) {
     const ExpectedFailure& x = *r.expected_failure;
-    j["expected_failure"] = {{"status", x.status}, {"checks", x.checks}, {"reason", x.reason},
+    j["expected_failure"] = {{"status", records::toString(x.status)}, {"checks", x.checks}, {"reason", x.reason},
                              {"met", r.expectation_mismatches.empty()}, {"mismatches", r.expectation_mismatches},
                              {"reached", r.expected_failure_reached}};
   }
@@ -426,7 +426,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   const long n_ticks = std::lround(spec.duration_s / T);
   sim::JointCommand cmd{Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj)};
   size_t next_event = 0;
-  r.status = "completed";
+  r.status = records::RunStatus::Completed;
 
   double last_recorded_t = -1.0;
   // A row holds the simulator's state at its time (before the events of that time, which act
@@ -456,9 +456,9 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   std::string failure;
   // An exception once the run has started (an internal error, out of memory, an input error that
   // only the run could reveal) stops it like a failure: the trace keeps its rows and says why.
-  auto stopOnException = [&](const char* status, const std::string& what) {
+  auto stopOnException = [&](records::RunStatus status, const std::string& what) {
     r.status = status;
-    r.message = std::string(status == std::string("input_error") ? "bad input found at " : "internal error at ") + "t = " +
+    r.message = std::string(status == records::RunStatus::InputError ? "bad input found at " : "internal error at ") + "t = " +
                 num(simu.time()) + " s: " + what;
   };
   std::optional<OutputError> output_error;
@@ -483,17 +483,17 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     if (ok && driver) diverged = driver->divergence(t, simu);
     write(k, k == 0 || !ok || !diverged.empty());
     if (!ok) {
-      r.status = "controller_failure";
+      r.status = records::RunStatus::ControllerFailure;
       r.message = failure;
       break;
     }
     if (!diverged.empty()) {
-      r.status = "diverged";
+      r.status = records::RunStatus::Diverged;
       r.message = diverged;
       break;
     }
     if (options.interrupt && options.interrupt->load()) {
-      r.status = "interrupted";
+      r.status = records::RunStatus::Interrupted;
       r.signal = options.interrupt_signal ? options.interrupt_signal->load() : 0;
       r.message = std::string("interrupted") + (r.signal == SIGINT ? " by SIGINT" : (r.signal == SIGTERM ? " by SIGTERM" : "")) +
                   " at t = " + num(t) + " s";
@@ -501,7 +501,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     }
     const sim::StepResult sr = simu.step(cmd);
     if (!sr.ok) {
-      r.status = "integrator_failure";
+      r.status = records::RunStatus::IntegratorFailure;
       r.message = sr.message;
       break;
     }
@@ -532,15 +532,15 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   } catch (const OutputError& e) {
     // The trace cannot be written (a full disk, a file-size limit): the run stops at once; what
     // can still be written is, and the error ends the run as a run failure (exit code 3).
-    r.status = "output_error";
+    r.status = records::RunStatus::OutputError;
     r.message = std::string(e.what()) + " (the run stopped at t = " + num(simu.time()) + " s)";
     output_error.emplace(e.where(), r.message.substr(e.where().empty() ? 0 : e.where().size() + 2));
   } catch (const InputError& e) {
-    stopOnException("input_error", e.what());
+    stopOnException(records::RunStatus::InputError, e.what());
   } catch (const std::bad_alloc&) {
-    stopOnException("internal_error", "out of memory");
+    stopOnException(records::RunStatus::InternalError, "out of memory");
   } catch (const std::exception& e) {
-    stopOnException("internal_error", e.what());
+    stopOnException(records::RunStatus::InternalError, e.what());
   }
   r.wall_s = wallNow();
   r.simulated_s = simu.time();
@@ -584,7 +584,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
       const bool listed_failed = std::any_of(r.checks.begin(), r.checks.end(), [&](const checks::CheckResult& c) {
         return c.decides && !c.passed && std::find(x->checks.begin(), x->checks.end(), c.name) != x->checks.end();
       });
-      const bool status_reached = x->status != "completed" && r.status == x->status;
+      const bool status_reached = x->status != records::RunStatus::Completed && r.status == x->status;
       r.expected_failure_reached = listed_failed || status_reached || (x->checks.empty() && r.status == x->status);
     }
   }
@@ -604,12 +604,14 @@ std::string checkResultsJson(const std::vector<checks::CheckResult>& results) {
   return j.dump(2);
 }
 
-std::vector<std::string> expectationMismatches(const ExpectedFailure& x, const std::string& status,
+std::vector<std::string> expectationMismatches(const ExpectedFailure& x, records::RunStatus status,
                                                const std::vector<checks::CheckResult>& results, bool cut_short) {
   std::vector<std::string> out;
   // A run stopped early may end before the expected failure happens: completing, and the listed
   // checks passing or not evaluated, are then no departure. A failure that is not expected is.
-  if (status != x.status && !(cut_short && status == "completed")) out.push_back("status " + status + " (expected " + x.status + ")");
+  if (status != x.status && !(cut_short && status == records::RunStatus::Completed)) {
+    out.push_back(std::string("status ") + records::toString(status) + " (expected " + records::toString(x.status) + ")");
+  }
   auto listed = [&](const std::string& name) { return std::binary_search(x.checks.begin(), x.checks.end(), name); };
   for (const checks::CheckResult& c : results) {
     if (c.decides && !c.passed && !listed(c.name)) out.push_back(c.name + " failed (not expected)");
@@ -624,13 +626,13 @@ std::vector<std::string> expectationMismatches(const ExpectedFailure& x, const s
 }
 
 int exitCode(const RunSummary& s) {
-  if (s.status == "interrupted") return kExitInterrupted + (s.signal > 0 ? s.signal : 2);
-  if (s.status == "input_error") return kExitBadInput;
-  if (s.expected_failure && s.status != "internal_error") {
+  if (s.status == records::RunStatus::Interrupted) return kExitInterrupted + (s.signal > 0 ? s.signal : 2);
+  if (s.status == records::RunStatus::InputError) return kExitBadInput;
+  if (s.expected_failure && s.status != records::RunStatus::InternalError) {
     if (s.expectation_mismatches.empty()) return kExitPass;
-    return s.status != "completed" && s.status != s.expected_failure->status ? kExitRunFailure : kExitCheckFailed;
+    return s.status != records::RunStatus::Completed && s.status != s.expected_failure->status ? kExitRunFailure : kExitCheckFailed;
   }
-  if (s.status != "completed") return kExitRunFailure;
+  if (s.status != records::RunStatus::Completed) return kExitRunFailure;
   return s.all_checks_passed ? kExitPass : kExitCheckFailed;
 }
 

@@ -42,8 +42,9 @@ struct RunOptions {
 inline constexpr const char* kRunSummaryFormat = "lexdyn-run-summary/1";
 
 struct RunSummary {
-  /// completed | integrator_failure | controller_failure | diverged | internal_error | interrupted
-  std::string status;
+  /// A run's own status: completed, integrator_failure, controller_failure, diverged,
+  /// internal_error, interrupted, input_error or output_error.
+  records::RunStatus status = records::RunStatus::Completed;
   std::string message;  ///< what stopped the run early
   std::string method;   ///< lexdyn: bfgs | ah | gn | wls ("" for other controllers)
   double duration_s = 0.0;
@@ -81,7 +82,7 @@ struct RunSummary {
 /// evaluated. Empty when the run failed exactly as expected.
 /// `cut_short`: the run was stopped early (stop_at_s): the expected failure may lie beyond its end,
 /// so only a failure that is not expected departs from it.
-std::vector<std::string> expectationMismatches(const ExpectedFailure& expected, const std::string& status,
+std::vector<std::string> expectationMismatches(const ExpectedFailure& expected, records::RunStatus status,
                                                const std::vector<checks::CheckResult>& results, bool cut_short = false);
 
 /// Throws lexdyn::InputError for bad input (nothing is simulated then). An exception once the

@@ -109,9 +109,9 @@ void TraceWriter::write(const double* row) {
   if (flush_every_ > 0 && rows_ % flush_every_ == 0) flushOrThrow();
 }
 
-void TraceWriter::finish(const std::string& end_status, const std::string& why) {
+void TraceWriter::finish(records::RunStatus end_status, const std::string& why) {
   if (!file_) return;
-  std::string mark = "# end: " + end_status + (why.empty() ? "" : ": " + why);
+  std::string mark = std::string("# end: ") + records::toString(end_status) + (why.empty() ? "" : ": " + why);
   for (char& c : mark) {
     if (c == '\n' || c == '\r') c = ' ';
   }
@@ -137,9 +137,9 @@ int TraceTable::column(const std::string& name) const {
 }  // linear: called for a few channels per check
 
 std::string TraceTable::completeness() const {
-  if (end_status.empty()) return "no end mark: the run was killed, is still running, or the file was not written by a finished run";
+  if (!end_status) return "no end mark: the run was killed, is still running, or the file was not written by a finished run";
   if (complete()) return "the run completed";
-  return "the run did not complete: " + end_status + (end_message.empty() ? "" : " (" + end_message + ")");
+  return std::string("the run did not complete: ") + records::toString(*end_status) + (end_message.empty() ? "" : " (" + end_message + ")");
 }
 
 namespace {
@@ -198,16 +198,24 @@ TraceTable parseTrace(std::istream& in, const std::string& name, bool partial) {
       if (partial) break;
       throw InputError(where, "the last line has no newline: the file was cut short");
     }
-    if (ended) throw InputError(where, "a line after the end mark ('# end: " + t.end_status + "')");
+    if (ended) throw InputError(where, std::string("a line after the end mark ('# end: ") + records::toString(*t.end_status) + "')");
     if (line.rfind("# ", 0) == 0) {
       if (have_names) {
         // The only comment after the channel line is the end mark.
         if (line.rfind("# end: ", 0) != 0) throw InputError(where, "a header line after the channel names (only '# end: STATUS' may follow the rows)");
         const std::string mark = line.substr(7);
         const size_t colon = mark.find(": ");
-        t.end_status = mark.substr(0, colon);
+        const std::string status = mark.substr(0, colon);
         if (colon != std::string::npos) t.end_message = mark.substr(colon + 2);
-        if (t.end_status.empty()) throw InputError(where, "empty end mark");
+        if (status.empty()) throw InputError(where, "empty end mark");
+        t.end_status = records::parseRunStatus(status);
+        if (!t.end_status || !records::isRunsOwn(*t.end_status)) {
+          std::vector<records::RunStatus> own;
+          for (records::RunStatus s : records::allRunStatuses()) {
+            if (records::isRunsOwn(s)) own.push_back(s);
+          }
+          throw InputError(where, "end mark '" + status + "' is no run status (" + records::spellings(own) + ")");
+        }
         ended = true;
         continue;
       }
@@ -282,7 +290,7 @@ TraceTable parseTrace(std::istream& in, const std::string& name, bool partial) {
     t.rows.push_back(std::move(row));
   }
   if (!have_names) throw InputError(name, "no header line with channel names");
-  if (!offgrid.empty() && (t.complete() || t.end_status.empty() || t.end_status == "interrupted")) {
+  if (!offgrid.empty() && (t.complete() || !t.end_status || t.end_status == records::RunStatus::Interrupted)) {
     throw InputError(offgrid, "time 't': the last row is not a tick of the header's control period (" + std::to_string(period) +
                                   " s), which only the last state of a failed run may be");
   }

@@ -12,9 +12,12 @@
 // channels the same way.
 #pragma once
 
+#include "harness/records/run_status.hpp"
+
 #include <cstdint>
 #include <cstdio>
 #include <iosfwd>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -55,8 +58,7 @@ class TraceWriter {
   void write(const double* row);
   /// Writes the end mark "# end: <end_status>[: <why>]" (newlines become spaces), flushes, closes
   /// and renames the file to its final name. Idempotent.
-  void finish(const std::string& end_status = kTraceCompleted, const std::string& why = "");
-  static constexpr const char* kTraceCompleted = "completed";
+  void finish(records::RunStatus end_status = records::RunStatus::Completed, const std::string& why = "");
   long rows() const { return rows_; }
   const std::string& path() const { return path_; }
   const std::string& partialPath() const { return partial_; }
@@ -84,12 +86,13 @@ struct TraceTable {
   TraceMetadata metadata;
   std::vector<std::string> names;
   std::vector<std::vector<double>> rows;
-  /// The end mark: "completed", "interrupted", "integrator_failure", "controller_failure", "diverged",
-  /// "internal_error", ... and why; empty when the file has none (cut, or an older writer).
-  std::string end_status, end_message;
+  /// The end mark's status (a run's own: completed, interrupted, integrator_failure, ...) and
+  /// why; no status when the file has no end mark (cut, or an older writer).
+  std::optional<records::RunStatus> end_status;
+  std::string end_message;
   int column(const std::string& name) const;  ///< -1 when absent
   /// True when the end mark says the run completed.
-  bool complete() const { return end_status == TraceWriter::kTraceCompleted; }
+  bool complete() const { return end_status == records::RunStatus::Completed; }
   /// One sentence on completeness for messages ("the run completed", "interrupted: ...",
   /// "no end mark: the run was killed or is still running").
   std::string completeness() const;

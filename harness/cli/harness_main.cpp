@@ -163,13 +163,13 @@ int runCheck(const std::vector<std::string>& positional, const std::string& case
   const lexdyn::cases::ExpectedFailure* x = lexdyn::cases::expectedFailureFor(spec, method ? *method : "");
   printChecks(results, x ? x->checks : std::vector<std::string>{});
   if (json) std::printf("%s\n", lexdyn::cases::checkResultsJson(results).c_str());
-  if (x && !table.end_status.empty() && table.end_status != "interrupted") {
+  if (x && table.end_status && table.end_status != lexdyn::records::RunStatus::Interrupted) {
     // Cut short as the run was: the trace's last time, not the case file's duration (a run given
     // --duration keeps the case's own stop).
     const int tc = table.column(lexdyn::checks::kTimeChannel);
     const double last_t = tc >= 0 && !table.rows.empty() ? table.rows.back()[static_cast<size_t>(tc)] : 0.0;
     const bool cut_short = last_t < spec.scenario_duration_s - 1e-6;
-    const std::vector<std::string> mismatches = lexdyn::cases::expectationMismatches(*x, table.end_status, results, cut_short);
+    const std::vector<std::string> mismatches = lexdyn::cases::expectationMismatches(*x, *table.end_status, results, cut_short);
     if (mismatches.empty()) {
       std::fprintf(stderr, "  expected failure, as the case says (%s): %s\n", x->where.c_str(), x->reason.c_str());
       return lexdyn::cases::kExitPass;
@@ -309,9 +309,9 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
       ++failed;
       continue;
     }
-    std::string status;
+    lexdyn::records::RunStatus status = lexdyn::records::RunStatus::Completed;
     const lexdyn::checks::TraceTable fresh = lexdyn::golden::runGolden(e, method, m, work, status, progress, &g_interrupt);
-    if (g_interrupt.load() || status == "interrupted") {
+    if (g_interrupt.load() || status == lexdyn::records::RunStatus::Interrupted) {
       std::fprintf(stderr, "  interrupted during %s: nothing written for it\n", id.c_str());
       if (temp_work) {
         std::error_code ec;
@@ -319,16 +319,16 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
       }
       return interruptedCode();
     }
-    if (status == "internal_error" || status == "input_error") {
+    if (status == lexdyn::records::RunStatus::InternalError || status == lexdyn::records::RunStatus::InputError) {
       // The run stopped on an exception: a golden would record that, not the case's behaviour.
-      std::fprintf(stderr, "  FAIL %s: the run stopped with %s (%s)\n", id.c_str(), status.c_str(), fresh.end_message.c_str());
+      std::fprintf(stderr, "  FAIL %s: the run stopped with %s (%s)\n", id.c_str(), lexdyn::records::toString(status), fresh.end_message.c_str());
       ++run_failures;
       continue;
     }
     if (update) {
       lexdyn::golden::writeGolden(path, fresh, lexdyn::golden::provenance(e, method, status, m.dir));
       std::fprintf(stderr, "  wrote %s: %zu rows x %zu channels, %g s, run %s\n", path.c_str(), fresh.rows.size(), fresh.names.size(),
-                   e.duration_s, status.c_str());
+                   e.duration_s, lexdyn::records::toString(status));
       continue;
     }
     const lexdyn::checks::TraceTable golden = lexdyn::checks::readTrace(path);
@@ -503,7 +503,7 @@ int main(int argc, char** argv) {
     const lexdyn::cases::RunSummary s = lexdyn::cases::runCase(spec, options);
     const std::string label = spec.name + (s.method.empty() ? "" : " " + s.method);
     std::fprintf(stderr, "[%s] %s: %.3f s simulated in %.3f s wall (%.1fx real time), %ld ticks\n", label.c_str(),
-                 s.status.c_str(), s.simulated_s, s.wall_s, s.realtime_factor, s.ticks);
+                 lexdyn::records::toString(s.status), s.simulated_s, s.wall_s, s.realtime_factor, s.ticks);
     if (!s.message.empty()) std::fprintf(stderr, "  %s\n", s.message.c_str());
     if (s.has_controller_stats) {
       std::string errs;

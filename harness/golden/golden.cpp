@@ -200,7 +200,7 @@ checks::TraceTable selectChannels(const checks::TraceTable& t, const Manifest& m
 }
 
 checks::TraceTable runGolden(const Entry& e, const std::string& method, const Manifest& m, const std::string& work_dir,
-                             std::string& status, bool progress, const std::atomic<bool>* interrupt) {
+                             records::RunStatus& status, bool progress, const std::atomic<bool>* interrupt) {
   cases::CaseSpec spec = cases::loadCase(e.case_path);
   if (!method.empty()) cases::overrideMethod(spec, method, e.where);
   spec.duration_s = std::min(spec.duration_s, e.duration_s);
@@ -222,11 +222,11 @@ checks::TraceTable runGolden(const Entry& e, const std::string& method, const Ma
   checks::TraceTable t = selectChannels(full, m);
   t.end_status = full.end_status;
   t.end_message = full.end_message;
-  t.metadata.emplace_back("golden_run_status", status);
+  t.metadata.emplace_back("golden_run_status", records::toString(status));
   return t;
 }
 
-checks::TraceMetadata provenance(const Entry& e, const std::string& method, const std::string& status,
+checks::TraceMetadata provenance(const Entry& e, const std::string& method, records::RunStatus status,
                                  const std::string& source_dir) {
   checks::TraceMetadata md;
   md.emplace_back("golden_format", "lexdyn-golden/1");
@@ -234,7 +234,7 @@ checks::TraceMetadata provenance(const Entry& e, const std::string& method, cons
   md.emplace_back("golden_method", method.empty() ? "none" : method);
   md.emplace_back("golden_duration_s", num(e.duration_s));
   md.emplace_back("golden_every_n_ticks", std::to_string(e.every_n_ticks));
-  md.emplace_back("golden_run_status", status);
+  md.emplace_back("golden_run_status", records::toString(status));
   std::string rev = shell("git -C '" + source_dir + "' rev-parse HEAD 2>/dev/null");
   if (rev.empty()) {
     rev = "unknown (not a git checkout)";
@@ -260,12 +260,12 @@ void writeGolden(const std::string& path, const checks::TraceTable& t, const che
 }
 
 std::vector<std::string> goldenFileProblems(const checks::TraceTable& golden) {
-  if (golden.end_status.empty()) {
+  if (!golden.end_status) {
     return {"the golden file has no end mark ('# end: completed'): it was cut or damaged after " + std::to_string(golden.rows.size()) +
             " rows; restore it (git checkout) or regenerate it"};
   }
-  if (golden.end_status != checks::TraceWriter::kTraceCompleted) {
-    return {"the golden file ends with '# end: " + golden.end_status + "', not written by `golden update`"};
+  if (!golden.complete()) {
+    return {std::string("the golden file ends with '# end: ") + records::toString(*golden.end_status) + "', not written by `golden update`"};
   }
   return {};
 }

@@ -62,11 +62,11 @@ checks::TraceTable selectChannels(const checks::TraceTable& t, const Manifest& m
 /// in `work_dir`, returns the selected trace and the run status in `status`. `interrupt` (e.g.
 /// set by SIGINT) stops the run after a tick (status "interrupted").
 checks::TraceTable runGolden(const Entry& e, const std::string& method, const Manifest& m, const std::string& work_dir,
-                             std::string& status, bool progress, const std::atomic<bool>* interrupt = nullptr);
+                             records::RunStatus& status, bool progress, const std::atomic<bool>* interrupt = nullptr);
 
 /// Header lines recorded in a golden besides the trace's own (which hold the build: compiler,
 /// flags, library versions): format, case, method, horizon, decimation, run status, git revision.
-checks::TraceMetadata provenance(const Entry& e, const std::string& method, const std::string& status,
+checks::TraceMetadata provenance(const Entry& e, const std::string& method, records::RunStatus status,
                                  const std::string& source_dir);
 
 /// Writes a golden file (temporary name, then rename).

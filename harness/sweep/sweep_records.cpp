@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <map>
 #include <set>
 #include <sstream>
@@ -67,7 +68,7 @@ json toJson(const RunResult& r) {
   json st = json::object(), fe = json::object();
   for (const auto& [k, v] : r.statistics) st[k] = number(v);
   for (const auto& [k, v] : r.final_errors) fe[k] = number(v);
-  return {{"status", r.status},       {"message", r.message},     {"exit_code", r.exit_code},   {"wall_s", r.wall_s},
+  return {{"status", records::toString(r.status)},       {"message", r.message},     {"exit_code", r.exit_code},   {"wall_s", r.wall_s},
           {"simulated_s", r.simulated_s}, {"checks", checks}, {"statistics", st}, {"final_errors", fe},
           {"peak_iterations", r.peak_iterations}};
 }
@@ -86,7 +87,11 @@ CheckOutcome checkFromJson(const json& c) {
 
 RunResult fromJson(const json& j) {
   RunResult r;
-  r.status = j.value("status", "");
+  // Validated by recordedResult (or written by this build): the status is one a sweep records.
+  const std::string status = j.value("status", "");
+  const std::optional<records::RunStatus> parsed = records::parseRunStatus(status);
+  if (!parsed) throw std::logic_error("a sweep run record with status '" + status + "'");
+  r.status = *parsed;
   r.message = j.value("message", "");
   r.exit_code = j.value("exit_code", 0);
   r.wall_s = j.value("wall_s", 0.0);
@@ -101,9 +106,6 @@ RunResult fromJson(const json& j) {
 }
 
 std::optional<RunResult> recordedResult(const json& j, std::string& why) {
-  // The statuses of runs that ended on their own, and the driver's own verdicts on a process.
-  static const std::set<std::string> kRecorded = {"completed", "integrator_failure", "controller_failure", "diverged", "internal_error",
-                                                  "input_error", "timeout", "bad_input", "crashed"};
   if (!j.is_object()) {
     why = "not a JSON object";
     return std::nullopt;
@@ -113,9 +115,11 @@ std::optional<RunResult> recordedResult(const json& j, std::string& why) {
     return std::nullopt;
   }
   const std::string status = j["status"].get<std::string>();
-  if (!kRecorded.count(status)) {
+  const std::optional<records::RunStatus> parsed = records::parseRunStatus(status);
+  if (!parsed || !records::isRecordedBySweeps(*parsed)) {
     // "interrupted", "no_summary": stored by older drivers for runs killed from outside, which
-    // are never results.
+    // are never results; the statuses of runs that ended on their own, and the driver's own
+    // verdicts on a process, are (records::isRecordedBySweeps).
     why = "status '" + status + "' is not the end of a run";
     return std::nullopt;
   }
@@ -192,7 +196,7 @@ json pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string,
     // has its statistic over a shorter window.
     json stopped = json::array();
     for (const RunResult* r : {&rb, &rw}) {
-      if (r->status != "completed") stopped.push_back(r == &rb ? c.better : c.worse);
+      if (r->status != records::RunStatus::Completed) stopped.push_back(r == &rb ? c.better : c.worse);
     }
     double value = std::numeric_limits<double>::quiet_NaN();
     if (stopped.empty() && rb.statistics.count(c.name) && rw.statistics.count(c.name)) value = rb.statistics.at(c.name) - rw.statistics.at(c.name);
@@ -242,7 +246,7 @@ json summarize(const SweepSpec& s, const std::vector<json>& records, long points
         const json& run = r["runs"][m];
         ++runs;
         if (name == kRunCompleted) {
-          passed += run.value("status", "") == "completed" ? 1 : 0;
+          passed += run.value("status", "") == records::toString(records::RunStatus::Completed) ? 1 : 0;
           continue;
         }
         for (const auto& c : run["checks"]) {
@@ -364,7 +368,7 @@ std::vector<json> writeMaps(const SweepSpec& s, const std::vector<json>& records
       for (const auto& r : records) {
         const json& run = r["runs"][m];
         if (name == kRunCompleted) {
-          csv += row(r) + "," + (run.value("status", "") == "completed" ? "1" : "0") + ",nan,nan\n";
+          csv += row(r) + "," + (run.value("status", "") == records::toString(records::RunStatus::Completed) ? "1" : "0") + ",nan,nan\n";
           continue;
         }
         for (const auto& c : run["checks"]) {
@@ -538,7 +542,7 @@ bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
     ++replayed;
     still += fails ? 1 : 0;
     json rec = e;
-    rec["status"] = r->status;
+    rec["status"] = records::toString(r->status);
     rec["still_fails"] = fails;
     if (const CheckOutcome* co = r->check(check)) {
       rec["value"] = number(co->value);

@@ -29,7 +29,7 @@ using nlohmann::json;
 
 std::vector<std::string> RunResult::failures() const {
   std::vector<std::string> out;
-  if (status != "completed") out.push_back(kRunCompleted);
+  if (status != records::RunStatus::Completed) out.push_back(kRunCompleted);
   for (const auto& c : checks) {
     if (!c.passed) out.push_back(c.name);
   }
@@ -83,7 +83,7 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
     return t;
   };
   if (p.timed_out) {
-    r.status = "timeout";
+    r.status = records::RunStatus::Timeout;
     r.message = "killed after the timeout";
     return t;
   }
@@ -93,7 +93,7 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
     return lost("its folder was in use by another job");
   }
   if (p.exit_code == 2) {
-    r.status = "bad_input";
+    r.status = records::RunStatus::BadInput;
     r.message = lastLines(p.output_tail, 1);
     return t;
   }
@@ -108,16 +108,15 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
                 ", this build reads '" + cases::kRunSummaryFormat + "'");
   }
   auto num = [](const json& v) { return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN(); };
-  r.status = j.is_object() ? j.value("status", "") : "";
+  const std::string status_text = j.is_object() && j.contains("status") && j["status"].is_string() ? j["status"].get<std::string>() : "";
+  const std::optional<records::RunStatus> status = records::parseRunStatus(status_text);
+  if (!status || !records::isRunsOwn(*status)) return lost("summary.json has no status of a run ('" + status_text + "')");
+  r.status = *status;
   r.message = j.is_object() ? j.value("message", "") : "";
-  if (r.status == "interrupted") return lost("stopped by a signal from outside (exit code " + std::to_string(p.exit_code) + ": " + r.message + ")");
-  if (r.status == "output_error") return lost("could not write its outputs: " + r.message);
+  if (r.status == records::RunStatus::Interrupted) return lost("stopped by a signal from outside (exit code " + std::to_string(p.exit_code) + ": " + r.message + ")");
+  if (r.status == records::RunStatus::OutputError) return lost("could not write its outputs: " + r.message);
   // Out of memory says nothing of the configuration: the machine's state, like a kill.
-  if (r.status == "internal_error" && r.message.find("out of memory") != std::string::npos) return lost(r.message);
-  if (r.status != "completed" && r.status != "integrator_failure" && r.status != "controller_failure" && r.status != "diverged" &&
-      r.status != "internal_error" && r.status != "input_error") {
-    return lost("summary.json has no status of a finished run ('" + r.status + "')");
-  }
+  if (r.status == records::RunStatus::InternalError && r.message.find("out of memory") != std::string::npos) return lost(r.message);
   r.simulated_s = j.value("simulated_s", 0.0);
   const std::vector<std::string> wanted = propertyChecks(s, method);
   for (const auto& c : j.value("checks", json::array())) {
@@ -305,7 +304,7 @@ class Pool {
     };
     if (crashed(first) && crashed(second)) {
       second.end = Trial::End::kRecorded;
-      second.result.status = "crashed";
+      second.result.status = records::RunStatus::Crashed;
       second.result.message = second.why;
       writeAtomically((fs::path(job.dir) / "result.json").string(), toJson(second.result).dump(1) + "\n");
     }

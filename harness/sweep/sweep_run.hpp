@@ -7,6 +7,7 @@
 // margins, method win rates, robustness maps, shrunk failures), OUT/maps/.
 #pragma once
 
+#include "harness/records/run_status.hpp"
 #include "harness/sweep/sweep_file.hpp"
 
 #include <atomic>
@@ -33,9 +34,10 @@ struct CheckOutcome {
 
 /// What one simulation gave (OUT/runs/.../result.json).
 struct RunResult {
-  /// completed | integrator_failure | controller_failure | diverged | interrupted (the run's own), or
-  /// timeout | crashed | bad_input | no_summary (what the driver saw of the process).
-  std::string status;
+  /// A status a sweep records (records::isRecordedBySweeps): the run's own (completed,
+  /// integrator_failure, controller_failure, diverged, internal_error, input_error) or what the
+  /// driver saw of the process (timeout, crashed, bad_input).
+  records::RunStatus status = records::RunStatus::Completed;
   std::string message;
   int exit_code = 0;   ///< the process's, or 128 + signal
   double wall_s = 0.0; ///< not deterministic; never compared

@@ -162,7 +162,7 @@ json failureRecord(const SweepSpec& s, const Failure& f, const RunConfig& c, con
             {"overrides", overrides},
             {"duration_s", c.duration_s},
             {"command", reproduceCommand(s, c)},
-            {"status", r.status}};
+            {"status", records::toString(r.status)}};
   if (const CheckOutcome* co = r.check(f.check)) {
     j["value"] = number(co->value);
     j["limit"] = number(co->limit);
@@ -326,7 +326,7 @@ class Shrinker {
   const SweepSpec& s_;
   const Failure& f_;
   TrialCache& cache_;
-  std::string status_;
+  records::RunStatus status_ = records::RunStatus::Completed;
   bool value_was_nan_ = false;
   double full_duration_ = 0.0;
   RunConfig best_;
@@ -365,8 +365,8 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
   // budget leaves less shrunk depends neither on the shrinks' timing nor on what an earlier,
   // interrupted driver ran.
   auto shrinks = [&](const Failure& f) {
-    const std::string status = f.first["runs"][f.method].value("status", "");
-    return !(f.check == kRunCompleted && (status == "timeout" || status == "crashed"));
+    const records::RunStatus status = fromJson(f.first["runs"][f.method]).status;
+    return !(f.check == kRunCompleted && (status == records::RunStatus::Timeout || status == records::RunStatus::Crashed));
   };
   long shrinking = 0;
   for (const Failure& f : failures) shrinking += shrinks(f) ? 1 : 0;

@@ -316,7 +316,7 @@ py::dict runCaseBound(const std::string& case_path, const std::string& method, c
   if (failure) std::rethrow_exception(failure);
   py::dict out;
   out["exit_code"] = lexdyn::cases::exitCode(summary);
-  out["status"] = summary.status;
+  out["status"] = lexdyn::records::toString(summary.status);
   out["message"] = summary.message;
   out["method"] = summary.method;
   out["trace_path"] = summary.trace_path;

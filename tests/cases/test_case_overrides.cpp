@@ -137,7 +137,7 @@ TEST(CaseOverrides, TheEffectiveCaseReproducesTheRunBitForBit) {
   o.progress = false;
   o.out_dir = dir + "/a";
   const RunSummary a = runCase(c, o);
-  ASSERT_EQ(a.status, "completed");
+  ASSERT_EQ(a.status, lexdyn::records::RunStatus::Completed);
   // The run wrote its effective case; it loads on its own (relative paths to its folder) and
   // gives the same trace.
   ASSERT_TRUE(std::filesystem::is_regular_file(a.case_path));

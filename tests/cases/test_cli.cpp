@@ -99,7 +99,7 @@ TEST(HarnessCli, SigintStopsTheRunAndKeepsTraceAndSummary) {
   // The trace is marked as interrupted by itself: separated from its summary it is not taken for
   // a complete run. Its checks can be run again (on the rows it holds) but do not pass.
   const checks::TraceTable t = checks::readTrace(out + "/trace.csv");
-  EXPECT_EQ(t.end_status, "interrupted");
+  EXPECT_EQ(t.end_status, lexdyn::records::RunStatus::Interrupted);
   EXPECT_NE(t.end_message.find("interrupted by SIGINT at t = "), std::string::npos) << t.end_message;
   const CliResult r = harness("check " + c + " " + out + "/trace.csv", dir);
   expectExit(r, 1, {" rows, t = 0 .. "});
@@ -263,7 +263,7 @@ TEST(HarnessCliExitCodes, SigtermIs143) {
   const std::string out = dir + "/out";
   EXPECT_EQ(harnessRunSignalled(c, out, dir, "TERM", "0.05"), 143);
   const checks::TraceTable t = checks::readTrace(out + "/trace.csv");
-  EXPECT_EQ(t.end_status, "interrupted");
+  EXPECT_EQ(t.end_status, lexdyn::records::RunStatus::Interrupted);
   EXPECT_NE(t.end_message.find("interrupted by SIGTERM"), std::string::npos) << t.end_message;
 }
 

@@ -46,7 +46,7 @@ TEST(ControllerRunner, EveryMethodRunsAndWritesTheControllerChannelsAndSummary) 
     CaseSpec spec = loadCase(writeCase(dir, minimalLexdynCase(0.2)));
     overrideMethod(spec, method, "test");
     const RunSummary s = run(spec, dir + "/out");
-    EXPECT_EQ(s.status, "completed") << method << ": " << s.message;
+    EXPECT_EQ(s.status, lexdyn::records::RunStatus::Completed) << method << ": " << s.message;
     EXPECT_EQ(s.method, method);
     const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
     ASSERT_EQ(t.rows.size(), 41u);  // t = 0 .. 0.2 s
@@ -104,15 +104,15 @@ TEST(ControllerRunner, RerunsAreBitIdentical) {
   auto sections = minimalLexdynCase(0.3, "ah");
   sections["g_trace"] = "trace:\n  frames: [WAIST]\n  timings: false\n";
   const CaseSpec spec = loadCase(writeCase(dir, sections));
-  ASSERT_EQ(run(spec, dir + "/a").status, "completed");
-  ASSERT_EQ(run(spec, dir + "/b").status, "completed");
+  ASSERT_EQ(run(spec, dir + "/a").status, lexdyn::records::RunStatus::Completed);
+  ASSERT_EQ(run(spec, dir + "/b").status, lexdyn::records::RunStatus::Completed);
   const std::string a = slurp(dir + "/a/trace.csv"), b = slurp(dir + "/b/trace.csv");
   EXPECT_GT(a.size(), 50000u);
   EXPECT_TRUE(a == b) << "traces differ";
   // With the wall-time channels every other channel is still identical.
   sections["g_trace"] = "trace:\n  frames: [WAIST]\n";
   const CaseSpec timed = loadCase(writeCase(dir, sections));
-  ASSERT_EQ(run(timed, dir + "/c").status, "completed");
+  ASSERT_EQ(run(timed, dir + "/c").status, lexdyn::records::RunStatus::Completed);
   const checks::TraceTable ta = checks::readTrace(dir + "/a/trace.csv"), tc = checks::readTrace(dir + "/c/trace.csv");
   ASSERT_EQ(ta.rows.size(), tc.rows.size());
   EXPECT_GE(tc.column("time.tick_us"), 0);
@@ -143,7 +143,7 @@ TEST(ControllerRunner, EventsApplyAtTheirTicks) {
 )";
   const CaseSpec spec = loadCase(writeCase(dir, sections));
   const RunSummary s = run(spec, dir + "/out");
-  ASSERT_EQ(s.status, "completed") << s.message;
+  ASSERT_EQ(s.status, lexdyn::records::RunStatus::Completed) << s.message;
   const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
   // An event applies at the first tick at or after its time; its target generator starts there.
   auto tickAt = [&](double at_s) -> double {
@@ -197,12 +197,12 @@ TEST(ControllerRunner, ControllerFailureStopsTheRunKeepingTheTrace) {
   sections["e_controller"] = ctl;
   const CaseSpec spec = loadCase(writeCase(dir, sections));
   const RunSummary s = run(spec, dir + "/out");
-  EXPECT_EQ(s.status, "controller_failure");
+  EXPECT_EQ(s.status, lexdyn::records::RunStatus::ControllerFailure);
   EXPECT_NE(s.message.find("controller_failure: infeasible at t = 0 s"), std::string::npos) << s.message;
   EXPECT_EQ(exitCode(s), kExitRunFailure);
   const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
   ASSERT_EQ(t.rows.size(), 1u);
-  EXPECT_EQ(t.end_status, "controller_failure");
+  EXPECT_EQ(t.end_status, lexdyn::records::RunStatus::ControllerFailure);
   EXPECT_NE(t.end_message.find("infeasible at t = 0 s"), std::string::npos) << t.end_message;
   EXPECT_EQ(at(t, 0, "ctrl.status"), 3.0);  // infeasible (ctrl_status_codes)
   const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/out/summary.json"));
@@ -221,12 +221,12 @@ TEST(ControllerRunner, DivergenceGuardStopsARunThatLeavesItsPlan) {
                                        {"stop_at_s", "5", ""}};
   const std::string dir = outputDir("ctl_runner_diverged");
   const RunSummary s = run(loadCase(exp1, heavy), dir + "/on");
-  EXPECT_EQ(s.status, "diverged") << s.message;
+  EXPECT_EQ(s.status, lexdyn::records::RunStatus::Diverged) << s.message;
   EXPECT_NE(s.message.find("from the plan's position (limit 0.25 m, divergence_guard.position_m)"), std::string::npos) << s.message;
   EXPECT_EQ(exitCode(s), kExitRunFailure);
   EXPECT_LT(s.simulated_s, 3.0);
   const checks::TraceTable t = checks::readTrace(dir + "/on/trace.csv");
-  EXPECT_EQ(t.end_status, "diverged");
+  EXPECT_EQ(t.end_status, lexdyn::records::RunStatus::Diverged);
   EXPECT_EQ(t.end_message, s.message);
   double lowest = INFINITY;
   for (size_t r = 0; r < t.rows.size(); ++r) lowest = std::min(lowest, at(t, r, "frame.WAIST.z"));
@@ -235,7 +235,7 @@ TEST(ControllerRunner, DivergenceGuardStopsARunThatLeavesItsPlan) {
   std::vector<Override> off = heavy;
   off.push_back({"controller.divergence_guard", "off", ""});
   const RunSummary s_off = run(loadCase(exp1, off), dir + "/off");
-  EXPECT_NE(s_off.status, "diverged");
+  EXPECT_NE(s_off.status, lexdyn::records::RunStatus::Diverged);
   EXPECT_GT(s_off.simulated_s, s.simulated_s);
   const checks::TraceTable t_off = checks::readTrace(dir + "/off/trace.csv");
   lowest = INFINITY;
@@ -261,10 +261,10 @@ TEST(ControllerRunner, DivergenceGuardCriteriaNameTheirThresholds) {
     if (*c.message == 0) {
       // The plan keeps its torques within their limits (the torque_limits level): a factor of 1
       // never fires on a healthy run.
-      EXPECT_EQ(s.status, "completed") << c.guard << ": " << s.message;
+      EXPECT_EQ(s.status, lexdyn::records::RunStatus::Completed) << c.guard << ": " << s.message;
       continue;
     }
-    EXPECT_EQ(s.status, "diverged") << c.guard;
+    EXPECT_EQ(s.status, lexdyn::records::RunStatus::Diverged) << c.guard;
     EXPECT_NE(s.message.find(c.message), std::string::npos) << c.guard << ": " << s.message;
     EXPECT_LT(s.simulated_s, c.before_s) << c.guard;
   }
@@ -290,7 +290,7 @@ TEST(ControllerRunner, StoredTraceChecksEqualTheLiveOnes) {
 )";
   const CaseSpec spec = loadCase(writeCase(dir, sections));
   const RunSummary s = run(spec, dir + "/out");
-  ASSERT_EQ(s.status, "completed");
+  ASSERT_EQ(s.status, lexdyn::records::RunStatus::Completed);
   ASSERT_EQ(s.checks.size(), 13u);
   const std::vector<checks::CheckResult> stored = checks::runChecks(spec.checks, checks::readTrace(dir + "/out/trace.csv"));
   ASSERT_EQ(stored.size(), s.checks.size());

@@ -47,13 +47,13 @@ TEST(ExpectedFailures, TheRepositoryCasesDeclareTheirs) {
   const CaseSpec pm = loadCase(kPointMass);
   const ExpectedFailure* x = expectedFailureFor(pm, "wls");
   ASSERT_NE(x, nullptr);
-  EXPECT_EQ(x->status, "completed");
+  EXPECT_EQ(x->status, lexdyn::records::RunStatus::Completed);
   EXPECT_EQ(x->checks, (std::vector<std::string>{"closed_form_eq49", "no_overshoot"}));  // sorted
   EXPECT_FALSE(x->reason.empty());
   EXPECT_EQ(expectedFailureFor(pm, "gn"), nullptr);
   const CaseSpec instant = loadCase(std::string(LEXDYN_SOURCE_DIR) + "/cases/exp2-instant.yaml");
   ASSERT_NE(expectedFailureFor(instant, "wls"), nullptr);
-  EXPECT_EQ(expectedFailureFor(instant, "wls")->status, "controller_failure");
+  EXPECT_EQ(expectedFailureFor(instant, "wls")->status, lexdyn::records::RunStatus::ControllerFailure);
 }
 
 TEST(ExpectedFailures, BadEntriesAreErrorsNamingTheKey) {
@@ -87,19 +87,19 @@ TEST(ExpectedFailures, TheOutcomeMustMatchExactly) {
   x.reason = "r";
   const std::vector<checks::CheckResult> as_expected = {result("a", false), result("b", false), result("c", true),
                                                         result("t", false, false)};  // a wall-clock check: no verdict
-  EXPECT_TRUE(expectationMismatches(x, "completed", as_expected).empty());
-  EXPECT_EQ(expectationMismatches(x, "completed", {result("a", false), result("b", false), result("c", false)}),
+  EXPECT_TRUE(expectationMismatches(x, lexdyn::records::RunStatus::Completed, as_expected).empty());
+  EXPECT_EQ(expectationMismatches(x, lexdyn::records::RunStatus::Completed, {result("a", false), result("b", false), result("c", false)}),
             (std::vector<std::string>{"c failed (not expected)"}));
-  EXPECT_EQ(expectationMismatches(x, "completed", {result("a", false), result("b", true)}),
+  EXPECT_EQ(expectationMismatches(x, lexdyn::records::RunStatus::Completed, {result("a", false), result("b", true)}),
             (std::vector<std::string>{"b passed (expected to fail)"}));
-  EXPECT_EQ(expectationMismatches(x, "completed", {result("a", false)}), (std::vector<std::string>{"b was not evaluated (expected to fail)"}));
-  EXPECT_EQ(expectationMismatches(x, "controller_failure", as_expected),
+  EXPECT_EQ(expectationMismatches(x, lexdyn::records::RunStatus::Completed, {result("a", false)}), (std::vector<std::string>{"b was not evaluated (expected to fail)"}));
+  EXPECT_EQ(expectationMismatches(x, lexdyn::records::RunStatus::ControllerFailure, as_expected),
             (std::vector<std::string>{"status controller_failure (expected completed)"}));
 }
 
 TEST(ExpectedFailures, ExitCodes) {
   RunSummary s;
-  s.status = "completed";
+  s.status = lexdyn::records::RunStatus::Completed;
   s.all_checks_passed = false;
   EXPECT_EQ(exitCode(s), kExitCheckFailed);  // no entry: a failure
   s.expected_failure.emplace();
@@ -107,17 +107,17 @@ TEST(ExpectedFailures, ExitCodes) {
   EXPECT_EQ(exitCode(s), kExitPass);  // failed as expected
   s.expectation_mismatches = {"b failed (not expected)"};
   EXPECT_EQ(exitCode(s), kExitCheckFailed);
-  s.status = "controller_failure";  // another run failure than the one expected (completed)
+  s.status = lexdyn::records::RunStatus::ControllerFailure;  // another run failure than the one expected (completed)
   EXPECT_EQ(exitCode(s), kExitRunFailure);
-  s.expected_failure->status = "controller_failure";
+  s.expected_failure->status = lexdyn::records::RunStatus::ControllerFailure;
   s.expectation_mismatches = {"a passed (expected to fail)"};
   EXPECT_EQ(exitCode(s), kExitCheckFailed);  // the expected status, a check differs
   s.expectation_mismatches.clear();
   EXPECT_EQ(exitCode(s), kExitPass);
-  s.status = "interrupted";
+  s.status = lexdyn::records::RunStatus::Interrupted;
   s.signal = 15;
   EXPECT_EQ(exitCode(s), kExitInterrupted + 15);  // an interruption is never expected
-  s.status = "internal_error";
+  s.status = lexdyn::records::RunStatus::InternalError;
   EXPECT_EQ(exitCode(s), kExitRunFailure);
 }
 

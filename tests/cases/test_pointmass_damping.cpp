@@ -61,7 +61,7 @@ TEST(PointmassDamping, CaseDampingPerMethod) {
 
 TEST(PointmassDamping, VelocityDomainFollowsEq49WithoutOvershoot) {
   const PmRun r = runMethod("gn", 10.0);
-  ASSERT_EQ(r.summary.status, "completed") << r.summary.message;
+  ASSERT_EQ(r.summary.status, lexdyn::records::RunStatus::Completed) << r.summary.message;
   ASSERT_TRUE(r.checks.count("closed_form_eq49"));
   EXPECT_TRUE(r.checks.at("closed_form_eq49").passed) << r.checks.at("closed_form_eq49").detail;
   EXPECT_LT(r.checks.at("closed_form_eq49").value, 0.01);
@@ -85,7 +85,7 @@ TEST(PointmassDamping, VelocityDomainFollowsEq49WithoutOvershoot) {
 
 TEST(PointmassDamping, VelocityDomainWithTheSameMuAsWlsIsMonotoneButSlow) {
   const PmRun r = runMethod("bfgs", 5.0);
-  ASSERT_EQ(r.summary.status, "completed") << r.summary.message;
+  ASSERT_EQ(r.summary.status, lexdyn::records::RunStatus::Completed) << r.summary.message;
   EXPECT_TRUE(r.checks.at("no_overshoot").passed) << r.checks.at("no_overshoot").detail;
   // eq. 82 with mu = 1 halves the velocity every tick: after 5 s the mass has moved < 5 cm.
   ASSERT_EQ(r.summary.controller.tasks.size(), 1u);
@@ -94,7 +94,7 @@ TEST(PointmassDamping, VelocityDomainWithTheSameMuAsWlsIsMonotoneButSlow) {
 
 TEST(PointmassDamping, AccelerationDomainOvershootsAsInFig1) {
   const PmRun r = runMethod("wls", 10.0);
-  ASSERT_EQ(r.summary.status, "completed") << r.summary.message;
+  ASSERT_EQ(r.summary.status, lexdyn::records::RunStatus::Completed) << r.summary.message;
   // Expected failures: the overshoot exp(-pi / mu) = 4.3 % and the distance to eq. 49.
   EXPECT_FALSE(r.checks.at("no_overshoot").passed);
   EXPECT_NEAR(r.checks.at("no_overshoot").value, std::exp(-M_PI), 1e-3);

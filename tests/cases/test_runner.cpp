@@ -55,7 +55,7 @@ TEST(Runner, StandCaseHoldsHalfSittingAndPassesItsChecks) {
   const std::string dir = outputDir("runner_stand");
   const CaseSpec spec = loadCase(src("cases/stand.yaml"));
   const RunSummary s = run(spec, dir);
-  EXPECT_EQ(s.status, "completed");
+  EXPECT_EQ(s.status, lexdyn::records::RunStatus::Completed);
   EXPECT_DOUBLE_EQ(s.simulated_s, 10.0);
   EXPECT_EQ(s.ticks, 2000);
   ASSERT_EQ(s.checks.size(), 3u);
@@ -91,7 +91,7 @@ TEST(Runner, StandStartsInStaticEquilibrium) {
   const std::string dir = outputDir("runner_stand_start");
   const CaseSpec spec = loadCase(shortenedCopy("cases/stand.yaml", 0.1, dir));
   ASSERT_EQ(spec.initial_state.settle, sim::Settle::StaticEquilibrium);
-  ASSERT_EQ(run(spec, dir + "/out").status, "completed");
+  ASSERT_EQ(run(spec, dir + "/out").status, lexdyn::records::RunStatus::Completed);
   const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
   const std::string* weight = checks::findMetadata(t.metadata, checks::kWeightMetadata);
   const std::string* init = checks::findMetadata(t.metadata, "initial_state");
@@ -131,7 +131,7 @@ TEST(Runner, RerunsAreBitIdentical) {
   const CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 1.5, base));
   const RunSummary a = run(spec, base + "/a");
   const RunSummary b = run(spec, base + "/b");
-  ASSERT_EQ(a.status, "completed");
+  ASSERT_EQ(a.status, lexdyn::records::RunStatus::Completed);
   const std::string ta = slurp(base + "/a/trace.csv"), tb = slurp(base + "/b/trace.csv");
   EXPECT_GT(ta.size(), 100000u);
   EXPECT_TRUE(ta == tb) << "traces differ";
@@ -171,7 +171,7 @@ TwoRuns runTwoWays(CaseSpec spec, const std::string& base, const std::string& fi
   r.a = run(spec, base + "/" + first);
   change(spec);
   r.b = run(spec, base + "/" + second);
-  if (r.a.status == "completed" && r.b.status == "completed") {
+  if (r.a.status == lexdyn::records::RunStatus::Completed && r.b.status == lexdyn::records::RunStatus::Completed) {
     r.ta = checks::readTrace(base + "/" + first + "/trace.csv");
     r.tb = checks::readTrace(base + "/" + second + "/trace.csv");
   }
@@ -188,8 +188,8 @@ TEST(Runner, TheTwoNewtonSystemSolversAgree) {
   ASSERT_EQ(spec.sim.integrator.linear_solver, sim::LinearSolver::BlockElimination);  // the default
   const TwoRuns r = runTwoWays(spec, base, "block", "dense",
                                [](CaseSpec& s) { s.sim.integrator.linear_solver = sim::LinearSolver::DenseLU; });
-  ASSERT_EQ(r.a.status, "completed");
-  ASSERT_EQ(r.b.status, "completed");
+  ASSERT_EQ(r.a.status, lexdyn::records::RunStatus::Completed);
+  ASSERT_EQ(r.b.status, lexdyn::records::RunStatus::Completed);
   EXPECT_EQ(r.b.integrator.lin_full_setups, 0);
   EXPECT_EQ(checks::findMetadata(r.ta.metadata, "integrator")->find("linear_solver"), std::string::npos);
   EXPECT_NE(checks::findMetadata(r.tb.metadata, "integrator")->find("linear_solver dense_lu"), std::string::npos);
@@ -212,8 +212,8 @@ TEST(Runner, TheAppliedForcesJacobianAgreesWithoutDifferenceQuotients) {
   spec.sim.integrator.jacobian = sim::IntegratorJacobian::DifferenceQuotient;
   const TwoRuns r = runTwoWays(spec, base, "dq", "forces",
                                [](CaseSpec& s) { s.sim.integrator.jacobian = sim::IntegratorJacobian::AppliedForces; });
-  ASSERT_EQ(r.a.status, "completed");
-  ASSERT_EQ(r.b.status, "completed");
+  ASSERT_EQ(r.a.status, lexdyn::records::RunStatus::Completed);
+  ASSERT_EQ(r.b.status, lexdyn::records::RunStatus::Completed);
   const RunSummary& a = r.a;
   const RunSummary& b = r.b;
   EXPECT_GT(a.integrator.jac_rhs_evals, 0);
@@ -239,7 +239,7 @@ TEST(Runner, IntegratorFailureKeepsTheTraceAndReportsTheStatus) {
   sections["f_sim"] += "  integrator: {max_steps_per_tick: 2}\n";
   const CaseSpec spec = loadCase(writeCase(dir, sections));
   const RunSummary s = run(spec, dir + "/out");
-  EXPECT_EQ(s.status, "integrator_failure");
+  EXPECT_EQ(s.status, lexdyn::records::RunStatus::IntegratorFailure);
   EXPECT_NE(s.message.find("too_much_work"), std::string::npos) << s.message;
   EXPECT_EQ(exitCode(s), kExitRunFailure);
   EXPECT_LT(s.simulated_s, 0.005);
@@ -247,7 +247,7 @@ TEST(Runner, IntegratorFailureKeepsTheTraceAndReportsTheStatus) {
   EXPECT_GE(t.rows.size(), 1u);
   // The trace says by itself that the run failed, and why.
   EXPECT_FALSE(t.complete());
-  EXPECT_EQ(t.end_status, "integrator_failure");
+  EXPECT_EQ(t.end_status, lexdyn::records::RunStatus::IntegratorFailure);
   EXPECT_NE(t.end_message.find("too_much_work"), std::string::npos) << t.end_message;
   const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/out/summary.json"));
   EXPECT_EQ(j["status"], "integrator_failure");
@@ -258,11 +258,11 @@ TEST(Runner, InterruptionStopsAfterATickAndKeepsTheTrace) {
   const CaseSpec spec = loadCase(writeCase(dir, minimalCase()));
   std::atomic<bool> stop{true};
   const RunSummary s = run(spec, dir + "/out", &stop);
-  EXPECT_EQ(s.status, "interrupted");
+  EXPECT_EQ(s.status, lexdyn::records::RunStatus::Interrupted);
   EXPECT_EQ(exitCode(s), 130);  // the signal unknown: SIGINT's code
   const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
   EXPECT_EQ(t.rows.size(), 1u);
-  EXPECT_EQ(t.end_status, "interrupted");
+  EXPECT_EQ(t.end_status, lexdyn::records::RunStatus::Interrupted);
   EXPECT_NE(t.end_message.find("interrupted at t = 0 s"), std::string::npos) << t.end_message;
 }
 
@@ -276,7 +276,7 @@ TEST(Runner, ProgressLinesGoToStderrOnly) {
   ::testing::internal::CaptureStderr();
   const RunSummary a = runCase(spec, o);
   const std::string err = ::testing::internal::GetCapturedStderr();
-  ASSERT_EQ(a.status, "completed");
+  ASSERT_EQ(a.status, lexdyn::records::RunStatus::Completed);
   size_t lines = 0;
   for (size_t p = err.find("real time, about"); p != std::string::npos; p = err.find("real time, about", p + 1)) ++lines;
   EXPECT_EQ(lines, 10u) << err;
@@ -284,7 +284,7 @@ TEST(Runner, ProgressLinesGoToStderrOnly) {
   // The trace does not depend on the progress output.
   o.out_dir = dir + "/b";
   o.progress = false;
-  ASSERT_EQ(runCase(spec, o).status, "completed");
+  ASSERT_EQ(runCase(spec, o).status, lexdyn::records::RunStatus::Completed);
   EXPECT_EQ(slurp(dir + "/a/trace.csv"), slurp(dir + "/b/trace.csv"));
 }
 
@@ -293,7 +293,7 @@ TEST(Runner, AFailedCheckGivesExitCodeOne) {
   auto sections = minimalCase(0.2);
   sections["h_checks"] = "checks:\n  - {name: tall, type: frame_height, frame: WAIST, min_m: 2.0}\n";
   const RunSummary s = run(loadCase(writeCase(dir, sections)), dir + "/out");
-  EXPECT_EQ(s.status, "completed");
+  EXPECT_EQ(s.status, lexdyn::records::RunStatus::Completed);
   ASSERT_EQ(s.checks.size(), 1u);
   EXPECT_FALSE(s.checks[0].passed);
   EXPECT_NEAR(s.checks[0].value, 0.774, 0.01);
@@ -308,7 +308,7 @@ TEST(Runner, GraspEventsSwitchTheContactAtTheirTimes) {
   sections["e_controller"] += "events:\n  - {at_s: 0.1, action: grasp_on, grasp: left}\n"
                               "  - {at_s: 0.3, action: grasp_off, grasp: left}\n";
   const RunSummary s = run(loadCase(writeCase(dir, sections)), dir + "/out");
-  ASSERT_EQ(s.status, "completed");
+  ASSERT_EQ(s.status, lexdyn::records::RunStatus::Completed);
   const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
   const int c = t.column("grasp.left.active");
   ASSERT_GE(c, 0);

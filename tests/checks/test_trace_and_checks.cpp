@@ -162,16 +162,16 @@ TEST(Trace, TheEndMarkSaysWhetherTheRunCompleted) {
   }
   TraceTable t = readTrace(dir + "/done.csv");
   EXPECT_TRUE(t.complete());
-  EXPECT_EQ(t.end_status, "completed");
+  EXPECT_EQ(t.end_status, lexdyn::records::RunStatus::Completed);
   {
     TraceWriter w(dir + "/stopped.csv", schema, {}, 1);
     w.write(&r0);
     w.write(&r1);
-    w.finish("integrator_failure", "CVODE stopped\nat t = 0.005 s");
+    w.finish(lexdyn::records::RunStatus::IntegratorFailure, "CVODE stopped\nat t = 0.005 s");
   }
   t = readTrace(dir + "/stopped.csv");
   EXPECT_FALSE(t.complete());
-  EXPECT_EQ(t.end_status, "integrator_failure");
+  EXPECT_EQ(t.end_status, lexdyn::records::RunStatus::IntegratorFailure);
   EXPECT_EQ(t.end_message, "CVODE stopped at t = 0.005 s");  // newlines become spaces
   EXPECT_NE(t.completeness().find("the run did not complete: integrator_failure (CVODE stopped"), std::string::npos);
   std::ofstream(dir + "/cut.csv.partial") << "t\n0\n0.005\n";

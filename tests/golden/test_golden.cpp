@@ -133,7 +133,7 @@ TEST(Golden, SelectionDropsTheWallTimeChannelsAndFilesKeepProvenance) {
   e.case_name = "c";
   e.duration_s = 2.0;
   e.every_n_ticks = 10;
-  writeGolden(dir + "/c.bfgs.csv", s, provenance(e, "bfgs", "completed", dir));
+  writeGolden(dir + "/c.bfgs.csv", s, provenance(e, "bfgs", lexdyn::records::RunStatus::Completed, dir));
   const checks::TraceTable r = checks::readTrace(dir + "/c.bfgs.csv");
   EXPECT_EQ(r.rows, s.rows);
   for (const char* key : {"golden_format", "golden_case", "golden_method", "golden_duration_s", "golden_every_n_ticks",
@@ -152,7 +152,7 @@ TEST(Golden, AGoldenFileCutAtALineEndIsNamedAsCut) {
   e.case_name = "c";
   e.duration_s = 1.0;
   e.every_n_ticks = 1;
-  writeGolden(dir + "/c.csv", t, provenance(e, "", "completed", dir));
+  writeGolden(dir + "/c.csv", t, provenance(e, "", lexdyn::records::RunStatus::Completed, dir));
   std::ifstream in(dir + "/c.csv");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   // Cut after its last row (the end mark gone) and after its fifth row: both at a line end.
