@@ -240,94 +240,77 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
 // Written to PATH.partial, synced and renamed: a killed run never leaves a half-written file.
 void writeFileAtomically(const std::string& path, const std::string& text) { files::writeAtomically(path, text); }
 
-nlohmann::json checksArray(const std::vector<checks::CheckResult>& results) {
-  using nlohmann::json;
-  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
-  json checks = json::array();
-  for (const auto& c : results) {
-    checks.push_back({{"name", c.name}, {"type", c.type}, {"passed", c.passed}, {"value", number(c.value)},
-                      {"limit", number(c.limit)}, {"margin", number(checks::margin(c))}, {"unit", c.unit}, {"detail", c.detail}});
-    // Wall-clock checks: reported, and a verdict only when asked for (docs/cases.md, "Checks").
-    if (c.machine_dependent) {
-      checks.back()["machine_dependent"] = true;
-      checks.back()["decides"] = c.decides;
-    }
-    if (!c.partial_window.empty()) checks.back()["partial_window"] = c.partial_window;
-  }
-  return checks;
+void writeSummary(const std::string& path, const records::RunRecord& record) {
+  writeFileAtomically(path, records::toJson(record).dump(2) + "\n");
 }
 
-void writeSummary(const std::string& path, const CaseSpec& spec, const RunSummary& r, const checks::TraceMetadata& md) {
-  using nlohmann::json;
-  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
-  json j;
-  j["format"] = kRunSummaryFormat;
-  j["case"] = spec.name;
-  j["case_file"] = spec.path;
-  j["status"] = records::toString(r.status);
-  j["message"] = r.message;
-  if (!r.method.empty()) j["method"] = r.method;
-  j["duration_s"] = r.duration_s;
-  j["simulated_s"] = r.simulated_s;
-  j["wall_s"] = r.wall_s;
-  j["realtime_factor"] = number(r.realtime_factor);
-  j["ticks"] = r.ticks;
-  j["integrator"] = {{"steps", r.integrator.steps},
-                     {"rhs_evals", r.integrator.rhs_evals},
-                     {"jac_evals", r.integrator.jac_evals},
-                     {"jac_rhs_evals", r.integrator.jac_rhs_evals},
-                     {"nonlin_iters", r.integrator.nonlin_iters},
-                     {"nonlin_conv_fails", r.integrator.nonlin_conv_fails},
-                     {"err_test_fails", r.integrator.err_test_fails},
-                     {"restarts", r.integrator_restarts}};
-  j["checks"] = checksArray(r.checks);
-  if (!r.statistics.empty()) {
-    json st = json::object();
-    for (const auto& c : r.statistics) st[c.name] = {{"value", number(c.value)}, {"detail", c.detail}};
-    j["statistics"] = st;
-  }
-  json overrides = json::array();
-  for (const auto& o : spec.overrides) overrides.push_back({{"path", o.path}, {"value", o.value}});
-  j["overrides"] = overrides;
-  j["effective_case"] = fs::path(r.case_path).filename().string();
-  json skipped = json::array();
-  for (const auto& s : r.skipped_checks) skipped.push_back({{"name", s.name}, {"reason", s.reason}});
-  j["skipped_checks"] = skipped;
-  if (spec.duration_s < spec.scenario_duration_s - 1e-9) j["scenario_duration_s"] = spec.scenario_duration_s;
-  j["robot_warnings"] = spec.robot_warnings;
-  j["all_checks_passed"] = r.all_checks_passed;
+}  // namespace
+
+records::CheckRecord checkRecord(const checks::CheckResult& c) {
+  records::CheckRecord o;
+  o.name = c.name;
+  o.type = c.type;
+  o.passed = c.passed;
+  o.value = c.value;
+  o.limit = c.limit;
+  o.margin = checks::margin(c);
+  o.unit = c.unit;
+  o.detail = c.detail;
+  o.machine_dependent = c.machine_dependent;
+  o.decides = c.decides;
+  o.partial_window = c.partial_window;
+  return o;
+}
+
+records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& r, const checks::TraceMetadata& trace_header) {
+  records::RunRecord o;
+  o.case_name = spec.name;
+  o.case_file = spec.path;
+  o.status = r.status;
+  o.message = r.message;
+  o.method = r.method;
+  o.duration_s = r.duration_s;
+  o.simulated_s = r.simulated_s;
+  o.wall_s = r.wall_s;
+  o.realtime_factor = r.realtime_factor;
+  o.ticks = r.ticks;
+  o.integrator = {r.integrator.steps,        r.integrator.rhs_evals,         r.integrator.jac_evals,      r.integrator.jac_rhs_evals,
+                  r.integrator.nonlin_iters, r.integrator.nonlin_conv_fails, r.integrator.err_test_fails, r.integrator_restarts};
+  for (const auto& c : r.checks) o.checks.push_back(checkRecord(c));
+  for (const auto& c : r.statistics) o.statistics[c.name] = {c.value, c.detail};
+  for (const auto& ov : spec.overrides) o.overrides.emplace_back(ov.path, ov.value);
+  o.effective_case = fs::path(r.case_path).filename().string();
+  for (const auto& sk : r.skipped_checks) o.skipped_checks.emplace_back(sk.name, sk.reason);
+  if (spec.duration_s < spec.scenario_duration_s - 1e-9) o.scenario_duration_s = spec.scenario_duration_s;
+  o.robot_warnings = spec.robot_warnings;
+  o.all_checks_passed = r.all_checks_passed;
   if (r.expected_failure) {
     const ExpectedFailure& x = *r.expected_failure;
-    j["expected_failure"] = {{"status", records::toString(x.status)}, {"checks", x.checks}, {"reason", x.reason},
-                             {"met", r.expectation_mismatches.empty()}, {"mismatches", r.expectation_mismatches},
-                             {"reached", r.expected_failure_reached}};
+    o.expected_failure = records::ExpectedFailureRecord{x.status, x.checks, x.reason, r.expectation_mismatches.empty(),
+                                                        r.expectation_mismatches, r.expected_failure_reached};
   }
-  j["exit_code"] = exitCode(r);
+  o.exit_code = exitCode(r);
   if (r.has_controller_stats) {
     const ControllerStats& cs = r.controller;
-    json tasks = json::object();
-    for (const auto& t : cs.tasks) tasks[t.name] = {{"final_error", number(t.final_error)}, {"mean_error", number(t.mean_error)}};
-    j["tasks"] = tasks;
-    json status = json::object(), solver_status = json::object(), augmented = json::object();
-    for (const auto& [n, c] : cs.status_counts) status[n] = c;
-    for (const auto& [n, c] : cs.solver_status_counts) solver_status[n] = c;
-    for (const auto& [n, c] : cs.augmented_ticks) augmented[n] = c;
-    j["controller"] = {{"ticks", cs.ticks}, {"status_counts", status}, {"augmented_ticks", augmented}};
-    j["solver"] = {{"peak_iterations", cs.peak_iterations},
-                   {"peak_iterations_at_s", cs.peak_iterations_at_s},
-                   {"peak_factorizations", cs.peak_factorizations},
-                   {"peak_factorizations_at_s", cs.peak_factorizations_at_s},
-                   {"status_counts", solver_status}};
-    json timing = json::object();
-    for (const auto& t : cs.timing) timing[t.name] = {{"median", t.median_us}, {"p99", t.p99_us}, {"max", t.max_us}};
-    j["timing_us"] = timing;
+    records::ControllerRecord c;
+    for (const auto& t : cs.tasks) c.tasks[t.name] = {t.final_error, t.mean_error};
+    c.ticks = cs.ticks;
+    for (const auto& [n, k] : cs.status_counts) c.status_counts[n] = k;
+    for (const auto& [n, k] : cs.augmented_ticks) c.augmented_ticks[n] = k;
+    c.peak_iterations = cs.peak_iterations;
+    c.peak_iterations_at_s = cs.peak_iterations_at_s;
+    c.peak_factorizations = cs.peak_factorizations;
+    c.peak_factorizations_at_s = cs.peak_factorizations_at_s;
+    for (const auto& [n, k] : cs.solver_status_counts) c.solver_status_counts[n] = k;
+    for (const auto& t : cs.timing) c.timing_us[t.name] = {t.median_us, t.p99_us, t.max_us};
+    o.controller = std::move(c);
   }
-  j["trace"] = fs::path(r.trace_path).filename().string();
-  json build = json::object();
-  for (const auto& kv : md) build[kv.first] = kv.second;
-  j["trace_header"] = build;
-  writeFileAtomically(path, j.dump(2) + "\n");
+  o.trace = fs::path(r.trace_path).filename().string();
+  o.trace_header.assign(trace_header.begin(), trace_header.end());
+  return o;
 }
+
+namespace {
 
 }  // namespace
 
@@ -590,17 +573,19 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   }
   if (output_error) {
     try {
-      writeSummary(r.summary_path, spec, r, md);
+      writeSummary(r.summary_path, runRecord(spec, r, md));
     } catch (const OutputError&) {
     }
     throw *output_error;
   }
-  writeSummary(r.summary_path, spec, r, md);
+  writeSummary(r.summary_path, runRecord(spec, r, md));
   return r;
 }
 
 std::string checkResultsJson(const std::vector<checks::CheckResult>& results) {
-  const nlohmann::json j = {{"checks", checksArray(results)}, {"all_checks_passed", checks::allPassed(results)}};
+  std::vector<records::CheckRecord> list;
+  for (const auto& c : results) list.push_back(checkRecord(c));
+  const nlohmann::json j = {{"checks", records::toJson(list)}, {"all_checks_passed", checks::allPassed(results)}};
   return j.dump(2);
 }
 

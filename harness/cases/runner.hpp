@@ -4,6 +4,7 @@
 
 #include "harness/cases/case_file.hpp"
 #include "harness/cases/lexdyn_driver.hpp"
+#include "harness/records/run_record.hpp"
 
 #include <atomic>
 #include <optional>
@@ -37,9 +38,6 @@ struct RunOptions {
   double dump_to_s = 1e300;  // the end of any run
 };
 
-/// The format key of summary.json (docs/file-formats.md, "Run summary"): readers refuse other
-/// versions and name the key.
-inline constexpr const char* kRunSummaryFormat = "lexdyn-run-summary/1";
 
 struct RunSummary {
   /// A run's own status: completed, integrator_failure, controller_failure, diverged,
@@ -101,6 +99,12 @@ inline constexpr int kExitInterrupted = 128; ///< + the signal: 130 SIGINT, 143 
 /// check that decides failed; 0 otherwise. With an expected failure: 0 when the run failed
 /// exactly as expected, else 3 for a run failure other than the expected status, else 1.
 int exitCode(const RunSummary& summary);
+
+/// The run's record (summary.json): the summary with the case's name, file, overrides and robot
+/// warnings and the trace's header.
+records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& summary, const checks::TraceMetadata& trace_header);
+/// One check's outcome as records keep it (the margin computed).
+records::CheckRecord checkRecord(const checks::CheckResult& result);
 
 /// {"checks": [...], "all_checks_passed": bool} with the checks as summary.json writes them
 /// (`lexdyn-harness check --json`, `compare --json`).

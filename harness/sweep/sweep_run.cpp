@@ -97,32 +97,26 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
     r.message = lastLines(p.output_tail, 1);
     return t;
   }
-  std::string why;
-  const std::optional<json> read = readJsonFile(summary, why);
-  if (!read) return lost("exit code " + std::to_string(p.exit_code) + ", summary.json " + (fs::exists(summary) ? why : "not written"));
-  const json& j = *read;
-  // A summary of another format (a folder written by another build) is not this run's.
-  const std::string format = j.is_object() && j.contains("format") && j["format"].is_string() ? j["format"].get<std::string>() : "";
-  if (format != cases::kRunSummaryFormat) {
-    return lost("summary.json is " + (format.empty() ? std::string("of no format (written by an older build)") : "of format '" + format + "'") +
-                ", this build reads '" + cases::kRunSummaryFormat + "'");
+  // The run's record, read by the records layer: a summary of another format (a folder written by
+  // another build), cut or damaged is not this run's.
+  if (!fs::exists(summary)) return lost("exit code " + std::to_string(p.exit_code) + ", summary.json not written");
+  records::RunRecord rec;
+  try {
+    rec = records::readRunRecord(summary);
+  } catch (const InputError& e) {
+    return lost("exit code " + std::to_string(p.exit_code) + ", " + e.what());
   }
-  auto num = [](const json& v) { return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN(); };
-  const std::string status_text = j.is_object() && j.contains("status") && j["status"].is_string() ? j["status"].get<std::string>() : "";
-  const std::optional<records::RunStatus> status = records::parseRunStatus(status_text);
-  if (!status || !records::isRunsOwn(*status)) return lost("summary.json has no status of a run ('" + status_text + "')");
-  r.status = *status;
-  r.message = j.is_object() ? j.value("message", "") : "";
+  r.status = rec.status;
+  r.message = rec.message;
   if (r.status == records::RunStatus::Interrupted) return lost("stopped by a signal from outside (exit code " + std::to_string(p.exit_code) + ": " + r.message + ")");
   if (r.status == records::RunStatus::OutputError) return lost("could not write its outputs: " + r.message);
   // Out of memory says nothing of the configuration: the machine's state, like a kill.
   if (r.status == records::RunStatus::InternalError && r.message.find("out of memory") != std::string::npos) return lost(r.message);
-  r.simulated_s = j.value("simulated_s", 0.0);
+  r.simulated_s = rec.simulated_s;
   const std::vector<std::string> wanted = propertyChecks(s, method);
-  for (const auto& c : j.value("checks", json::array())) {
-    const std::string name = c.value("name", "");
-    if (std::find(wanted.begin(), wanted.end(), name) == wanted.end()) continue;
-    r.checks.push_back(checkFromJson(c));
+  for (const records::CheckRecord& c : rec.checks) {
+    if (std::find(wanted.begin(), wanted.end(), c.name) == wanted.end()) continue;
+    r.checks.push_back({c.name, c.passed, c.value, c.limit, c.margin, c.unit, c.detail});
   }
   // Checks the run did not report (it stopped before they were set up) count as failed.
   for (const auto& name : wanted) {
@@ -133,13 +127,11 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
     o.detail = "not evaluated";
     r.checks.push_back(o);
   }
-  if (j.contains("statistics")) {
-    for (auto it = j["statistics"].begin(); it != j["statistics"].end(); ++it) r.statistics[it.key()] = num(it.value().value("value", json()));
+  for (const auto& [name, st] : rec.statistics) r.statistics[name] = st.value;
+  if (rec.controller) {
+    for (const auto& [name, task] : rec.controller->tasks) r.final_errors[name] = task.final_error;
+    r.peak_iterations = rec.controller->peak_iterations;
   }
-  if (j.contains("tasks")) {
-    for (auto it = j["tasks"].begin(); it != j["tasks"].end(); ++it) r.final_errors[it.key()] = num(it.value().value("final_error", json()));
-  }
-  if (j.contains("solver")) r.peak_iterations = j["solver"].value("peak_iterations", 0);
   return t;
 }
 
