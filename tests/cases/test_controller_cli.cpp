@@ -5,6 +5,7 @@
 // controller's statistics; method_params errors name the file and key.
 #include "harness/cases/case_file.hpp"
 #include "harness/checks/task_checks.hpp"
+#include "harness/records/run_record.hpp"
 #include "case_test_utils.hpp"
 #include "../common/cli_test_utils.hpp"
 #include "../common/expect_text.hpp"
@@ -15,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -209,6 +211,43 @@ TEST(ControllerCli, ShortRunsSkipLateChecksAndCoverWhatWasRun) {
   // rolls the feet within 3 s.
   const CliResult weak = harness("run " + src + "/cases/exp1-wls-weak.yaml --duration 3 --out " + dir + "/weak --quiet", dir);
   expectExit(weak, 1, {"FAIL right_foot_cop", "[part of its window]"});
+}
+
+// The 90 kg humanoid with TALOS's upper-body effort limits (docs/results.md, "A heavier
+// humanoid"): after the out-of-reach switch at 30 s both LexDyn methods fold at the hips (base
+// pitched past 1 rad, hip flexed past -1.5 rad) and the guard stops them; WLS's hard level
+// becomes infeasible. The case declares these outcomes, so `run` exits 0 saying so; the same
+// robot with its upper body as strong as hrp2kai_heavy's (cases/hrp2kai_heavy/exp1.yaml) stands
+// (its golden).
+TEST(ControllerCli, TheWeakUpperBodyHumanoidFoldsAfterTheSwitchAsDocumented) {
+  const std::string dir = outputDir("controller_cli_weak");
+  const std::string src = LEXDYN_SOURCE_DIR;
+  for (const char* method : {"bfgs", "ah", "wls"}) {
+    const std::string out = dir + "/" + method;
+    const CliResult r = harness("run " + src + "/cases/hrp2kai_weak/exp1.yaml --method " + method + " --out " + out + " --quiet", dir);
+    expectExit(r, 0, {"expected failure, as the case says"});
+    const lexdyn::records::RunRecord s = lexdyn::records::readRunRecord(out + "/summary.json");
+    ASSERT_TRUE(s.expected_failure.has_value()) << method;
+    EXPECT_TRUE(s.expected_failure->met) << method;
+    const checks::TraceTable t = checks::readTrace(out + "/trace.csv");
+    const int tc = t.column("t"), pitch = t.column("base.ry"), hip = t.column("q.RLEG_JOINT2");
+    ASSERT_GE(pitch, 0);
+    ASSERT_GE(hip, 0);
+    double fold_at = -1.0, upright_until_switch = 0.0;
+    for (const auto& row : t.rows) {
+      if (row[tc] < 30.0) upright_until_switch = std::max(upright_until_switch, std::abs(row[pitch]));
+      if (fold_at < 0.0 && row[pitch] > 1.0 && row[hip] < -1.5) fold_at = row[tc];
+    }
+    if (std::string(method) == "wls") {
+      EXPECT_EQ(s.status, lexdyn::records::RunStatus::ControllerFailure);
+      continue;
+    }
+    EXPECT_EQ(s.status, lexdyn::records::RunStatus::Diverged) << s.message;
+    EXPECT_LT(upright_until_switch, 0.3) << method << ": the first reach stands";
+    EXPECT_GT(fold_at, 30.0) << method << ": folds after the switch";
+    EXPECT_LT(fold_at, 38.0) << method;
+    EXPECT_LT(s.simulated_s - fold_at, 2.0) << method << ": the guard stops the run soon after the fold";
+  }
 }
 
 TEST(ControllerCli, TwoProcessesWriteBitIdenticalTracesButForTheWallTimes) {
