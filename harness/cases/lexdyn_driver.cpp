@@ -229,7 +229,10 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
   std::string cs;
   for (const auto& c : I.lx.contacts) {
     cs += (cs.empty() ? "" : "; ") + c.name + " (frame " + c.frame + ", " + std::to_string(c.points.size()) + " points, " +
-          (c.fixed ? "fixed" : "friction " + num(c.friction)) + (c.grasp.empty() ? "" : ", grasp " + c.grasp) +
+          (c.fixed ? "fixed"
+                   : "friction " + num(c.friction) + ", margins " + num(c.margins.friction) + " / " + num(c.margins.cop_m) + " m / " +
+                         num(c.margins.min_normal_N) + " N per point" + (I.lx.contact_margins_default ? " (default)" : "")) +
+          (c.grasp.empty() ? "" : ", grasp " + c.grasp) +
           (c.sensor.empty() ? "" : ", sensor " + c.sensor) + ")";
   }
   md.emplace_back("contacts", cs.empty() ? "none" : cs);

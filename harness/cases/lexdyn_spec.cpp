@@ -5,7 +5,9 @@
 #include "lexdyn/control/method.hpp"
 #include "lexdyn/model/robot_model.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace lexdyn::cases {
 
@@ -129,8 +131,30 @@ std::vector<std::string> plannedContact(const ContactEntry& c, tasks::ContactSpe
   return tasks::applyContactMargins(cs, c.margins);
 }
 
+}  // namespace
+
+tasks::ContactMargins defaultContactMargins(const std::vector<Eigen::Vector3d>& points, bool point_contact, double weight_N) {
+  // exp1's margins on HRP-2 (0.1, 1 cm on soles of half extents 0.07 m, 10 N per corner of 4 for
+  // 637 N; docs/results.md, "exp1 variants nobody tuned for"), as fractions.
+  tasks::ContactMargins m = kNoContactMargins;
+  if (points.empty()) return m;
+  m.friction = 0.1;
+  if (!point_contact && points.size() >= 3) {
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const auto& p : points) {
+      lo = lo.cwiseMin(p.head<2>());
+      hi = hi.cwiseMax(p.head<2>());
+    }
+    m.cop_m = std::min(0.01, std::floor(0.14 * 0.5 * (hi - lo).minCoeff() * 1000.0) / 1000.0);
+  }
+  m.min_normal_N = std::round(10.0 * 0.063 * weight_N / static_cast<double>(points.size())) / 10.0;
+  return m;
+}
+
+namespace {
+
 ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& d, const tasks::ContactMargins& margins,
-                         const std::optional<yaml::Node>& margins_node) {
+                         const std::optional<yaml::Node>& margins_node, bool default_margins, double weight_N) {
   yaml::StrictMap m(node);
   ContactEntry c;
   c.where = node.where();
@@ -183,9 +207,9 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
   } else {
     m.node().fail("the robot data file has no friction_coefficient; give friction here");
   }
-  c.margins = margins;
+  c.margins = default_margins && !c.fixed ? defaultContactMargins(c.points, c.dims == 3, weight_N) : margins;
   std::optional<yaml::Node> own = m.optional("margins");
-  if (own) c.margins = readMargins(*own, margins);
+  if (own) c.margins = readMargins(*own, c.margins);
   {
     // The margins must fit the contact (a CoP margin smaller than its support polygon).
     tasks::ContactSpec planned;
@@ -347,10 +371,19 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
     }
   }
   const std::optional<yaml::Node> margins_node = m.optional("contact_margins");
-  if (margins_node) s.contact_margins = readMargins(*margins_node, kDefaultContactMargins);
+  if (margins_node && margins_node->isScalar()) {
+    if (margins_node->asString() != "none") margins_node->fail("expected `none` (no margin) or a map {friction, cop_m, min_normal_N}");
+    s.contact_margins = kNoContactMargins;
+  } else if (margins_node) {
+    s.contact_margins = readMargins(*margins_node, kNoContactMargins);
+  }
+  s.contact_margins_default = !margins_node;
+  double mass_kg = 0.0;
+  for (const auto& l : d.links) mass_kg += l.mass;
+  const double weight_N = mass_kg * d.gravity.norm();
   if (auto cn = m.optional("contacts")) {
     for (const yaml::Node& c : cn->elements()) {
-      ContactEntry e = readContact(c, d, s.contact_margins, margins_node);
+      ContactEntry e = readContact(c, d, s.contact_margins, margins_node, s.contact_margins_default, weight_N);
       if (s.findContact(e.name) >= 0) c.fail("duplicate contact name '" + e.name + "'");
       s.contacts.push_back(std::move(e));
     }

@@ -19,9 +19,16 @@
 namespace lexdyn::cases {
 
 /// A contact the controller may use: a robot data contact surface, or a frame with points.
-/// The contact margins of a case that does not give controller.contact_margins
-/// (docs/controller.md, "Contact margins": how they were chosen).
-inline constexpr tasks::ContactMargins kDefaultContactMargins{0.0, 0.0, 0.0};
+/// No margin (`contact_margins: none`: the paper's formulation).
+inline constexpr tasks::ContactMargins kNoContactMargins{0.0, 0.0, 0.0};
+
+/// The margins a friction contact plans with when the case gives none (docs/controller.md,
+/// "Contact margins": exp1's measured margins, scaled to the contact and the robot): 10 % of the
+/// friction coefficient; a CoP margin of 14 % of the narrowest half extent of the contact's points
+/// (in the frame's x-y plane), at most 1 cm, rounded down to the millimetre (none for fewer than 3
+/// points or a point contact); a minimum normal force of 6.3 % of the robot's weight shared by
+/// the contact's points, rounded to 0.1 N.
+tasks::ContactMargins defaultContactMargins(const std::vector<Eigen::Vector3d>& points, bool point_contact, double weight_N);
 
 /// The divergence guard (docs/cases.md, "Divergence guard"): ends a run whose plan the simulated
 /// robot no longer follows, with status `diverged` and the reason. Thresholds far from any
@@ -75,8 +82,10 @@ struct LexdynSpec {
   /// only tracking the joint set-points; reset from the measured initial state).
   std::string state_feedback = "measured";  ///< measured | integrated | measured_position
   std::vector<ContactEntry> contacts;
-  /// controller.contact_margins: every friction contact's margins unless it gives its own.
-  tasks::ContactMargins contact_margins = kDefaultContactMargins;
+  /// controller.contact_margins: every friction contact's margins unless it gives its own; when
+  /// the case gives none (contact_margins_default), each contact's are defaultContactMargins.
+  tasks::ContactMargins contact_margins = kNoContactMargins;
+  bool contact_margins_default = false;
   DivergenceGuard guard;               ///< controller.divergence_guard
   std::vector<std::string> initial_contacts;
   std::vector<TaskSpec> tasks;

@@ -485,23 +485,17 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       << "  params: {nu_dt2: 1.0e-12, xi_dt2: 1.0e-12, zeta_dt2: 1.0e-3, rho_dt2: 1.0e-12, eps_dt2: 1.0e-3, newton_identity_weight: 1.0e-4"
       << (humanoid ? ", stop_after_level: contacts}" : "}") << "\n";
     if (humanoid) {
-      // exp1's contact margins (10 % friction, 1 cm of CoP, 10 N per corner of HRP-2's 0.22 x
-      // 0.14 m soles for 637 N; docs/results.md, "exp1 variants nobody tuned for") scaled: the CoP
-      // margin 14 % of the narrowest sole's half extent, at most 1 cm; the minimum per point 6.3 %
-      // of the weight per foot, shared by its points.
-      double half_min = std::numeric_limits<double>::infinity();
-      size_t foot_points = 1;
+      // The default margins (exp1's scaled to the soles and the weight: cases::defaultContactMargins),
+      // written out so that the draft shows them: the narrowest sole's CoP margin and the foot with
+      // the most points' minimum force per point.
+      double cop = std::numeric_limits<double>::infinity(), fmin_point = std::numeric_limits<double>::infinity();
       for (const auto& f : L.feet) {
-        Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-        for (const auto& p : f.points) {
-          lo = lo.cwiseMin(p.head<2>());
-          hi = hi.cwiseMax(p.head<2>());
-        }
-        if (f.points.size() >= 3) half_min = std::min(half_min, 0.5 * (hi - lo).minCoeff());
-        foot_points = std::max(foot_points, f.points.size());
+        const tasks::ContactMargins fm = cases::defaultContactMargins(f.points, f.points.size() == 1, L.mass * kGravity);
+        if (f.points.size() >= 3) cop = std::min(cop, fm.cop_m);
+        fmin_point = std::min(fmin_point, fm.min_normal_N);
       }
-      const double cop = std::isfinite(half_min) ? std::min(0.01, std::floor(0.14 * half_min * 1000.0) / 1000.0) : 0.0;
-      const double fmin_point = std::round(10.0 * 0.063 * L.mass * kGravity / static_cast<double>(foot_points)) / 10.0;
+      if (!std::isfinite(cop)) cop = 0.0;
+      if (!std::isfinite(fmin_point)) fmin_point = 0.0;
       c << "  contact_margins: {friction: 0.1, cop_m: " << num(cop, 3) << ", min_normal_N: " << num(fmin_point, 3)
         << "}   # exp1's, scaled to these soles and this weight (docs/results.md)\n";
       c << "  method_params:\n    wls: {stop_after_level: hard}\n";

@@ -6,6 +6,7 @@
 #include "case_test_utils.hpp"
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/control/controller.hpp"
+#include "lexdyn/model/robot_description.hpp"
 #include "lexdyn/model/robot_model.hpp"
 #include "lexdyn/tasks/self_collision.hpp"
 #include "lexdyn/tasks/torque_limits.hpp"
@@ -236,6 +237,8 @@ TEST(ControllerCase, ErrorsNameFileLineAndKeyPath) {
   expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  contact_margins: {cop_m: 0.08}\n"),
               {"case.yaml:12: controller.contact_margins", "cop_m: 0.08 m leaves no support polygon of contact RIGHT_FOOT",
                "less than 0.07 m", "give this contact its own `margins`"});
+  expectError(with("  state_feedback: integrated\n", "  state_feedback: integrated\n  contact_margins: nothing\n"),
+              {"controller.contact_margins", "expected `none` (no margin) or a map {friction, cop_m, min_normal_N}"});
   expectError(with("surface: RIGHT_FOOT, sensor", "surface: RIGHT_FOOT, margins: {min_normal_N: -1}, sensor"),
               {"controller.contacts[0].margins.min_normal_N"});
   expectError(with("surface: RIGHT_FOOT, sensor", "surface: RIGHT_FOOT, margins: {cop_m: 0.1}, sensor"),
@@ -250,6 +253,66 @@ TEST(ControllerCase, ErrorsNameFileLineAndKeyPath) {
   CaseSpec c = loadCase(writeCase(outputDir("controller_case_nowls"), s));
   EXPECT_TRUE(containsAll(inputErrorOf([&] { overrideMethod(c, "wls", "--method"); }),
                           {"--method: method wls needs controller.wls_levels"}));
+}
+
+// A case without controller.contact_margins plans with exp1's margins scaled to each contact and
+// the robot (docs/controller.md, "Contact margins"); `none` is the paper's formulation; a
+// contact's own margins replace the default's keys it gives; a grasp takes none.
+TEST(ControllerCase, ContactMarginsDefaultToExp1sScaledToTheRobot) {
+  // HRP-2's sole (0.216 x 0.140 m) for 637 N: exp1's 0.1, 1 cm (here 14 % of 0.07 m, 9 mm) and 10 N.
+  const std::vector<Eigen::Vector3d> sole = {{0.108, 0.07, 0}, {0.108, -0.07, 0}, {-0.108, 0.07, 0}, {-0.108, -0.07, 0}};
+  tasks::ContactMargins m = defaultContactMargins(sole, false, 637.0);
+  EXPECT_EQ(m.friction, 0.1);
+  EXPECT_NEAR(m.cop_m, 0.009, 1e-15);
+  EXPECT_NEAR(m.min_normal_N, 10.0, 1e-12);
+  // A narrow foot (3 cm wide): 2 mm; a large one is capped at 1 cm; a point foot gets no CoP margin.
+  const std::vector<Eigen::Vector3d> narrow = {{0.1, 0.015, 0}, {0.1, -0.015, 0}, {-0.05, 0.015, 0}, {-0.05, -0.015, 0}};
+  EXPECT_NEAR(defaultContactMargins(narrow, false, 500.0).cop_m, 0.002, 1e-15);
+  const std::vector<Eigen::Vector3d> large = {{0.2, 0.2, 0}, {0.2, -0.2, 0}, {-0.2, 0.2, 0}, {-0.2, -0.2, 0}};
+  EXPECT_EQ(defaultContactMargins(large, false, 500.0).cop_m, 0.01);
+  const tasks::ContactMargins point = defaultContactMargins({Eigen::Vector3d::Zero()}, true, 160.0);
+  EXPECT_EQ(point.cop_m, 0.0);
+  EXPECT_NEAR(point.min_normal_N, 10.1, 1e-12);  // 6.3 % of 160 N on its one point
+  EXPECT_EQ(defaultContactMargins({}, false, 637.0).min_normal_N, 0.0);
+
+  auto base = minimalLexdynCase();
+  const CaseSpec d = loadCase(writeCase(outputDir("controller_case_margins_default"), base));
+  ASSERT_TRUE(d.controller.lexdyn.contact_margins_default);
+  double mass = 0.0;
+  for (const auto& l : model::loadRobotDescription(d.urdf_path, d.data_path, d.robot_options).links) mass += l.mass;
+  for (const auto& c : d.controller.lexdyn.contacts) {
+    if (c.fixed) {
+      EXPECT_EQ(c.margins.friction, 0.0) << c.name;
+      EXPECT_EQ(c.margins.min_normal_N, 0.0) << c.name;
+      continue;
+    }
+    const tasks::ContactMargins want = defaultContactMargins(c.points, c.dims == 3, mass * 9.81);
+    EXPECT_EQ(c.margins.friction, want.friction) << c.name;
+    EXPECT_EQ(c.margins.cop_m, want.cop_m) << c.name;
+    EXPECT_EQ(c.margins.min_normal_N, want.min_normal_N) << c.name;
+    EXPECT_GT(c.margins.min_normal_N, 0.0) << c.name;
+  }
+  auto none = base;
+  none["e_controller"] += "";
+  const size_t at = none["e_controller"].find("  state_feedback: integrated\n");
+  ASSERT_NE(at, std::string::npos);
+  none["e_controller"].insert(at, "  contact_margins: none\n");
+  const CaseSpec n = loadCase(writeCase(outputDir("controller_case_margins_none"), none));
+  EXPECT_FALSE(n.controller.lexdyn.contact_margins_default);
+  for (const auto& c : n.controller.lexdyn.contacts) {
+    EXPECT_EQ(c.margins.friction, 0.0) << c.name;
+    EXPECT_EQ(c.margins.cop_m, 0.0) << c.name;
+    EXPECT_EQ(c.margins.min_normal_N, 0.0) << c.name;
+  }
+  auto own = base;
+  const size_t rf = own["e_controller"].find("surface: RIGHT_FOOT, sensor");
+  ASSERT_NE(rf, std::string::npos);
+  own["e_controller"].replace(rf, 27, "surface: RIGHT_FOOT, margins: {cop_m: 0.002}, sensor");
+  const CaseSpec o = loadCase(writeCase(outputDir("controller_case_margins_own"), own));
+  const ContactEntry& right = o.controller.lexdyn.contacts[static_cast<size_t>(o.controller.lexdyn.findContact("RIGHT_FOOT"))];
+  EXPECT_EQ(right.margins.cop_m, 0.002);
+  EXPECT_EQ(right.margins.friction, 0.1);  // the default's, kept
+  EXPECT_EQ(right.margins.min_normal_N, defaultContactMargins(right.points, false, mass * 9.81).min_normal_N);
 }
 
 TEST(ControllerCase, EventAndCheckErrors) {
