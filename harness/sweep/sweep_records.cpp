@@ -59,89 +59,11 @@ std::string shellQuote(const std::string& a) {
 
 void writeAtomically(const std::string& path, const std::string& text) { files::writeAtomically(path, text); }
 
-json toJson(const RunResult& r) {
-  json checks = json::array();
-  for (const auto& c : r.checks) {
-    checks.push_back({{"name", c.name}, {"passed", c.passed}, {"value", number(c.value)}, {"limit", number(c.limit)},
-                      {"margin", number(c.margin)}, {"unit", c.unit}, {"detail", c.detail}});
-  }
-  json st = json::object(), fe = json::object();
-  for (const auto& [k, v] : r.statistics) st[k] = number(v);
-  for (const auto& [k, v] : r.final_errors) fe[k] = number(v);
-  return {{"status", records::toString(r.status)},       {"message", r.message},     {"exit_code", r.exit_code},   {"wall_s", r.wall_s},
-          {"simulated_s", r.simulated_s}, {"checks", checks}, {"statistics", st}, {"final_errors", fe},
-          {"peak_iterations", r.peak_iterations}};
-}
-
-CheckOutcome checkFromJson(const json& c) {
-  CheckOutcome o;
-  o.name = c.value("name", "");
-  o.passed = c.value("passed", false);
-  o.value = num(c.value("value", json()));
-  o.limit = num(c.value("limit", json()));
-  o.margin = num(c.value("margin", json()));
-  o.unit = c.value("unit", "");
-  o.detail = c.value("detail", "");
-  return o;
-}
-
 RunResult fromJson(const json& j) {
-  RunResult r;
-  // Validated by recordedResult (or written by this build): the status is one a sweep records.
-  const std::string status = j.value("status", "");
-  const std::optional<records::RunStatus> parsed = records::parseRunStatus(status);
-  if (!parsed) throw std::logic_error("a sweep run record with status '" + status + "'");
-  r.status = *parsed;
-  r.message = j.value("message", "");
-  r.exit_code = j.value("exit_code", 0);
-  r.wall_s = j.value("wall_s", 0.0);
-  r.simulated_s = j.value("simulated_s", 0.0);
-  r.peak_iterations = j.value("peak_iterations", 0);
-  for (const auto& c : j.value("checks", json::array())) r.checks.push_back(checkFromJson(c));
-  const json st = j.value("statistics", json::object());
-  for (auto it = st.begin(); it != st.end(); ++it) r.statistics[it.key()] = num(it.value());
-  const json fe = j.value("final_errors", json::object());
-  for (auto it = fe.begin(); it != fe.end(); ++it) r.final_errors[it.key()] = num(it.value());
-  return r;
-}
-
-std::optional<RunResult> recordedResult(const json& j, std::string& why) {
-  if (!j.is_object()) {
-    why = "not a JSON object";
-    return std::nullopt;
-  }
-  if (!j.contains("status") || !j["status"].is_string()) {
-    why = "no status";
-    return std::nullopt;
-  }
-  const std::string status = j["status"].get<std::string>();
-  const std::optional<records::RunStatus> parsed = records::parseRunStatus(status);
-  if (!parsed || !records::isRecordedBySweeps(*parsed)) {
-    // "interrupted", "no_summary": stored by older drivers for runs killed from outside, which
-    // are never results; the statuses of runs that ended on their own, and the driver's own
-    // verdicts on a process, are (records::isRecordedBySweeps).
-    why = "status '" + status + "' is not the end of a run";
-    return std::nullopt;
-  }
-  for (const char* key : {"checks", "statistics", "final_errors"}) {
-    if (!j.contains(key) || (std::string(key) == "checks" ? !j[key].is_array() : !j[key].is_object())) {
-      why = std::string("no ") + key;
-      return std::nullopt;
-    }
-  }
-  for (const char* key : {"exit_code", "simulated_s", "peak_iterations"}) {
-    if (!j.contains(key) || !j[key].is_number()) {
-      why = std::string("no number ") + key;
-      return std::nullopt;
-    }
-  }
-  for (const auto& c : j["checks"]) {
-    if (!c.is_object() || !c.contains("name") || !c["name"].is_string() || !c.contains("passed") || !c["passed"].is_boolean()) {
-      why = "a check without its name or verdict";
-      return std::nullopt;
-    }
-  }
-  return fromJson(j);
+  std::string why;
+  std::optional<RunResult> r = records::sweepRunFromJson(j, why);
+  if (!r) throw std::logic_error("a sweep run record that was checked is not one: " + why);
+  return *r;
 }
 
 std::optional<json> readJsonFile(const std::string& path, std::string& why) {
@@ -160,6 +82,11 @@ std::optional<json> readJsonFile(const std::string& path, std::string& why) {
 
 std::string pointRecordProblem(const SweepSpec& s, long index, const json& j) {
   if (!j.is_object()) return "not a JSON object";
+  const std::string format = j.contains("format") && j["format"].is_string() ? j["format"].get<std::string>() : "";
+  if (format != records::kSweepPointFormat) {
+    return (format.empty() ? std::string("a point record of no format (written by an older build)") : "a point record of format '" + format + "'") +
+           ", this build reads '" + records::kSweepPointFormat + "'";
+  }
   if (!j.contains("point") || !j["point"].is_number_integer() || j["point"].get<long>() != index) return "not the record of point " + std::to_string(index);
   if (!j.contains("runs") || !j["runs"].is_object()) return "no runs";
   for (const auto& m : s.methods) {
@@ -210,7 +137,7 @@ json pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string,
                      {"better_wins", has && value <= c.margin},
                      {"stopped_early", stopped}});
   }
-  return {{"point", p.index}, {"values", values}, {"overrides", overrides}, {"runs", jruns}, {"comparisons", comps}, {"failures", failures}};
+  return {{"format", records::kSweepPointFormat}, {"point", p.index}, {"values", values}, {"overrides", overrides}, {"runs", jruns}, {"comparisons", comps}, {"failures", failures}};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -327,7 +254,7 @@ json summarize(const SweepSpec& s, const std::vector<json>& records, long points
                        {"max", number(diffs.empty() ? std::numeric_limits<double>::quiet_NaN() : diffs.back())}}},
                      {"by_parameter", jby}});
   }
-  return {{"format", "lexdyn-sweep-summary/1"},
+  return {{"format", records::kSweepSummaryFormat},
           {"name", s.name},
           {"description", s.description},
           {"sweep_file", s.path},

@@ -16,7 +16,7 @@ namespace lexdyn::sweep {
 
 /// The pseudo-check of a run that stopped early (integrator or controller failure, timeout,
 /// crash, bad input).
-constexpr const char* kRunCompleted = "run_completed";
+constexpr const char* kRunCompleted = records::kRunCompletedCheck;
 
 void writeAtomically(const std::string& path, const std::string& text);
 /// The whole file ("" when it cannot be read).
@@ -27,14 +27,11 @@ std::string shellQuote(const std::string& word);
 // FNV-1a of a text, as 16 hex digits (a trial's folder name, sweep.txt's digest).
 std::string textDigest(const std::string& text);
 
-nlohmann::json toJson(const RunResult& r);
-/// A check's result as summary.json and result.json write it.
-CheckOutcome checkFromJson(const nlohmann::json& c);
+/// A run's result read back from OUT (result.json, a shrink-cache line): records::sweepRunFromJson.
+inline std::optional<RunResult> recordedResult(const nlohmann::json& j, std::string& why) { return records::sweepRunFromJson(j, why); }
+/// A run's result from a record already checked (a point record that pointRecordProblem accepted);
+/// std::logic_error otherwise.
 RunResult fromJson(const nlohmann::json& j);
-/// A run's result read back from OUT (result.json, a shrink-cache line): nullopt, with `why`,
-/// when `j` is not a whole result of a run that ended on its own or by the driver's timeout
-/// (a damaged file, or a run the driver never records: killed, interrupted).
-std::optional<RunResult> recordedResult(const nlohmann::json& j, std::string& why);
 /// The file parsed as JSON, or nullopt with `why` (missing, unreadable, damaged).
 std::optional<nlohmann::json> readJsonFile(const std::string& path, std::string& why);
 /// "" when `j` is the whole record of point `index` (every method's run); otherwise why not.

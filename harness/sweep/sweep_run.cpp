@@ -27,22 +27,6 @@ namespace lexdyn::sweep {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::vector<std::string> RunResult::failures() const {
-  std::vector<std::string> out;
-  if (status != records::RunStatus::Completed) out.push_back(kRunCompleted);
-  for (const auto& c : checks) {
-    if (!c.passed) out.push_back(c.name);
-  }
-  return out;
-}
-
-const CheckOutcome* RunResult::check(const std::string& name) const {
-  for (const auto& c : checks) {
-    if (c.name == name) return &c;
-  }
-  return nullptr;
-}
-
 namespace {
 
 // The statistics a run records for the sweep's comparisons (one task_error figure per side).

@@ -7,7 +7,7 @@
 // margins, method win rates, robustness maps, shrunk failures), OUT/maps/.
 #pragma once
 
-#include "harness/records/run_status.hpp"
+#include "harness/records/sweep_record.hpp"
 #include "harness/sweep/sweep_file.hpp"
 
 #include <atomic>
@@ -25,31 +25,10 @@ struct RunConfig {
   double duration_s = 0.0;
 };
 
-struct CheckOutcome {
-  std::string name;
-  bool passed = false;
-  double value = 0.0, limit = 0.0, margin = 0.0;  ///< NaN when not computed
-  std::string unit, detail;
-};
-
-/// What one simulation gave (OUT/runs/.../result.json).
-struct RunResult {
-  /// A status a sweep records (records::isRecordedBySweeps): the run's own (completed,
-  /// integrator_failure, controller_failure, diverged, internal_error, input_error) or what the
-  /// driver saw of the process (timeout, crashed, bad_input).
-  records::RunStatus status = records::RunStatus::Completed;
-  std::string message;
-  int exit_code = 0;   ///< the process's, or 128 + signal
-  double wall_s = 0.0; ///< not deterministic; never compared
-  double simulated_s = 0.0;
-  std::vector<CheckOutcome> checks;            ///< the sweep's property checks for the method
-  std::map<std::string, double> statistics;    ///< the comparisons' per-method figures
-  std::map<std::string, double> final_errors;  ///< per task
-  int peak_iterations = 0;
-  /// The failures of this run: "run_completed" when it stopped early, and every failed check.
-  std::vector<std::string> failures() const;
-  const CheckOutcome* check(const std::string& name) const;
-};
+/// One property check of a run, and what one simulation gave (OUT/runs/.../result.json): the
+/// records layer's (harness/records/sweep_record.hpp).
+using CheckOutcome = records::SweepCheckRecord;
+using RunResult = records::SweepRunRecord;
 
 struct DriverOptions {
   std::string out_dir;

@@ -15,6 +15,10 @@ from . import _json
 from .errors import FormatError
 
 SWEEP_SUMMARY_FORMAT = "lexdyn-sweep-summary/1"
+# A point record's format (results.jsonl's lines, OUT/points/<i>.json) and its runs' (C++:
+# records::kSweepPointFormat, kSweepRunFormat).
+SWEEP_POINT_FORMAT = "lexdyn-sweep-point/1"
+SWEEP_RUN_FORMAT = "lexdyn-sweep-run/1"
 SUMMARY_KEYS = ["name", "base_case", "methods", "points", "completed", "checks"]
 
 
@@ -58,6 +62,8 @@ def check_point_record(r, path, line, methods=None):
         if not cond:
             raise FormatError(path, what, line=line, field=field)
     need(isinstance(r, dict), None, f"expected a point record (a JSON object), found {_json.kind(r)}")
+    need(r.get("format") == SWEEP_POINT_FORMAT, "format",
+         f"expected '{SWEEP_POINT_FORMAT}', found {repr(r['format']) if 'format' in r else 'none (written by an older build)'}")
     p = r.get("point")
     need(isinstance(p, int) and not isinstance(p, bool), "point",
          f"expected the point's index (an integer), found {_json.kind(p) if 'point' in r else 'none'}")
@@ -70,6 +76,8 @@ def check_point_record(r, path, line, methods=None):
         need(m in runs, f"runs.{m}", "expected the run of this method, found none")
     for m, run in runs.items():
         need(isinstance(run, dict), f"runs.{m}", f"expected a run (an object), found {_json.kind(run)}")
+        need(run.get("format") == SWEEP_RUN_FORMAT, f"runs.{m}.format",
+             f"expected '{SWEEP_RUN_FORMAT}', found {repr(run['format']) if 'format' in run else 'none'}")
         need(isinstance(run.get("status"), str), f"runs.{m}.status",
              f"expected the run's status (a string), found {_json.kind(run.get('status')) if 'status' in run else 'none'}")
         checks = run.get("checks", [])

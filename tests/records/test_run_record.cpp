@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -67,6 +68,34 @@ TEST(RunRecord, ARealRunsSummaryReadsBackAndWritesTheSameJson) {
   EXPECT_FALSE(r.trace_header.empty());
   // One writer: the record written again is the file's JSON, field for field.
   EXPECT_EQ(lexdyn::records::toJson(r), nlohmann::json::parse(slurp(path)));
+}
+
+// docs/file-formats.md's table of summary.json keys is the writer's: every key a real run writes
+// is documented, and every documented key is written (statistics only when figures are asked for).
+TEST(RunRecord, TheDocumentedKeysAreTheWrittenOnes) {
+  const std::string doc = slurp(std::string(LEXDYN_SOURCE_DIR) + "/docs/file-formats.md");
+  const size_t from = doc.find("**Run summary**"), to = doc.find("**Sweep run**");
+  ASSERT_NE(from, std::string::npos);
+  ASSERT_NE(to, std::string::npos);
+  std::set<std::string> documented;
+  std::istringstream lines(doc.substr(from, to - from));
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("| `", 0) != 0) continue;
+    const std::string first = line.substr(2, line.find(" |", 2) - 2);  // "`a`, `b`"
+    for (size_t p = first.find('`'); p != std::string::npos; p = first.find('`', first.find('`', p + 1) + 1)) {
+      const size_t q = first.find('`', p + 1);
+      documented.insert(first.substr(p + 1, q - p - 1));
+    }
+  }
+  const nlohmann::json j = nlohmann::json::parse(slurp(exp1WlsSummary()));
+  std::set<std::string> written;
+  for (auto it = j.begin(); it != j.end(); ++it) written.insert(it.key());
+  for (const std::string& k : written) EXPECT_TRUE(documented.count(k)) << "summary.json key '" << k << "' is not in docs/file-formats.md";
+  for (const std::string& k : documented) {
+    if (k == "statistics") continue;  // written when a sweep asks for figures
+    EXPECT_TRUE(written.count(k)) << "docs/file-formats.md documents '" << k << "', which the run did not write";
+  }
+  EXPECT_GT(documented.size(), 25u);
 }
 
 TEST(RunRecord, EveryBadFieldIsNamedAtOnce) {
