@@ -149,13 +149,17 @@ std::optional<WarmStart> warmStartFrom(const py::object& warm) {
 }
 
 ls::Result solveWith(PySolver& s, const ls::Problem& problem, const py::object& warm) {
-  const std::optional<WarmStart> w = warmStartFrom(warm);
+  // A Result warm-starts in place (`warm` keeps it alive, and Python cannot change it): no copy
+  // of its active set and x, as a C++ caller passes them.
+  const ls::Result* from = !warm.is_none() && py::isinstance<ls::Result>(warm) ? &warm.cast<const ls::Result&>() : nullptr;
+  const std::optional<WarmStart> w = from ? std::nullopt : warmStartFrom(warm);
   py::gil_scoped_release nogil;
   const std::lock_guard<std::mutex> lock(s.mutex);
   if (!s.is_setup) {
     s.solver.setup(problem, s.options);
     s.is_setup = true;
   }
+  if (from) return s.solver.solve(problem, from->active, from->x);
   if (w) return s.solver.solve(problem, w->active, w->x);
   return s.solver.solve(problem);
 }
