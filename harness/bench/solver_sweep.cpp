@@ -3,9 +3,9 @@
 // conflicting rows, bounds levels, equalities and inequalities) are solved and each result is
 // checked:
 //  - status: solved; a hard-cap hit (iteration_limit) or a non-finite result is a failure;
-//  - the KKT certificate built from x and the multipliers alone (tests/solver/reference.hpp);
+//  - the KKT certificate built from x and the multipliers alone (tests/support/reference.hpp);
 //  - a result whose certificate fails goes to the exact reference (rational arithmetic,
-//    tests/solver/exact_reference.hpp), which decides: a result it proves optimal is not a
+//    tests/support/exact_reference.hpp), which decides: a result it proves optimal is not a
 //    failure (a false alarm of the double-precision certificate, counted), one it proves wrong
 //    or cannot decide is;
 //  - with --brute-force, tiny problems are also compared with an enumeration of every active set;

@@ -11,7 +11,7 @@
 //
 // Model / Data split: the configuration (tasks, levels, parameters) is const after
 // construction; all per-tick memory is allocated in the constructor and tick() allocates
-// nothing (tests/control/test_controller_allocation.cpp).
+// nothing (tests/control/test_controller_humanoid.cpp, TickAllocatesNothing).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,7 +1,5 @@
 # Controller-side robot model (urdfdom + data file -> Simbody matter subsystem), see docs/model.md.
 target_sources(lexdyn PRIVATE
-  ${CMAKE_CURRENT_LIST_DIR}/../common/yaml_strict.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/../common/problems.cpp
   ${CMAKE_CURRENT_LIST_DIR}/data_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/inertia.cpp
   ${CMAKE_CURRENT_LIST_DIR}/resource_path.cpp

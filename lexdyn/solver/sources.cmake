@@ -1,7 +1,4 @@
 target_sources(lexdyn PRIVATE
-  ${CMAKE_CURRENT_LIST_DIR}/../common/error.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/../common/format.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/../common/input_text.cpp
   ${CMAKE_CURRENT_LIST_DIR}/problem.cpp
   ${CMAKE_CURRENT_LIST_DIR}/problem_io.cpp
   ${CMAKE_CURRENT_LIST_DIR}/hls_factorization.cpp

@@ -1,5 +1,5 @@
-// The exact reference of the verification sweep (tests/solver/exact_reference.hpp) and the
-// certificate check it arbitrates (tests/solver/reference.hpp, checkKkt).
+// The exact reference of the verification sweep (tests/support/exact_reference.hpp) and the
+// certificate check it arbitrates (tests/support/reference.hpp, checkKkt).
 #include <gtest/gtest.h>
 
 #include <string>

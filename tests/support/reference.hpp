@@ -234,7 +234,7 @@ inline std::vector<double> bruteForce(const Problem& p, double feasTol = 1e-9) {
 // rounding of a x is about n eps of it): a genuine violation of 1e-7 at a level's optimum is
 // frozen (any multiplier sign), although it is below the loose `tol` of the other tests. Treating
 // such a row as "at its bound" made the check fail correct results (docs/solver.md, the sweep;
-// the exact reference tests/solver/exact_reference.hpp decides such cases).
+// the exact reference tests/support/exact_reference.hpp decides such cases).
 // Returns an empty string when the certificate holds, else a description of the first failure.
 // ---------------------------------------------------------------------------------------------
 inline std::string checkKkt(const Problem& p, const Result& r, double tol = 1e-7, double frozen_tol = 1e-12) {
