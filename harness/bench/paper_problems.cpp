@@ -54,8 +54,7 @@ struct PaperProblemSequence::Data {
   VectorXd c;
 };
 
-PaperProblemSequence::PaperProblemSequence(Regime regime, std::uint64_t seed)
-    : d_(std::make_unique<Data>()), regime_(regime) {
+PaperProblemSequence::PaperProblemSequence(Regime regime, std::uint64_t seed) : d_(std::make_unique<Data>()), regime_(regime) {
   Data& b = *d_;
   std::mt19937_64 rng(seed);
   const bool stress = regime == Regime::Stress;
@@ -109,8 +108,7 @@ Problem PaperProblemSequence::tick(int k) const {
   {
     std::vector<int> vars(kNg);
     for (int i = 0; i < kNg; ++i) vars[static_cast<size_t>(i)] = kNq + i;
-    p.addBoundsLevel("contact wrench generators >= 0", vars, VectorXd::Ones(kNg), VectorXd::Zero(kNg),
-                     VectorXd::Constant(kNg, kInf));
+    p.addBoundsLevel("contact wrench generators >= 0", vars, VectorXd::Ones(kNg), VectorXd::Zero(kNg), VectorXd::Constant(kNg, kInf));
   }
   {
     // Eq. 86: [M, -Jc^T] [qdot(k+1); dt gamma] = M qdot(k) - dt N.

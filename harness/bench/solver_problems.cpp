@@ -15,8 +15,7 @@ int main(int argc, char** argv) {
   std::string regime = "nominal", out;
   int ticks = 1000;
   std::uint64_t seed = 20200710;
-  app.add_option("--regime", regime, "nominal | stress | near-singular")
-      ->check(CLI::IsMember({"nominal", "stress", "near-singular"}));
+  app.add_option("--regime", regime, "nominal | stress | near-singular")->check(CLI::IsMember({"nominal", "stress", "near-singular"}));
   app.add_option("--ticks", ticks, "number of ticks")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "generator seed");
   app.add_option("--out", out, "output directory")->required();

@@ -44,7 +44,6 @@ constexpr int kExitPass = 0, kExitFailed = 1, kExitBadInput = 2, kExitInternal =
 std::atomic<int> g_signal{0};
 extern "C" void onSignal(int s) { g_signal.store(s); }
 
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -93,10 +92,11 @@ int main(int argc, char** argv) {
   char unitLevelsBuf[32];
   std::snprintf(unitLevelsBuf, sizeof(unitLevelsBuf), "%.17g", unitLevels);
   const std::string unitLevelsText = unitLevelsBuf;
-  const std::string options = " --max-variables " + std::to_string(maxN) + " --max-levels " + std::to_string(maxLevels) +
-                              " --max-rows " + std::to_string(maxRows) + (brute ? " --brute-force" : "") +
+  const std::string options = " --max-variables " + std::to_string(maxN) + " --max-levels " + std::to_string(maxLevels) + " --max-rows " +
+                              std::to_string(maxRows) + (brute ? " --brute-force" : "") +
                               (maxIterations != Options{}.max_iterations ? " --max-iterations " + std::to_string(maxIterations) : "") +
-                              (spanning ? " --spanning-stages" : "") + (lazy ? " --lazy-snapshots" : "") + (suffix ? " --unit-suffix" : "") + (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "");
+                              (spanning ? " --spanning-stages" : "") + (lazy ? " --lazy-snapshots" : "") +
+                              (suffix ? " --unit-suffix" : "") + (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "");
   Options solverOptions;
   solverOptions.max_iterations = maxIterations;
   solverOptions.spanning_stages = spanning;
@@ -184,14 +184,15 @@ int main(int argc, char** argv) {
     return lexdyn::cli::exitCodeOfException("lexdyn-solver-sweep", kExitInternal);
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("{\"problems\": %ld, \"solved\": %ld, \"failures\": %ld, \"cap_hits\": %ld, \"non_finite\": %ld, "
-              "\"certificate_failures\": %ld, \"exact_checked\": %ld, \"exact_cleared\": %ld, \"exact_confirmed\": %ld, "
-              "\"exact_undecided\": %ld, \"certificate_exact_disagreements\": %ld, \"brute_force_checked\": %ld, "
-              "\"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld, "
-              "\"seconds\": %.1f, \"interrupted\": %s}\n",
-              done, solved, failures, capHits, nonFinite, kktFlagged, exactChecked, exactCleared, exactConfirmed, exactUndecided,
-              disagreements, bruteChecked, held, cycles, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0,
-              maxIt, secs, g_signal.load() ? "true" : "false");
+  std::printf(
+      "{\"problems\": %ld, \"solved\": %ld, \"failures\": %ld, \"cap_hits\": %ld, \"non_finite\": %ld, "
+      "\"certificate_failures\": %ld, \"exact_checked\": %ld, \"exact_cleared\": %ld, \"exact_confirmed\": %ld, "
+      "\"exact_undecided\": %ld, \"certificate_exact_disagreements\": %ld, \"brute_force_checked\": %ld, "
+      "\"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld, "
+      "\"seconds\": %.1f, \"interrupted\": %s}\n",
+      done, solved, failures, capHits, nonFinite, kktFlagged, exactChecked, exactCleared, exactConfirmed, exactUndecided, disagreements,
+      bruteChecked, held, cycles, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0, maxIt, secs,
+      g_signal.load() ? "true" : "false");
   if (g_signal.load()) return kExitInterrupted + g_signal.load();
   if (solved == 0) {
     // Nothing was verified (e.g. --brute-force with sizes that never give 9 rows or fewer).

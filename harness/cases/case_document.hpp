@@ -32,8 +32,7 @@ struct Resolved {
 Resolved resolve(const YAML::Node& root, const std::string& path, const Schema& schema, const std::string& where);
 
 /// Sets the value at `path` (creating absent keys the schema accepts). Returns the resolution.
-Resolved set(YAML::Node& root, const std::string& path, const YAML::Node& value, const Schema& schema,
-             const std::string& where);
+Resolved set(YAML::Node& root, const std::string& path, const YAML::Node& value, const Schema& schema, const std::string& where);
 
 /// Parses an override's VALUE (YAML text); InputError naming the override.
 YAML::Node parseValue(const Override& o);

@@ -26,9 +26,12 @@ namespace fs = std::filesystem;
 
 const char* toString(sim::SetpointProfile p) {
   switch (p) {
-    case sim::SetpointProfile::Step: return "step";
-    case sim::SetpointProfile::Linear: return "linear";
-    case sim::SetpointProfile::Hermite: return "hermite";
+    case sim::SetpointProfile::Step:
+      return "step";
+    case sim::SetpointProfile::Linear:
+      return "linear";
+    case sim::SetpointProfile::Hermite:
+      return "hermite";
   }
   return "?";
 }
@@ -163,8 +166,8 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
     yaml::StrictMap sm(m.required("servo"));
     const yaml::Node prof = sm.required("setpoint_profile");
     const std::string p = prof.asEnum({"step", "linear", "hermite"});
-    s.servo.profile = p == "step" ? sim::SetpointProfile::Step
-                                  : (p == "linear" ? sim::SetpointProfile::Linear : sim::SetpointProfile::Hermite);
+    s.servo.profile =
+        p == "step" ? sim::SetpointProfile::Step : (p == "linear" ? sim::SetpointProfile::Linear : sim::SetpointProfile::Hermite);
     const int nj = static_cast<int>(d.joints.size());
     Eigen::VectorXd kp = Eigen::VectorXd::Constant(nj, -1.0), kd = Eigen::VectorXd::Constant(nj, -1.0);
     // Scales of every group's gains (a servo perturbation: the real servos are stiffer or softer).
@@ -225,7 +228,8 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
       }
       g.frame = frameName(gm.required("frame"), d);
       g.stiffness_N_per_m = gm.required("stiffness_N_per_m").asPositiveDouble();
-      if (g.stiffness_N_per_m > R::kMaxGraspStiffness_N_per_m) gm.required("stiffness_N_per_m").asDoubleIn(0.0, R::kMaxGraspStiffness_N_per_m, "N/m");
+      if (g.stiffness_N_per_m > R::kMaxGraspStiffness_N_per_m)
+        gm.required("stiffness_N_per_m").asDoubleIn(0.0, R::kMaxGraspStiffness_N_per_m, "N/m");
       g.damping_Ns_per_m = gm.required("damping_Ns_per_m").asDoubleIn(0.0, R::kMaxGraspDamping_Ns_per_m, "N s/m");
       g.rot_stiffness_Nm_per_rad = gm.required("rot_stiffness_Nm_per_rad").asPositiveDouble();
       if (g.rot_stiffness_Nm_per_rad > R::kMaxGraspRotStiffness_Nm_per_rad) {
@@ -279,7 +283,8 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
     sim::IntegratorSettings& i = s.integrator;
     if (auto v = im.optional("rtol")) i.rtol = v->asDoubleIn(R::kMinIntegratorRtol, R::kMaxIntegratorRtol);
     if (auto v = im.optional("atol_position")) i.atol_position = v->asDoubleIn(R::kMinIntegratorAtol, R::kMaxIntegratorAtol, "m or rad");
-    if (auto v = im.optional("atol_velocity")) i.atol_velocity = v->asDoubleIn(R::kMinIntegratorAtol, R::kMaxIntegratorAtol, "m/s or rad/s");
+    if (auto v = im.optional("atol_velocity"))
+      i.atol_velocity = v->asDoubleIn(R::kMinIntegratorAtol, R::kMaxIntegratorAtol, "m/s or rad/s");
     if (auto v = im.optional("max_order")) {
       i.max_order = v->asInt();
       if (i.max_order < 1 || i.max_order > 5) v->fail("expected an integer in 1..5");
@@ -287,15 +292,15 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
     if (auto v = im.optional("max_steps_per_tick")) {
       i.max_steps_per_tick = v->asIntIn(1, R::kMaxIntegratorStepsPerTick);
     }
-    if (auto v = im.optional("max_step_s")) i.max_step_s = v->asDoubleIn(0.0, c.control_period_s, "s (0: no limit; at most the control period)");
+    if (auto v = im.optional("max_step_s"))
+      i.max_step_s = v->asDoubleIn(0.0, c.control_period_s, "s (0: no limit; at most the control period)");
     if (auto v = im.optional("linear_solver")) {
-      i.linear_solver = v->asEnum({"block_elimination", "dense_lu"}) == "dense_lu" ? sim::LinearSolver::DenseLU
-                                                                                  : sim::LinearSolver::BlockElimination;
+      i.linear_solver =
+          v->asEnum({"block_elimination", "dense_lu"}) == "dense_lu" ? sim::LinearSolver::DenseLU : sim::LinearSolver::BlockElimination;
     }
     if (auto v = im.optional("jacobian")) {
-      i.jacobian = v->asEnum({"difference_quotient", "applied_forces"}) == "applied_forces"
-                       ? sim::IntegratorJacobian::AppliedForces
-                       : sim::IntegratorJacobian::DifferenceQuotient;
+      i.jacobian = v->asEnum({"difference_quotient", "applied_forces"}) == "applied_forces" ? sim::IntegratorJacobian::AppliedForces
+                                                                                            : sim::IntegratorJacobian::DifferenceQuotient;
     }
     im.finish();
   }
@@ -357,7 +362,8 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
     if (!known) g.fail("unknown grasp '" + e.grasp + "' (define it under sim.grasps)");
     if (isLexdyn(c)) {
       for (const auto& ce : lx.contacts) {
-        if (ce.grasp == e.grasp) g.fail("grasp '" + e.grasp + "' is linked to controller contact '" + ce.name + "': use add_contact / remove_contact");
+        if (ce.grasp == e.grasp)
+          g.fail("grasp '" + e.grasp + "' is linked to controller contact '" + ce.name + "': use add_contact / remove_contact");
       }
     }
     em.finish();
@@ -475,11 +481,12 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
     const int ti = first->taskIndex(e.task);
     const tasks::TaskModel& t = first->task(ti);
     const int n = t.targetSize();
-    if (n == 0) throw InputError(e.where, "task '" + e.task + "' (" + lx.tasks[static_cast<size_t>(lx.findTask(e.task))].type + ") has no target");
+    if (n == 0)
+      throw InputError(e.where, "task '" + e.task + "' (" + lx.tasks[static_cast<size_t>(lx.findTask(e.task))].type + ") has no target");
     if (e.action == "set_target") {
       if (e.value.size() != n) {
-        throw InputError(e.where, "task '" + e.task + "' takes a target of " + std::to_string(n) + " values, found " +
-                                      std::to_string(e.value.size()));
+        throw InputError(
+            e.where, "task '" + e.task + "' takes a target of " + std::to_string(n) + " values, found " + std::to_string(e.value.size()));
       }
       try {
         t.checkTarget(e.value);
@@ -493,28 +500,29 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
       for (int k = 0; k < e.value.size(); ++k) {
         const double v = e.value[k];
         if (target.positions && std::isfinite(v) && std::abs(v) > R::kMaxPosition_m) {
-          throw InputError(e.where + ".value[" + std::to_string(k) + "]", "expected a position in [-1000, 1000] m, found " + std::to_string(v));
+          throw InputError(e.where + ".value[" + std::to_string(k) + "]",
+                           "expected a position in [-1000, 1000] m, found " + std::to_string(v));
         }
         const int j = static_cast<size_t>(k) < target.joints.size() ? d.findJoint(target.joints[static_cast<size_t>(k)]) : -1;
         if (j >= 0) {
           const model::JointDescription& jd = d.joints[static_cast<size_t>(j)];
           if (!(v >= std::max(jd.lower, -R::kMaxJointLimit) && v <= std::min(jd.upper, R::kMaxJointLimit))) {
             throw InputError(e.where + ".value[" + std::to_string(k) + "]", "joint " + jd.name + ": expected a target within its limits [" +
-                                                                                 std::to_string(jd.lower) + ", " + std::to_string(jd.upper) + "], found " + std::to_string(v));
+                                                                                std::to_string(jd.lower) + ", " + std::to_string(jd.upper) +
+                                                                                "], found " + std::to_string(v));
           }
         }
       }
     } else if (n != 3) {
-      throw InputError(e.where, e.action + " drives 3-D targets (position, com); task '" + e.task + "' takes " + std::to_string(n) + " values");
+      throw InputError(e.where,
+                       e.action + " drives 3-D targets (position, com); task '" + e.task + "' takes " + std::to_string(n) + " values");
     }
   }
 }
 
 }  // namespace
 
-std::string methodName(const CaseSpec& spec) {
-  return spec.controller.type == "lexdyn" ? spec.controller.lexdyn.method : "";
-}
+std::string methodName(const CaseSpec& spec) { return spec.controller.type == "lexdyn" ? spec.controller.lexdyn.method : ""; }
 
 void overrideMethod(CaseSpec& spec, const std::string& method, const std::string& where) {
   if (spec.controller.type != "lexdyn") throw InputError(where, "--method needs a case with controller type lexdyn");
@@ -529,7 +537,6 @@ void overrideMethod(CaseSpec& spec, const std::string& method, const std::string
 }
 
 namespace {
-
 
 // expected_failures: [{method?, status?, checks?, reason}] (docs/cases.md, "Expected failures").
 void readExpectedFailures(CaseSpec& c, const yaml::Node& list, const checks::CheckContext& context) {
@@ -567,7 +574,8 @@ void readExpectedFailures(CaseSpec& c, const yaml::Node& list, const checks::Che
     const yaml::Node reason = m.required("reason");
     x.reason = reason.asString();
     m.finish();
-    if (x.status == records::RunStatus::Completed && x.checks.empty()) en.fail("expected a failure: a status other than completed, or checks");
+    if (x.status == records::RunStatus::Completed && x.checks.empty())
+      en.fail("expected a failure: a status other than completed, or checks");
     for (const ExpectedFailure& o : c.expected_failures) {
       if (o.method == x.method) en.fail(x.method.empty() ? "a second entry (one at most)" : "a second entry for method " + x.method);
     }
@@ -582,10 +590,11 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
   const yaml::Node name = top.required("name");
   c.name = name.asString();
   // The name names golden files and directories: no path separators or odd characters.
-  if (c.name.size() > 128 || c.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.") != std::string::npos ||
+  if (c.name.size() > 128 ||
+      c.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.") != std::string::npos ||
       c.name[0] == '.') {
-    name.fail("expected a name of at most 128 letters, digits, '_', '-' and '.' (not starting with '.'), found '" +
-              c.name.substr(0, 64) + (c.name.size() > 64 ? "...'" : "'"));
+    name.fail("expected a name of at most 128 letters, digits, '_', '-' and '.' (not starting with '.'), found '" + c.name.substr(0, 64) +
+              (c.name.size() > 64 ? "...'" : "'"));
   }
   if (auto desc = top.optional("description")) c.description = desc->asString();
   {
@@ -651,8 +660,8 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
     const bool floating = d.base == model::BaseType::FreeFlyer;
     if (auto st = is.optional("settle")) {
       const std::string v = st->asEnum({"static_equilibrium", "base_only", "none"});
-      c.initial_state.settle = v == "static_equilibrium" ? sim::Settle::StaticEquilibrium
-                                                          : (v == "base_only" ? sim::Settle::BaseOnly : sim::Settle::None);
+      c.initial_state.settle =
+          v == "static_equilibrium" ? sim::Settle::StaticEquilibrium : (v == "base_only" ? sim::Settle::BaseOnly : sim::Settle::None);
       c.initial_state.settle_given = true;
       c.initial_state.settle_where = st->where();
       if (c.initial_state.settle == sim::Settle::BaseOnly && !floating) st->fail("base_only needs a free-flyer base");
@@ -660,8 +669,7 @@ CaseSpec parseCase(const yaml::Node& root, const std::string& path) {
         st->fail("a floating robot without contact surfaces has no static equilibrium; use none");
       }
     } else {
-      c.initial_state.settle =
-          floating && !d.contact_surfaces.empty() ? sim::Settle::StaticEquilibrium : sim::Settle::None;
+      c.initial_state.settle = floating && !d.contact_surfaces.empty() ? sim::Settle::StaticEquilibrium : sim::Settle::None;
       c.initial_state.settle_where = is.node().where() + " (settle: " + sim::toString(c.initial_state.settle) + ", the default)";
     }
     is.finish();
@@ -764,8 +772,7 @@ CaseSpec loadCase(const std::string& path, const std::vector<Override>& override
       yaml::KeyRecorder recorder;
       try {
         parseCase(yaml::Node(d.root, path, ""), path);
-      } catch (const InputError&) {
-      }
+      } catch (const InputError&) {}
       for (const std::string& k : recorder.paths())
         if (std::find(d.schema.keys.begin(), d.schema.keys.end(), k) == d.schema.keys.end()) d.schema.keys.push_back(k);
       try {

@@ -68,8 +68,8 @@ struct InitialStateSpec {
   PosturePerturbation perturbation;
   double base_x = 0.0, base_y = 0.0, base_yaw_rad = 0.0;
   sim::Settle settle = sim::Settle::None;
-  bool settle_given = false;   ///< false: the default was taken
-  std::string settle_where;    ///< "file:line: initial_state.settle" (or initial_state) for errors
+  bool settle_given = false;  ///< false: the default was taken
+  std::string settle_where;   ///< "file:line: initial_state.settle" (or initial_state) for errors
 };
 
 struct GainGroup {
@@ -83,13 +83,13 @@ struct EventSpec {
   /// grasp_on | grasp_off (simulator), set_target | add_contact | remove_contact |
   /// target_trajectory | swing (lexdyn controller)
   std::string action;
-  std::string grasp;          ///< grasp_on, grasp_off
+  std::string grasp;  ///< grasp_on, grasp_off
   std::string where;
-  std::string task;           ///< set_target, target_trajectory, swing
-  Eigen::VectorXd value;      ///< set_target: the task's target (TaskModel::targetSize values)
-  double ramp_s = 0.0;        ///< set_target: reach `value` linearly over this time (0: at once)
-  std::string contact;        ///< add_contact, remove_contact
-  std::string file;           ///< target_trajectory: the CSV file (resolved)
+  std::string task;       ///< set_target, target_trajectory, swing
+  Eigen::VectorXd value;  ///< set_target: the task's target (TaskModel::targetSize values)
+  double ramp_s = 0.0;    ///< set_target: reach `value` linearly over this time (0: at once)
+  std::string contact;    ///< add_contact, remove_contact
+  std::string file;       ///< target_trajectory: the CSV file (resolved)
   TargetTrajectory trajectory;
   Swing swing;
 };
@@ -122,11 +122,11 @@ struct SimModelPerturbation {
 /// that fails exactly so is an expected failure (exit code 0); any other outcome, including a
 /// listed check that passes, is reported as a mismatch.
 struct ExpectedFailure {
-  std::string method;              ///< "" for a case without methods
+  std::string method;                                         ///< "" for a case without methods
   records::RunStatus status = records::RunStatus::Completed;  ///< completed | controller_failure | integrator_failure | diverged
-  std::vector<std::string> checks;   ///< the checks expected to fail (sorted)
+  std::vector<std::string> checks;                            ///< the checks expected to fail (sorted)
   std::string reason;
-  std::string where;                 ///< file:line of the entry
+  std::string where;  ///< file:line of the entry
 };
 
 struct CaseSpec {
@@ -142,9 +142,9 @@ struct CaseSpec {
   double control_period_s = 0.005;
   InitialStateSpec initial_state;
   ControllerSpec controller;
-  sim::SimulatorSettings sim;        ///< gains resolved per joint
+  sim::SimulatorSettings sim;  ///< gains resolved per joint
   std::vector<GainGroup> gain_groups;
-  std::vector<EventSpec> events;     ///< sorted by time
+  std::vector<EventSpec> events;  ///< sorted by time
   TraceSpec trace;
   std::vector<checks::CheckSpec> checks;
   std::vector<checks::ComparisonSpec> comparisons;  ///< evaluated by `lexdyn-harness compare`

@@ -56,7 +56,8 @@ std::vector<Segment> split(const std::string& path, const std::string& where) {
       if (inner.empty()) throw InputError(where, "empty [] in path '" + path + "'");
       out.push_back({inner, true});
       i = close + 1;
-      if (i < path.size() && path[i] != '.' && path[i] != '[') throw InputError(where, "expected '.' or '[' after ']' in path '" + path + "'");
+      if (i < path.size() && path[i] != '.' && path[i] != '[')
+        throw InputError(where, "expected '.' or '[' after ']' in path '" + path + "'");
       if (i < path.size() && path[i] == '.') {
         ++i;
         if (i == path.size()) throw InputError(where, "path '" + path + "' ends with '.'");
@@ -66,8 +67,10 @@ std::vector<Segment> split(const std::string& path, const std::string& where) {
       ++i;
     }
   }
-  if (!cur.empty()) flush();
-  else if (!path.empty() && path.back() == '.') throw InputError(where, "path '" + path + "' ends with '.'");
+  if (!cur.empty())
+    flush();
+  else if (!path.empty() && path.back() == '.')
+    throw InputError(where, "path '" + path + "' ends with '.'");
   if (out.empty()) throw InputError(where, "empty key path");
   return out;
 }
@@ -142,8 +145,10 @@ std::string nearest(const YAML::Node& root, const Schema& schema, const std::str
     return std::min(d, levenshtein(typed, c.substr(0, typed.size())) + 1);
   };
   for (const auto& c : candidates) {
-    if (below(c)) scored.push_back({{0, distance(tail, c.substr(prefix.size() + 1))}, c});
-    else scored.push_back({{1, distance(path, c)}, c});
+    if (below(c))
+      scored.push_back({{0, distance(tail, c.substr(prefix.size() + 1))}, c});
+    else
+      scored.push_back({{1, distance(path, c)}, c});
   }
   std::stable_sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::string s;
@@ -159,10 +164,10 @@ std::string keysOf(const YAML::Node& map) {
 
 struct Walk {
   Resolved r;
-  YAML::Node parent;      ///< the mapping or sequence holding the last segment
-  std::string last_key;   ///< the last mapping key ("" for a sequence element)
-  long last_index = -1;   ///< the last sequence index
-  size_t created = 0;     ///< absent segments at the end (a key path to create)
+  YAML::Node parent;     ///< the mapping or sequence holding the last segment
+  std::string last_key;  ///< the last mapping key ("" for a sequence element)
+  long last_index = -1;  ///< the last sequence index
+  size_t created = 0;    ///< absent segments at the end (a key path to create)
 };
 
 // Walks `path` through `root`; absent mapping keys are allowed where the schema knows them (or
@@ -202,7 +207,8 @@ Walk walk(const YAML::Node& root, const std::string& path, const Schema& schema,
           if (n == seg.text) index = static_cast<long>(i);
           if (!n.empty()) names += (names.empty() ? "" : ", ") + n;
         }
-        if (index < 0) fail("'" + display + "' has no element named '" + seg.text + "'" + (names.empty() ? "" : " (elements: " + names + ")"));
+        if (index < 0)
+          fail("'" + display + "' has no element named '" + seg.text + "'" + (names.empty() ? "" : " (elements: " + names + ")"));
       }
       const std::string name = elementName(cur[static_cast<size_t>(index)]);
       canonical += "[" + std::to_string(index) + "]";
@@ -215,7 +221,8 @@ Walk walk(const YAML::Node& root, const std::string& path, const Schema& schema,
       continue;
     }
     if (!cur.IsMap()) {
-      fail("'" + display + "' is a value (" + (cur.IsScalar() ? "'" + cur.Scalar() + "'" : std::string("null")) + "), it has no key '" + seg.text + "'");
+      fail("'" + display + "' is a value (" + (cur.IsScalar() ? "'" + cur.Scalar() + "'" : std::string("null")) + "), it has no key '" +
+           seg.text + "'");
     }
     const std::string next = joinKey(canonical, seg.text);
     const YAML::Node child = static_cast<const YAML::Node&>(cur)[seg.text];
@@ -229,7 +236,8 @@ Walk walk(const YAML::Node& root, const std::string& path, const Schema& schema,
       continue;
     }
     if (!schema.knows(next)) {
-      fail("no key '" + seg.text + "' in " + (resolved.empty() ? std::string("the case") : "'" + resolved + "'") + " (keys there: " + keysOf(cur) + ")");
+      fail("no key '" + seg.text + "' in " + (resolved.empty() ? std::string("the case") : "'" + resolved + "'") +
+           " (keys there: " + keysOf(cur) + ")");
     }
     absent = true;
     w.created = 1;
@@ -282,8 +290,10 @@ std::string displayPath(const YAML::Node& root, const std::string& canonical) {
     const std::string key = canonical.substr(i, end - i);
     out += key;
     const YAML::Node child = cur.IsMap() ? static_cast<const YAML::Node&>(cur)[key] : YAML::Node();
-    if (!lost && child) cur.reset(child);
-    else lost = true;
+    if (!lost && child)
+      cur.reset(child);
+    else
+      lost = true;
     i = end;
   }
   return out;
@@ -296,8 +306,10 @@ Resolved resolve(const YAML::Node& root, const std::string& path, const Schema& 
 Resolved set(YAML::Node& root, const std::string& path, const YAML::Node& value, const Schema& schema, const std::string& where) {
   Walk w = walk(root, path, schema, where);
   if (w.r.exists) {
-    if (w.last_index >= 0) w.parent[static_cast<size_t>(w.last_index)] = value;
-    else w.parent[w.last_key] = value;
+    if (w.last_index >= 0)
+      w.parent[static_cast<size_t>(w.last_index)] = value;
+    else
+      w.parent[w.last_key] = value;
     w.r.node.reset(value);
     return w.r;
   }

@@ -48,23 +48,23 @@ struct LexdynDriver::Impl {
   double dt = 0.005;
 
   struct TaskRec {
-    int index = -1;          // controller task index
+    int index = -1;  // controller task index
     std::string name;
-    int target_values = 0;   // recorded target values
+    int target_values = 0;  // recorded target values
     std::vector<std::string> target_names;
   };
   std::vector<TaskRec> tasks;  // the tasks of the method's hierarchy
   struct ContactRec {
-    int index = -1;          // controller contact index
+    int index = -1;  // controller contact index
     std::string name;
-    model::FrameId frame = -1;   // in the simulator's model
+    model::FrameId frame = -1;       // in the simulator's model
     model::FrameId ctrl_frame = -1;  // in the controller's model
-    int grasp = -1;              // simulator grasp
-    int sensor = -1;             // index into the simulator's sensor readings
+    int grasp = -1;                  // simulator grasp
+    int sensor = -1;                 // index into the simulator's sensor readings
     model::FrameId sensor_frame = -1;
-    bool point = false;          // a point contact: its wrenches in the world's axes (z the ground's normal)
+    bool point = false;  // a point contact: its wrenches in the world's axes (z the ground's normal)
     bool fixed = false;
-    int surface = -1;            // the simulator's contact surface (description order); -1: none
+    int surface = -1;                                              // the simulator's contact surface (description order); -1: none
     double lost_since = std::numeric_limits<double>::quiet_NaN();  // divergence guard
   };
   std::vector<ContactRec> contacts;
@@ -191,33 +191,30 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
   const control::ControllerParams& p = I.lx.params;
   md.emplace_back(checks::kMethodMetadata, I.lx.method);
   md.emplace_back("controller_params",
-                  "nu_dt2 " + num(p.nu_dt2) + ", xi_dt2 " + num(p.xi_dt2) + ", zeta_dt2 " + num(p.zeta_dt2) +
-                      ", new_dof_diagonal_dt2 " + num(p.new_dof_diagonal_dt2) + ", rho_dt2 " + num(p.rho_dt2) + ", eps_dt2 " +
-                      num(p.eps_dt2) + ", newton_target " +
-                      (p.newton_target == control::NewtonTarget::Zero ? "zero" : "previous_velocity") + ", damping " +
-                      num(p.damping) + ", use_qmod " + (p.use_qmod ? "true" : "false") + ", sr1 " + (p.sr1 ? "true" : "false") + ", newton_identity_weight " + num(p.newton_identity_weight) +
-                      ", bfgs_secant " +
+                  "nu_dt2 " + num(p.nu_dt2) + ", xi_dt2 " + num(p.xi_dt2) + ", zeta_dt2 " + num(p.zeta_dt2) + ", new_dof_diagonal_dt2 " +
+                      num(p.new_dof_diagonal_dt2) + ", rho_dt2 " + num(p.rho_dt2) + ", eps_dt2 " + num(p.eps_dt2) + ", newton_target " +
+                      (p.newton_target == control::NewtonTarget::Zero ? "zero" : "previous_velocity") + ", damping " + num(p.damping) +
+                      ", use_qmod " + (p.use_qmod ? "true" : "false") + ", sr1 " + (p.sr1 ? "true" : "false") +
+                      ", newton_identity_weight " + num(p.newton_identity_weight) + ", bfgs_secant " +
                       (p.bfgs_secant == control::BfgsSecant::CurrentMultipliers ? "current_multipliers"
                        : p.bfgs_secant == control::BfgsSecant::FullDifference   ? "full_difference"
-                                                                                 : "gauss_newton") +
+                                                                                : "gauss_newton") +
                       ", ah_add_jtj " + (p.ah_add_jtj ? "true" : "false") + ", multiplier_scale " +
-                      (p.multiplier_scale == control::MultiplierScale::Dt ? "dt" : "one") +
-                      ", stop_after_level " + (p.stop_after_level.empty() ? std::string("(none)") : p.stop_after_level) +
-                      ", rank_switching " + (p.rank_switching ? "true" : "false") + ", sign_change_guard " +
-                      (p.sign_change_guard ? "true" : "false") + ", wls_infeasibility_tolerance " +
-                      num(p.wls_infeasibility_tolerance) + "; feed-forward torque " + (I.lx.feedforward_torque ? "on" : "off") +
-                      "; state feedback " + I.lx.state_feedback);
+                      (p.multiplier_scale == control::MultiplierScale::Dt ? "dt" : "one") + ", stop_after_level " +
+                      (p.stop_after_level.empty() ? std::string("(none)") : p.stop_after_level) + ", rank_switching " +
+                      (p.rank_switching ? "true" : "false") + ", sign_change_guard " + (p.sign_change_guard ? "true" : "false") +
+                      ", wls_infeasibility_tolerance " + num(p.wls_infeasibility_tolerance) + "; feed-forward torque " +
+                      (I.lx.feedforward_torque ? "on" : "off") + "; state feedback " + I.lx.state_feedback);
   const solver::Options& o = p.solver;
-  md.emplace_back("solver_options", "max_iterations " + std::to_string(o.max_iterations) + ", rank_tolerance " +
-                                        num(o.rank_tolerance) + ", feasibility_tolerance " + num(o.feasibility_tolerance) +
-                                        ", zero_tolerance " + num(o.zero_tolerance) + ", dual_tolerance " +
-                                        num(o.dual_tolerance) + ", stop_slack_norm " + num(o.stop_slack_norm) +
-                                        ", stop_optimality_iterations " + std::to_string(o.stop_optimality_iterations) +
-                                        ", stop_total_iterations " + std::to_string(o.stop_total_iterations) +
-                                        ", split_force_coordinates " + (o.split_from_variable != -1 ? "true" : "false") +
-                                        ", spanning_stages " + (o.spanning_stages ? "true" : "false") + ", lazy_snapshots " +
-                                        (o.lazy_snapshots ? "true" : "false") + ", project_unit_suffix " +
-                                        (o.project_unit_suffix ? "true" : "false"));
+  md.emplace_back("solver_options",
+                  "max_iterations " + std::to_string(o.max_iterations) + ", rank_tolerance " + num(o.rank_tolerance) +
+                      ", feasibility_tolerance " + num(o.feasibility_tolerance) + ", zero_tolerance " + num(o.zero_tolerance) +
+                      ", dual_tolerance " + num(o.dual_tolerance) + ", stop_slack_norm " + num(o.stop_slack_norm) +
+                      ", stop_optimality_iterations " + std::to_string(o.stop_optimality_iterations) + ", stop_total_iterations " +
+                      std::to_string(o.stop_total_iterations) + ", split_force_coordinates " +
+                      (o.split_from_variable != -1 ? "true" : "false") + ", spanning_stages " + (o.spanning_stages ? "true" : "false") +
+                      ", lazy_snapshots " + (o.lazy_snapshots ? "true" : "false") + ", project_unit_suffix " +
+                      (o.project_unit_suffix ? "true" : "false"));
   std::string h;
   for (const auto& l : I.lx.hierarchy(I.lx.method)) {
     h += (h.empty() ? "" : " | ") + l.name + ":";
@@ -232,8 +229,7 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
           (c.fixed ? "fixed"
                    : "friction " + num(c.friction) + ", margins " + num(c.margins.friction) + " / " + num(c.margins.cop_m) + " m / " +
                          num(c.margins.min_normal_N) + " N per point" + (I.lx.contact_margins_default ? " (default)" : "")) +
-          (c.grasp.empty() ? "" : ", grasp " + c.grasp) +
-          (c.sensor.empty() ? "" : ", sensor " + c.sensor) + ")";
+          (c.grasp.empty() ? "" : ", grasp " + c.grasp) + (c.sensor.empty() ? "" : ", sensor " + c.sensor) + ")";
   }
   md.emplace_back("contacts", cs.empty() ? "none" : cs);
   std::string codes;
@@ -244,9 +240,10 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
   const auto& vn = checks::solverStatusNames();
   for (size_t k = 0; k < vn.size(); ++k) codes += (k ? ", " : "") + std::to_string(k) + " " + vn[k];
   md.emplace_back("solver_status_codes", codes);
-  md.emplace_back("wrench_axes", "wrench.<contact>.* from the controller's generators (the plan for the coming period) and "
-                                 "wrench_sensed.<contact>.* from the linked F/T sensor (at the row's time): force on the robot "
-                                 "and torque about the contact frame's origin, in the contact frame's axes");
+  md.emplace_back("wrench_axes",
+                  "wrench.<contact>.* from the controller's generators (the plan for the coming period) and "
+                  "wrench_sensed.<contact>.* from the linked F/T sensor (at the row's time): force on the robot "
+                  "and torque about the contact frame's origin, in the contact frame's axes");
 }
 
 void LexdynDriver::reset(const sim::Simulator& simu) {
@@ -362,8 +359,10 @@ bool LexdynDriver::tick(double t, const sim::Simulator& simu, sim::JointCommand&
   }
   cmd.q = c.q.joints;
   cmd.qdot = c.u.tail(I.nj);
-  if (I.lx.feedforward_torque) cmd.tau_ff = c.tau;
-  else cmd.tau_ff.setZero();
+  if (I.lx.feedforward_torque)
+    cmd.tau_ff = c.tau;
+  else
+    cmd.tau_ff.setZero();
   return true;
 }
 
@@ -391,7 +390,8 @@ std::string LexdynDriver::divergence(double t, const sim::Simulator& simu) {
     if (I.model.hasFreeFlyer()) {
       const double dp = (I.expected.base_position - q.base_position).norm();
       if (!(dp <= g.position_m)) {
-        return at + "the base is " + num(dp) + " m from the plan's position (limit " + num(g.position_m) + " m, divergence_guard.position_m)";
+        return at + "the base is " + num(dp) + " m from the plan's position (limit " + num(g.position_m) +
+               " m, divergence_guard.position_m)";
       }
       const double da = Eigen::AngleAxisd(I.expected.base_rotation.transpose() * q.base_rotation).angle();
       if (!(da <= g.angle_rad)) {
@@ -480,8 +480,8 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
     // own state, not the simulator's).
     // A point contact's: in the world's axes, whose z is the ground's normal (its frame turns
     // with the foot).
-    const Eigen::Matrix3d Rc =
-        cr.point ? Eigen::Matrix3d::Identity() : Eigen::Matrix3d(I.model.framePlacement(I.ctl->modelData(), cr.ctrl_frame).linear().transpose());
+    const Eigen::Matrix3d Rc = cr.point ? Eigen::Matrix3d::Identity()
+                                        : Eigen::Matrix3d(I.model.framePlacement(I.ctl->modelData(), cr.ctrl_frame).linear().transpose());
     const Eigen::Vector3d f = Rc * r.contact_wrench.col(cr.index).head<3>();
     const Eigen::Vector3d m = Rc * r.contact_wrench.col(cr.index).tail<3>();
     const Eigen::Isometry3d X = sm.framePlacement(simu.data(), cr.frame);

@@ -31,7 +31,7 @@ struct ControllerStats {
   std::vector<Task> tasks;
   int peak_iterations = 0;
   double peak_iterations_at_s = 0.0;
-  int peak_factorizations = 0;       ///< solver level stages factorised in a tick, the largest
+  int peak_factorizations = 0;  ///< solver level stages factorised in a tick, the largest
   double peak_factorizations_at_s = 0.0;
   std::vector<std::pair<std::string, long>> status_counts;         ///< controller tick status
   std::vector<std::pair<std::string, long>> solver_status_counts;  ///< solver status

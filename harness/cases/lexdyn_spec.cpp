@@ -27,8 +27,8 @@ void readParams(yaml::StrictMap& pm, control::ControllerParams& p) {
   if (auto v = pm.optional("rho_dt2")) p.rho_dt2 = dimensionless(*v);
   if (auto v = pm.optional("eps_dt2")) p.eps_dt2 = dimensionless(*v);
   if (auto v = pm.optional("newton_target")) {
-    p.newton_target = v->asEnum({"zero", "previous_velocity"}) == "zero" ? control::NewtonTarget::Zero
-                                                                       : control::NewtonTarget::PreviousVelocity;
+    p.newton_target =
+        v->asEnum({"zero", "previous_velocity"}) == "zero" ? control::NewtonTarget::Zero : control::NewtonTarget::PreviousVelocity;
   }
   if (auto v = pm.optional("damping")) p.damping = dimensionless(*v);
   if (auto v = pm.optional("use_qmod")) p.use_qmod = v->asBool();
@@ -190,8 +190,8 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
     const double k = v->asDouble();
     if (k != 3.0 && k != 6.0) v->fail("expected 3 (a point contact: its position held) or 6 (the frame's pose held)");
     c.dims = static_cast<int>(k);
-    if (c.dims == 3 && c.points.size() != 1) v->fail("dims 3 is a point contact: it needs exactly one point (this contact has " +
-                                                     std::to_string(c.points.size()) + ")");
+    if (c.dims == 3 && c.points.size() != 1)
+      v->fail("dims 3 is a point contact: it needs exactly one point (this contact has " + std::to_string(c.points.size()) + ")");
   }
   if (auto v = m.optional("normal")) {
     if (c.dims == 3) v->fail("a point contact (dims 3) takes the ground's normal (world +z); normal is for a contact of dims 6");
@@ -238,7 +238,8 @@ std::vector<LevelEntry> readLevels(const yaml::Node& node, const LexdynSpec& spe
   std::vector<LevelEntry> out;
   const std::vector<yaml::Node> items = node.elements();
   if (items.empty()) node.fail("expected at least one level");
-  if (wls && items.size() != 2) node.fail("the WLS baseline needs exactly two levels (hard constraints, weighted objective), found " + std::to_string(items.size()));
+  if (wls && items.size() != 2)
+    node.fail("the WLS baseline needs exactly two levels (hard constraints, weighted objective), found " + std::to_string(items.size()));
   std::vector<std::string> seen;
   for (size_t l = 0; l < items.size(); ++l) {
     yaml::StrictMap m(items[l]);

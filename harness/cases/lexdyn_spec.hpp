@@ -35,20 +35,20 @@ tasks::ContactMargins defaultContactMargins(const std::vector<Eigen::Vector3d>& 
 /// healthy run (measured on the committed cases: docs/cases.md).
 struct DivergenceGuard {
   bool enabled = true;
-  double position_m = 0.25;        ///< base position: the plan's (last command) against the simulator's
-  double angle_rad = 0.5;          ///< base attitude and every joint: plan against simulator
-  double contact_lost_s = 1.0;     ///< a contact the plan holds without force in the simulator this long
+  double position_m = 0.25;             ///< base position: the plan's (last command) against the simulator's
+  double angle_rad = 0.5;               ///< base attitude and every joint: plan against simulator
+  double contact_lost_s = 1.0;          ///< a contact the plan holds without force in the simulator this long
   double contact_lost_fraction = 0.01;  ///< "without force": below this fraction of the robot's weight
-  double torque_factor = 10.0;     ///< a commanded torque beyond this multiple of its effort limit
-  double task_error = 100.0;       ///< a task error norm beyond this (m or rad): beyond any workspace
+  double torque_factor = 10.0;          ///< a commanded torque beyond this multiple of its effort limit
+  double task_error = 100.0;            ///< a task error norm beyond this (m or rad): beyond any workspace
 };
 
 struct ContactEntry {
   std::string name;
   std::string where;
-  std::string surface;                 ///< the data-file surface it was taken from (may be empty)
+  std::string surface;  ///< the data-file surface it was taken from (may be empty)
   std::string frame;
-  std::vector<Eigen::Vector3d> points; ///< in the frame
+  std::vector<Eigen::Vector3d> points;  ///< in the frame
   bool fixed = false;
   double friction = 0.7;
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< in the frame
@@ -70,13 +70,13 @@ struct LevelEntry {
 };
 
 struct LexdynSpec {
-  std::string method = "bfgs";         ///< a registered method (control::findMethod)
-  std::string method_where;            ///< where the method comes from (file key or --method)
-  control::ControllerParams params;    ///< of the current method: method, dt and solver filled in as well
+  std::string method = "bfgs";       ///< a registered method (control::findMethod)
+  std::string method_where;          ///< where the method comes from (file key or --method)
+  control::ControllerParams params;  ///< of the current method: method, dt and solver filled in as well
   /// `params` for every registered method (with its method_params override applied), by name;
   /// setMethod() copies the method's entry into `params`.
   std::map<std::string, control::ControllerParams> params_by_method;
-  bool feedforward_torque = true;      ///< Command::tau sent as the servo's feed-forward torque
+  bool feedforward_torque = true;  ///< Command::tau sent as the servo's feed-forward torque
   /// The state the controller reads each tick: the simulator's measured (q, u) (`measured`), or
   /// its own previous command (`integrated`: q(k+1), u(k+1) of the last tick, the simulator
   /// only tracking the joint set-points; reset from the measured initial state).
@@ -86,7 +86,7 @@ struct LexdynSpec {
   /// the case gives none (contact_margins_default), each contact's are defaultContactMargins.
   tasks::ContactMargins contact_margins = kNoContactMargins;
   bool contact_margins_default = false;
-  DivergenceGuard guard;               ///< controller.divergence_guard
+  DivergenceGuard guard;  ///< controller.divergence_guard
   std::vector<std::string> initial_contacts;
   std::vector<TaskSpec> tasks;
   std::vector<LevelEntry> levels;      ///< methods with the strict hierarchy: bfgs, ah, gn

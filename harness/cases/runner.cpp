@@ -186,34 +186,33 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
   }
   const InitialStateSpec& is = spec.initial_state;
   std::string init = "posture " + is.posture;
-  for (const auto& [j, v] : is.joints) init += (&j == &is.joints.front().first ? " with " : ", ") + m.jointNames()[static_cast<size_t>(j)] + " " + num(v);
-  init += ", base_xy [" + num(is.base_x) + ", " + num(is.base_y) + "], base_yaw_rad " +
-                     num(is.base_yaw_rad) + "; settle " + sim::toString(rest.settle);
+  for (const auto& [j, v] : is.joints)
+    init += (&j == &is.joints.front().first ? " with " : ", ") + m.jointNames()[static_cast<size_t>(j)] + " " + num(v);
+  init += ", base_xy [" + num(is.base_x) + ", " + num(is.base_y) + "], base_yaw_rad " + num(is.base_yaw_rad) + "; settle " +
+          sim::toString(rest.settle);
   if (rest.settle != sim::Settle::None) init += " (" + std::to_string(rest.iterations) + " Newton iterations)";
   if (is.perturbation.amplitude_rad > 0.0) {
     init += "; perturbed by up to " + num(is.perturbation.amplitude_rad) + " rad on " + std::to_string(is.perturbation.joints.size()) +
             " joints (seed " + std::to_string(is.perturbation.seed) + ")";
   }
-  init += "; at rest: net force " + num(rest.net_force_N) + " N, net moment " + num(rest.net_moment_Nm) +
-          " N m, largest joint imbalance " + num(rest.joint_residual_Nm) + " N m";
+  init += "; at rest: net force " + num(rest.net_force_N) + " N, net moment " + num(rest.net_moment_Nm) + " N m, largest joint imbalance " +
+          num(rest.joint_residual_Nm) + " N m";
   md.emplace_back("initial_state", init);
   const bool dq_jacobian = s.integrator.jacobian == sim::IntegratorJacobian::DifferenceQuotient;
   md.emplace_back("integrator", std::string("SUNDIALS CVODE BDF, Newton, ") +
-                                    (dq_jacobian ? "dense difference-quotient Jacobian" : "Jacobian of the applied forces") +
-                                    "; rtol " +
-                                    num(s.integrator.rtol) + ", atol_position " + num(s.integrator.atol_position) +
-                                    ", atol_velocity " + num(s.integrator.atol_velocity) + ", max_order " +
-                                    std::to_string(s.integrator.max_order) + ", max_steps_per_tick " +
-                                    std::to_string(s.integrator.max_steps_per_tick) + ", max_step_s " +
+                                    (dq_jacobian ? "dense difference-quotient Jacobian" : "Jacobian of the applied forces") + "; rtol " +
+                                    num(s.integrator.rtol) + ", atol_position " + num(s.integrator.atol_position) + ", atol_velocity " +
+                                    num(s.integrator.atol_velocity) + ", max_order " + std::to_string(s.integrator.max_order) +
+                                    ", max_steps_per_tick " + std::to_string(s.integrator.max_steps_per_tick) + ", max_step_s " +
                                     num(s.integrator.max_step_s) +
                                     // Only when not the default, so that the default traces keep their header.
                                     (s.integrator.linear_solver != sim::LinearSolver::BlockElimination
                                          ? std::string(", linear_solver ") + sim::toString(s.integrator.linear_solver)
                                          : std::string()));
-  md.emplace_back("contact", "Hunt-Crossley k " + num(s.contact.stiffness) + " N/m^" + num(s.contact.exponent) +
-                                 ", c " + num(s.contact.dissipation_s_per_m) + " s/m; regularised Coulomb mu " +
-                                 num(s.contact.friction_coefficient) + ", v_s " + num(s.contact.slip_velocity_m_per_s) +
-                                 " m/s; ground z " + num(s.contact.ground_height_m) + " m");
+  md.emplace_back("contact", "Hunt-Crossley k " + num(s.contact.stiffness) + " N/m^" + num(s.contact.exponent) + ", c " +
+                                 num(s.contact.dissipation_s_per_m) + " s/m; regularised Coulomb mu " +
+                                 num(s.contact.friction_coefficient) + ", v_s " + num(s.contact.slip_velocity_m_per_s) + " m/s; ground z " +
+                                 num(s.contact.ground_height_m) + " m");
   std::string gains;
   for (const auto& g : spec.gain_groups) gains += (gains.empty() ? "" : "; ") + g.match + " kp " + num(g.kp) + " kd " + num(g.kd);
   if (!spec.sim_model.mass_scale.empty() || !spec.sim_model.com_offset.empty()) {
@@ -224,7 +223,8 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
     }
     md.emplace_back("sim_model", p);
   }
-  md.emplace_back("servo", std::string("set-point profile ") + toString(s.servo.profile) + "; torque saturated at the URDF effort limit; " + gains);
+  md.emplace_back("servo",
+                  std::string("set-point profile ") + toString(s.servo.profile) + "; torque saturated at the URDF effort limit; " + gains);
   if (driver) {
     md.emplace_back("controller", "lexdyn (docs/controller.md)");
     driver->addMetadata(md);
@@ -286,8 +286,8 @@ records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& r, const ch
   o.all_checks_passed = r.all_checks_passed;
   if (r.expected_failure) {
     const ExpectedFailure& x = *r.expected_failure;
-    o.expected_failure = records::ExpectedFailureRecord{x.status, x.checks, x.reason, r.expectation_mismatches.empty(),
-                                                        r.expectation_mismatches, r.expected_failure_reached};
+    o.expected_failure = records::ExpectedFailureRecord{
+        x.status, x.checks, x.reason, r.expectation_mismatches.empty(), r.expectation_mismatches, r.expected_failure_reached};
   }
   o.exit_code = exitCode(r);
   if (r.has_controller_stats) {
@@ -310,15 +310,14 @@ records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& r, const ch
   return o;
 }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   std::error_code ec;
   // One job per output folder: a second one exits at once naming this one (docs/architecture.md,
   // "Faults").
-  const files::FolderLock lock(options.out_dir, "lexdyn-harness run " + spec.name + (methodName(spec).empty() ? "" : " " + methodName(spec)));
+  const files::FolderLock lock(options.out_dir,
+                               "lexdyn-harness run " + spec.name + (methodName(spec).empty() ? "" : " " + methodName(spec)));
 
   if (!spec.robot_warnings.empty()) {
     std::fprintf(stderr, "[%s] the robot files were read with %zu warning(s) (kept in summary.json, robot_warnings):\n", spec.name.c_str(),
@@ -331,8 +330,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   // "Initial state"). No equilibrium is bad input: nothing is simulated.
   const InitialStateSpec& is = spec.initial_state;
   const Eigen::VectorXd q_init = initialJointPositions(spec, m.description());
-  const sim::RestingState rest =
-      simu.restingState(q_init, is.settle, is.base_yaw_rad, Eigen::Vector2d(is.base_x, is.base_y));
+  const sim::RestingState rest = simu.restingState(q_init, is.settle, is.base_yaw_rad, Eigen::Vector2d(is.base_x, is.base_y));
   if (!rest.converged) {
     throw InputError(is.settle_where, rest.message + " (posture '" + is.posture + "'; settle: none starts without it)");
   }
@@ -359,9 +357,12 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   }
   const bool dump = !options.dump_problems_dir.empty();
   if (dump) {
-    if (!driver) throw InputError(options.dump_problems_dir, "solver problems are dumped only for a lexdyn controller (this case has the posture servo)");
+    if (!driver)
+      throw InputError(options.dump_problems_dir,
+                       "solver problems are dumped only for a lexdyn controller (this case has the posture servo)");
     if (!(options.dump_from_s <= options.dump_to_s)) {
-      throw InputError(options.dump_problems_dir, "the dump window starts after it ends (" + num(options.dump_from_s) + " > " + num(options.dump_to_s) + " s)");
+      throw InputError(options.dump_problems_dir,
+                       "the dump window starts after it ends (" + num(options.dump_from_s) + " > " + num(options.dump_to_s) + " s)");
     }
     files::createFolder(options.dump_problems_dir);
   }
@@ -441,77 +442,77 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   // only the run could reveal) stops it like a failure: the trace keeps its rows and says why.
   auto stopOnException = [&](records::RunStatus status, const std::string& what) {
     r.status = status;
-    r.message = std::string(status == records::RunStatus::InputError ? "bad input found at " : "internal error at ") + "t = " +
-                num(simu.time()) + " s: " + what;
+    r.message = std::string(status == records::RunStatus::InputError ? "bad input found at " : "internal error at ") +
+                "t = " + num(simu.time()) + " s: " + what;
   };
   std::optional<OutputError> output_error;
   try {
-  for (; k < n_ticks; ++k) {
-    const double t = static_cast<double>(k) * T;
-    recorder.fillSim();
-    applyEvents(t);
-    bool ok = true;
-    if (driver) {
-      ok = driver->tick(t, simu, cmd, failure);
-      if (dump && t >= options.dump_from_s && t <= options.dump_to_s) {
-        char name[32];
-        std::snprintf(name, sizeof(name), "tick_%06ld.json", k);
-        driver->writeProblem((fs::path(options.dump_problems_dir) / name).string());
+    for (; k < n_ticks; ++k) {
+      const double t = static_cast<double>(k) * T;
+      recorder.fillSim();
+      applyEvents(t);
+      bool ok = true;
+      if (driver) {
+        ok = driver->tick(t, simu, cmd, failure);
+        if (dump && t >= options.dump_from_s && t <= options.dump_to_s) {
+          char name[32];
+          std::snprintf(name, sizeof(name), "tick_%06ld.json", k);
+          driver->writeProblem((fs::path(options.dump_problems_dir) / name).string());
+        }
+        recorder.fillController();
+      } else {
+        servo->command(static_cast<double>(k + 1) * T, cmd);
       }
-      recorder.fillController();
-    } else {
-      servo->command(static_cast<double>(k + 1) * T, cmd);
-    }
-    std::string diverged;
-    if (ok && driver) diverged = driver->divergence(t, simu);
-    write(k, k == 0 || !ok || !diverged.empty());
-    if (!ok) {
-      r.status = records::RunStatus::ControllerFailure;
-      r.message = failure;
-      break;
-    }
-    if (!diverged.empty()) {
-      r.status = records::RunStatus::Diverged;
-      r.message = diverged;
-      break;
-    }
-    if (options.interrupt && options.interrupt->load()) {
-      r.status = records::RunStatus::Interrupted;
-      r.signal = options.interrupt_signal ? options.interrupt_signal->load() : 0;
-      r.message = std::string("interrupted") + (r.signal == SIGINT ? " by SIGINT" : (r.signal == SIGTERM ? " by SIGTERM" : "")) +
-                  " at t = " + num(t) + " s";
-      break;
-    }
-    const sim::StepResult sr = simu.step(cmd);
-    if (!sr.ok) {
-      r.status = records::RunStatus::IntegratorFailure;
-      r.message = sr.message;
-      break;
-    }
-    if (options.progress) {
-      // A line every progress_interval_s of wall time (stderr only; nothing else depends on it).
-      const double w = wallNow();
-      if (w - last_progress_wall >= options.progress_interval_s) {
-        last_progress_wall = w;
-        const double rate = w > 0.0 ? simu.time() / w : 0.0;
-        std::fprintf(stderr, "[%s%s%s] t = %.2f / %.2f s, wall %.1f s, %.1fx real time, about %.0f s left\n",
-                     spec.name.c_str(), r.method.empty() ? "" : " ", r.method.c_str(), simu.time(), spec.duration_s, w, rate,
-                     rate > 0.0 ? (spec.duration_s - simu.time()) / rate : 0.0);
+      std::string diverged;
+      if (ok && driver) diverged = driver->divergence(t, simu);
+      write(k, k == 0 || !ok || !diverged.empty());
+      if (!ok) {
+        r.status = records::RunStatus::ControllerFailure;
+        r.message = failure;
+        break;
+      }
+      if (!diverged.empty()) {
+        r.status = records::RunStatus::Diverged;
+        r.message = diverged;
+        break;
+      }
+      if (options.interrupt && options.interrupt->load()) {
+        r.status = records::RunStatus::Interrupted;
+        r.signal = options.interrupt_signal ? options.interrupt_signal->load() : 0;
+        r.message = std::string("interrupted") + (r.signal == SIGINT ? " by SIGINT" : (r.signal == SIGTERM ? " by SIGTERM" : "")) +
+                    " at t = " + num(t) + " s";
+        break;
+      }
+      const sim::StepResult sr = simu.step(cmd);
+      if (!sr.ok) {
+        r.status = records::RunStatus::IntegratorFailure;
+        r.message = sr.message;
+        break;
+      }
+      if (options.progress) {
+        // A line every progress_interval_s of wall time (stderr only; nothing else depends on it).
+        const double w = wallNow();
+        if (w - last_progress_wall >= options.progress_interval_s) {
+          last_progress_wall = w;
+          const double rate = w > 0.0 ? simu.time() / w : 0.0;
+          std::fprintf(stderr, "[%s%s%s] t = %.2f / %.2f s, wall %.1f s, %.1fx real time, about %.0f s left\n", spec.name.c_str(),
+                       r.method.empty() ? "" : " ", r.method.c_str(), simu.time(), spec.duration_s, w, rate,
+                       rate > 0.0 ? (spec.duration_s - simu.time()) / rate : 0.0);
+        }
       }
     }
-  }
-  // The last state (end of the run), unless already recorded. The controller ticks there too
-  // (its command is not used) so that every row has the controller's channels.
-  if (simu.time() != last_recorded_t) {
-    recorder.fillSim();
-    applyEvents(simu.time());
-    if (driver) {
-      std::string ignored;
-      driver->tick(simu.time(), simu, cmd, ignored);
-      recorder.fillController();
+    // The last state (end of the run), unless already recorded. The controller ticks there too
+    // (its command is not used) so that every row has the controller's channels.
+    if (simu.time() != last_recorded_t) {
+      recorder.fillSim();
+      applyEvents(simu.time());
+      if (driver) {
+        std::string ignored;
+        driver->tick(simu.time(), simu, cmd, ignored);
+        recorder.fillController();
+      }
+      write(k, true);
     }
-    write(k, true);
-  }
   } catch (const OutputError& e) {
     // The trace cannot be written (a full disk, a file-size limit): the run stops at once; what
     // can still be written is, and the error ends the run as a run failure (exit code 3).
@@ -534,8 +535,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   if (output_error) {
     try {
       writer.finish(r.status, r.message);
-    } catch (const OutputError&) {
-    }
+    } catch (const OutputError&) {}
   } else {
     writer.finish(r.status, r.message);
   }
@@ -574,8 +574,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   if (output_error) {
     try {
       writeSummary(r.summary_path, runRecord(spec, r, md));
-    } catch (const OutputError&) {
-    }
+    } catch (const OutputError&) {}
     throw *output_error;
   }
   writeSummary(r.summary_path, runRecord(spec, r, md));
@@ -604,8 +603,10 @@ std::vector<std::string> expectationMismatches(const ExpectedFailure& x, records
   if (cut_short) return out;
   for (const std::string& name : x.checks) {
     const auto c = std::find_if(results.begin(), results.end(), [&](const checks::CheckResult& r) { return r.name == name; });
-    if (c == results.end()) out.push_back(name + " was not evaluated (expected to fail)");
-    else if (c->passed || !c->decides) out.push_back(name + " passed (expected to fail)");
+    if (c == results.end())
+      out.push_back(name + " was not evaluated (expected to fail)");
+    else if (c->passed || !c->decides)
+      out.push_back(name + " passed (expected to fail)");
   }
   return out;
 }

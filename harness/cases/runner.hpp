@@ -15,7 +15,7 @@ namespace lexdyn::cases {
 
 struct RunOptions {
   std::string out_dir;
-  bool progress = true;                          ///< progress lines on stderr
+  bool progress = true;  ///< progress lines on stderr
   /// Wall-clock seconds between progress lines. Only stderr depends on it, never the
   /// simulation, the trace or the summary.
   double progress_interval_s = 2.0;
@@ -38,7 +38,6 @@ struct RunOptions {
   double dump_to_s = 1e300;  // the end of any run
 };
 
-
 struct RunSummary {
   /// A run's own status: completed, integrator_failure, controller_failure, diverged,
   /// internal_error, interrupted, input_error or output_error.
@@ -50,7 +49,7 @@ struct RunSummary {
   double wall_s = 0.0;
   double realtime_factor = 0.0;
   long ticks = 0;
-  int signal = 0;       ///< interrupted: the signal (SIGINT, SIGTERM), 0 when unknown
+  int signal = 0;  ///< interrupted: the signal (SIGINT, SIGTERM), 0 when unknown
   sim::CvodeStats integrator;
   long integrator_restarts = 0;
   std::vector<checks::CheckResult> checks;
@@ -63,7 +62,7 @@ struct RunSummary {
   std::vector<Skipped> skipped_checks;
   bool all_checks_passed = false;
   bool has_controller_stats = false;
-  ControllerStats controller;               ///< lexdyn: per task errors, iterations, timings
+  ControllerStats controller;  ///< lexdyn: per task errors, iterations, timings
   std::string trace_path, summary_path;
   std::string case_path;  ///< DIR/case.yaml: the effective case (effectiveCaseText)
   /// The case's expected failure for this run's method (expected_failures), if it has one,
@@ -89,11 +88,11 @@ std::vector<std::string> expectationMismatches(const ExpectedFailure& expected, 
 RunSummary runCase(const CaseSpec& spec, const RunOptions& options);
 
 /// The exit codes of docs/architecture.md ("Errors and exit codes").
-inline constexpr int kExitPass = 0;          ///< completed, every check that decides passed
-inline constexpr int kExitCheckFailed = 1;   ///< a check, comparison or golden failed
-inline constexpr int kExitBadInput = 2;      ///< bad input: file, line and key path named
-inline constexpr int kExitRunFailure = 3;    ///< integrator, controller or solver failure, internal error
-inline constexpr int kExitInterrupted = 128; ///< + the signal: 130 SIGINT, 143 SIGTERM
+inline constexpr int kExitPass = 0;           ///< completed, every check that decides passed
+inline constexpr int kExitCheckFailed = 1;    ///< a check, comparison or golden failed
+inline constexpr int kExitBadInput = 2;       ///< bad input: file, line and key path named
+inline constexpr int kExitRunFailure = 3;     ///< integrator, controller or solver failure, internal error
+inline constexpr int kExitInterrupted = 128;  ///< + the signal: 130 SIGINT, 143 SIGTERM
 
 /// 128 + signal when interrupted (130 when the signal is unknown); 3 on a run failure; 1 when a
 /// check that decides failed; 0 otherwise. With an expected failure: 0 when the run failed

@@ -62,7 +62,8 @@ TargetTrajectory TargetTrajectory::fromCsv(const std::string& path, double movin
     double v[4];
     for (int i = 0; i < 4; ++i) {
       if (!parseNumber(f[static_cast<size_t>(i)], v[i])) {
-        throw InputError(where, std::string("column ") + "txyz"[i] + ": expected a finite number, found '" + f[static_cast<size_t>(i)] + "'");
+        throw InputError(where,
+                         std::string("column ") + "txyz"[i] + ": expected a finite number, found '" + f[static_cast<size_t>(i)] + "'");
       }
     }
     if (v[0] < 0.0 || v[0] > ranges::kMaxTime_s) {
@@ -70,10 +71,12 @@ TargetTrajectory TargetTrajectory::fromCsv(const std::string& path, double movin
     }
     for (int i = 1; i < 4; ++i) {
       if (std::abs(v[i]) > ranges::kMaxPosition_m) {
-        throw InputError(where, std::string("column ") + "txyz"[i] + ": expected a position in [-1000, 1000] m, found " + f[static_cast<size_t>(i)]);
+        throw InputError(
+            where, std::string("column ") + "txyz"[i] + ": expected a position in [-1000, 1000] m, found " + f[static_cast<size_t>(i)]);
       }
     }
-    if (!t.empty() && !(v[0] > t.back())) throw InputError(where, "times must increase strictly, found " + f[0] + " after " + std::to_string(t.back()));
+    if (!t.empty() && !(v[0] > t.back()))
+      throw InputError(where, "times must increase strictly, found " + f[0] + " after " + std::to_string(t.back()));
     t.push_back(v[0]);
     x.emplace_back(v[1], v[2], v[3]);
   }

@@ -26,8 +26,7 @@ class TargetTrajectory {
   /// naming the file and line.
   static TargetTrajectory fromCsv(const std::string& path, double moving_average_s, bool loop);
   /// From samples (t strictly increasing, at least 2); throws InputError naming `where`.
-  TargetTrajectory(std::vector<double> t, std::vector<Eigen::Vector3d> x, double moving_average_s, bool loop,
-                   const std::string& where);
+  TargetTrajectory(std::vector<double> t, std::vector<Eigen::Vector3d> x, double moving_average_s, bool loop, const std::string& where);
 
   /// The raw (unfiltered) path.
   Eigen::Vector3d raw(double tau) const;

@@ -40,8 +40,8 @@ void readGains(yaml::StrictMap& m, tasks::PdGains& g, double dt) {
     if (dt > 0.0 && (kvv * dt > R::kMaxPdKvDt || g.kp * dt * dt + 2.0 * kvv * dt > R::kMaxPdKpDt2Plus2KvDt)) {
       const yaml::Node& at = kv && kvv * dt > R::kMaxPdKvDt ? *kv : (kp ? *kp : *kv);
       at.fail("gains kp " + fmt(g.kp) + " /s^2, kv " + fmt(kvv) + " /s" + (g.kv ? "" : " (2 sqrt(kp))") +
-              " make the task's discrete PD law unstable at the control period " + fmt(dt) + " s: expected kv dt < " +
-              fmt(R::kMaxPdKvDt) + " and kp dt^2 + 2 kv dt < " + fmt(R::kMaxPdKpDt2Plus2KvDt) + ", found " + fmt(kvv * dt) + " and " +
+              " make the task's discrete PD law unstable at the control period " + fmt(dt) + " s: expected kv dt < " + fmt(R::kMaxPdKvDt) +
+              " and kp dt^2 + 2 kv dt < " + fmt(R::kMaxPdKpDt2Plus2KvDt) + ", found " + fmt(kvv * dt) + " and " +
               fmt(g.kp * dt * dt + 2.0 * kvv * dt));
     }
   }
@@ -52,7 +52,8 @@ Eigen::Vector3d position3(const yaml::Node& n) { return n.asVector3In(-R::kMaxPo
 // A joint target within the joint's limits (rad or m).
 void requireWithinLimits(const yaml::Node& n, double v, const model::JointDescription& jd) {
   const double lo = std::max(jd.lower, -R::kMaxJointLimit), hi = std::min(jd.upper, R::kMaxJointLimit);
-  if (!(v >= lo && v <= hi)) n.fail("joint " + jd.name + ": expected a target within its limits [" + fmt(lo) + ", " + fmt(hi) + "], found " + fmt(v));
+  if (!(v >= lo && v <= hi))
+    n.fail("joint " + jd.name + ": expected a target within its limits [" + fmt(lo) + ", " + fmt(hi) + "], found " + fmt(v));
 }
 
 Eigen::Matrix3d readRotation(const yaml::Node& n) {
@@ -191,7 +192,8 @@ void readJointPosition(TaskSpec& s, yaml::StrictMap& m, const model::RobotDescri
   for (const yaml::Node& jn : joints.elements()) p.joints.push_back(jointName(jn, d));
   if (auto v = m.optional("target")) {
     p.target = v->asVector(static_cast<int>(p.joints.size()));
-    for (int k = 0; k < p.target.size(); ++k) requireWithinLimits((*v)[k], p.target[k], d.joints[static_cast<size_t>(d.findJoint(p.joints[static_cast<size_t>(k)]))]);
+    for (int k = 0; k < p.target.size(); ++k)
+      requireWithinLimits((*v)[k], p.target[k], d.joints[static_cast<size_t>(d.findJoint(p.joints[static_cast<size_t>(k)]))]);
   }
   readGains(m, p.gains, dt);
 }
@@ -396,8 +398,7 @@ TaskTargetLayout taskTarget(const TaskSpec& spec, const model::RobotDescription&
   return t && t->target ? t->target(spec, robot) : TaskTargetLayout{};
 }
 
-std::unique_ptr<tasks::TaskModel> makeTask(const TaskSpec& spec, const model::RobotModel& model,
-                                           const tasks::ContactLayout& layout) {
+std::unique_ptr<tasks::TaskModel> makeTask(const TaskSpec& spec, const model::RobotModel& model, const tasks::ContactLayout& layout) {
   const TaskType* t = findType(spec.type);
   if (!t) throw InputError(spec.where, "unknown task type '" + spec.type + "'");
   try {

@@ -59,13 +59,12 @@ const std::vector<std::string>& taskTypes();
 /// checked against the ranges of lexdyn/common/input_ranges.hpp: positions, joint targets within
 /// the joints' limits, PD gains stable at `control_period_s` (0: not checked). Throws
 /// lexdyn::InputError naming the file, line and key path.
-TaskSpec readTaskSpec(const yaml::Node& node, const model::RobotDescription& robot,
-                      const std::vector<std::string>& contacts, double control_period_s = 0.0);
+TaskSpec readTaskSpec(const yaml::Node& node, const model::RobotDescription& robot, const std::vector<std::string>& contacts,
+                      double control_period_s = 0.0);
 
 /// Builds the task. Errors of the task's own validation are rethrown naming the case file
 /// entry (TaskSpec::where).
-std::unique_ptr<tasks::TaskModel> makeTask(const TaskSpec& spec, const model::RobotModel& model,
-                                           const tasks::ContactLayout& layout);
+std::unique_ptr<tasks::TaskModel> makeTask(const TaskSpec& spec, const model::RobotModel& model, const tasks::ContactLayout& layout);
 
 /// The PD gains of a task (position, orientation, com, joint_position, posture, contact);
 /// nullptr for a type without.

@@ -22,14 +22,14 @@ namespace lexdyn::checks {
 
 /// What a check's parser may ask about the case.
 struct CheckContext {
-  std::string controller;             ///< the case's controller type (posture_servo, lexdyn)
+  std::string controller;  ///< the case's controller type (posture_servo, lexdyn)
   double control_period_s = 0.0;
   // The robot.
   std::vector<std::string> frames;
   std::vector<std::string> surfaces;  ///< contact surfaces of the robot data file (simulator side)
   struct Joint {
     std::string name;
-    double effort_limit = 0.0;        ///< URDF effort limit (N m or N); <= 0: none
+    double effort_limit = 0.0;  ///< URDF effort limit (N m or N); <= 0: none
   };
   std::vector<Joint> joints;
   // The lexdyn controller.
@@ -37,16 +37,16 @@ struct CheckContext {
     std::string name;
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< in the contact frame
     double friction = 0.0;
-    bool has_sensor = false;          ///< a linked force/torque sensor
-    std::vector<Eigen::Vector3d> points;                ///< in the contact frame
+    bool has_sensor = false;              ///< a linked force/torque sensor
+    std::vector<Eigen::Vector3d> points;  ///< in the contact frame
   };
   std::vector<Contact> contacts;
   struct Task {
     std::string name;
     std::string type;
-    bool has_gains = false;           ///< a task with PD gains (kp, kv)
+    bool has_gains = false;  ///< a task with PD gains (kp, kv)
     double kp = 0.0;
-    std::optional<double> kv;         ///< absent: 2 sqrt(kp)
+    std::optional<double> kv;  ///< absent: 2 sqrt(kp)
   };
   std::vector<Task> tasks;
   struct Method {
@@ -55,7 +55,7 @@ struct CheckContext {
     std::vector<std::string> tasks;   ///< the tasks its hierarchy uses
     std::vector<std::string> levels;  ///< its levels' names
   };
-  std::vector<Method> methods;        ///< every method of the controller, in order
+  std::vector<Method> methods;  ///< every method of the controller, in order
 
   bool lexdyn() const { return controller == "lexdyn"; }
   std::vector<std::string> methodNames() const;
@@ -121,16 +121,16 @@ using CheckMaker = std::unique_ptr<Check> (*)(const CheckSpec& spec, const Check
 
 /// Flags of a check type.
 enum CheckFlags : unsigned {
-  kSimulatorChannels = 0,        ///< reads the simulator's channels (any controller)
-  kControllerChannels = 1u << 0, ///< reads the lexdyn controller's channels: needs it; has to_s
-  kBoundsBelow = 1u << 1,        ///< passes when value >= limit (margin: value - limit)
-  kMachineDependent = 1u << 2,   ///< a wall-clock measurement: decides only when asked
+  kSimulatorChannels = 0,         ///< reads the simulator's channels (any controller)
+  kControllerChannels = 1u << 0,  ///< reads the lexdyn controller's channels: needs it; has to_s
+  kBoundsBelow = 1u << 1,         ///< passes when value >= limit (margin: value - limit)
+  kMachineDependent = 1u << 2,    ///< a wall-clock measurement: decides only when asked
 };
 
 struct CheckType {
   std::string name;
-  std::string unit;       ///< of the value (an evaluator may name a finer one, e.g. N m for torques)
-  unsigned flags = 0;     ///< CheckFlags
+  std::string unit;    ///< of the value (an evaluator may name a finer one, e.g. N m for torques)
+  unsigned flags = 0;  ///< CheckFlags
   CheckParser parse = nullptr;
   CheckMaker make = nullptr;
 
@@ -165,8 +165,7 @@ const CheckRegistry& builtinChecks();
 
 /// Reads one `checks` entry: the common keys (type, name, from_s, methods; to_s for the
 /// controller's checks), then the type's own. InputError naming the file, line and key path.
-CheckSpec readCheck(const yaml::Node& node, const CheckContext& context,
-                    const CheckRegistry& registry = builtinChecks());
+CheckSpec readCheck(const yaml::Node& node, const CheckContext& context, const CheckRegistry& registry = builtinChecks());
 
 /// The evaluator of a check of a type of `registry`.
 std::unique_ptr<Check> makeCheck(const CheckSpec& spec, const CheckRegistry& registry);

@@ -41,8 +41,8 @@ WindowCut cutWindow(const CheckSpec& spec, double run_end_s, double scenario_end
     w.skip = true;
     w.note = "its window " + window() + " starts after the run's end at " + fmt(run_end_s) + " s (stop_at_s, run --duration)";
   } else if (end > run_end_s + 1e-9) {
-    w.note = "over [" + fmt(spec.from_s) + ", " + fmt(run_end_s) + "] s of its window " + window() + ": the run stopped at " + fmt(run_end_s) +
-             " s (stop_at_s, run --duration)";
+    w.note = "over [" + fmt(spec.from_s) + ", " + fmt(run_end_s) + "] s of its window " + window() + ": the run stopped at " +
+             fmt(run_end_s) + " s (stop_at_s, run --duration)";
   }
   return w;
 }
@@ -56,14 +56,12 @@ std::string contactActiveChannel(const std::string& contact) { return "ctrl_cont
 std::string timerChannel(const std::string& timer) { return "time." + timer + "_us"; }
 
 const std::vector<std::string>& controllerStatusNames() {
-  static const std::vector<std::string> names = {"ok", "solver_stopped_early", "solver_iteration_limit", "infeasible",
-                                                 "non_finite"};
+  static const std::vector<std::string> names = {"ok", "solver_stopped_early", "solver_iteration_limit", "infeasible", "non_finite"};
   return names;
 }
 
 const std::vector<std::string>& solverStatusNames() {
-  static const std::vector<std::string> names = {"solved", "stopped_early", "iteration_limit", "non_finite_input",
-                                                 "non_finite_result"};
+  static const std::vector<std::string> names = {"solved", "stopped_early", "iteration_limit", "non_finite_input", "non_finite_result"};
   return names;
 }
 

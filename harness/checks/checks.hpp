@@ -32,13 +32,13 @@ namespace lexdyn::checks {
 /// (CheckType::parse sets it; e.g. TaskErrorParams for task_error, task_checks.hpp).
 struct CheckSpec {
   std::string name;
-  std::string type;                    ///< a registered check type (checkTypes())
-  std::string where;                   ///< origin in the case file, for messages
-  double from_s = 0.0;                 ///< start of the window
+  std::string type;                                       ///< a registered check type (checkTypes())
+  std::string where;                                      ///< origin in the case file, for messages
+  double from_s = 0.0;                                    ///< start of the window
   double to_s = std::numeric_limits<double>::infinity();  ///< end of the window
   double limit = 0.0;
-  std::vector<std::string> methods;    ///< the check applies to these methods only (empty: all)
-  std::any params;                     ///< the type's params struct (empty for a type without)
+  std::vector<std::string> methods;  ///< the check applies to these methods only (empty: all)
+  std::any params;                   ///< the type's params struct (empty for a type without)
 
   /// The params struct of the check's type; aborts when the spec holds another (an internal
   /// error: the type's parser or the code that built the spec set the wrong one).
@@ -66,8 +66,8 @@ struct ComparisonSpec {
   std::string name;
   std::string type = "method_comparison";
   std::vector<std::string> tasks;
-  std::string statistic = "final";     ///< final | mean | max of the sum of the tasks' error norms
-  std::string better, worse;           ///< methods
+  std::string statistic = "final";  ///< final | mean | max of the sum of the tasks' error norms
+  std::string better, worse;        ///< methods
   double margin = 0.0;
   double from_s = 0.0;
   double to_s = std::numeric_limits<double>::infinity();
@@ -103,8 +103,8 @@ struct CheckResult {
 /// Where a run stopped early (at run_end_s, before the scenario's end at scenario_end_s) leaves a
 /// check's window [from_s, to_s] (to_s infinite: the scenario's end).
 struct WindowCut {
-  bool skip = false;   ///< the window starts after the run's end: not evaluated
-  std::string note;    ///< why it is skipped, or what of the window was run (empty: all of it)
+  bool skip = false;  ///< the window starts after the run's end: not evaluated
+  std::string note;   ///< why it is skipped, or what of the window was run (empty: all of it)
 };
 WindowCut cutWindow(const CheckSpec& spec, double run_end_s, double scenario_end_s);
 
@@ -141,15 +141,16 @@ bool machineDependent(const CheckSpec& spec);
 bool appliesTo(const CheckSpec& spec, const std::string& method);
 
 /// Channel names the runner records and the checks read.
-std::string frameChannel(const std::string& frame, char axis);               // frame.<F>.<x|y|z>
-std::string contactForceChannel(const std::string& surface);                 // contact.<S>.fz
+std::string frameChannel(const std::string& frame, char axis);                      // frame.<F>.<x|y|z>
+std::string contactForceChannel(const std::string& surface);                        // contact.<S>.fz
 std::string contactPointChannel(const std::string& surface, int point, char axis);  // contact.<S>.p<i>.<x|y>
 // The lexdyn controller's channels (docs/cases.md, "Trace channels").
-std::string taskChannel(const std::string& task, const char* what);        // task.<T>.<error|active|engaged>
-std::string levelChannel(const std::string& level, const char* what);      // level.<L>.<augmented|hessian_updated|violation|second_order_ratio|curvature_ratio>
+std::string taskChannel(const std::string& task, const char* what);  // task.<T>.<error|active|engaged>
+std::string levelChannel(const std::string& level,
+                         const char* what);  // level.<L>.<augmented|hessian_updated|violation|second_order_ratio|curvature_ratio>
 std::string wrenchChannel(const std::string& contact, bool sensed, const char* component);  // wrench[_sensed].<C>.<fx..tz>
-std::string contactActiveChannel(const std::string& contact);              // ctrl_contact.<C>.active
-std::string timerChannel(const std::string& timer);                        // time.<timer>_us
+std::string contactActiveChannel(const std::string& contact);                               // ctrl_contact.<C>.active
+std::string timerChannel(const std::string& timer);                                         // time.<timer>_us
 constexpr const char* kTimeChannel = "t";
 constexpr const char* kWeightMetadata = "robot_weight_N";
 constexpr const char* kMethodMetadata = "method";
@@ -163,12 +164,11 @@ constexpr const char* kSolverFactorizationsChannel = "solver.factorizations";
 /// ctrl.status holds the index of the controller's tick status in this list.
 const std::vector<std::string>& controllerStatusNames();  // ok, solver_stopped_early, ...
 /// solver.status holds the index of the solver's status in this list.
-const std::vector<std::string>& solverStatusNames();      // solved, stopped_early, ...
+const std::vector<std::string>& solverStatusNames();  // solved, stopped_early, ...
 
 /// Runs checks over a stored trace. Checks that do not apply to the trace's method (metadata
 /// `method`) are left out. Machine-dependent checks decide only with `wall_clock_checks`.
-std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace,
-                                   bool wall_clock_checks = false);
+std::vector<CheckResult> runChecks(const std::vector<CheckSpec>& specs, const TraceTable& trace, bool wall_clock_checks = false);
 
 /// The figure a comparison compares, for one method: a task_error check of the comparison's
 /// tasks, statistic and window, without a limit (+inf).

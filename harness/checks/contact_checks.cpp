@@ -11,7 +11,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-
 using Polygon = std::vector<std::pair<double, double>>;
 
 /// Convex hull (counter-clockwise, Andrew's monotone chain) of the points' (x, y).
@@ -73,7 +72,8 @@ void readCop(CheckReader& r) {
   Polygon pts;
   for (const auto& pt : c.points) pts.emplace_back(pt.x(), pt.y());
   p.polygon = convexHull(pts);
-  if (p.polygon.size() < 3) r.map.required("contact").fail("contact_cop needs a contact with a support polygon (3 points or more, not aligned)");
+  if (p.polygon.size() < 3)
+    r.map.required("contact").fail("contact_cop needs a contact with a support polygon (3 points or more, not aligned)");
   p.min_normal_N = minNormal(r);
   r.spec.params = std::move(p);
   r.spec.limit = r.number("limit_m", 0.0, &yaml::Node::asDouble);
@@ -112,9 +112,7 @@ class ContactCheck : public CheckBase {
     for (int k = 0; k < 6; ++k) w_[k] = channel(schema, wrenchChannel(c_.contact, sensed, kWrenchComponents[k]));
   }
   bool contactActive(const double* row) const { return active(row) && row[active_] != 0.0; }
-  double normalForce(const double* row) const {
-    return row[w_[0]] * c_.normal[0] + row[w_[1]] * c_.normal[1] + row[w_[2]] * c_.normal[2];
-  }
+  double normalForce(const double* row) const { return row[w_[0]] * c_.normal[0] + row[w_[1]] * c_.normal[1] + row[w_[2]] * c_.normal[2]; }
   double tangentialForce(const double* row) const {
     const double fn = normalForce(row);
     double s = 0.0;
@@ -190,8 +188,7 @@ class ContactLoadedCheck : public ContactCheck {
 class ContactFriction final : public ContactLoadedCheck {
  public:
   ContactFriction(const CheckSpec& s, const CheckType& t)
-      : ContactLoadedCheck(s, t, s.paramsAs<ContactFrictionParams>().min_normal_N),
-        p_(spec_.paramsAs<ContactFrictionParams>()) {
+      : ContactLoadedCheck(s, t, s.paramsAs<ContactFrictionParams>().min_normal_N), p_(spec_.paramsAs<ContactFrictionParams>()) {
     tolerance_ = kBoundaryRelTolerance;
   }
   void consume(const double* row) override {
@@ -233,8 +230,7 @@ double signedDistanceToPolygon(const Polygon& poly, double x, double y) {
 class ContactCop final : public ContactLoadedCheck {
  public:
   ContactCop(const CheckSpec& s, const CheckType& t)
-      : ContactLoadedCheck(s, t, s.paramsAs<ContactCopParams>().min_normal_N),
-        p_(spec_.paramsAs<ContactCopParams>()) {
+      : ContactLoadedCheck(s, t, s.paramsAs<ContactCopParams>().min_normal_N), p_(spec_.paramsAs<ContactCopParams>()) {
     worst_ = -kInf;
     double diameter = 0.0;
     for (const auto& a : p_.polygon) {
@@ -291,8 +287,8 @@ class ContactWrenchMatch final : public CheckOf<WrenchMatchParams> {
   void finish(CheckResult& r) const override {
     r.value = p_.statistic == "max" ? max_ : std::sqrt(sum2_ / static_cast<double>(n_));
     r.passed = r.value <= spec_.limit;
-    r.detail = p_.statistic + " of |computed - sensed| " + p_.component + " over " + std::to_string(n_) + " rows; largest " +
-               fmt(max_) + " at t = " + fmt(t_max_) + " s";
+    r.detail = p_.statistic + " of |computed - sensed| " + p_.component + " over " + std::to_string(n_) + " rows; largest " + fmt(max_) +
+               " at t = " + fmt(t_max_) + " s";
   }
 
   int active_ = 0, c_[3] = {0, 0, 0}, s_[3] = {0, 0, 0};
@@ -302,9 +298,17 @@ class ContactWrenchMatch final : public CheckOf<WrenchMatchParams> {
 
 }  // namespace
 
-CheckType contactUnilateralCheck() { return {"contact_unilateral", "N", kControllerChannels | kBoundsBelow, readUnilateral, makeEvaluator<ContactUnilateral>}; }
-CheckType contactFrictionCheck() { return {"contact_friction", "|f_t| / (mu f_n)", kControllerChannels, readFriction, makeEvaluator<ContactFriction>}; }
-CheckType contactCopCheck() { return {"contact_cop", "m (signed distance to the sole's edge, < 0 inside)", kControllerChannels, readCop, makeEvaluator<ContactCop>}; }
-CheckType contactWrenchMatchCheck() { return {"contact_wrench_match", "N", kControllerChannels, readWrenchMatch, makeEvaluator<ContactWrenchMatch>}; }
+CheckType contactUnilateralCheck() {
+  return {"contact_unilateral", "N", kControllerChannels | kBoundsBelow, readUnilateral, makeEvaluator<ContactUnilateral>};
+}
+CheckType contactFrictionCheck() {
+  return {"contact_friction", "|f_t| / (mu f_n)", kControllerChannels, readFriction, makeEvaluator<ContactFriction>};
+}
+CheckType contactCopCheck() {
+  return {"contact_cop", "m (signed distance to the sole's edge, < 0 inside)", kControllerChannels, readCop, makeEvaluator<ContactCop>};
+}
+CheckType contactWrenchMatchCheck() {
+  return {"contact_wrench_match", "N", kControllerChannels, readWrenchMatch, makeEvaluator<ContactWrenchMatch>};
+}
 
 }  // namespace lexdyn::checks

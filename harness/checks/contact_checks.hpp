@@ -16,26 +16,26 @@ namespace lexdyn::checks {
 
 /// contact_unilateral, and the common part of contact_friction and contact_cop.
 struct ContactParams {
-  std::string contact;                 ///< a controller contact
-  std::string source = "computed";     ///< computed (wrench.<C>) | sensed (wrench_sensed.<C>)
+  std::string contact;                                ///< a controller contact
+  std::string source = "computed";                    ///< computed (wrench.<C>) | sensed (wrench_sensed.<C>)
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< the contact normal in the contact frame
 };
 
 struct ContactFrictionParams : ContactParams {
-  double friction = 0.0;               ///< mu
-  double min_normal_N = 1.0;           ///< rows with a lower normal force are skipped
+  double friction = 0.0;      ///< mu
+  double min_normal_N = 1.0;  ///< rows with a lower normal force are skipped
 };
 
 struct ContactCopParams : ContactParams {
   /// The convex support polygon (x, y) in the contact frame, counter-clockwise.
   std::vector<std::pair<double, double>> polygon;
-  double min_normal_N = 1.0;           ///< rows with a lower normal force are skipped
+  double min_normal_N = 1.0;  ///< rows with a lower normal force are skipped
 };
 
 struct WrenchMatchParams {
-  std::string contact;                 ///< a controller contact with a linked sensor
-  std::string component = "force";     ///< force | torque
-  std::string statistic = "rms";       ///< rms | max
+  std::string contact;              ///< a controller contact with a linked sensor
+  std::string component = "force";  ///< force | torque
+  std::string statistic = "rms";    ///< rms | max
 };
 
 CheckType contactUnilateralCheck();

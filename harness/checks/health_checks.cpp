@@ -12,7 +12,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-
 // ---------------------------------------------------------------------------------------------
 // Parsers.
 
@@ -133,7 +132,9 @@ class AugmentedFraction final : public CheckOf<AugmentedFractionParams> {
   using CheckOf::CheckOf;
 
  private:
-  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override { col_ = channel(schema, levelChannel(p_.level, "augmented")); }
+  void bindChannels(const TraceSchema& schema, const TraceMetadata&) override {
+    col_ = channel(schema, levelChannel(p_.level, "augmented"));
+  }
   void sample(const double* row, bool) override {
     ++n_;
     if (row[col_] != 0.0) {
@@ -141,8 +142,8 @@ class AugmentedFraction final : public CheckOf<AugmentedFractionParams> {
       ++augmented_;
     }
     worst_ = static_cast<double>(augmented_) / static_cast<double>(n_);
-    detail_ = std::to_string(augmented_) + " of " + std::to_string(n_) + " rows" +
-              (augmented_ > 0 ? ", first at t = " + fmt(first_) + " s" : "");
+    detail_ =
+        std::to_string(augmented_) + " of " + std::to_string(n_) + " rows" + (augmented_ > 0 ? ", first at t = " + fmt(first_) + " s" : "");
   }
   int col_ = 0;
   long n_ = 0, augmented_ = 0;
@@ -174,10 +175,18 @@ class TickTime final : public CheckOf<TickTimeParams> {
 
 }  // namespace
 
-CheckType controllerStatusCheck() { return {"controller_status", "ticks", kControllerChannels, readControllerStatus, makeEvaluator<ControllerStatus>}; }
-CheckType activeSetPeakCheck() { return {"active_set_peak", "iterations", kControllerChannels, readActiveSetPeak, makeEvaluator<ActiveSetPeak>}; }
-CheckType factorizationPeakCheck() { return {"factorization_peak", "level factorisations", kControllerChannels, readFactorizationPeak, makeEvaluator<FactorizationPeak>}; }
-CheckType augmentedFractionCheck() { return {"augmented_fraction", "fraction of ticks", kControllerChannels, readAugmentedFraction, makeEvaluator<AugmentedFraction>}; }
+CheckType controllerStatusCheck() {
+  return {"controller_status", "ticks", kControllerChannels, readControllerStatus, makeEvaluator<ControllerStatus>};
+}
+CheckType activeSetPeakCheck() {
+  return {"active_set_peak", "iterations", kControllerChannels, readActiveSetPeak, makeEvaluator<ActiveSetPeak>};
+}
+CheckType factorizationPeakCheck() {
+  return {"factorization_peak", "level factorisations", kControllerChannels, readFactorizationPeak, makeEvaluator<FactorizationPeak>};
+}
+CheckType augmentedFractionCheck() {
+  return {"augmented_fraction", "fraction of ticks", kControllerChannels, readAugmentedFraction, makeEvaluator<AugmentedFraction>};
+}
 CheckType tickTimeCheck() { return {"tick_time", "us", kControllerChannels | kMachineDependent, readTickTime, makeEvaluator<TickTime>}; }
 
 }  // namespace lexdyn::checks

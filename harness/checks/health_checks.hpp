@@ -22,13 +22,13 @@ struct AugmentedFractionParams {
 };
 
 struct TickTimeParams {
-  std::string timer;                 ///< model | tasks | hessian | solver | tick
-  double percentile = 100.0;         ///< nearest rank
+  std::string timer;          ///< model | tasks | hessian | solver | tick
+  double percentile = 100.0;  ///< nearest rank
 };
 
 CheckType controllerStatusCheck();
-CheckType activeSetPeakCheck();        ///< no params
-CheckType factorizationPeakCheck();    ///< no params
+CheckType activeSetPeakCheck();      ///< no params
+CheckType factorizationPeakCheck();  ///< no params
 CheckType augmentedFractionCheck();
 CheckType tickTimeCheck();
 

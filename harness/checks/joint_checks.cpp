@@ -9,7 +9,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-
 // ---------------------------------------------------------------------------------------------
 // Parsers.
 
@@ -128,9 +127,8 @@ class JointAccelerationSignChanges final : public CheckOf<JointSignChangesParams
     if (best < 0) best = 0;
     r.value = span > 0.0 ? static_cast<double>(best) / span : 0.0;
     r.passed = r.value <= spec_.limit;
-    r.detail = (cols_.empty() ? std::string("no joints") : p_.joints[best_j] + ": " + std::to_string(best)) +
-               " sign changes of the " + sourceName(p_.source) + " acceleration over " + fmt(span) + " s (dead band " +
-               fmt(p_.dead_band) + " rad/s^2)";
+    r.detail = (cols_.empty() ? std::string("no joints") : p_.joints[best_j] + ": " + std::to_string(best)) + " sign changes of the " +
+               sourceName(p_.source) + " acceleration over " + fmt(span) + " s (dead band " + fmt(p_.dead_band) + " rad/s^2)";
   }
 
  private:
@@ -250,8 +248,15 @@ class JointVelocityHfEnergy final : public CheckOf<JointHfEnergyParams> {
 
 }  // namespace
 
-CheckType torqueLimitsCheck() { return {"torque_limits", "fraction of the effort limit", kControllerChannels, readTorqueLimits, makeEvaluator<TorqueLimits>}; }
-CheckType jointAccelerationSignChangesCheck() { return {"joint_acceleration_sign_changes", "sign changes per second", kControllerChannels, readJointSignChanges, makeEvaluator<JointAccelerationSignChanges>}; }
-CheckType jointVelocityHfEnergyCheck() { return {"joint_velocity_hf_energy", "(rad/s)^2", kControllerChannels, readJointHfEnergy, makeEvaluator<JointVelocityHfEnergy>}; }
+CheckType torqueLimitsCheck() {
+  return {"torque_limits", "fraction of the effort limit", kControllerChannels, readTorqueLimits, makeEvaluator<TorqueLimits>};
+}
+CheckType jointAccelerationSignChangesCheck() {
+  return {"joint_acceleration_sign_changes", "sign changes per second", kControllerChannels, readJointSignChanges,
+          makeEvaluator<JointAccelerationSignChanges>};
+}
+CheckType jointVelocityHfEnergyCheck() {
+  return {"joint_velocity_hf_energy", "(rad/s)^2", kControllerChannels, readJointHfEnergy, makeEvaluator<JointVelocityHfEnergy>};
+}
 
 }  // namespace lexdyn::checks

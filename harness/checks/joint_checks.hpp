@@ -12,19 +12,19 @@
 namespace lexdyn::checks {
 
 struct TorqueLimitsParams {
-  std::string source = "both";         ///< applied (tau.<J>) | commanded (cmd.tau.<J>) | both
+  std::string source = "both";  ///< applied (tau.<J>) | commanded (cmd.tau.<J>) | both
   std::vector<std::string> joints;
-  std::vector<double> joint_limits;    ///< the effort limit of each joint of `joints`
+  std::vector<double> joint_limits;  ///< the effort limit of each joint of `joints`
 };
 
 struct JointSignChangesParams {
-  std::string source = "measured";     ///< measured (qd.<J>) | commanded (cmd.qd.<J>)
+  std::string source = "measured";  ///< measured (qd.<J>) | commanded (cmd.qd.<J>)
   std::vector<std::string> joints;
-  double dead_band = 0.0;              ///< rad/s^2: |acceleration| <= dead_band carries no sign
+  double dead_band = 0.0;  ///< rad/s^2: |acceleration| <= dead_band carries no sign
 };
 
 struct JointHfEnergyParams {
-  std::string source = "measured";     ///< measured | commanded
+  std::string source = "measured";  ///< measured | commanded
   std::vector<std::string> joints;
   double cutoff_hz = 0.0;
 };

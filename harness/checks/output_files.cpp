@@ -77,9 +77,11 @@ std::string describeHolder(int fd) {
     p += p == 0 ? k.size() : k.size() + 1;
     return rest ? line.substr(p) : line.substr(p, line.find(' ', p) - p);
   };
-  const std::string pid = field("pid", false), started = field("started", false), host = field("host", false), command = field("command", true);
+  const std::string pid = field("pid", false), started = field("started", false), host = field("host", false),
+                    command = field("command", true);
   if (pid.empty()) return "holder unknown";
-  return "pid " + pid + (command.empty() ? "" : ", " + command) + (started.empty() ? "" : ", started " + started) + (host.empty() ? "" : " on " + host);
+  return "pid " + pid + (command.empty() ? "" : ", " + command) + (started.empty() ? "" : ", started " + started) +
+         (host.empty() ? "" : " on " + host);
 }
 
 // Opens DIR/.lexdyn.lock (or FILE.lock), created when missing.

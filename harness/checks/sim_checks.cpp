@@ -12,7 +12,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-
 // ---------------------------------------------------------------------------------------------
 // Parsers.
 
@@ -83,8 +82,8 @@ class ForceBalance final : public CheckOf<SurfacesParams> {
     double sum = 0.0;
     for (int c : cols_) sum += row[c];
     if (worse(std::abs(sum - weight_) / weight_)) {
-      detail_ = "largest at t = " + std::to_string(row[t_]) + " s: sum " + std::to_string(sum) + " N, weight " +
-                std::to_string(weight_) + " N";
+      detail_ =
+          "largest at t = " + std::to_string(row[t_]) + " s: sum " + std::to_string(sum) + " N, weight " + std::to_string(weight_) + " N";
     }
   }
   std::vector<int> cols_;

@@ -13,7 +13,6 @@ namespace lexdyn::checks {
 
 namespace {
 
-
 // ---------------------------------------------------------------------------------------------
 // Parsers.
 
@@ -42,9 +41,12 @@ void readTaskClosedForm(CheckReader& r) {
   auto kv = r.map.optional("kv");
   if (!t.has_gains && !kp) r.map.required("task").fail("task '" + t.name + "' (" + t.type + ") has no PD gains; give kp (and kv)");
   p.kp = kp ? kp->asNonNegativeDouble() : t.kp;
-  if (kv) p.kv = kv->asNonNegativeDouble();
-  else if (!kp && t.kv) p.kv = *t.kv;
-  else p.kv = 2.0 * std::sqrt(p.kp);
+  if (kv)
+    p.kv = kv->asNonNegativeDouble();
+  else if (!kp && t.kv)
+    p.kv = *t.kv;
+  else
+    p.kv = 2.0 * std::sqrt(p.kp);
   r.spec.params = std::move(p);
   r.spec.limit = r.map.required("limit_rel").asNonNegativeDouble();
 }
@@ -66,8 +68,10 @@ class TaskErrorStat {
   void consume(double t, const double* row) {
     double s = 0.0;
     for (int c : cols_) s += row[c];
-    if (n_ > 0) integral_ += 0.5 * (t - t_last_) * (s + last_);
-    else t_first_ = t;
+    if (n_ > 0)
+      integral_ += 0.5 * (t - t_last_) * (s + last_);
+    else
+      t_first_ = t;
     if (n_ == 0 || s > max_ || std::isnan(s)) {
       max_ = s;
       t_max_ = t;
@@ -131,8 +135,8 @@ class TaskErrorRateSignChanges final : public CheckOf<TaskErrorRateParams> {
     const double span = t1_ - t0_;
     r.value = span > 0.0 ? static_cast<double>(counter_.changes) / span : 0.0;
     r.passed = r.value <= spec_.limit;
-    r.detail = std::to_string(counter_.changes) + " sign changes of d/dt |e| of " + p_.task + " over " + fmt(span) +
-               " s (dead band " + fmt(p_.dead_band) + ")";
+    r.detail = std::to_string(counter_.changes) + " sign changes of d/dt |e| of " + p_.task + " over " + fmt(span) + " s (dead band " +
+               fmt(p_.dead_band) + ")";
   }
 
  private:
@@ -246,8 +250,8 @@ class TaskOvershoot final : public TaskResponseCheck {
     const double rise = e - min_;
     if (rise > rise_ || std::isnan(rise)) {
       rise_ = rise;
-      detail_ = "largest rise at t = " + fmt(t) + " s: |e| " + fmt(e) + " after a minimum of " + fmt(min_) + " at t = " +
-                fmt(t_min_) + " s";
+      detail_ =
+          "largest rise at t = " + fmt(t) + " s: |e| " + fmt(e) + " after a minimum of " + fmt(min_) + " at t = " + fmt(t_min_) + " s";
     }
   }
   bool have_min_ = false;
@@ -256,10 +260,20 @@ class TaskOvershoot final : public TaskResponseCheck {
 
 }  // namespace
 
-CheckType taskErrorCheck() { return {"task_error", "task error norm (m, rad)", kControllerChannels, readTaskError, makeEvaluator<TaskError>}; }
-CheckType taskErrorRateSignChangesCheck() { return {"task_error_rate_sign_changes", "sign changes per second", kControllerChannels, readTaskErrorRate, makeEvaluator<TaskErrorRateSignChanges>}; }
-CheckType taskErrorClosedFormCheck() { return {"task_error_closed_form", "fraction of the initial error", kControllerChannels, readTaskClosedForm, makeEvaluator<TaskErrorClosedForm>}; }
-CheckType taskOvershootCheck() { return {"task_overshoot", "fraction of the initial error", kControllerChannels, readTaskOvershoot, makeEvaluator<TaskOvershoot>}; }
+CheckType taskErrorCheck() {
+  return {"task_error", "task error norm (m, rad)", kControllerChannels, readTaskError, makeEvaluator<TaskError>};
+}
+CheckType taskErrorRateSignChangesCheck() {
+  return {"task_error_rate_sign_changes", "sign changes per second", kControllerChannels, readTaskErrorRate,
+          makeEvaluator<TaskErrorRateSignChanges>};
+}
+CheckType taskErrorClosedFormCheck() {
+  return {"task_error_closed_form", "fraction of the initial error", kControllerChannels, readTaskClosedForm,
+          makeEvaluator<TaskErrorClosedForm>};
+}
+CheckType taskOvershootCheck() {
+  return {"task_overshoot", "fraction of the initial error", kControllerChannels, readTaskOvershoot, makeEvaluator<TaskOvershoot>};
+}
 
 // ---------------------------------------------------------------------------------------------
 // Method comparisons.
@@ -321,8 +335,7 @@ CheckResult compareMethods(const ComparisonSpec& spec, const TraceTable& better,
   r.value = b.value - w.value;
   r.passed = r.value <= spec.margin;
   char buf[256];
-  std::snprintf(buf, sizeof(buf), "%s %s %.6g, %s %.6g", spec.statistic.c_str(), spec.better.c_str(), b.value,
-                spec.worse.c_str(), w.value);
+  std::snprintf(buf, sizeof(buf), "%s %s %.6g, %s %.6g", spec.statistic.c_str(), spec.better.c_str(), b.value, spec.worse.c_str(), w.value);
   r.detail = buf;
   return r;
 }

@@ -20,12 +20,12 @@ struct TaskErrorParams {
 
 struct TaskErrorRateParams {
   std::string task;
-  double dead_band = 0.0;          ///< 1/s: |rate| <= dead_band carries no sign
+  double dead_band = 0.0;  ///< 1/s: |rate| <= dead_band carries no sign
 };
 
 struct TaskClosedFormParams {
   std::string task;
-  double kp = 0.0, kv = 0.0;       ///< the PD gains (1/s^2, 1/s)
+  double kp = 0.0, kv = 0.0;  ///< the PD gains (1/s^2, 1/s)
 };
 
 struct TaskOvershootParams {

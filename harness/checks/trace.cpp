@@ -26,8 +26,7 @@ const std::string* findMetadata(const TraceMetadata& m, const std::string& key) 
 }
 
 int TraceSchema::add(const std::string& name) {
-  LEXDYN_ALWAYS_ASSERT(!name.empty() && name.find_first_of(", \t\r\n\"") == std::string::npos,
-                       "invalid trace channel name '" + name + "'");
+  LEXDYN_ALWAYS_ASSERT(!name.empty() && name.find_first_of(", \t\r\n\"") == std::string::npos, "invalid trace channel name '" + name + "'");
   LEXDYN_ALWAYS_ASSERT(find(name) < 0, "duplicate trace channel '" + name + "'");
   names_.push_back(name);
   index_.emplace(name, static_cast<int>(names_.size()) - 1);
@@ -185,7 +184,8 @@ TraceTable parseTrace(std::istream& in, const std::string& name, bool partial) {
     ++lineno;
     const std::string where = name + ":" + std::to_string(lineno);
     if (line.find('\0') != std::string::npos) {
-      throw InputError(where, "expected a text trace file, found binary data (a NUL byte) at column " + std::to_string(line.find('\0') + 1));
+      throw InputError(where,
+                       "expected a text trace file, found binary data (a NUL byte) at column " + std::to_string(line.find('\0') + 1));
     }
     if (!line.empty() && line.back() == '\r') {
       throw InputError(where, "the line ends with a carriage return (CRLF line endings); trace files use LF only");
@@ -202,7 +202,8 @@ TraceTable parseTrace(std::istream& in, const std::string& name, bool partial) {
     if (line.rfind("# ", 0) == 0) {
       if (have_names) {
         // The only comment after the channel line is the end mark.
-        if (line.rfind("# end: ", 0) != 0) throw InputError(where, "a header line after the channel names (only '# end: STATUS' may follow the rows)");
+        if (line.rfind("# end: ", 0) != 0)
+          throw InputError(where, "a header line after the channel names (only '# end: STATUS' may follow the rows)");
         const std::string mark = line.substr(7);
         const size_t colon = mark.find(": ");
         const std::string status = mark.substr(0, colon);
@@ -265,7 +266,8 @@ TraceTable parseTrace(std::istream& in, const std::string& name, bool partial) {
     if (tc >= 0) {
       // The time column orders the rows: every check and comparison relies on it.
       const double tv = row[static_cast<size_t>(tc)];
-      if (!std::isfinite(tv) || tv < 0.0) throw InputError(where, "time 't': expected a finite time >= 0 s, found " + fields[static_cast<size_t>(tc)]);
+      if (!std::isfinite(tv) || tv < 0.0)
+        throw InputError(where, "time 't': expected a finite time >= 0 s, found " + fields[static_cast<size_t>(tc)]);
       if (!t.rows.empty()) {
         const double prev = t.rows.back()[static_cast<size_t>(tc)];
         if (!(tv > prev)) {
@@ -275,8 +277,8 @@ TraceTable parseTrace(std::istream& in, const std::string& name, bool partial) {
       }
       if (period > 0.0 && !offgrid.empty()) {
         // Only the last row may be off the tick grid: the state where a failed run stopped.
-        throw InputError(offgrid, "time 't': not a tick of the header's control period (" + std::to_string(period) +
-                                      " s), and not the last row");
+        throw InputError(offgrid,
+                         "time 't': not a tick of the header's control period (" + std::to_string(period) + " s), and not the last row");
       }
       if (period > 0.0) {
         const double k = tv / period;

@@ -76,7 +76,7 @@ class TraceWriter {
   struct LastValue {
     std::uint64_t bits = 0;
     unsigned char length = 0;  ///< 0: no previous row
-    char text[24] = {};  ///< the longest shortest form of a double has 24 characters
+    char text[24] = {};        ///< the longest shortest form of a double has 24 characters
   };
   std::vector<LastValue> last_;
 };

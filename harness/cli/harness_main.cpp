@@ -73,10 +73,11 @@ void printChecks(const std::vector<lexdyn::checks::CheckResult>& checks, const s
     // reported as "info", labelled; a failure the case expects (expected_failures) as "xfail".
     const bool expected = std::find(expected_to_fail.begin(), expected_to_fail.end(), c.name) != expected_to_fail.end();
     const char* mark = c.decides ? (c.passed ? "ok" : (expected ? "xfail" : "FAIL")) : "info";
-    std::fprintf(stderr, "  %-4s %-28s value %-12.6g limit %-10.6g %s%s%s%s%s\n", mark, c.name.c_str(), c.value, c.limit,
-                 c.unit.c_str(), c.detail.empty() ? "" : "  (", c.detail.empty() ? "" : (c.detail + ")").c_str(),
-                 c.decides ? "" : (c.passed ? "  [machine-dependent, reported only: within the limit here]"
-                                            : "  [machine-dependent, reported only: above the limit here]"),
+    std::fprintf(stderr, "  %-4s %-28s value %-12.6g limit %-10.6g %s%s%s%s%s\n", mark, c.name.c_str(), c.value, c.limit, c.unit.c_str(),
+                 c.detail.empty() ? "" : "  (", c.detail.empty() ? "" : (c.detail + ")").c_str(),
+                 c.decides ? ""
+                           : (c.passed ? "  [machine-dependent, reported only: within the limit here]"
+                                       : "  [machine-dependent, reported only: above the limit here]"),
                  c.partial_window.empty() ? "" : "  [part of its window]");
   }
 }
@@ -84,8 +85,10 @@ void printChecks(const std::vector<lexdyn::checks::CheckResult>& checks, const s
 /// A trace that does not end with the mark of a completed run: the checks only saw part of it.
 bool warnIfIncomplete(const std::string& path, const lexdyn::checks::TraceTable& table) {
   if (table.complete()) return false;
-  std::fprintf(stderr, "lexdyn-harness: %s is not the trace of a complete run (%s): the results cover its rows only and "
-                       "do not pass\n", path.c_str(), table.completeness().c_str());
+  std::fprintf(stderr,
+               "lexdyn-harness: %s is not the trace of a complete run (%s): the results cover its rows only and "
+               "do not pass\n",
+               path.c_str(), table.completeness().c_str());
   return true;
 }
 
@@ -127,7 +130,9 @@ void parseDumpWindow(const std::string& text, double& from, double& to) {
   double a = 0.0, b = to;
   const bool ok = colon != std::string::npos && number(text.substr(0, colon), a) &&
                   (colon + 1 == text.size() || number(text.substr(colon + 1), b)) && a <= b;
-  if (!ok) throw lexdyn::InputError("--dump-window", "expected FROM:TO in seconds with FROM <= TO (e.g. 31.5:32.5, or 31.5: to the end), found '" + text + "'");
+  if (!ok)
+    throw lexdyn::InputError("--dump-window",
+                             "expected FROM:TO in seconds with FROM <= TO (e.g. 31.5:32.5, or 31.5: to the end), found '" + text + "'");
   from = a;
   to = b;
 }
@@ -145,7 +150,8 @@ int runCheck(const std::vector<std::string>& positional, const std::string& case
   const lexdyn::checks::TraceTable table = lexdyn::checks::readTrace(trace_path);
   if (case_path.empty()) {
     const std::string* cf = lexdyn::checks::findMetadata(table.metadata, "case_file");
-    if (!cf || !fs::is_regular_file(*cf)) throw lexdyn::InputError(trace_path, "the trace does not name a readable case file; give --case CASE");
+    if (!cf || !fs::is_regular_file(*cf))
+      throw lexdyn::InputError(trace_path, "the trace does not name a readable case file; give --case CASE");
     case_path = *cf;
   }
   const lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
@@ -245,9 +251,10 @@ int runCompare(const std::string& case_path, const std::vector<std::string>& tra
                    cs.where.c_str());
     } else {
       as_documented = false;
-      std::fprintf(stderr, "  NOT as the case says: %s passed, the case documents that it fails (%s: %s); the outcome changed: "
-                           "update the case and docs/results.md\n", cs.name.c_str(), cs.where.c_str(),
-                   cs.expected_failure_reason.c_str());
+      std::fprintf(stderr,
+                   "  NOT as the case says: %s passed, the case documents that it fails (%s: %s); the outcome changed: "
+                   "update the case and docs/results.md\n",
+                   cs.name.c_str(), cs.where.c_str(), cs.expected_failure_reason.c_str());
     }
   }
   if (json) std::printf("%s\n", lexdyn::cases::checkResultsJson(results).c_str());
@@ -263,8 +270,8 @@ struct SelectedGolden {
   std::string method, id;
 };
 
-std::vector<SelectedGolden> selectGoldens(const lexdyn::golden::Manifest& m, const std::string& manifest_path,
-                                          const std::string& cases_opt, const std::string& only) {
+std::vector<SelectedGolden> selectGoldens(const lexdyn::golden::Manifest& m, const std::string& manifest_path, const std::string& cases_opt,
+                                          const std::string& only) {
   const std::vector<std::string> wanted_cases = splitList(cases_opt);
   const std::vector<std::string> wanted_only = splitList(only);
   auto listed = [](const std::vector<std::string>& v, const std::string& x) { return std::find(v.begin(), v.end(), x) != v.end(); };
@@ -289,8 +296,8 @@ int runGoldenList(const std::string& manifest_path, const std::string& cases_opt
   return 0;
 }
 
-int runGoldenCommand(bool update, const std::string& manifest_path, const std::string& cases_opt, const std::string& only,
-                     std::string work, bool progress) {
+int runGoldenCommand(bool update, const std::string& manifest_path, const std::string& cases_opt, const std::string& only, std::string work,
+                     bool progress) {
   const lexdyn::golden::Manifest m = lexdyn::golden::loadManifest(manifest_path);
   const std::vector<SelectedGolden> selected = selectGoldens(m, manifest_path, cases_opt, only);
   bool temp_work = false;
@@ -305,7 +312,8 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
     const std::string& id = g.id;
     const std::string path = lexdyn::golden::goldenPath(m, e.case_name, method);
     if (!update && !fs::is_regular_file(path)) {
-      std::fprintf(stderr, "  MISSING %s: %s does not exist (lexdyn-harness golden update --only %s)\n", id.c_str(), path.c_str(), id.c_str());
+      std::fprintf(stderr, "  MISSING %s: %s does not exist (lexdyn-harness golden update --only %s)\n", id.c_str(), path.c_str(),
+                   id.c_str());
       ++failed;
       continue;
     }
@@ -321,7 +329,8 @@ int runGoldenCommand(bool update, const std::string& manifest_path, const std::s
     }
     if (status == lexdyn::records::RunStatus::InternalError || status == lexdyn::records::RunStatus::InputError) {
       // The run stopped on an exception: a golden would record that, not the case's behaviour.
-      std::fprintf(stderr, "  FAIL %s: the run stopped with %s (%s)\n", id.c_str(), lexdyn::records::toString(status), fresh.end_message.c_str());
+      std::fprintf(stderr, "  FAIL %s: the run stopped with %s (%s)\n", id.c_str(), lexdyn::records::toString(status),
+                   fresh.end_message.c_str());
       ++run_failures;
       continue;
     }
@@ -445,7 +454,8 @@ int main(int argc, char** argv) {
   try {
     if (*report) {
       const std::string script = std::string(LEXDYN_SOURCE_DIR) + "/harness/scripts/report.py";
-      if (!fs::is_regular_file("/usr/bin/python3")) throw lexdyn::InputError("report", "needs /usr/bin/python3 (Debian's python3 with python3-matplotlib)");
+      if (!fs::is_regular_file("/usr/bin/python3"))
+        throw lexdyn::InputError("report", "needs /usr/bin/python3 (Debian's python3 with python3-matplotlib)");
       std::vector<std::string> args = {"/usr/bin/python3", script};
       for (const std::string& a : report->remaining()) args.push_back(a);
       std::vector<char*> argv_c;
@@ -513,7 +523,8 @@ int main(int argc, char** argv) {
         errs += buf;
       }
       std::fprintf(stderr, "  final task errors: %s\n", errs.c_str());
-      std::fprintf(stderr, "  peak active-set iterations %d at t = %g s\n", s.controller.peak_iterations, s.controller.peak_iterations_at_s);
+      std::fprintf(stderr, "  peak active-set iterations %d at t = %g s\n", s.controller.peak_iterations,
+                   s.controller.peak_iterations_at_s);
     }
     printChecks(s.checks, s.expected_failure ? s.expected_failure->checks : std::vector<std::string>{});
     if (s.expected_failure) {
@@ -530,8 +541,9 @@ int main(int argc, char** argv) {
     }
     for (const auto& k : s.skipped_checks) std::fprintf(stderr, "  skip %-28s %s\n", k.name.c_str(), k.reason.c_str());
     if (std::any_of(s.checks.begin(), s.checks.end(), [](const auto& c) { return !c.partial_window.empty(); })) {
-      std::fprintf(stderr, "  [part of its window]: the run stopped at %g s of the scenario's %g s (stop_at_s, run --duration); such a check "
-                           "covers what was run (summary.json: partial_window)\n",
+      std::fprintf(stderr,
+                   "  [part of its window]: the run stopped at %g s of the scenario's %g s (stop_at_s, run --duration); such a check "
+                   "covers what was run (summary.json: partial_window)\n",
                    s.duration_s, spec.scenario_duration_s);
     }
     std::fprintf(stderr, "  wrote %s and %s\n", s.trace_path.c_str(), s.summary_path.c_str());

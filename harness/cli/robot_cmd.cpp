@@ -21,7 +21,9 @@ void addRobotCommands(CLI::App& app, RobotCommand& c) {
   c.init->add_option("--out", c.out, "a new folder for the drafted files")->required();
   c.init->add_option("--srdf", c.srdf, "the robot's SRDF: its group states become postures, its groups name limbs");
   c.init->add_flag("--srdf-skip-unknown", c.srdf_skip_unknown, "leave out the SRDF's joints the URDF does not have (else an error)");
-  c.init->add_option("--mimic", c.mimic, "the URDF's <mimic> joints: coupled (move with their masters; the default) or locked (held at the posture)")
+  c.init
+      ->add_option("--mimic", c.mimic,
+                   "the URDF's <mimic> joints: coupled (move with their masters; the default) or locked (held at the posture)")
       ->check(CLI::IsMember({"coupled", "locked"}));
   c.init->add_option("--package-path", c.package_paths, "a folder to look for package://NAME/ in (repeatable; also $ROS_PACKAGE_PATH)");
   c.init->add_option("--base", c.base, "free_flyer or fixed (default: guessed from the URDF: fixed for a `world` root or no legs)");
@@ -38,7 +40,10 @@ void addRobotCommands(CLI::App& app, RobotCommand& c) {
   c.mesh = c.robot->add_subcommand("mesh", "convert a mesh file (any format libassimp reads) to binary STL, as robot init reads it");
   c.mesh->add_option("mesh", c.input, "the mesh file (STL, DAE, OBJ, glTF, ...)")->required();
   c.mesh->add_option("--out", c.out, "the binary STL to write")->required();
-  c.mesh->add_option("--up-axis", c.up_axis, "ignore: a COLLADA file's coordinates as written (ROS's tools); file: turned by its <up_axis> (the data file's mesh_up_axis)")
+  c.mesh
+      ->add_option(
+          "--up-axis", c.up_axis,
+          "ignore: a COLLADA file's coordinates as written (ROS's tools); file: turned by its <up_axis> (the data file's mesh_up_axis)")
       ->check(CLI::IsMember({"ignore", "file"}));
 }
 

@@ -56,9 +56,7 @@ using lexdyn::solver::Problem;
 using lexdyn::solver::Solver;
 using lexdyn::solver::Status;
 
-double elapsedUs(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::micro>(b - a).count();
-}
+double elapsedUs(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::micro>(b - a).count(); }
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -113,9 +111,9 @@ nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iter
   j["count"] = us.size();
   if (us.empty()) {
     // Nothing timed (a single file has no warm tick): no figure rather than zeros.
-    for (const char* k : {"median_us", "p99_us", "max_us", "median_qr_units", "p99_qr_units", "max_qr_units",
-                          "min_repeat_median_us", "min_repeat_median_qr_units", "tick_best_median_us", "tick_best_p99_us",
-                          "tick_best_max_us", "tick_best_p99_qr_units", "tick_best_max_qr_units"})
+    for (const char* k : {"median_us", "p99_us", "max_us", "median_qr_units", "p99_qr_units", "max_qr_units", "min_repeat_median_us",
+                          "min_repeat_median_qr_units", "tick_best_median_us", "tick_best_p99_us", "tick_best_max_us",
+                          "tick_best_p99_qr_units", "tick_best_max_qr_units"})
       j[k] = nullptr;
     j["mean_iterations"] = nullptr;
     j["max_iterations"] = nullptr;
@@ -147,8 +145,7 @@ nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iter
   return j;
 }
 
-int runBench(const std::vector<std::string>& files, const Options& options, bool detectBounds, int repeats,
-             bool warmOnly) {
+int runBench(const std::vector<std::string>& files, const Options& options, bool detectBounds, int repeats, bool warmOnly) {
   std::vector<Problem> ticks;
   ticks.reserve(files.size());
   for (size_t i = 0; i < files.size(); ++i) {

@@ -31,15 +31,42 @@ struct SweepOptions {
   CLI::App* s;
   SweepCommand& c;
 
-  SweepOptions& out(const std::string& help) { s->add_option("--out", c.out, help)->required(); return *this; }
-  SweepOptions& jobs(const std::string& help) { s->add_option("-j,--jobs", c.jobs, help); return *this; }
-  SweepOptions& points(const std::string& help) { s->add_option("--points", c.points, help); return *this; }
-  SweepOptions& timeout() { s->add_option("--timeout", c.timeout_s, "seconds per run (default: the sweep file's timeout_s)"); return *this; }
-  SweepOptions& keepTraces() { s->add_flag("--keep-traces", c.keep_traces, "keep the traces of passing runs too"); return *this; }
-  SweepOptions& noShrink() { s->add_flag("--no-shrink", c.no_shrink, "do not shrink the failures"); return *this; }
-  SweepOptions& db(const std::string& help) { s->add_option("--db", c.db, help); return *this; }
-  SweepOptions& noDb(const std::string& help) { s->add_flag("--no-db", c.no_db, help); return *this; }
-  SweepOptions& quiet() { s->add_flag("--quiet", c.quiet, "no progress lines"); return *this; }
+  SweepOptions& out(const std::string& help) {
+    s->add_option("--out", c.out, help)->required();
+    return *this;
+  }
+  SweepOptions& jobs(const std::string& help) {
+    s->add_option("-j,--jobs", c.jobs, help);
+    return *this;
+  }
+  SweepOptions& points(const std::string& help) {
+    s->add_option("--points", c.points, help);
+    return *this;
+  }
+  SweepOptions& timeout() {
+    s->add_option("--timeout", c.timeout_s, "seconds per run (default: the sweep file's timeout_s)");
+    return *this;
+  }
+  SweepOptions& keepTraces() {
+    s->add_flag("--keep-traces", c.keep_traces, "keep the traces of passing runs too");
+    return *this;
+  }
+  SweepOptions& noShrink() {
+    s->add_flag("--no-shrink", c.no_shrink, "do not shrink the failures");
+    return *this;
+  }
+  SweepOptions& db(const std::string& help) {
+    s->add_option("--db", c.db, help);
+    return *this;
+  }
+  SweepOptions& noDb(const std::string& help) {
+    s->add_flag("--no-db", c.no_db, help);
+    return *this;
+  }
+  SweepOptions& quiet() {
+    s->add_flag("--quiet", c.quiet, "no progress lines");
+    return *this;
+  }
 };
 
 const char* const kDefaultDb = "failure database (default: .lexdyn/sweep-failures/<sweep>.jsonl)";
@@ -57,9 +84,15 @@ void addSweepCommands(CLI::App& app, SweepCommand& c) {
   };
 
   command(c.run, "run", "run a sweep on the local cores (resumable: run it again to finish an interrupted one)")
-      .out("output directory").jobs("parallel processes (default: the number of cores)")
-      .points("run only the first N points (a smaller budget)").timeout().keepTraces().noShrink().db(kDefaultDb)
-      .noDb("neither replay nor record failures").quiet();
+      .out("output directory")
+      .jobs("parallel processes (default: the number of cores)")
+      .points("run only the first N points (a smaller budget)")
+      .timeout()
+      .keepTraces()
+      .noShrink()
+      .db(kDefaultDb)
+      .noDb("neither replay nor record failures")
+      .quiet();
 
   command(c.point, "point", "one run of a sweep in this process (what the driver runs for each point and method)");
   c.point->add_option("--method", c.method, "method")->required();
@@ -76,16 +109,24 @@ void addSweepCommands(CLI::App& app, SweepCommand& c) {
   SweepOptions{c.chunk, c}.timeout().keepTraces();
 
   command(c.merge, "merge", "merge the points of OUT, shrink the failures, write the summary")
-      .out("output directory").jobs("parallel shrinking runs (default: the number of cores)")
-      .points("the sweep's first N points only").noShrink().db(kDefaultDb).noDb("do not record failures").quiet();
+      .out("output directory")
+      .jobs("parallel shrinking runs (default: the number of cores)")
+      .points("the sweep's first N points only")
+      .noShrink()
+      .db(kDefaultDb)
+      .noDb("do not record failures")
+      .quiet();
 
   command(c.submit, "submit", "run a sweep on Slurm: an array job over the missing points, then a merge job")
       .out("output directory (on a file system the nodes share)");
   c.submit->add_option("--chunk", c.chunk_size, "points per array task (default 4)");
   c.submit->add_option("--partition", c.partition, "Slurm partition");
   c.submit->add_option("--throttle", c.throttle, "at most this many array tasks at once (sbatch --array=...%N)");
-  SweepOptions{c.submit, c}.points("the sweep's first N points only").jobs("CPUs of the merge job (parallel shrinking runs; default 1)")
-      .db("failure database of the merge job").noDb("no failure database");
+  SweepOptions{c.submit, c}
+      .points("the sweep's first N points only")
+      .jobs("CPUs of the merge job (parallel shrinking runs; default 1)")
+      .db("failure database of the merge job")
+      .noDb("no failure database");
   c.submit->add_flag("--dry-run", c.dry_run, "write the job scripts, do not submit them");
 
   command(c.list, "list", "print the points: index and parameter values").points("the first N points only");
@@ -117,7 +158,8 @@ sweep::DriverOptions driverOptions(const SweepCommand& c, const sweep::SweepSpec
   o.harness_exe = selfExe();
   o.interrupt = &signal;
   const std::string script = std::string(LEXDYN_SOURCE_DIR) + "/harness/scripts/sweep_plots.py";
-  if (fs::is_regular_file("/usr/bin/python3") && fs::is_regular_file(script)) o.plot_command = "/usr/bin/python3 " + sweep::shellQuote(script);
+  if (fs::is_regular_file("/usr/bin/python3") && fs::is_regular_file(script))
+    o.plot_command = "/usr/bin/python3 " + sweep::shellQuote(script);
   return o;
 }
 
@@ -148,7 +190,8 @@ std::vector<long> parsePoints(const SweepCommand& c) {
   if (!from_file) return all;
   if (c.chunk_size <= 0 || c.index < 0) throw InputError("--points", "@FILE needs --chunk-size and --task");
   std::vector<long> out;
-  for (long k = c.index * c.chunk_size; k < (c.index + 1) * c.chunk_size && k < static_cast<long>(all.size()); ++k) out.push_back(all[static_cast<size_t>(k)]);
+  for (long k = c.index * c.chunk_size; k < (c.index + 1) * c.chunk_size && k < static_cast<long>(all.size()); ++k)
+    out.push_back(all[static_cast<size_t>(k)]);
   return out;
 }
 
@@ -183,7 +226,8 @@ int runSweepCommand(const SweepCommand& c, const std::atomic<int>& signal, const
     if (!c.duration.empty()) {
       char* end = nullptr;
       rc.duration_s = std::strtod(c.duration.c_str(), &end);
-      if (end != c.duration.c_str() + c.duration.size() || !(rc.duration_s > 0.0)) throw InputError("--duration", "expected a positive number of seconds");
+      if (end != c.duration.c_str() + c.duration.size() || !(rc.duration_s > 0.0))
+        throw InputError("--duration", "expected a positive number of seconds");
     }
     return sweep::runPointHere(s, rc, c.out, &interrupted, !c.quiet);
   }

@@ -37,7 +37,8 @@ Tolerance readTolerance(const yaml::Node& n, Tolerance t) {
 std::vector<std::string> readPatterns(const yaml::Node& list, bool allow_empty_list, std::vector<yaml::Node>* nodes) {
   std::vector<std::string> out;
   const std::vector<yaml::Node> items = list.elements();
-  if (items.empty() && !allow_empty_list) list.fail("expected at least one channel pattern (\"t\" is always kept; \"*\" keeps every channel)");
+  if (items.empty() && !allow_empty_list)
+    list.fail("expected at least one channel pattern (\"t\" is always kept; \"*\" keeps every channel)");
   for (const yaml::Node& n : items) {
     const std::string p = n.asString();
     if (std::find(out.begin(), out.end(), p) != out.end()) n.fail("pattern '" + p + "' listed twice");
@@ -140,7 +141,8 @@ Manifest loadManifest(const std::string& path) {
     if (auto v = em.optional("every_n_ticks")) {
       e.every_n_ticks = v->asInt();
       if (e.every_n_ticks < 1 || e.every_n_ticks > ticks) {
-        v->fail("expected an integer in [1, " + std::to_string(ticks) + "] (the ticks of the golden's horizon), found " + v->raw().Scalar());
+        v->fail("expected an integer in [1, " + std::to_string(ticks) + "] (the ticks of the golden's horizon), found " +
+                v->raw().Scalar());
       }
     }
     if (patterns_to_check) {
@@ -209,9 +211,9 @@ checks::TraceTable runGolden(const Entry& e, const std::string& method, const Ma
   // Without the wall-time channels the tick_time checks have nothing to read; a golden compares
   // traces, not check results, so they are left out (every other check keeps the channels it
   // adds, e.g. frames).
-  spec.checks.erase(std::remove_if(spec.checks.begin(), spec.checks.end(),
-                                   [](const checks::CheckSpec& c) { return checks::machineDependent(c); }),
-                    spec.checks.end());
+  spec.checks.erase(
+      std::remove_if(spec.checks.begin(), spec.checks.end(), [](const checks::CheckSpec& c) { return checks::machineDependent(c); }),
+      spec.checks.end());
   cases::RunOptions o;
   o.out_dir = (fs::path(work_dir) / goldenId(e.case_name, method)).string();
   o.progress = progress;
@@ -226,8 +228,7 @@ checks::TraceTable runGolden(const Entry& e, const std::string& method, const Ma
   return t;
 }
 
-checks::TraceMetadata provenance(const Entry& e, const std::string& method, records::RunStatus status,
-                                 const std::string& source_dir) {
+checks::TraceMetadata provenance(const Entry& e, const std::string& method, records::RunStatus status, const std::string& source_dir) {
   checks::TraceMetadata md;
   md.emplace_back("golden_format", "lexdyn-golden/1");
   md.emplace_back("golden_case", e.case_name);
@@ -265,7 +266,8 @@ std::vector<std::string> goldenFileProblems(const checks::TraceTable& golden) {
             " rows; restore it (git checkout) or regenerate it"};
   }
   if (!golden.complete()) {
-    return {std::string("the golden file ends with '# end: ") + records::toString(*golden.end_status) + "', not written by `golden update`"};
+    return {std::string("the golden file ends with '# end: ") + records::toString(*golden.end_status) +
+            "', not written by `golden update`"};
   }
   return {};
 }
@@ -365,8 +367,8 @@ std::string Comparison::report() const {
   } else {
     s = "MISMATCH";
     if (!first_channel.empty()) {
-      s += ": first divergence at t = " + num(first_t) + " s in channel " + first_channel + " (golden " + num(golden_value) +
-           ", fresh " + num(fresh_value) + ", allowed |diff| " + num(allowed) + "); " + std::to_string(diverging_at_first_t) +
+      s += ": first divergence at t = " + num(first_t) + " s in channel " + first_channel + " (golden " + num(golden_value) + ", fresh " +
+           num(fresh_value) + ", allowed |diff| " + num(allowed) + "); " + std::to_string(diverging_at_first_t) +
            " channels diverge at that time, " + std::to_string(diverging_values) + " values in all";
     }
     for (const auto& p : problems) s += "; " + p;

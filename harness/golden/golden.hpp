@@ -66,8 +66,7 @@ checks::TraceTable runGolden(const Entry& e, const std::string& method, const Ma
 
 /// Header lines recorded in a golden besides the trace's own (which hold the build: compiler,
 /// flags, library versions): format, case, method, horizon, decimation, run status, git revision.
-checks::TraceMetadata provenance(const Entry& e, const std::string& method, records::RunStatus status,
-                                 const std::string& source_dir);
+checks::TraceMetadata provenance(const Entry& e, const std::string& method, records::RunStatus status, const std::string& source_dir);
 
 /// Writes a golden file (temporary name, then rename).
 void writeGolden(const std::string& path, const checks::TraceTable& t, const checks::TraceMetadata& provenance);

@@ -124,8 +124,14 @@ const CheckRecord* RunRecord::check(const std::string& name) const {
 json toJson(const std::vector<CheckRecord>& records) {
   json checks = json::array();
   for (const CheckRecord& c : records) {
-    checks.push_back({{"name", c.name}, {"type", c.type}, {"passed", c.passed}, {"value", number(c.value)},
-                      {"limit", number(c.limit)}, {"margin", number(c.margin)}, {"unit", c.unit}, {"detail", c.detail}});
+    checks.push_back({{"name", c.name},
+                      {"type", c.type},
+                      {"passed", c.passed},
+                      {"value", number(c.value)},
+                      {"limit", number(c.limit)},
+                      {"margin", number(c.margin)},
+                      {"unit", c.unit},
+                      {"detail", c.detail}});
     // Wall-clock checks: reported, and a verdict only when asked for (docs/cases.md, "Checks").
     if (c.machine_dependent) {
       checks.back()["machine_dependent"] = true;
@@ -176,8 +182,8 @@ json toJson(const RunRecord& r) {
   j["all_checks_passed"] = r.all_checks_passed;
   if (r.expected_failure) {
     const ExpectedFailureRecord& x = *r.expected_failure;
-    j["expected_failure"] = {{"status", toString(x.status)}, {"checks", x.checks}, {"reason", x.reason},
-                             {"met", x.met},                 {"mismatches", x.mismatches}, {"reached", x.reached}};
+    j["expected_failure"] = {{"status", toString(x.status)}, {"checks", x.checks},  {"reason", x.reason}, {"met", x.met},
+                             {"mismatches", x.mismatches},   {"reached", x.reached}};
   }
   j["exit_code"] = r.exit_code;
   if (r.controller) {
@@ -192,7 +198,8 @@ json toJson(const RunRecord& r) {
                    {"peak_factorizations_at_s", cs.peak_factorizations_at_s},
                    {"status_counts", cs.solver_status_counts}};
     json timing = json::object();
-    for (const auto& [name, t] : cs.timing_us) timing[name] = {{"median", number(t.median)}, {"p99", number(t.p99)}, {"max", number(t.max)}};
+    for (const auto& [name, t] : cs.timing_us)
+      timing[name] = {{"median", number(t.median)}, {"p99", number(t.p99)}, {"max", number(t.max)}};
     j["timing_us"] = timing;
   }
   j["trace"] = r.trace;
@@ -205,9 +212,10 @@ json toJson(const RunRecord& r) {
 RunRecord runRecordFromJson(const json& j, const std::string& where) {
   const std::string format = j.is_object() && j.contains("format") && j["format"].is_string() ? j["format"].get<std::string>() : "";
   if (format != kRunSummaryFormat) {
-    throw InputError(where, "a run summary of " +
-                                (format.empty() ? std::string("no format (no 'format' key: written by an older build)") : "format '" + format + "'") +
-                                "; this build reads '" + kRunSummaryFormat + "'");
+    throw InputError(
+        where, "a run summary of " +
+                   (format.empty() ? std::string("no format (no 'format' key: written by an older build)") : "format '" + format + "'") +
+                   "; this build reads '" + kRunSummaryFormat + "'");
   }
   std::vector<std::string> problems;
   FieldReader f(j, "", problems);

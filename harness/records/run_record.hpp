@@ -77,11 +77,11 @@ struct RunRecord {
     double value = 0.0;
     std::string detail;
   };
-  std::map<std::string, Statistic> statistics;  ///< not written when empty
-  std::vector<std::pair<std::string, std::string>> overrides;  ///< path, value
-  std::string effective_case;                                   ///< file name in the run's folder
+  std::map<std::string, Statistic> statistics;                      ///< not written when empty
+  std::vector<std::pair<std::string, std::string>> overrides;       ///< path, value
+  std::string effective_case;                                       ///< file name in the run's folder
   std::vector<std::pair<std::string, std::string>> skipped_checks;  ///< name, reason
-  std::optional<double> scenario_duration_s;  ///< written when the run was cut short (--duration)
+  std::optional<double> scenario_duration_s;                        ///< written when the run was cut short (--duration)
   std::vector<std::string> robot_warnings;
   bool all_checks_passed = false;
   std::optional<ExpectedFailureRecord> expected_failure;

@@ -23,10 +23,10 @@ enum class RunStatus {
   InputError,         ///< bad input found during the run (e.g. a target out of its table)
   OutputError,        ///< its outputs could not be written (disk full, ...)
   // What a sweep driver records of a process (results.jsonl, result.json):
-  Timeout,            ///< killed by the driver after the sweep's timeout
-  Crashed,            ///< the process died twice on the same configuration
-  BadInput,           ///< the process refused its input (exit code 2)
-  NoSummary,          ///< older records only: a process that left no summary
+  Timeout,    ///< killed by the driver after the sweep's timeout
+  Crashed,    ///< the process died twice on the same configuration
+  BadInput,   ///< the process refused its input (exit code 2)
+  NoSummary,  ///< older records only: a process that left no summary
 };
 
 /// The file spelling: "completed", "integrator_failure", ...

@@ -35,22 +35,20 @@ const SweepCheckRecord* SweepRunRecord::check(const std::string& name) const {
 json toJson(const SweepRunRecord& r) {
   json checks = json::array();
   for (const auto& c : r.checks) {
-    checks.push_back({{"name", c.name}, {"passed", c.passed}, {"value", number(c.value)}, {"limit", number(c.limit)},
-                      {"margin", number(c.margin)}, {"unit", c.unit}, {"detail", c.detail}});
+    checks.push_back({{"name", c.name},
+                      {"passed", c.passed},
+                      {"value", number(c.value)},
+                      {"limit", number(c.limit)},
+                      {"margin", number(c.margin)},
+                      {"unit", c.unit},
+                      {"detail", c.detail}});
   }
   json st = json::object(), fe = json::object();
   for (const auto& [k, v] : r.statistics) st[k] = number(v);
   for (const auto& [k, v] : r.final_errors) fe[k] = number(v);
-  return {{"format", kSweepRunFormat},
-          {"status", toString(r.status)},
-          {"message", r.message},
-          {"exit_code", r.exit_code},
-          {"wall_s", r.wall_s},
-          {"simulated_s", r.simulated_s},
-          {"checks", checks},
-          {"statistics", st},
-          {"final_errors", fe},
-          {"peak_iterations", r.peak_iterations}};
+  return {{"format", kSweepRunFormat}, {"status", toString(r.status)},        {"message", r.message}, {"exit_code", r.exit_code},
+          {"wall_s", r.wall_s},        {"simulated_s", r.simulated_s},        {"checks", checks},     {"statistics", st},
+          {"final_errors", fe},        {"peak_iterations", r.peak_iterations}};
 }
 
 std::optional<SweepRunRecord> sweepRunFromJson(const json& j, std::string& why) {
@@ -60,7 +58,8 @@ std::optional<SweepRunRecord> sweepRunFromJson(const json& j, std::string& why) 
   }
   const std::string format = j.contains("format") && j["format"].is_string() ? j["format"].get<std::string>() : "";
   if (format != kSweepRunFormat) {
-    why = (format.empty() ? std::string("a run record of no format (written by an older build)") : "a run record of format '" + format + "'") +
+    why = (format.empty() ? std::string("a run record of no format (written by an older build)")
+                          : "a run record of format '" + format + "'") +
           ", this build reads '" + kSweepRunFormat + "'";
     return std::nullopt;
   }

@@ -40,8 +40,8 @@ struct SweepRunRecord {
   /// driver saw of the process (timeout, crashed, bad_input).
   RunStatus status = RunStatus::Completed;
   std::string message;
-  int exit_code = 0;   ///< the process's, or 128 + signal
-  double wall_s = 0.0; ///< not deterministic; never compared
+  int exit_code = 0;    ///< the process's, or 128 + signal
+  double wall_s = 0.0;  ///< not deterministic; never compared
   double simulated_s = 0.0;
   std::vector<SweepCheckRecord> checks;        ///< the sweep's property checks for the method
   std::map<std::string, double> statistics;    ///< the comparisons' per-method figures

@@ -79,8 +79,9 @@ Loaded load(const CheckOptions& o) {
 // The picture: three views of the robot's geometry outlines, skeleton, contact points, CoM and
 // support polygon, drawn by harness/scripts/robot_view.py (matplotlib).
 std::string drawPicture(const model::RobotDescription& d, const RobotLayout& L, const std::vector<Eigen::Vector3d>& contacts,
-                        const std::vector<Eigen::Vector2d>& poly, double ground, const std::vector<std::pair<std::string, Eigen::Isometry3d>>& frames,
-                        const std::string& title, const std::string& png) {
+                        const std::vector<Eigen::Vector2d>& poly, double ground,
+                        const std::vector<std::pair<std::string, Eigen::Isometry3d>>& frames, const std::string& title,
+                        const std::string& png) {
   using nlohmann::json;
   json j;
   j["title"] = title;
@@ -118,7 +119,8 @@ std::string drawPicture(const model::RobotDescription& d, const RobotLayout& L, 
   json fj = json::array();
   const double len = 0.1 * std::max(L.height, 0.1);
   for (const auto& [name, X] : frames) {
-    fj.push_back({{"name", name}, {"p", p3(X.translation())}, {"x", p3(X * Eigen::Vector3d(len, 0, 0))}, {"z", p3(X * Eigen::Vector3d(0, 0, len))}});
+    fj.push_back(
+        {{"name", name}, {"p", p3(X.translation())}, {"x", p3(X * Eigen::Vector3d(len, 0, 0))}, {"z", p3(X * Eigen::Vector3d(0, 0, len))}});
   }
   j["frames"] = fj;
   j["forward"] = L.forward.x() < 0.0 ? -1 : 1;
@@ -163,7 +165,8 @@ CheckReport checkRobot(const CheckOptions& o) {
   const RobotLayout L = analyseLayout(d, q, problems);
 
   std::ostringstream t;
-  t << "robot " << d.name << "\n  URDF: " << d.urdf_path << "\n  data: " << (ld.data_path.empty() ? "(none: the URDF alone)" : ld.data_path) << "\n";
+  t << "robot " << d.name << "\n  URDF: " << d.urdf_path << "\n  data: " << (ld.data_path.empty() ? "(none: the URDF alone)" : ld.data_path)
+    << "\n";
   const double ground = L.lowest_z;
   t << "  base: " << (d.base == model::BaseType::Fixed ? "fixed" : "free_flyer") << "; " << d.links.size() << " bodies, " << d.joints.size()
     << " joints";
@@ -173,8 +176,9 @@ CheckReport checkRobot(const CheckOptions& o) {
   t << "  centre of mass " << num(L.com.x(), 3) << ", " << num(L.com.y(), 3) << ", " << num(L.com.z() - ground, 3)
     << " m (z above the lowest point; the base at the origin)\n"
     << "  forward: " << (backwards ? "-x" : "+x") << " of the base frame"
-    << (L.sides_from == "names" ? (backwards ? " (the links' names put the robot's left at -y)" : " (the links' names put the robot's left at +y)")
-                                : " (x forward, y left, as REP 103 has it)")
+    << (L.sides_from == "names"
+            ? (backwards ? " (the links' names put the robot's left at -y)" : " (the links' names put the robot's left at +y)")
+            : " (x forward, y left, as REP 103 has it)")
     << "\n";
   if (!L.base_rotation.isIdentity(1e-12)) {
     const Eigen::AngleAxisd aa(L.base_rotation);
@@ -207,7 +211,9 @@ CheckReport checkRobot(const CheckOptions& o) {
         t << " [" << num(w.x(), 3) << ", " << num(w.y(), 3) << ", " << num(w.z() - ground, 3) << "]";
       }
       t << "\n";
-      if (zmax - zmin > 0.005) t << "      note: its points are " << num((zmax - zmin) * 1000, 3) << " mm apart in height: the sole is not flat on the ground in this posture\n";
+      if (zmax - zmin > 0.005)
+        t << "      note: its points are " << num((zmax - zmin) * 1000, 3)
+          << " mm apart in height: the sole is not flat on the ground in this posture\n";
     }
     // The points on the ground (within 2 mm of the lowest) make the support polygon.
     double zlow = 1e18;
@@ -241,7 +247,8 @@ CheckReport checkRobot(const CheckOptions& o) {
     if (m.hasFreeFlyer() && !contacts.empty()) {
       const int np = static_cast<int>(contacts.size());
       Eigen::MatrixXd A(3, np);
-      for (int i = 0; i < np; ++i) A.col(i) << 1.0, contacts[static_cast<size_t>(i)].y() - L.com.y(), contacts[static_cast<size_t>(i)].x() - L.com.x();
+      for (int i = 0; i < np; ++i)
+        A.col(i) << 1.0, contacts[static_cast<size_t>(i)].y() - L.com.y(), contacts[static_cast<size_t>(i)].x() - L.com.x();
       const Eigen::Vector3d b(L.mass * m.gravity().norm(), 0.0, 0.0);
       const Eigen::VectorXd f = A.transpose() * (A * A.transpose()).completeOrthogonalDecomposition().solve(b);
       if (f.minCoeff() < 0.0) torque_note = " (some contact points would have to pull: the centre of mass is not above the support)";
@@ -268,16 +275,17 @@ CheckReport checkRobot(const CheckOptions& o) {
       }
     }
   }
-  t << "  joints (posture '" << posture << "'; margin: to the nearer limit):\n    " << pad("joint", 26) << pad("type", 10) << pad("lower", 9)
-    << pad("upper", 9) << pad("posture", 9) << pad("margin", 9) << pad("effort", 9) << pad("static", 9) << pad("velocity", 9) << pad("servo kp", 10)
-    << "kd\n";
+  t << "  joints (posture '" << posture << "'; margin: to the nearer limit):\n    " << pad("joint", 26) << pad("type", 10)
+    << pad("lower", 9) << pad("upper", 9) << pad("posture", 9) << pad("margin", 9) << pad("effort", 9) << pad("static", 9)
+    << pad("velocity", 9) << pad("servo kp", 10) << "kd\n";
   std::vector<std::string> overloaded;
   for (size_t j = 0; j < d.joints.size(); ++j) {
     const auto& J = d.joints[j];
     const double v = q[static_cast<int>(j)];
     const double margin = std::min(v - J.lower, J.upper - v);
-    t << "    " << pad(J.name, 26) << pad(J.continuous ? "continuous" : (J.type == model::JointType::Revolute ? "revolute" : "prismatic"), 10)
-      << pad(num(J.lower, 3), 9) << pad(num(J.upper, 3), 9) << pad(num(v, 3), 9) << pad(num(margin, 3) + (margin < 0.02 && !std::isinf(margin) ? "!" : ""), 9)
+    t << "    " << pad(J.name, 26)
+      << pad(J.continuous ? "continuous" : (J.type == model::JointType::Revolute ? "revolute" : "prismatic"), 10) << pad(num(J.lower, 3), 9)
+      << pad(num(J.upper, 3), 9) << pad(num(v, 3), 9) << pad(num(margin, 3) + (margin < 0.02 && !std::isinf(margin) ? "!" : ""), 9)
       << pad(num(J.effort_limit, 3), 9);
     const double ts = tau_static[static_cast<int>(j)];
     const bool over = std::abs(ts) > J.effort_limit;
@@ -304,7 +312,8 @@ CheckReport checkRobot(const CheckOptions& o) {
     for (const auto& l : d.locked_joints) {
       t << "    " << pad(l.name, 26) << "at " << pad(num(l.value, 4), 9);
       for (const auto& mm : d.mimics) {
-        if (mm.joint == l.name) t << "mimic: " << num(mm.multiplier) << " x " << mm.master << (mm.offset != 0.0 ? " + " + num(mm.offset) : "");
+        if (mm.joint == l.name)
+          t << "mimic: " << num(mm.multiplier) << " x " << mm.master << (mm.offset != 0.0 ? " + " + num(mm.offset) : "");
       }
       if (l.reason == "massless") t << "moves only massless links";
       t << "\n";
@@ -313,7 +322,8 @@ CheckReport checkRobot(const CheckOptions& o) {
   // Bodies: mass and inertia after lumping.
   t << "  bodies (mass after lumping, principal moments):\n";
   for (const auto& l : d.links) {
-    t << "    " << pad(l.name, 26) << pad(num(l.mass, 4) + " kg", 12) << model::formatMoments(model::checkInertia(l.inertia).moments) << " kg m^2";
+    t << "    " << pad(l.name, 26) << pad(num(l.mass, 4) + " kg", 12) << model::formatMoments(model::checkInertia(l.inertia).moments)
+      << " kg m^2";
     if (!l.merged_links.empty()) t << "  (+" << l.merged_links.size() << " merged)";
     t << "\n";
   }

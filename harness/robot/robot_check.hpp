@@ -11,17 +11,17 @@
 namespace lexdyn::robot {
 
 struct CheckOptions {
-  std::string input;                      ///< a data file, a case file or a URDF
-  std::string urdf;                       ///< with a data file: its URDF (else its `urdf` key)
+  std::string input;  ///< a data file, a case file or a URDF
+  std::string urdf;   ///< with a data file: its URDF (else its `urdf` key)
   std::vector<std::string> package_paths;
-  std::string posture;                    ///< the posture to show ("" : the case's, else the first)
-  std::string png;                        ///< the picture ("": <input folder>/<robot>_posture.png; "-": none)
+  std::string posture;  ///< the posture to show ("" : the case's, else the first)
+  std::string png;      ///< the picture ("": <input folder>/<robot>_posture.png; "-": none)
   bool strict = false;
 };
 
 struct CheckReport {
-  std::string text;        ///< the report, as printed
-  std::string png;         ///< the picture written ("" when none)
+  std::string text;  ///< the report, as printed
+  std::string png;   ///< the picture written ("" when none)
   int warnings = 0;
   bool com_inside = true;  ///< legged robots: the CoM above the support polygon
 };

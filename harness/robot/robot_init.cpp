@@ -135,7 +135,8 @@ std::vector<Posture> srdfPostures(const model::RobotDescription& d, const Srdf& 
         const double two_pi = 2.0 * 3.14159265358979323846;
         const double w = v + two_pi * std::ceil((J.lower - v) / two_pi);
         if (w >= J.lower && w <= J.upper) {
-          p.clamped.push_back(joint + ": " + num(v) + " is outside [" + num(J.lower) + ", " + num(J.upper) + "], taken as the same angle " + num(w));
+          p.clamped.push_back(joint + ": " + num(v) + " is outside [" + num(J.lower) + ", " + num(J.upper) + "], taken as the same angle " +
+                              num(w));
           v = w;
         }
       }
@@ -230,15 +231,17 @@ UpAxisChoice chooseMeshUpAxis(const model::RobotDescription& d, MeshCache& cache
   }
   if (files.empty()) return c;
   std::string declared;
-  for (const auto& [axis, n] : files) declared += std::string(declared.empty() ? "" : ", ") + std::to_string(n) + " declare " + axis + "_UP";
+  for (const auto& [axis, n] : files)
+    declared += std::string(declared.empty() ? "" : ", ") + std::to_string(n) + " declare " + axis + "_UP";
   auto cm = [&](double sum) {
     char b[32];
     std::snprintf(b, sizeof(b), "%.1f cm", 100.0 * sum / compared);
     return std::string(b);
   };
   const std::string fit = compared == 0 ? std::string("no link with mass to compare")
-                                        : "the links' centres of mass lie " + cm(sum_turned) + " on average from their meshes' centres with the up axis applied, " +
-                                              cm(sum_written) + " as written (" + std::to_string(compared) + " meshes)";
+                                        : "the links' centres of mass lie " + cm(sum_turned) +
+                                              " on average from their meshes' centres with the up axis applied, " + cm(sum_written) +
+                                              " as written (" + std::to_string(compared) + " meshes)";
   c.apply = compared > 0 && sum_turned < 0.5 * sum_written;
   c.note = "meshes: of the COLLADA files, " + declared + "; " + fit + ": " + (c.apply ? "turned to z up" : "taken as written");
   c.line = std::string("mesh_up_axis: ") + (c.apply ? "file" : "ignore") + "               # guessed: " + fit +
@@ -268,7 +271,8 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
   const double dt = o.control_period_s;
   std::ostringstream y;
   y << "# " << d.name << ": the data file of " << urdf_rel << " (format: docs/model.md), drafted by\n"
-    << "# `lexdyn-harness robot init`" << (srdf ? " with the SRDF " + relativePath(srdf->path, final_dir) : std::string(" (no SRDF)")) << ".\n"
+    << "# `lexdyn-harness robot init`" << (srdf ? " with the SRDF " + relativePath(srdf->path, final_dir) : std::string(" (no SRDF)"))
+    << ".\n"
     << "# Every value the URDF does not carry is a guess; the comment beside it says where it came from.\n"
     << "# Check it with `lexdyn-harness robot check " << out.robot_file << "` and correct what is wrong\n"
     << "# (docs/model.md, \"Bringing your own robot\").\n"
@@ -351,7 +355,8 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     << "servo_gains:\n";
   for (size_t j = 0; j < d.joints.size(); ++j) {
     const ServoGains g = sizeServo(d, L, static_cast<int>(j), dt);
-    y << "  - {match: " << yamlString(d.joints[j].name) << ", kp: " << num(g.kp, 3) << ", kd: " << num(g.kd, 3) << "}   # " << g.source << "\n";
+    y << "  - {match: " << yamlString(d.joints[j].name) << ", kp: " << num(g.kp, 3) << ", kd: " << num(g.kd, 3) << "}   # " << g.source
+      << "\n";
   }
   y << "postures:\n";
   std::vector<const Posture*> written{&posture};
@@ -391,10 +396,12 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     s << "sim:\n";
     s << "  contact:";
     if (points > 0) {
-      s << "\n    stiffness: " << num(k_contact, 2) << "              # sized: 1 mm of static penetration under an even share of the weight on each of the "
-        << points << " contact points\n";
+      s << "\n    stiffness: " << num(k_contact, 2)
+        << "              # sized: 1 mm of static penetration under an even share of the weight on each of the " << points
+        << " contact points\n";
     } else {
-      s << "                          # (the robot has no contact points: nothing touches the ground)\n    stiffness: " << num(k_contact, 2) << "\n";
+      s << "                          # (the robot has no contact points: nothing touches the ground)\n    stiffness: " << num(k_contact, 2)
+        << "\n";
     }
     s << "    exponent: 1.5\n"
       << "    dissipation_s_per_m: " << num(dissipation) << "\n"
@@ -411,12 +418,14 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     std::ostringstream c;
     c << "# " << d.name << " holds posture '" << posture.name << "' for 10 s under its joint servos alone (no balance\n"
       << "# control), drafted by `lexdyn-harness robot init`: a first check of the model, its servo gains and\n"
-      << "# (legged robots) its soles. " << (L.feet.empty() ? "" : "It starts in static equilibrium on its feet (docs/simulator.md, \"Initial state\").\n# ")
+      << "# (legged robots) its soles. "
+      << (L.feet.empty() ? "" : "It starts in static equilibrium on its feet (docs/simulator.md, \"Initial state\").\n# ")
       << "Run: lexdyn-harness run stand.yaml --out out/stand\n"
       << "name: " << yamlString(d.name + "_stand") << "\n"
       << "description: " << yamlString(d.name + " holds its posture for 10 s by its joint servos alone.") << "\n"
       << robotSection() << "duration_s: 10.0\ncontrol_period_s: " << num(dt) << "\n"
-      << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: " << (L.feet.empty() ? "none" : "static_equilibrium") << "\n"
+      << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: " << (L.feet.empty() ? "none" : "static_equilibrium")
+      << "\n"
       << "controller:\n  type: posture_servo\n  posture: " << yamlString(posture.name) << "\n"
       << simSection(5.0) << "trace:\n  frames: [" << yamlString(root);
     for (const auto& s : sole_frames) c << ", " << yamlString(s);
@@ -477,8 +486,13 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       << "# the arms' geometry; every method of the case runs it (--method bfgs | ah | gn | wls).\n"
       << "# Run: lexdyn-harness run reach.yaml --out out/reach --method bfgs\n"
       << "name: " << yamlString(d.name + "_reach") << "\n"
-      << "description: " << yamlString(std::string(humanoid ? "Two-foot stance; hands" : L.arms.size() == 2 ? "Fixed base; the hands" : "Fixed base; the hand") + " to targets within reach, then out of reach.")
-      << "\n" << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
+      << "description: "
+      << yamlString(std::string(humanoid             ? "Two-foot stance; hands"
+                                : L.arms.size() == 2 ? "Fixed base; the hands"
+                                                     : "Fixed base; the hand") +
+                    " to targets within reach, then out of reach.")
+      << "\n"
+      << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
       << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: " << (humanoid ? "static_equilibrium" : "none") << "\n\n"
       << "controller:\n  type: lexdyn\n  method: bfgs                       # --method overrides it\n  feedforward_torque: true\n"
       << "  state_feedback: integrated\n"
@@ -503,7 +517,8 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     c << "  solver:\n    paper_rules: true\n";
     if (humanoid) {
       c << "  contacts:\n";
-      for (const auto& f : L.feet) c << "    - {name: " << f.surface << ", surface: " << f.surface << ", sensor: " << f.surface << "_SENSOR}\n";
+      for (const auto& f : L.feet)
+        c << "    - {name: " << f.surface << ", surface: " << f.surface << ", sensor: " << f.surface << "_SENSOR}\n";
       c << "  initial_contacts: [" << surfaces << "]\n";
     }
     c << "  tasks:\n"
@@ -538,14 +553,16 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
         box_hi[i] = std::min(box_hi[i], std::max(hi[i] - 1.5 * box[i], c0[i] + 0.25 * box[i]));
       }
       c << "    # exp1's CoM box (+-0.03 x +-0.06 m on HRP-2's 0.22 x 0.35 m support) scaled to this support: +-28 % of its half length,\n"
-        << "    # +-34 % of its half width, about the posture's centre of mass, each face at least 1.5 times that inside the support's edge.\n"
+        << "    # +-34 % of its half width, about the posture's centre of mass, each face at least 1.5 times that inside the support's "
+           "edge.\n"
         << "    - {name: com_box, type: com_box, lower: [" << num(box_lo.x(), 4) << ", " << num(box_lo.y(), 4) << ", -.inf], upper: ["
         << num(box_hi.x(), 4) << ", " << num(box_hi.y(), 4) << ", .inf]}\n";
     }
     for (size_t k = 0; k < L.arms.size(); ++k) {
-      c << "    - {name: " << hand_tasks[k] << ", type: position, frame: " << yamlString(grasp_frames[k]) << ", target: " << vec3(in_reach[k], 4)
-        << ", gains: {kp: 0.3}}   # " << num((in_reach[k] - (L.arms[k].shoulder - ground)).norm() / L.arms[k].reach * 100.0, 3)
-        << " % of the reach (" << num(L.arms[k].reach, 3) << " m) from the shoulder\n";
+      c << "    - {name: " << hand_tasks[k] << ", type: position, frame: " << yamlString(grasp_frames[k])
+        << ", target: " << vec3(in_reach[k], 4) << ", gains: {kp: 0.3}}   # "
+        << num((in_reach[k] - (L.arms[k].shoulder - ground)).norm() / L.arms[k].reach * 100.0, 3) << " % of the reach ("
+        << num(L.arms[k].reach, 3) << " m) from the shoulder\n";
     }
     c << "    - {name: velocity, type: velocity_min}\n";
     if (humanoid) c << "    - {name: wrench, type: wrench_min}\n";
@@ -566,12 +583,14 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     c << "  wls_levels:\n"
       << "    - {name: hard, tasks: [joint_limits" << (humanoid ? ", force_bounds" : "") << ", dynamics, torque_limits"
       << (humanoid ? ", " + list(contact_tasks) + ", com_box" : std::string()) << "]}\n"
-      << "    - name: objective\n      tasks: [" << list(hand_tasks) << ", posture" << (humanoid ? ", wrench" : "") << "]\n      weights: {";
+      << "    - name: objective\n      tasks: [" << list(hand_tasks) << ", posture" << (humanoid ? ", wrench" : "")
+      << "]\n      weights: {";
     for (const auto& h : hand_tasks) c << h << ": 1.0, ";
     c << "posture: 1.0e-3" << (humanoid ? ", wrench: 1.0e-5" : "") << "}\n\n";
     c << simSection(humanoid ? 50.0 : 5.0) << "\nevents:\n";
     for (size_t k = 0; k < L.arms.size(); ++k) {
-      c << "  - {at_s: " << num(switch_s) << ", action: set_target, task: " << hand_tasks[k] << ", value: " << vec3(out_of_reach[k], 4) << "}   # out of reach\n";
+      c << "  - {at_s: " << num(switch_s) << ", action: set_target, task: " << hand_tasks[k] << ", value: " << vec3(out_of_reach[k], 4)
+        << "}   # out of reach\n";
     }
     // The top of the trunk: the body not part of an arm whose centre of mass is highest in the
     // posture (the head, the chest); a robot folding forward at the hip lowers it long before its
@@ -604,15 +623,16 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       c << "  - {name: " << h << "_reached, type: task_error, tasks: [" << h << "], statistic: max, from_s: " << num(switch_s - 5.0)
         << ", to_s: " << num(switch_s - 0.01) << ", limit: 0.01}\n";
     }
-    c << "  - {name: hands_settled, type: task_error, tasks: [" << list(hand_tasks) << "], statistic: range, from_s: " << num(duration - 10.0)
-      << ", limit: 0.005}\n";
+    c << "  - {name: hands_settled, type: task_error, tasks: [" << list(hand_tasks)
+      << "], statistic: range, from_s: " << num(duration - 10.0) << ", limit: 0.005}\n";
     if (humanoid) {
       c << "  - {name: feet_held, type: task_error, tasks: [" << list(contact_tasks) << "], statistic: max, from_s: 0.1, limit: 0.001}\n"
-        << "  - {name: upright, type: frame_height, frame: " << yamlString(root) << ", min_m: " << num(0.5 * (L.body_pose[0].translation().z() - L.lowest_z), 3)
-        << "}   # half the base's height in the posture\n";
+        << "  - {name: upright, type: frame_height, frame: " << yamlString(root)
+        << ", min_m: " << num(0.5 * (L.body_pose[0].translation().z() - L.lowest_z), 3) << "}   # half the base's height in the posture\n";
       if (!top.empty()) {
-        c << "  - {name: trunk_up, type: frame_height, frame: " << yamlString(top) << ", min_m: " << num(0.8 * (top_origin_z - L.lowest_z), 3)
-          << "}   # 80 % of the height of '" << top << "' in the posture: the trunk does not fold\n";
+        c << "  - {name: trunk_up, type: frame_height, frame: " << yamlString(top)
+          << ", min_m: " << num(0.8 * (top_origin_z - L.lowest_z), 3) << "}   # 80 % of the height of '" << top
+          << "' in the posture: the trunk does not fold\n";
       }
     }
     c << "  - {name: torques, type: torque_limits, source: both, limit_fraction: 1.0}\n";
@@ -620,15 +640,16 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       for (const auto& f : L.feet) {
         const std::string n = lower(f.surface);
         c << "  - {name: " << n << "_unilateral, type: contact_unilateral, contact: " << f.surface << ", source: sensed, min_N: 0.0}\n"
-          << "  - {name: " << n << "_friction, type: contact_friction, contact: " << f.surface << ", source: sensed, min_normal_N: "
-          << num(std::max(1.0, 0.015 * L.mass * kGravity), 2) << "}\n";
+          << "  - {name: " << n << "_friction, type: contact_friction, contact: " << f.surface
+          << ", source: sensed, min_normal_N: " << num(std::max(1.0, 0.015 * L.mass * kGravity), 2) << "}\n";
         if (f.points.size() >= 3) {
-          c << "  - {name: " << n << "_cop, type: contact_cop, contact: " << f.surface << ", source: sensed, min_normal_N: "
-            << num(std::max(1.0, 0.015 * L.mass * kGravity), 2) << ", limit_m: -0.001}\n";
+          c << "  - {name: " << n << "_cop, type: contact_cop, contact: " << f.surface
+            << ", source: sensed, min_normal_N: " << num(std::max(1.0, 0.015 * L.mass * kGravity), 2) << ", limit_m: -0.001}\n";
         }
       }
     }
-    c << "  - {name: joint_accel_sign_changes, type: joint_acceleration_sign_changes, source: commanded, dead_band_rad_per_s2: 0.05, limit_per_s: 5.0}\n"
+    c << "  - {name: joint_accel_sign_changes, type: joint_acceleration_sign_changes, source: commanded, dead_band_rad_per_s2: 0.05, "
+         "limit_per_s: 5.0}\n"
       << "  - {name: joint_velocity_hf, type: joint_velocity_hf_energy, source: measured, cutoff_hz: 5.0, limit_rad2_per_s2: 0.1}\n"
       << "  - {name: controller_ok, type: controller_status, allowed: [ok, solver_stopped_early], limit_count: 0}\n"
       << "  - {name: active_set_peak, type: active_set_peak, limit_iterations: 50}\n"
@@ -654,15 +675,18 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     const double fmin = std::max(1.0, 0.015 * L.mass * kGravity);
     // The controller (exp1's parameters and levels, the feet as contacts, the base's position
     // and attitude), with `extra_task` (a task line) on a level of its own below the base's.
-    auto controller = [&](std::ostream& c, const Eigen::Vector3d& base_target, const std::string& extra_task, const std::string& extra_name) {
+    auto controller = [&](std::ostream& c, const Eigen::Vector3d& base_target, const std::string& extra_task,
+                          const std::string& extra_name) {
       c << "controller:\n  type: lexdyn\n  method: bfgs                       # --method overrides it\n  feedforward_torque: true\n"
         << "  state_feedback: integrated\n"
-        << "  params: {nu_dt2: 1.0e-12, xi_dt2: 1.0e-12, zeta_dt2: 1.0e-3, rho_dt2: 1.0e-12, eps_dt2: 1.0e-3, newton_identity_weight: 1.0e-4, "
+        << "  params: {nu_dt2: 1.0e-12, xi_dt2: 1.0e-12, zeta_dt2: 1.0e-3, rho_dt2: 1.0e-12, eps_dt2: 1.0e-3, newton_identity_weight: "
+           "1.0e-4, "
            "stop_after_level: contacts}\n"
         << "  method_params:\n    wls: {stop_after_level: hard}\n"
         << "  solver:\n    paper_rules: true\n"
         << "  contacts:   # a foot of one point is a point contact (3 rows: its position; docs/controller.md)\n";
-      for (const auto& f : L.feet) c << "    - {name: " << f.surface << ", surface: " << f.surface << ", sensor: " << f.surface << "_SENSOR}\n";
+      for (const auto& f : L.feet)
+        c << "    - {name: " << f.surface << ", surface: " << f.surface << ", sensor: " << f.surface << "_SENSOR}\n";
       c << "  initial_contacts: [" << surfaces << "]\n"
         << "  tasks:\n"
         << "    - {name: joint_limits, type: joint_limits}\n"
@@ -673,9 +697,9 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       for (const auto& f : L.feet) c << "    - {name: " << lower(f.surface) << ", type: contact, contact: " << f.surface << "}\n";
       c << "    - {name: base_position, type: position, frame: " << yamlString(root) << ", target: " << vec3(base_target, 4)
         << ", gains: {kp: 1.0}}   # from " << vec3(start, 4) << " (the posture's base " << num(h, 3) << " m above the ground)\n"
-        << "    - {name: base_orientation, type: orientation, frame: " << yamlString(root) << ", gains: {kp: 1.0}}   # holds the start's attitude\n"
-        << extra_task
-        << "    - {name: velocity, type: velocity_min}\n"
+        << "    - {name: base_orientation, type: orientation, frame: " << yamlString(root)
+        << ", gains: {kp: 1.0}}   # holds the start's attitude\n"
+        << extra_task << "    - {name: velocity, type: velocity_min}\n"
         << "    - {name: wrench, type: wrench_min}\n"
         << "    - {name: posture, type: posture, posture: " << yamlString(posture.name) << "}     # WLS only\n"
         << "  levels:\n"
@@ -697,18 +721,21 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     // The checks every legged case shares: feet, posture, forces, oscillations, solver.
     auto commonChecks = [&](std::ostream& c) {
       c << "  - {name: feet_held, type: task_error, tasks: [" << list(contact_tasks) << "], statistic: max, from_s: 0.1, limit: 0.001}\n"
-        << "  - {name: upright, type: frame_height, frame: " << yamlString(root) << ", min_m: " << num(0.5 * h, 3) << "}   # half the base's height in the posture\n"
+        << "  - {name: upright, type: frame_height, frame: " << yamlString(root) << ", min_m: " << num(0.5 * h, 3)
+        << "}   # half the base's height in the posture\n"
         << "  - {name: torques, type: torque_limits, source: both, limit_fraction: 1.0}\n";
       for (const auto& f : L.feet) {
         const std::string n = lower(f.surface);
         c << "  - {name: " << n << "_unilateral, type: contact_unilateral, contact: " << f.surface << ", source: sensed, min_N: 0.0}\n"
-          << "  - {name: " << n << "_friction, type: contact_friction, contact: " << f.surface << ", source: sensed, min_normal_N: " << num(fmin, 2) << "}\n";
+          << "  - {name: " << n << "_friction, type: contact_friction, contact: " << f.surface
+          << ", source: sensed, min_normal_N: " << num(fmin, 2) << "}\n";
         if (f.points.size() >= 3) {
           c << "  - {name: " << n << "_cop, type: contact_cop, contact: " << f.surface << ", source: sensed, min_normal_N: " << num(fmin, 2)
             << ", limit_m: -0.001}\n";
         }
       }
-      c << "  - {name: joint_accel_sign_changes, type: joint_acceleration_sign_changes, source: commanded, dead_band_rad_per_s2: 0.05, limit_per_s: 5.0}\n"
+      c << "  - {name: joint_accel_sign_changes, type: joint_acceleration_sign_changes, source: commanded, dead_band_rad_per_s2: 0.05, "
+           "limit_per_s: 5.0}\n"
         << "  - {name: joint_velocity_hf, type: joint_velocity_hf_energy, source: measured, cutoff_hz: 5.0, limit_rad2_per_s2: 0.1}\n"
         << "  - {name: controller_ok, type: controller_status, allowed: [ok, solver_stopped_early], limit_count: 0}\n"
         << "  - {name: active_set_peak, type: active_set_peak, limit_iterations: 50}\n"
@@ -734,20 +761,25 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
         << "Every method runs it (--method bfgs | ah | gn | wls).\n"
         << "# Run: lexdyn-harness run base.yaml --out out/base --method bfgs\n"
         << "name: " << yamlString(d.name + "_base") << "\n"
-        << "description: " << yamlString("On " + std::to_string(L.feet.size()) + " feet; the base to a target within reach, tilted, then out of reach.") << "\n"
+        << "description: "
+        << yamlString("On " + std::to_string(L.feet.size()) + " feet; the base to a target within reach, tilted, then out of reach.")
+        << "\n"
         << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
         << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: static_equilibrium\n\n";
       controller(c, in_reach, "", "");
       c << simSection(5.0) << "\nevents:\n"
-        << "  - {at_s: " << num(tilt_s) << ", action: set_target, task: base_orientation, value: " << rot9(tilt) << "}   # 0.1 rad nose-down\n"
-        << "  - {at_s: " << num(switch_s) << ", action: set_target, task: base_position, value: " << vec3(out_of_reach, 4) << "}   # out of reach\n"
+        << "  - {at_s: " << num(tilt_s) << ", action: set_target, task: base_orientation, value: " << rot9(tilt)
+        << "}   # 0.1 rad nose-down\n"
+        << "  - {at_s: " << num(switch_s) << ", action: set_target, task: base_position, value: " << vec3(out_of_reach, 4)
+        << "}   # out of reach\n"
         << "\ntrace:\n  every_n_ticks: 1\n  frames: [" << yamlString(root) << "]\n\nchecks:\n"
         << "  # The base reaches its target (5 mm) before it tilts, then its tilt (0.01 rad) before the switch.\n"
-        << "  - {name: base_reached, type: task_error, tasks: [base_position], statistic: max, from_s: " << num(move_s) << ", to_s: " << num(tilt_s - 0.01)
-        << ", limit: 0.005}\n"
-        << "  - {name: base_tilted, type: task_error, tasks: [base_orientation], statistic: max, from_s: " << num(tilt_s + 6.0) << ", to_s: "
-        << num(switch_s - 0.01) << ", limit: 0.01}\n"
-        << "  - {name: base_settled, type: task_error, tasks: [base_position], statistic: range, from_s: " << num(duration - 10.0) << ", limit: 0.005}\n";
+        << "  - {name: base_reached, type: task_error, tasks: [base_position], statistic: max, from_s: " << num(move_s)
+        << ", to_s: " << num(tilt_s - 0.01) << ", limit: 0.005}\n"
+        << "  - {name: base_tilted, type: task_error, tasks: [base_orientation], statistic: max, from_s: " << num(tilt_s + 6.0)
+        << ", to_s: " << num(switch_s - 0.01) << ", limit: 0.01}\n"
+        << "  - {name: base_settled, type: task_error, tasks: [base_position], statistic: range, from_s: " << num(duration - 10.0)
+        << ", limit: 0.005}\n";
       commonChecks(c);
       out.base = c.str();
     }
@@ -770,8 +802,9 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
       const std::string sole = sole_frames[0];
       std::ostringstream c;
       c << "# " << d.name << ": the base moves over the other three feet (to their centroid), at " << num(off_s) << " s foot "
-        << lifted.surface << " leaves the\n# ground and rises by 15 % of the base's height, at " << num(down_s) << " s it goes back down, at "
-        << num(on_s) << " s it is a contact again and the base\n# returns; drafted by `lexdyn-harness robot init`. Every method runs it "
+        << lifted.surface << " leaves the\n# ground and rises by 15 % of the base's height, at " << num(down_s)
+        << " s it goes back down, at " << num(on_s)
+        << " s it is a contact again and the base\n# returns; drafted by `lexdyn-harness robot init`. Every method runs it "
         << "(--method bfgs | ah | gn | wls).\n"
         << "# Run: lexdyn-harness run lift_foot.yaml --out out/lift_foot --method bfgs\n"
         << "name: " << yamlString(d.name + "_lift_foot") << "\n"
@@ -779,23 +812,25 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
         << robotSection() << "duration_s: " << num(duration) << "\ncontrol_period_s: " << num(dt) << "\n"
         << "initial_state:\n  posture: " << yamlString(posture.name) << "\n  settle: static_equilibrium\n\n";
       controller(c, shifted,
-                 "    - {name: " + task + ", type: position, frame: " + yamlString(sole) + ", gains: {kp: 1.0}}   # holds the foot, then lifts it\n",
+                 "    - {name: " + task + ", type: position, frame: " + yamlString(sole) +
+                     ", gains: {kp: 1.0}}   # holds the foot, then lifts it\n",
                  task);
       c << simSection(5.0) << "\nevents:\n"
         << "  - {at_s: " << num(off_s) << ", action: remove_contact, contact: " << lifted.surface << "}\n"
         << "  - {at_s: " << num(off_s) << ", action: set_target, task: " << task << ", value: " << vec3(up, 4) << "}   # up\n"
-        << "  - {at_s: " << num(down_s) << ", action: set_target, task: " << task << ", value: " << vec3(down, 4) << "}   # down, 1 mm into the ground\n"
+        << "  - {at_s: " << num(down_s) << ", action: set_target, task: " << task << ", value: " << vec3(down, 4)
+        << "}   # down, 1 mm into the ground\n"
         << "  - {at_s: " << num(on_s) << ", action: add_contact, contact: " << lifted.surface << "}\n"
         << "  - {at_s: " << num(on_s) << ", action: set_target, task: base_position, value: " << vec3(start, 4) << "}   # back\n"
         << "\ntrace:\n  every_n_ticks: 1\n  frames: [" << yamlString(root) << ", " << yamlString(sole) << "]\n\nchecks:\n"
         << "  # The base is over the other feet (5 mm) before the foot leaves; the foot reaches its height\n"
         << "  # (5 mm), then the ground (3 mm); the put-back foot carries load again.\n"
-        << "  - {name: base_shifted, type: task_error, tasks: [base_position], statistic: max, from_s: " << num(off_s - 1.0) << ", to_s: "
-        << num(off_s - 0.01) << ", limit: 0.005}\n"
-        << "  - {name: foot_lifted, type: task_error, tasks: [" << task << "], statistic: max, from_s: " << num(off_s + 6.0) << ", to_s: "
-        << num(down_s - 0.01) << ", limit: 0.005}\n"
-        << "  - {name: foot_down, type: task_error, tasks: [" << task << "], statistic: max, from_s: " << num(down_s + 6.0) << ", to_s: "
-        << num(on_s - 0.01) << ", limit: 0.003}\n"
+        << "  - {name: base_shifted, type: task_error, tasks: [base_position], statistic: max, from_s: " << num(off_s - 1.0)
+        << ", to_s: " << num(off_s - 0.01) << ", limit: 0.005}\n"
+        << "  - {name: foot_lifted, type: task_error, tasks: [" << task << "], statistic: max, from_s: " << num(off_s + 6.0)
+        << ", to_s: " << num(down_s - 0.01) << ", limit: 0.005}\n"
+        << "  - {name: foot_down, type: task_error, tasks: [" << task << "], statistic: max, from_s: " << num(down_s + 6.0)
+        << ", to_s: " << num(on_s - 0.01) << ", limit: 0.003}\n"
         << "  - {name: " << lower(lifted.surface) << "_reloaded, type: contact_unilateral, contact: " << lifted.surface
         << ", source: sensed, from_s: " << num(on_s + 6.0) << ", min_N: " << num(fmin, 2)
         << "}   # loaded: 1.5 % of the weight, the friction checks' threshold\n";
@@ -804,12 +839,15 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     }
   }
   out.summary.push_back("base: " + std::string(d.base == model::BaseType::Fixed ? "fixed" : "free_flyer") + " (" + L.base_reason + ")");
-  out.summary.push_back("mass " + num(L.mass, 4) + " kg, height " + num(L.height, 3) + " m in posture '" + posture.name + "' (" + posture.source + ")");
+  out.summary.push_back("mass " + num(L.mass, 4) + " kg, height " + num(L.height, 3) + " m in posture '" + posture.name + "' (" +
+                        posture.source + ")");
   for (const auto& f : L.feet) {
-    out.summary.push_back("foot " + f.surface + " on link '" + f.link + "': " + std::to_string(f.points.size()) + " contact point(s) from " + f.source);
+    out.summary.push_back("foot " + f.surface + " on link '" + f.link + "': " + std::to_string(f.points.size()) +
+                          " contact point(s) from " + f.source);
   }
   for (const auto& a : L.arms) {
-    out.summary.push_back("arm " + (a.side.empty() ? std::string("(single)") : a.side) + ": hand link '" + a.end_link + "', reach " + num(a.reach, 3) + " m");
+    out.summary.push_back("arm " + (a.side.empty() ? std::string("(single)") : a.side) + ": hand link '" + a.end_link + "', reach " +
+                          num(a.reach, 3) + " m");
   }
   if (!L.feet.empty()) {
     // The centre of mass over the support: the stand tips when it is outside, and a small margin
@@ -823,7 +861,8 @@ Draft draft(const model::RobotDescription& d, const RobotLayout& L, const Postur
     if (poly.size() >= 3 && margin < 0.01) {
       out.warnings.push_back("posture '" + posture.name + "': the centre of mass is " + num(100.0 * std::abs(margin), 3) + " cm " +
                              (margin >= 0.0 ? "inside" : "outside") + " the support polygon's nearest edge: the stand " +
-                             (margin >= 0.0 ? "may tip" : "tips") + "; give another --posture (an SRDF group state) or correct the posture in the data file");
+                             (margin >= 0.0 ? "may tip" : "tips") +
+                             "; give another --posture (an SRDF group state) or correct the posture in the data file");
     }
   }
   if (!up.note.empty()) out.summary.push_back(up.note);
@@ -863,9 +902,10 @@ std::vector<std::string> armsThatCannotHold(const model::RobotDescription& d, co
       const double lever = std::min(a.reach, load.lever * stretch);
       const double torque = load.mass * kGravity * lever;
       if (torque > J.effort_limit) {
-        out.push_back("the " + (a.side.empty() ? std::string("arm") : lower(a.side) + " arm") + "'s joint '" + J.name + "' cannot hold the arm " +
-                      "stretched out level: that takes about " + num(torque, 3) + " N m (" + num(load.mass, 3) + " kg at " + num(lever, 2) +
-                      " m), its effort limit is " + num(J.effort_limit, 3) + " N m; targets out of reach saturate it and the drafted reach " +
+        out.push_back("the " + (a.side.empty() ? std::string("arm") : lower(a.side) + " arm") + "'s joint '" + J.name +
+                      "' cannot hold the arm " + "stretched out level: that takes about " + num(torque, 3) + " N m (" + num(load.mass, 3) +
+                      " kg at " + num(lever, 2) + " m), its effort limit is " + num(J.effort_limit, 3) +
+                      " N m; targets out of reach saturate it and the drafted reach " +
                       "may fold the robot (docs/results.md, \"A heavier humanoid\")");
       }
     }
@@ -897,8 +937,9 @@ std::vector<std::string> armSingularities(const model::RobotDescription& d, cons
     const Eigen::VectorXd sv = svd.singularValues();
     if (sv[0] > 0.0 && sv[2] < 0.02 * sv[0]) {
       out.push_back("posture '" + posture + "': the " + (a.side.empty() ? std::string("arm") : lower(a.side) + " arm") +
-                    " is near a singularity (its hand's position Jacobian has singular values " + num(sv[0], 3) + ", " + num(sv[1], 3) + ", " +
-                    num(sv[2], 3) + " m/rad: stretched out or folded): the drafted reach starts there; another --posture starts it better");
+                    " is near a singularity (its hand's position Jacobian has singular values " + num(sv[0], 3) + ", " + num(sv[1], 3) +
+                    ", " + num(sv[2], 3) +
+                    " m/rad: stretched out or folded): the drafted reach starts there; another --posture starts it better");
     }
   }
   // A leg so (a straight knee): the base moves slowly, if at all, in the direction the leg cannot
@@ -907,7 +948,8 @@ std::vector<std::string> armSingularities(const model::RobotDescription& d, cons
     for (const auto& f : L.feet) {
       std::vector<int> cols;
       for (int b = f.body; b > 0; b = d.parentBody(b)) {
-        if (d.links[static_cast<size_t>(b)].parent_joint >= 0) cols.push_back(m.jointVelocityOffset() + d.links[static_cast<size_t>(b)].parent_joint);
+        if (d.links[static_cast<size_t>(b)].parent_joint >= 0)
+          cols.push_back(m.jointVelocityOffset() + d.links[static_cast<size_t>(b)].parent_joint);
       }
       if (cols.size() < 3) continue;
       const Eigen::Vector3d sole = f.sole_in_body.translation();
@@ -917,10 +959,12 @@ std::vector<std::string> armSingularities(const model::RobotDescription& d, cons
       const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Jl);
       const Eigen::VectorXd sv = svd.singularValues();
       if (sv[0] > 0.0 && sv[2] < 0.02 * sv[0]) {
-        out.push_back("posture '" + posture + "': the leg of " + f.surface + " is near a singularity (its foot's position Jacobian has singular values " +
-                      num(sv[0], 3) + ", " + num(sv[1], 3) + ", " + num(sv[2], 3) +
-                      " m/rad: a straight knee?): the base can hardly move along the leg; a posture with the knees bent (--posture, an SRDF) "
-                      "moves it");
+        out.push_back(
+            "posture '" + posture + "': the leg of " + f.surface +
+            " is near a singularity (its foot's position Jacobian has singular values " + num(sv[0], 3) + ", " + num(sv[1], 3) + ", " +
+            num(sv[2], 3) +
+            " m/rad: a straight knee?): the base can hardly move along the leg; a posture with the knees bent (--posture, an SRDF) "
+            "moves it");
       }
     }
   }
@@ -1021,7 +1065,8 @@ InitResult initRobot(const InitOptions& o) {
   if (!base_note.empty()) L.base_reason = base_note;
   if (posture.given >= 0 && 2 * posture.given < static_cast<int>(d.joints.size())) {
     result.warnings.push_back("posture '" + posture.name + "' (the SRDF's) gives " + std::to_string(posture.given) + " of the " +
-                              std::to_string(d.joints.size()) + " joints; the others are at 0: is it a state of one group only? "
+                              std::to_string(d.joints.size()) +
+                              " joints; the others are at 0: is it a state of one group only? "
                               "(another --posture, or complete it in the data file)");
   }
   for (const auto& w : armSingularities(d, L, posture.name)) result.warnings.push_back(w);
@@ -1029,7 +1074,8 @@ InitResult initRobot(const InitOptions& o) {
   for (const auto& w : L.warnings) result.warnings.push_back("posture '" + posture.name + "': " + w);
   if (d.base == model::BaseType::FreeFlyer && L.feet.size() < 2) {
     throw InputError(o.urdf, "the robot has a floating base but no two chains reach the ground in posture '" + posture.name + "' (" +
-                                 L.base_reason + "): robot init cannot place its feet; give --base fixed for a robot welded to the world, or "
+                                 L.base_reason +
+                                 "): robot init cannot place its feet; give --base fixed for a robot welded to the world, or "
                                  "another --posture");
   }
   const Draft dr = draft(d, L, posture, postures, o, final_dir, srdf ? &*srdf : nullptr, up);

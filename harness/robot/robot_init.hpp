@@ -13,22 +13,22 @@ namespace lexdyn::robot {
 
 struct InitOptions {
   std::string urdf;
-  std::string srdf;                       ///< optional
-  bool srdf_skip_unknown = false;         ///< drop an SRDF state's joints the URDF lacks (else an error)
-  std::string out_dir;                    ///< must not exist, or be empty
+  std::string srdf;                ///< optional
+  bool srdf_skip_unknown = false;  ///< drop an SRDF state's joints the URDF lacks (else an error)
+  std::string out_dir;             ///< must not exist, or be empty
   std::vector<std::string> package_paths;
-  std::string base;                       ///< "free_flyer", "fixed" or "" (guess)
-  std::string posture;                    ///< the SRDF state to stand in ("" for the best one)
+  std::string base;     ///< "free_flyer", "fixed" or "" (guess)
+  std::string posture;  ///< the SRDF state to stand in ("" for the best one)
   bool strict = false;
-  bool allow_missing_meshes = false;      ///< a mesh that cannot be found is a warning, not an error
-  std::string mimic = "coupled";          ///< the URDF's <mimic> joints: coupled | locked (at the posture)
+  bool allow_missing_meshes = false;  ///< a mesh that cannot be found is a warning, not an error
+  std::string mimic = "coupled";      ///< the URDF's <mimic> joints: coupled | locked (at the posture)
   double control_period_s = 0.005;
 };
 
 struct InitResult {
-  std::vector<std::string> files;         ///< written, in DIR
-  std::vector<std::string> summary;       ///< what was found and guessed, one line each
-  std::vector<std::string> warnings;      ///< the loader's and the drafting's
+  std::vector<std::string> files;     ///< written, in DIR
+  std::vector<std::string> summary;   ///< what was found and guessed, one line each
+  std::vector<std::string> warnings;  ///< the loader's and the drafting's
 };
 
 /// Drafts DIR/<robot>.yaml, DIR/stand.yaml and (for a robot with two arms and legs, or one

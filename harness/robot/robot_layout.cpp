@@ -27,8 +27,8 @@ constexpr double kFootInAir_m = 0.002;
 
 // Points of one geometry that bound it (world): box corners, sphere extremes along the world
 // axes, cylinder rims (with the exact lowest points of a tilted cylinder), mesh vertices.
-void geometryPoints(const model::GeometryDescription& g, const Eigen::Isometry3d& X_world_body, bool apply_up_axis,
-                    MeshCache& meshes, ProblemList& problems, std::vector<Eigen::Vector3d>& out) {
+void geometryPoints(const model::GeometryDescription& g, const Eigen::Isometry3d& X_world_body, bool apply_up_axis, MeshCache& meshes,
+                    ProblemList& problems, std::vector<Eigen::Vector3d>& out) {
   const Eigen::Isometry3d X = X_world_body * g.placement;
   switch (g.type) {
     case model::GeometryType::Box:
@@ -110,8 +110,10 @@ double chainLength(const std::vector<Eigen::Vector3d>& pts) {
 }  // namespace
 
 std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> p) {
-  std::sort(p.begin(), p.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
-  p.erase(std::unique(p.begin(), p.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return (a - b).norm() < 1e-9; }), p.end());
+  std::sort(p.begin(), p.end(),
+            [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  p.erase(std::unique(p.begin(), p.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return (a - b).norm() < 1e-9; }),
+          p.end());
   if (p.size() < 3) return p;
   auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
@@ -188,8 +190,10 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
         if (g.link != b || g.collision != collision) continue;
         pts[static_cast<size_t>(b)].insert(pts[static_cast<size_t>(b)].end(), L.geometry_points[gi].begin(), L.geometry_points[gi].end());
         const char* kind[] = {"box", "sphere", "cylinder", "mesh"};
-        std::string s = std::string(collision ? "collision " : "visual ") + kind[static_cast<int>(g.type)] + " of link '" + g.urdf_link + "'";
-        if (shapes[static_cast<size_t>(b)].find(s) == std::string::npos) shapes[static_cast<size_t>(b)] += (shapes[static_cast<size_t>(b)].empty() ? "" : ", ") + s;
+        std::string s =
+            std::string(collision ? "collision " : "visual ") + kind[static_cast<int>(g.type)] + " of link '" + g.urdf_link + "'";
+        if (shapes[static_cast<size_t>(b)].find(s) == std::string::npos)
+          shapes[static_cast<size_t>(b)] += (shapes[static_cast<size_t>(b)].empty() ? "" : ", ") + s;
       }
       if (!pts[static_cast<size_t>(b)].empty()) break;
     }
@@ -455,8 +459,9 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
       local.z() = 0.0;
       f.points.push_back(local);
     }
-    f.source = (f.point_foot ? "the lowest point of " : "the extreme points, along the foot's diagonals, of the lowest " +
-                                                          formatNumber(std::round(band * 1000.0), 2) + " mm of ") +
+    f.source = (f.point_foot ? "the lowest point of "
+                             : "the extreme points, along the foot's diagonals, of the lowest " +
+                                   formatNumber(std::round(band * 1000.0), 2) + " mm of ") +
                shapes[static_cast<size_t>(f.body)] + " in the posture";
   }
   // A foot above the others' level: the robot does not stand on it in this posture.
@@ -552,7 +557,8 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     const Eigen::Vector3d first = L.body_pose[static_cast<size_t>(limb.bodies.front())].translation() - L.com;
     cands.push_back({static_cast<int>(li), static_cast<int>(n), hand, first.dot(left_dir), sideOfLimb(limb.all)});
   }
-  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.joints > b.joints || (a.joints == b.joints && a.limb < b.limb); });
+  std::sort(cands.begin(), cands.end(),
+            [](const Candidate& a, const Candidate& b) { return a.joints > b.joints || (a.joints == b.joints && a.limb < b.limb); });
   std::vector<std::pair<Candidate, std::string>> arms;
   for (size_t i = 0; i < cands.size() && arms.empty(); ++i) {
     for (size_t j = i + 1; j < cands.size(); ++j) {
@@ -653,10 +659,12 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     }
     chain.push_back(g);
     a.reach = chainLength(chain);
-    a.source = (between_fingers ? "between the tips of the " + std::to_string(fingers.size()) + " fingers of the hand, link '" + a.end_link + "'"
-                : at_end        ? "the end of the hand, link '" + a.end_link + "' and what it carries (its geometry's extreme away from its joint)"
-                                : "the centre of the geometry of the hand, link '" + a.end_link + "' and what it carries") +
-               " (the end of the " + std::to_string(c.joints) + "-joint chain from joint '" + d.joints[static_cast<size_t>(a.first_joint)].name + "')";
+    a.source =
+        (between_fingers ? "between the tips of the " + std::to_string(fingers.size()) + " fingers of the hand, link '" + a.end_link + "'"
+         : at_end        ? "the end of the hand, link '" + a.end_link + "' and what it carries (its geometry's extreme away from its joint)"
+                         : "the centre of the geometry of the hand, link '" + a.end_link + "' and what it carries") +
+        " (the end of the " + std::to_string(c.joints) + "-joint chain from joint '" + d.joints[static_cast<size_t>(a.first_joint)].name +
+        "')";
     L.arms.push_back(a);
   }
   if (L.arms.empty()) L.notes.push_back("no arm found (no chain of 3 or more joints that is not a leg)");
@@ -706,8 +714,10 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
         const auto& l = d.links[static_cast<size_t>(k)];
         const Eigen::Matrix3d R = L.body_pose[static_cast<size_t>(k)].linear();
         const Eigen::Vector3d r = L.body_pose[static_cast<size_t>(k)] * l.com - o;
-        I += J.type == model::JointType::Prismatic ? l.mass
-                                                   : a.dot((R * l.inertia * R.transpose() + l.mass * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose())) * a);
+        I +=
+            J.type == model::JointType::Prismatic
+                ? l.mass
+                : a.dot((R * l.inertia * R.transpose() + l.mass * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose())) * a);
         for (int c : children[static_cast<size_t>(k)]) stack.push_back(c);
       }
       load.inertia = I;
@@ -731,8 +741,8 @@ ServoGains sizeServo(const model::RobotDescription& d, const RobotLayout& layout
   const double torque = prismatic ? load.mass * kGravity : load.mass * kGravity * lever;
   double kp = torque / kDeflection;
   std::string why = prismatic ? "load " + formatNumber(load.mass, 3) + " kg (" + load.what + "): " + formatNumber(torque, 3) + " N / 5 mm"
-                              : "load " + formatNumber(load.mass, 3) + " kg at " + formatNumber(lever, 2) + " m (" + load.what + "): " +
-                                    formatNumber(torque, 3) + " N m / 5 mrad";
+                              : "load " + formatNumber(load.mass, 3) + " kg at " + formatNumber(lever, 2) + " m (" + load.what +
+                                    "): " + formatNumber(torque, 3) + " N m / 5 mrad";
   if (std::isfinite(J.effort_limit) && J.effort_limit / kSaturation > kp) {
     kp = J.effort_limit / kSaturation;
     why = "effort " + formatNumber(J.effort_limit, 3) + " reached at 0.5 " + (prismatic ? "m" : "rad");

@@ -24,26 +24,26 @@ struct Sourced {
 };
 
 struct FootLayout {
-  std::string surface;                   ///< contact surface name (LEFT_FOOT, FRONT_LEFT_FOOT, ...)
-  int body = -1;                         ///< the body that carries the sole
-  std::string link;                      ///< that body's link name
+  std::string surface;                                             ///< contact surface name (LEFT_FOOT, FRONT_LEFT_FOOT, ...)
+  int body = -1;                                                   ///< the body that carries the sole
+  std::string link;                                                ///< that body's link name
   Eigen::Isometry3d sole_in_body = Eigen::Isometry3d::Identity();  ///< the sole frame (z up in the posture)
-  std::vector<Eigen::Vector3d> points;   ///< contact points in the sole frame (z = 0)
+  std::vector<Eigen::Vector3d> points;                             ///< contact points in the sole frame (z = 0)
   std::vector<Eigen::Vector3d> points_world;
-  bool point_foot = false;               ///< one contact point (a sphere or a tip)
-  double radius = 0.0;                   ///< a point foot that is the bottom of a collision sphere: its radius
-  std::string source;                    ///< which geometry gave the points
+  bool point_foot = false;  ///< one contact point (a sphere or a tip)
+  double radius = 0.0;      ///< a point foot that is the bottom of a collision sphere: its radius
+  std::string source;       ///< which geometry gave the points
 };
 
 struct ArmLayout {
-  std::string side;                      ///< "LEFT", "RIGHT" or "" (a single arm)
-  int end_body = -1;                     ///< the hand's body
+  std::string side;   ///< "LEFT", "RIGHT" or "" (a single arm)
+  int end_body = -1;  ///< the hand's body
   std::string end_link;
-  int first_joint = -1;                  ///< where the arm leaves the trunk (model joint index)
+  int first_joint = -1;                                ///< where the arm leaves the trunk (model joint index)
   Eigen::Vector3d shoulder = Eigen::Vector3d::Zero();  ///< first joint's origin, world
   Eigen::Vector3d grasp_world = Eigen::Vector3d::Zero();
   Eigen::Vector3d grasp_in_body = Eigen::Vector3d::Zero();
-  double reach = 0.0;                    ///< shoulder to grasp point along the chain, fully stretched, m
+  double reach = 0.0;  ///< shoulder to grasp point along the chain, fully stretched, m
   std::string source;
 };
 
@@ -51,19 +51,19 @@ struct ArmLayout {
 inline constexpr double kGravity = 9.81;
 
 struct JointLoad {
-  double mass = 0.0;                     ///< kg the joint holds (its subtree, or the rest of the robot for a leg joint)
-  double lever = 0.0;                    ///< m, from the joint to that mass's centre of mass
-  double inertia = 0.0;                  ///< kg m^2 (kg): the load's inertia about the joint
-  std::string what;                      ///< "its subtree (arm)", "the robot above it, shared by 2 feet"
+  double mass = 0.0;     ///< kg the joint holds (its subtree, or the rest of the robot for a leg joint)
+  double lever = 0.0;    ///< m, from the joint to that mass's centre of mass
+  double inertia = 0.0;  ///< kg m^2 (kg): the load's inertia about the joint
+  std::string what;      ///< "its subtree (arm)", "the robot above it, shared by 2 feet"
 };
 
 struct ServoGains {
   double kp = 0.0, kd = 0.0;
-  std::string source;                    ///< the sizing, in words, for the comment
+  std::string source;  ///< the sizing, in words, for the comment
 };
 
 struct RobotLayout {
-  Eigen::VectorXd posture;               ///< model joint order
+  Eigen::VectorXd posture;  ///< model joint order
   /// The base's orientation in the layout's world: the identity, or turned so that two feet that
   /// the posture tilts stand flat (the base at the origin either way).
   Eigen::Matrix3d base_rotation = Eigen::Matrix3d::Identity();
@@ -75,16 +75,16 @@ struct RobotLayout {
   bool legged = false;
   /// The robot's forward direction in the world (+x, or -x when the links' names put its left at -y).
   Eigen::Vector3d forward = Eigen::Vector3d::UnitX();
-  std::string sides_from = "geometry";   ///< how left and right were told: "names" or "geometry"
-  std::string base_reason;               ///< why free-flyer or fixed
+  std::string sides_from = "geometry";  ///< how left and right were told: "names" or "geometry"
+  std::string base_reason;              ///< why free-flyer or fixed
   std::vector<FootLayout> feet;
   std::vector<ArmLayout> arms;
-  std::vector<JointLoad> loads;          ///< per model joint
+  std::vector<JointLoad> loads;  ///< per model joint
   /// The bounding points (world) of every geometry of the description (same order as
   /// RobotDescription::geometries; a mesh that could not be read has none).
   std::vector<std::vector<Eigen::Vector3d>> geometry_points;
-  std::vector<std::string> notes;        ///< what could not be found, what was assumed
-  std::vector<std::string> warnings;     ///< what is likely wrong (a foot in the air in the posture)
+  std::vector<std::string> notes;     ///< what could not be found, what was assumed
+  std::vector<std::string> warnings;  ///< what is likely wrong (a foot in the air in the posture)
 };
 
 /// The layout in `posture` (model joint order). `legged_hint`: the base type the URDF implies

@@ -44,7 +44,9 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
   auto at = [&](const TiXmlElement* e) { return path + ":" + std::to_string(e->Row()); };
   TiXmlDocument doc;
   doc.Parse(text.c_str());
-  if (doc.Error()) problems.fatal(path + (doc.ErrorRow() > 0 ? ":" + std::to_string(doc.ErrorRow()) : ""), std::string("XML syntax error: ") + doc.ErrorDesc());
+  if (doc.Error())
+    problems.fatal(path + (doc.ErrorRow() > 0 ? ":" + std::to_string(doc.ErrorRow()) : ""),
+                   std::string("XML syntax error: ") + doc.ErrorDesc());
   const TiXmlElement* robot = doc.RootElement();
   if (!robot || std::string(robot->Value()) != "robot") problems.fatal(path, "expected a <robot> root element (an SRDF)");
   s.robot_name = attr(robot, "name");
@@ -76,7 +78,8 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
       if (kind == "chain") {
         const std::string base = attr(c, "base_link"), tip = attr(c, "tip_link");
         for (const std::string& l : {base, tip}) {
-          if (!knownLink(l)) problems.error(at(c), "group '" + grp.name + "': <chain> names link '" + l + "', which the URDF does not have");
+          if (!knownLink(l))
+            problems.error(at(c), "group '" + grp.name + "': <chain> names link '" + l + "', which the URDF does not have");
         }
         grp.chains.emplace_back(base, tip);
       } else if (kind == "link") {
@@ -127,7 +130,8 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
       }
       std::vector<double> v;
       if (!numbers(attr(j, "value"), v)) {
-        problems.error(at(j), "group state '" + state.name + "': joint '" + name + "': value=\"" + attr(j, "value") + "\" is not a list of finite numbers");
+        problems.error(at(j), "group state '" + state.name + "': joint '" + name + "': value=\"" + attr(j, "value") +
+                                  "\" is not a list of finite numbers");
         continue;
       }
       const bool virtual_joint = std::find(s.virtual_joints.begin(), s.virtual_joints.end(), name) != s.virtual_joints.end();
@@ -154,7 +158,8 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
         continue;
       }
       if (v.size() != 1) {
-        problems.error(at(j), "group state '" + state.name + "': joint '" + name + "' has " + std::to_string(v.size()) + " values, expected 1");
+        problems.error(at(j),
+                       "group state '" + state.name + "': joint '" + name + "' has " + std::to_string(v.size()) + " values, expected 1");
         continue;
       }
       state.values.emplace_back(name, v[0]);
@@ -168,7 +173,8 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
       for (const auto& [joint, value] : state.values) {
         const bool known = std::any_of(same->values.begin(), same->values.end(), [&](const auto& jv) { return jv.first == joint; });
         if (known) {
-          const double first = std::find_if(same->values.begin(), same->values.end(), [&](const auto& jv) { return jv.first == joint; })->second;
+          const double first =
+              std::find_if(same->values.begin(), same->values.end(), [&](const auto& jv) { return jv.first == joint; })->second;
           if (first != value) {
             s.notes.push_back("SRDF state '" + state.name + "' (groups '" + same->group + "' and '" + state.group + "'): joint '" + joint +
                               "' given twice, " + formatNumber(first) + " and " + formatNumber(value) + ": the first is kept");
@@ -179,8 +185,8 @@ Srdf readSrdf(const std::string& path, const model::RobotDescription& d, Problem
         ++added;
       }
       s.notes.push_back("SRDF state '" + state.name + "' of group '" + state.group + "' (line " + std::to_string(state.line) +
-                        ") merged with the one of group '" + same->group + "' (line " + std::to_string(same->line) + "): " +
-                        std::to_string(added) + " more joint(s)");
+                        ") merged with the one of group '" + same->group + "' (line " + std::to_string(same->line) +
+                        "): " + std::to_string(added) + " more joint(s)");
       same->group += "+" + state.group;
       continue;
     }

@@ -14,8 +14,8 @@ std::vector<std::pair<std::string, std::string>> buildInfo() {
   int major = 0, minor = 0, build = 0;
   SimTK_version_simbody(&major, &minor, &build);
   const std::string simbody = std::to_string(major) + "." + std::to_string(minor) + "." + std::to_string(build);
-  const std::string eigen = std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
-                            std::to_string(EIGEN_MINOR_VERSION);
+  const std::string eigen =
+      std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." + std::to_string(EIGEN_MINOR_VERSION);
   return {
       {"compiler", LEXDYN_BUILD_COMPILER " (" __VERSION__ ")"},
       {"build_type", LEXDYN_BUILD_TYPE},

@@ -30,10 +30,8 @@
 // but an external symbol of the static library linked here (a SUNDIALS without it fails to
 // link). The block-elimination solver calls it from its own linear-system function, so that the
 // Jacobian has exactly the increments and bits of CVODE's own (docs/simulator.md, "Integrator").
-extern "C" int cvLsDQJac(realtype t, N_Vector y, N_Vector fy, SUNMatrix Jac, void* cvode_mem, N_Vector tmp1,
-                         N_Vector tmp2, N_Vector tmp3);
-static_assert(SUNDIALS_VERSION_MAJOR == 6,
-              "cvLsDQJac's signature and CVODE's linear-system function are those of SUNDIALS 6: check them");
+extern "C" int cvLsDQJac(realtype t, N_Vector y, N_Vector fy, SUNMatrix Jac, void* cvode_mem, N_Vector tmp1, N_Vector tmp2, N_Vector tmp3);
+static_assert(SUNDIALS_VERSION_MAJOR == 6, "cvLsDQJac's signature and CVODE's linear-system function are those of SUNDIALS 6: check them");
 
 namespace lexdyn::sim {
 
@@ -267,7 +265,7 @@ class NewtonSolver {
   Eigen::MatrixXd full_;
   Eigen::PartialPivLU<Eigen::MatrixXd> full_lu_;
   // Block elimination.
-  Eigen::MatrixXd a11_;  // LU of A11 in place
+  Eigen::MatrixXd a11_;    // LU of A11 in place
   std::vector<int> perm_;  // row k was interchanged with row perm_[k]
   std::vector<double> udiag_;
   std::vector<int> lstart_, lrow_, ustart_, urow_, xstart_, xrow_, rows_;
@@ -298,8 +296,10 @@ int lsFree(SUNLinearSolver S) {
 
 const char* toString(LinearSolver s) {
   switch (s) {
-    case LinearSolver::BlockElimination: return "block_elimination";
-    case LinearSolver::DenseLU: return "dense_lu";
+    case LinearSolver::BlockElimination:
+      return "block_elimination";
+    case LinearSolver::DenseLU:
+      return "dense_lu";
   }
   return "unknown";
 }
@@ -310,21 +310,30 @@ void OdeSystem::jacobian(double, const double*, const double*, double*) {
 
 const char* toString(JacobianSource s) {
   switch (s) {
-    case JacobianSource::DifferenceQuotient: return "difference_quotient";
-    case JacobianSource::System: return "system";
+    case JacobianSource::DifferenceQuotient:
+      return "difference_quotient";
+    case JacobianSource::System:
+      return "system";
   }
   return "unknown";
 }
 
 const char* toString(CvodeStatus s) {
   switch (s) {
-    case CvodeStatus::Success: return "success";
-    case CvodeStatus::TooMuchWork: return "too_much_work";
-    case CvodeStatus::TooMuchAccuracy: return "too_much_accuracy";
-    case CvodeStatus::ErrorTestFailures: return "error_test_failures";
-    case CvodeStatus::ConvergenceFailures: return "convergence_failures";
-    case CvodeStatus::RhsFailure: return "rhs_failure";
-    case CvodeStatus::OtherFailure: return "other_failure";
+    case CvodeStatus::Success:
+      return "success";
+    case CvodeStatus::TooMuchWork:
+      return "too_much_work";
+    case CvodeStatus::TooMuchAccuracy:
+      return "too_much_accuracy";
+    case CvodeStatus::ErrorTestFailures:
+      return "error_test_failures";
+    case CvodeStatus::ConvergenceFailures:
+      return "convergence_failures";
+    case CvodeStatus::RhsFailure:
+      return "rhs_failure";
+    case CvodeStatus::OtherFailure:
+      return "other_failure";
   }
   return "unknown";
 }
@@ -342,9 +351,9 @@ struct CvodeIntegrator::Impl {
   bool jacobian_incomplete = false;  // the last Jacobian failed part-way (or had non-finite entries)
   void* mem = nullptr;
   double t = 0.0;
-  std::string message;       // last failure
-  std::string rhs_error;     // exception text from the right-hand side
-  std::string cvode_error;   // text from CVODE's error handler
+  std::string message;      // last failure
+  std::string rhs_error;    // exception text from the right-hand side
+  std::string cvode_error;  // text from CVODE's error handler
 
   Impl(OdeSystem& s, const CvodeSettings& st) : system(s), settings(st) {}
 
@@ -396,15 +405,14 @@ struct CvodeIntegrator::Impl {
   }
 
   // CVODE's Jacobian function (CVodeSetJacFn), for the solvers that let CVODE form I - gamma J.
-  static int jacobianCallback(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user, N_Vector, N_Vector,
-                              N_Vector) {
+  static int jacobianCallback(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector) {
     return static_cast<Impl*>(user)->systemJacobian(t, yv, fy, J);
   }
 
   static void errorHandler(int code, const char* module, const char* function, char* msg, void* user) {
     Impl& self = *static_cast<Impl*>(user);
-    self.cvode_error = std::string(module ? module : "CVODE") + "::" + (function ? function : "?") + " (" +
-                       std::to_string(code) + "): " + (msg ? msg : "");
+    self.cvode_error = std::string(module ? module : "CVODE") + "::" + (function ? function : "?") + " (" + std::to_string(code) +
+                       "): " + (msg ? msg : "");
   }
 
   // CVODE's linear-system function for the block-elimination solver: where CVODE's own copies its
@@ -412,8 +420,8 @@ struct CvodeIntegrator::Impl {
   // keeps the Jacobian in the system matrix (a new one, difference quotients or the system's,
   // when CVODE asks for one, !jok) and hands gamma to the solver, which forms I - gamma J only
   // where it reads it.
-  static int linearSystem(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, booleantype jok, booleantype* jcur,
-                          realtype gamma, void* user, N_Vector tmp1, N_Vector tmp2, N_Vector tmp3) {
+  static int linearSystem(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, booleantype jok, booleantype* jcur, realtype gamma, void* user,
+                          N_Vector tmp1, N_Vector tmp2, N_Vector tmp3) {
     Impl& self = *static_cast<Impl*>(user);
     // A Jacobian that failed part-way leaves J with columns of two Jacobians (CVODE's
     // own function would still hold its last saved one): the next setup forms a new one.
@@ -435,14 +443,12 @@ struct CvodeIntegrator::Impl {
   }
 };
 
-CvodeIntegrator::CvodeIntegrator(OdeSystem& system, const CvodeSettings& settings)
-    : impl_(std::make_unique<Impl>(system, settings)) {
+CvodeIntegrator::CvodeIntegrator(OdeSystem& system, const CvodeSettings& settings) : impl_(std::make_unique<Impl>(system, settings)) {
   Impl& m = *impl_;
   // Guard against the link-order trap: our SUNDIALS must be the static one linked into this
   // program, not the old copy exported by libSimTKmath.so.
   Dl_info info;
-  if (dladdr(reinterpret_cast<void*>(&N_VNew_Serial), &info) != 0 && info.dli_fname &&
-      std::strstr(info.dli_fname, "SimTK") != nullptr) {
+  if (dladdr(reinterpret_cast<void*>(&N_VNew_Serial), &info) != 0 && info.dli_fname && std::strstr(info.dli_fname, "SimTK") != nullptr) {
     throw std::runtime_error(std::string("SUNDIALS symbols resolve to ") + info.dli_fname +
                              " (Simbody's embedded copy): link libsundials_cvode.a before the Simbody libraries");
   }
@@ -517,18 +523,29 @@ CvodeStatus CvodeIntegrator::advance(double t_out, double* y_out) {
   if (flag >= 0) return CvodeStatus::Success;
   CvodeStatus s = CvodeStatus::OtherFailure;
   switch (flag) {
-    case CV_TOO_MUCH_WORK: s = CvodeStatus::TooMuchWork; break;
-    case CV_TOO_MUCH_ACC: s = CvodeStatus::TooMuchAccuracy; break;
-    case CV_ERR_FAILURE: s = CvodeStatus::ErrorTestFailures; break;
-    case CV_CONV_FAILURE: s = CvodeStatus::ConvergenceFailures; break;
+    case CV_TOO_MUCH_WORK:
+      s = CvodeStatus::TooMuchWork;
+      break;
+    case CV_TOO_MUCH_ACC:
+      s = CvodeStatus::TooMuchAccuracy;
+      break;
+    case CV_ERR_FAILURE:
+      s = CvodeStatus::ErrorTestFailures;
+      break;
+    case CV_CONV_FAILURE:
+      s = CvodeStatus::ConvergenceFailures;
+      break;
     case CV_RHSFUNC_FAIL:
     case CV_REPTD_RHSFUNC_ERR:
     case CV_UNREC_RHSFUNC_ERR:
-    case CV_FIRST_RHSFUNC_ERR: s = CvodeStatus::RhsFailure; break;
+    case CV_FIRST_RHSFUNC_ERR:
+      s = CvodeStatus::RhsFailure;
+      break;
     case CV_LSETUP_FAIL:  // a throwing OdeSystem::jacobian(), or rhs() within a difference quotient
       if (!m.rhs_error.empty()) s = CvodeStatus::RhsFailure;
       break;
-    default: break;
+    default:
+      break;
   }
   m.message = std::string("CVODE stopped at t = ") + std::to_string(t_reached) + " s (" + toString(s) + ")";
   if (!m.rhs_error.empty()) m.message += ": " + m.rhs_error;

@@ -43,7 +43,6 @@ enum class JacobianSource {
 
 const char* toString(JacobianSource s);  ///< "difference_quotient" | "system"
 
-
 /// Who solves the Newton systems (I - gamma J) x = b.
 enum class LinearSolver {
   BlockElimination,  ///< NewtonSolver: block elimination of the kinematic block (the default)
@@ -53,12 +52,12 @@ enum class LinearSolver {
 const char* toString(LinearSolver s);  ///< "block_elimination" | "dense_lu"
 
 struct CvodeSettings {
-  double rtol = 1e-4;           ///< relative tolerance
-  std::vector<double> atol;     ///< absolute tolerance per component (size of the system)
-  int max_order = 5;            ///< BDF order limit (1..5)
-  long max_steps = 20000;       ///< per advance() call
-  double max_step = 0.0;        ///< 0: no limit
-  double initial_step = 0.0;    ///< 0: CVODE's estimate
+  double rtol = 1e-4;         ///< relative tolerance
+  std::vector<double> atol;   ///< absolute tolerance per component (size of the system)
+  int max_order = 5;          ///< BDF order limit (1..5)
+  long max_steps = 20000;     ///< per advance() call
+  double max_step = 0.0;      ///< 0: no limit
+  double initial_step = 0.0;  ///< 0: CVODE's estimate
   /// Size p of a leading block q of y = [q; u] whose rates depend on u through a sparse map
   /// (qdot = N(q) u, e.g. joint rates = joint speeds): the Newton matrix is then factorised by
   /// eliminating the q block (its blocks I - gamma dqdot/dq and -gamma N are sparse) and a
@@ -79,14 +78,14 @@ struct CvodeSettings {
 
 struct CvodeStats {
   long steps = 0;
-  long rhs_evals = 0;           ///< by the integrator (not counting the Jacobian's)
-  long jac_evals = 0;           ///< Jacobians (difference quotients or the system's)
-  long jac_rhs_evals = 0;       ///< rhs evaluations spent on those Jacobians
+  long rhs_evals = 0;      ///< by the integrator (not counting the Jacobian's)
+  long jac_evals = 0;      ///< Jacobians (difference quotients or the system's)
+  long jac_rhs_evals = 0;  ///< rhs evaluations spent on those Jacobians
   long nonlin_iters = 0;
   long nonlin_conv_fails = 0;
   long err_test_fails = 0;
-  long lin_setups = 0;          ///< Newton-matrix factorisations
-  long lin_full_setups = 0;     ///< of which of the whole matrix by NewtonSolver (kinematic block not used; 0 with DenseLU)
+  long lin_setups = 0;       ///< Newton-matrix factorisations
+  long lin_full_setups = 0;  ///< of which of the whole matrix by NewtonSolver (kinematic block not used; 0 with DenseLU)
   double last_step = 0.0;
   int last_order = 0;
 };

@@ -79,8 +79,8 @@ struct Multibody::Impl {
 
   SimTK::MultibodySystem system;
   SimTK::SimbodyMatterSubsystem matter;
-  SimTK::State default_state;                     // Euler angles on, realized to Model
-  std::vector<SimTK::MobilizedBodyIndex> mobod;  // per body
+  SimTK::State default_state;                       // Euler angles on, realized to Model
+  std::vector<SimTK::MobilizedBodyIndex> mobod;     // per body
   std::vector<const SimTK::MobilizedBody*> mobody;  // per body, looked up once
   // Simbody's numbering: q[k] of ours is Simbody's q[q_index[k]], u[k] is u[u_index[k]].
   std::vector<int> q_index, u_index;
@@ -148,7 +148,8 @@ struct Multibody::Impl {
     M.setZero();
     for (int i = 0; i < nu; ++i) {
       for (int j = 0; j < nu; ++j) {
-        M(model_of[static_cast<size_t>(i)], model_of[static_cast<size_t>(j)]) += g[static_cast<size_t>(i)] * g[static_cast<size_t>(j)] * Ms(i, j);
+        M(model_of[static_cast<size_t>(i)], model_of[static_cast<size_t>(j)]) +=
+            g[static_cast<size_t>(i)] * g[static_cast<size_t>(j)] * Ms(i, j);
       }
     }
   }
@@ -180,10 +181,10 @@ Multibody::Impl::Impl(model::RobotDescription d) : desc(std::move(d)), matter(sy
   for (int b = 1; b < nb; ++b) {
     const model::LinkDescription& L = desc.links[static_cast<size_t>(b)];
     const bool is_joint = L.parent_joint >= 0;
-    const model::JointType type = is_joint ? desc.joints[static_cast<size_t>(L.parent_joint)].type
-                                           : desc.coupled_joints[static_cast<size_t>(L.parent_coupled)].type;
-    const Eigen::Vector3d axis = is_joint ? desc.joints[static_cast<size_t>(L.parent_joint)].axis
-                                          : desc.coupled_joints[static_cast<size_t>(L.parent_coupled)].axis;
+    const model::JointType type =
+        is_joint ? desc.joints[static_cast<size_t>(L.parent_joint)].type : desc.coupled_joints[static_cast<size_t>(L.parent_coupled)].type;
+    const Eigen::Vector3d axis =
+        is_joint ? desc.joints[static_cast<size_t>(L.parent_joint)].axis : desc.coupled_joints[static_cast<size_t>(L.parent_coupled)].axis;
     const Eigen::Isometry3d& origin = desc.jointOrigin(b);
     const int parent_body = desc.parentBody(b);
     LEXDYN_ALWAYS_ASSERT(parent_body >= 0 && parent_body < b, "robot description: a body's parent comes before it");
@@ -466,8 +467,7 @@ void Multibody::clearForces(MultibodyState& st) const {
   st.impl_->mobility_forces.setToZero();
 }
 
-void Multibody::addBodyForce(MultibodyState& st, int body, const Eigen::Vector3d& torque_about_origin,
-                             const Eigen::Vector3d& force) const {
+void Multibody::addBodyForce(MultibodyState& st, int body, const Eigen::Vector3d& torque_about_origin, const Eigen::Vector3d& force) const {
   SimTK::SpatialVec& F = st.impl_->body_forces[impl_->mobod[static_cast<size_t>(body)]];
   F[0] += vec3(torque_about_origin);
   F[1] += vec3(force);

@@ -107,8 +107,7 @@ class Multibody {
   // ----- applied forces and dynamics (in the state's force workspace) ---------------------
   void clearForces(MultibodyState& s) const;
   /// Adds a force on a body: the torque about the body frame's origin and the force (world).
-  void addBodyForce(MultibodyState& s, int body, const Eigen::Vector3d& torque_about_origin,
-                    const Eigen::Vector3d& force) const;
+  void addBodyForce(MultibodyState& s, int body, const Eigen::Vector3d& torque_about_origin, const Eigen::Vector3d& force) const;
   void setJointForce(MultibodyState& s, int joint, double tau) const;
   /// udot (nv) from the applied forces: Simbody's articulated-body forward dynamics.
   void accelerations(MultibodyState& s, double* udot) const;

@@ -1,7 +1,7 @@
 // Simulator: the robot's Simbody matter subsystem (the simulator's own, multibody.hpp; built
-// from the robot description independently of lexdyn::model), external forces computed here (gravity, compliant ground contact, grasp bushings, joint
-// servos), Simbody's articulated-body forward dynamics for udot, CVODE for time integration.
-// Conventions and parameters: docs/simulator.md.
+// from the robot description independently of lexdyn::model), external forces computed here (gravity, compliant ground contact, grasp
+// bushings, joint servos), Simbody's articulated-body forward dynamics for udot, CVODE for time integration. Conventions and parameters:
+// docs/simulator.md.
 #include "harness/sim/simulator.hpp"
 
 #include "lexdyn/common/format.hpp"
@@ -26,7 +26,7 @@ struct PointInfo {
   int surface = -1;
   int body = -1;
   Eigen::Vector3d r_body = Eigen::Vector3d::Zero();  // point in its body frame (a sphere's centre)
-  double radius = 0.0;  // a sphere (ball foot): it touches the ground at its lowest point
+  double radius = 0.0;                               // a sphere (ball foot): it touches the ground at its lowest point
 };
 
 struct GraspState {
@@ -69,7 +69,8 @@ Eigen::Vector3d rotationVector(const Eigen::Matrix3d& R) {
 // Signed distance (> 0 inside) of p to the convex hull of `pts` in the plane; -distance to the
 // nearest point when there are fewer than 3.
 static double horizontalMargin(std::vector<Eigen::Vector2d> pts, const Eigen::Vector2d& p) {
-  std::sort(pts.begin(), pts.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::sort(pts.begin(), pts.end(),
+            [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
   };
@@ -177,8 +178,7 @@ struct Simulator::Impl final : public OdeSystem {
 
   // A contact point at the state of `d`: its lever arm r from its body's origin, its position p
   // and velocity v (world).
-  static void pointState(const BodyKinematics& d, const PointInfo& P, Eigen::Vector3d& r, Eigen::Vector3d& p,
-                         Eigen::Vector3d& v) {
+  static void pointState(const BodyKinematics& d, const PointInfo& P, Eigen::Vector3d& r, Eigen::Vector3d& p, Eigen::Vector3d& v) {
     // The point of contact: a sphere's lowest point, whose material velocity is the body's
     // there (a rolling ball does not slip).
     r = d.R[static_cast<size_t>(P.body)] * P.r_body;
@@ -296,8 +296,10 @@ struct Simulator::Impl final : public OdeSystem {
       dF_dv.topLeftCorner<2, 2>() = (-mu * fn / w) * (Eigen::Matrix2d::Identity() - vt * vt.transpose() / (w * w));
       dF_dv.col(2) += dF_dfn * dfn_dvz;
       // At the point of contact (a sphere's lowest point; the point itself otherwise).
-      if (P.radius > 0.0) model.pointJacobian(data, P.body, d.R[static_cast<size_t>(P.body)].transpose() * r, jac_point);
-      else model.pointJacobian(data, P.body, P.r_body, jac_point);
+      if (P.radius > 0.0)
+        model.pointJacobian(data, P.body, d.R[static_cast<size_t>(P.body)].transpose() * r, jac_point);
+      else
+        model.pointJacobian(data, P.body, P.r_body, jac_point);
       const auto Jl = jac_point.topRows<3>();
       jac_Kq.noalias() += Jl.transpose() * (dF_dp * Jl);
       jac_Ku.noalias() += Jl.transpose() * (dF_dv * Jl);
@@ -392,7 +394,8 @@ struct Simulator::Impl final : public OdeSystem {
     std::string saturated;
     const Eigen::VectorXd& tau_max = model.jointTorqueLimits();
     for (int j = 0; j < nj; ++j) {
-      if (std::abs(servoTorque(t0, j, coords.data(), zero_u.data())) >= tau_max[j]) saturated += (saturated.empty() ? "" : ", ") + desc.joints[static_cast<size_t>(j)].name;
+      if (std::abs(servoTorque(t0, j, coords.data(), zero_u.data())) >= tau_max[j])
+        saturated += (saturated.empty() ? "" : ", ") + desc.joints[static_cast<size_t>(j)].name;
     }
     if (!saturated.empty()) text += "; servos at their effort limit (they cannot hold the posture): " + saturated;
     return text;
@@ -436,8 +439,10 @@ struct Simulator::Impl final : public OdeSystem {
 
 const char* toString(IntegratorJacobian j) {
   switch (j) {
-    case IntegratorJacobian::DifferenceQuotient: return "difference_quotient";
-    case IntegratorJacobian::AppliedForces: return "applied_forces";
+    case IntegratorJacobian::DifferenceQuotient:
+      return "difference_quotient";
+    case IntegratorJacobian::AppliedForces:
+      return "applied_forces";
   }
   return "unknown";
 }
@@ -514,8 +519,8 @@ Simulator::Simulator(model::RobotDescription description, SimulatorSettings sett
 
   CvodeSettings cs;
   const IntegratorSettings& is = st.integrator;
-  if (!(is.rtol > 0.0) || !(is.atol_position > 0.0) || !(is.atol_velocity > 0.0) || is.max_order < 1 ||
-      is.max_order > 5 || is.max_steps_per_tick < 1 || is.max_step_s < 0.0) {
+  if (!(is.rtol > 0.0) || !(is.atol_position > 0.0) || !(is.atol_velocity > 0.0) || is.max_order < 1 || is.max_order > 5 ||
+      is.max_steps_per_tick < 1 || is.max_step_s < 0.0) {
     throw InputError(where, "integrator: expected rtol, atol > 0, max_order in 1..5, max_steps_per_tick >= 1");
   }
   cs.rtol = is.rtol;
@@ -566,15 +571,17 @@ model::Configuration Simulator::placeOnGround(const Eigen::VectorXd& joints, con
 
 const char* toString(Settle s) {
   switch (s) {
-    case Settle::StaticEquilibrium: return "static_equilibrium";
-    case Settle::BaseOnly: return "base_only";
-    case Settle::None: return "none";
+    case Settle::StaticEquilibrium:
+      return "static_equilibrium";
+    case Settle::BaseOnly:
+      return "base_only";
+    case Settle::None:
+      return "none";
   }
   return "?";
 }
 
-RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settle, double base_yaw_rad,
-                                     const Eigen::Vector2d& base_xy) {
+RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settle, double base_yaw_rad, const Eigen::Vector2d& base_xy) {
   Impl& s = *impl_;
   const std::string where = "initial state";
   if (joints.size() != s.nj) throw InputError(where, "the posture must have one entry per joint (" + std::to_string(s.nj) + ")");
@@ -624,8 +631,9 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
       pitch0 = std::asin(std::clamp(-M(2, 0), -1.0, 1.0));
       roll0 = std::atan2(M(2, 1), M(2, 2));
       if (std::abs(pitch0) <= 0.5 && std::abs(roll0) <= 0.5) {
-        out.q = placeOnGround(joints, R_yaw * Eigen::AngleAxisd(pitch0, Eigen::Vector3d::UnitY()).toRotationMatrix() *
-                                          Eigen::AngleAxisd(roll0, Eigen::Vector3d::UnitX()).toRotationMatrix(),
+        out.q = placeOnGround(joints,
+                              R_yaw * Eigen::AngleAxisd(pitch0, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                                  Eigen::AngleAxisd(roll0, Eigen::Vector3d::UnitX()).toRotationMatrix(),
                               base_xy);
       } else {
         roll0 = pitch0 = 0.0;  // surfaces far from level: not a stance to start from
@@ -670,9 +678,10 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
     r.resize(n);
     int i = 0;
     if (solve_base) {
-      const Eigen::Vector3d roll_axis = conjugate ? Eigen::Vector3d(R_yaw * Eigen::AngleAxisd(xx[1], Eigen::Vector3d::UnitY()).toRotationMatrix() *
-                                                                   Eigen::Vector3d::UnitX())
-                                                  : Eigen::Vector3d(R_yaw * Eigen::Vector3d::UnitX());
+      const Eigen::Vector3d roll_axis =
+          conjugate
+              ? Eigen::Vector3d(R_yaw * Eigen::AngleAxisd(xx[1], Eigen::Vector3d::UnitY()).toRotationMatrix() * Eigen::Vector3d::UnitX())
+              : Eigen::Vector3d(R_yaw * Eigen::Vector3d::UnitX());
       const Eigen::Vector3d pitch_axis = R_yaw * Eigen::Vector3d::UnitY();
       r[i++] = roll_axis.dot(f.head<3>());
       r[i++] = pitch_axis.dot(f.head<3>());
@@ -690,9 +699,7 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
     out.net_moment_Nm = ff ? f.head(3).norm() : 0.0;
     out.joint_residual_Nm = s.nj > 0 ? f.tail(s.nj).cwiseAbs().maxCoeff() : 0.0;
   };
-  auto converged = [&] {
-    return out.net_force_N <= tol && out.net_moment_Nm <= tol && (!solve_joints || out.joint_residual_Nm <= tol);
-  };
+  auto converged = [&] { return out.net_force_N <= tol && out.net_moment_Nm <= tol && (!solve_joints || out.joint_residual_Nm <= tol); };
   // The largest components of a mode of x, named (base roll, pitch, height; joints).
   auto describeMode = [&](const Eigen::VectorXd& v, bool base, bool with_joints) {
     std::vector<std::pair<double, std::string>> parts;
@@ -745,8 +752,9 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
         const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(K);
         const double lo = es.eigenvalues()[0], hi = es.eigenvalues()[n - 1];
         if (lo < -1e-6 * std::abs(hi)) {
-          failure = "the equilibrium found is unstable (stiffness eigenvalue " + fmt(lo) + " < 0: the robot would fall; the unstable mode is " +
-                    describeMode(es.eigenvectors().col(0), solve_base, solve_joints) + ")";
+          failure = "the equilibrium found is unstable (stiffness eigenvalue " + fmt(lo) +
+                    " < 0: the robot would fall; the unstable mode is " + describeMode(es.eigenvectors().col(0), solve_base, solve_joints) +
+                    ")";
         }
         break;
       }
@@ -794,10 +802,10 @@ RestingState Simulator::restingState(const Eigen::VectorXd& joints, Settle settl
     out.converged = failure.empty();
     if (!out.converged) {
       out.message = "no stable static equilibrium found (" + std::string(toString(settle)) + "): " + failure + " after " +
-                    std::to_string(out.iterations) + " iterations; left: net force " + fmt(out.net_force_N) +
-                    " N, net moment " + fmt(out.net_moment_Nm) + " N m" +
-                    (solve_joints ? ", joint torque " + fmt(out.joint_residual_Nm) + " N m" : std::string()) +
-                    " (tolerance " + fmt(tol) + ")" + (ff ? "; " + s.describeSupport(out.q) : std::string());
+                    std::to_string(out.iterations) + " iterations; left: net force " + fmt(out.net_force_N) + " N, net moment " +
+                    fmt(out.net_moment_Nm) + " N m" +
+                    (solve_joints ? ", joint torque " + fmt(out.joint_residual_Nm) + " N m" : std::string()) + " (tolerance " + fmt(tol) +
+                    ")" + (ff ? "; " + s.describeSupport(out.q) : std::string());
     }
   } else {
     summarize(out.q);

@@ -27,13 +27,13 @@ namespace lexdyn::sim {
 /// Compliant ground contact at every point of every contact surface of the model.
 struct ContactSettings {
   /// Hunt-Crossley normal force fn = k d^n (1 + c ddot) for penetration d > 0 (N, m, s).
-  double stiffness = 2.0e6;              ///< k, N / m^n
-  double exponent = 1.5;                 ///< n (1.5: Hertz-like; the force is C1 at touch-down)
-  double dissipation_s_per_m = 5.0;      ///< c
+  double stiffness = 2.0e6;          ///< k, N / m^n
+  double exponent = 1.5;             ///< n (1.5: Hertz-like; the force is C1 at touch-down)
+  double dissipation_s_per_m = 5.0;  ///< c
   /// Regularised Coulomb friction ft = -mu fn v / sqrt(|v|^2 + v_s^2) (tangential velocity v).
-  double friction_coefficient = -1.0;    ///< mu; < 0: take the model's data-file value
-  double slip_velocity_m_per_s = 1e-3;   ///< v_s
-  double ground_height_m = 0.0;          ///< horizontal ground plane z = h
+  double friction_coefficient = -1.0;   ///< mu; < 0: take the model's data-file value
+  double slip_velocity_m_per_s = 1e-3;  ///< v_s
+  double ground_height_m = 0.0;         ///< horizontal ground plane z = h
 };
 
 enum class SetpointProfile {
@@ -77,7 +77,7 @@ struct IntegratorSettings {
   double atol_velocity = 1e-4;  ///< rad/s or m/s
   int max_order = 5;
   long max_steps_per_tick = 20000;
-  double max_step_s = 0.0;      ///< 0: no limit (the control period bounds each call anyway)
+  double max_step_s = 0.0;  ///< 0: no limit (the control period bounds each call anyway)
   /// Solver of CVODE's Newton systems: our block elimination of the kinematic block, or
   /// SUNDIALS' dense LU of the whole matrix (for comparisons; docs/simulator.md, "Integrator").
   LinearSolver linear_solver = LinearSolver::BlockElimination;
@@ -108,10 +108,10 @@ struct Wrench {
 /// What the robot's sensors report at a tick.
 struct SensorReadings {
   double time_s = 0.0;
-  Eigen::VectorXd q;              ///< joint encoders
-  Eigen::VectorXd qdot;           ///< joint velocities
-  Eigen::VectorXd tau;            ///< applied joint torques (after saturation)
-  std::vector<Wrench> wrenches;   ///< one per model force sensor (description().force_sensors)
+  Eigen::VectorXd q;             ///< joint encoders
+  Eigen::VectorXd qdot;          ///< joint velocities
+  Eigen::VectorXd tau;           ///< applied joint torques (after saturation)
+  std::vector<Wrench> wrenches;  ///< one per model force sensor (description().force_sensors)
 };
 
 /// Ground truth of one contact point (world frame).
@@ -142,10 +142,10 @@ const char* toString(Settle s);
 
 /// The initial state found by Simulator::restingState, with the force imbalance left at it.
 struct RestingState {
-  model::Configuration q;          ///< base pose and joints (velocity zero)
+  model::Configuration q;  ///< base pose and joints (velocity zero)
   Settle settle = Settle::None;
-  bool converged = true;           ///< false: no equilibrium was found (`message` says why)
-  int iterations = 0;              ///< Newton iterations
+  bool converged = true;  ///< false: no equilibrium was found (`message` says why)
+  int iterations = 0;     ///< Newton iterations
   /// At (q, u = 0), servo holding the posture: net external force on the robot (gravity +
   /// contact), net external moment about the base origin, and the largest net generalized force
   /// on a joint (servo torque + load; the unloaded servo's imbalance for BaseOnly / None).
@@ -179,8 +179,7 @@ class Simulator {
   /// Base pose that puts the lowest contact point at the static penetration below the ground
   /// (an even share of the weight on every contact point), for the given joints and base
   /// orientation / horizontal position.
-  model::Configuration placeOnGround(const Eigen::VectorXd& joints,
-                                     const Eigen::Matrix3d& base_rotation = Eigen::Matrix3d::Identity(),
+  model::Configuration placeOnGround(const Eigen::VectorXd& joints, const Eigen::Matrix3d& base_rotation = Eigen::Matrix3d::Identity(),
                                      const Eigen::Vector2d& base_xy = Eigen::Vector2d::Zero()) const;
 
   /// Initial state at rest for a posture held by the servos (`settle`, see Settle): keeps the

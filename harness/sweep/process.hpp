@@ -15,10 +15,10 @@ struct ProcessOutcome {
   int exit_code = -1;        ///< when it exited normally
   int signal = 0;            ///< when a signal ended it
   double wall_s = 0.0;
-  std::string error;         ///< why it could not start
-  int error_errno = 0;       ///< the system's error code of `error`, when it has one
-  std::string output_tail;   ///< the last 4 kB the process wrote (stdout and stderr)
-  std::string log_error;     ///< why the log could not be written ("" when it was)
+  std::string error;        ///< why it could not start
+  int error_errno = 0;      ///< the system's error code of `error`, when it has one
+  std::string output_tail;  ///< the last 4 kB the process wrote (stdout and stderr)
+  std::string log_error;    ///< why the log could not be written ("" when it was)
 };
 
 /// Runs argv[0] (a path) with stdout and stderr appended to `log_path` (through the driver, which

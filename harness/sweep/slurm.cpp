@@ -51,19 +51,21 @@ int submitSweep(const SweepSpec& s, const DriverOptions& o, const SlurmOptions& 
   if (!so.partition.empty()) head += "#SBATCH --partition=" + so.partition + "\n";
   const std::string points_opt = o.points >= 0 ? " --points " + std::to_string(o.points) : "";
   std::string array = head + "#SBATCH --array=0-" + std::to_string(std::max(0L, tasks - 1)) +
-                      (so.throttle > 0 ? "%" + std::to_string(so.throttle) : "") + "\n#SBATCH --cpus-per-task=1\n#SBATCH --output=" +
-                      (dir / "task-%a.log").string() + "\n" + "cd " + shellQuote(fs::current_path().string()) + "\nexec " + shellQuote(o.harness_exe) +
-                      " sweep chunk " + shellQuote(file) + " --out " + shellQuote(out.string()) + " --points @" + shellQuote((dir / "points.txt").string()) +
-                      " --chunk-size " + std::to_string(so.chunk) + " --task \"$SLURM_ARRAY_TASK_ID\"" +
+                      (so.throttle > 0 ? "%" + std::to_string(so.throttle) : "") +
+                      "\n#SBATCH --cpus-per-task=1\n#SBATCH --output=" + (dir / "task-%a.log").string() + "\n" + "cd " +
+                      shellQuote(fs::current_path().string()) + "\nexec " + shellQuote(o.harness_exe) + " sweep chunk " + shellQuote(file) +
+                      " --out " + shellQuote(out.string()) + " --points @" + shellQuote((dir / "points.txt").string()) + " --chunk-size " +
+                      std::to_string(so.chunk) + " --task \"$SLURM_ARRAY_TASK_ID\"" +
                       (o.timeout_s > 0.0 ? " --timeout " + numberText(o.timeout_s) : "") + (o.keep_traces ? " --keep-traces" : "") + "\n";
-  std::string merge = head + "#SBATCH --cpus-per-task=" + std::to_string(so.merge_cpus) + "\n#SBATCH --output=" + (dir / "merge.log").string() +
-                      "\n" + "cd " + shellQuote(fs::current_path().string()) + "\nexec " + shellQuote(o.harness_exe) + " sweep merge " + shellQuote(file) + " --out " +
-                      shellQuote(out.string()) + points_opt + " -j " + std::to_string(so.merge_cpus) + (o.shrink ? "" : " --no-shrink") +
+  std::string merge = head + "#SBATCH --cpus-per-task=" + std::to_string(so.merge_cpus) +
+                      "\n#SBATCH --output=" + (dir / "merge.log").string() + "\n" + "cd " + shellQuote(fs::current_path().string()) +
+                      "\nexec " + shellQuote(o.harness_exe) + " sweep merge " + shellQuote(file) + " --out " + shellQuote(out.string()) +
+                      points_opt + " -j " + std::to_string(so.merge_cpus) + (o.shrink ? "" : " --no-shrink") +
                       (o.db_path.empty() ? " --no-db" : " --db " + shellQuote(fs::absolute(o.db_path).string())) + " --quiet\n";
   writeAtomically((dir / "array.sh").string(), array);
   writeAtomically((dir / "merge.sh").string(), merge);
-  std::fprintf(stderr, "[sweep %s] %zu missing points in %ld array tasks of %d; scripts in %s\n", s.name.c_str(), missing.size(), tasks, so.chunk,
-               dir.string().c_str());
+  std::fprintf(stderr, "[sweep %s] %zu missing points in %ld array tasks of %d; scripts in %s\n", s.name.c_str(), missing.size(), tasks,
+               so.chunk, dir.string().c_str());
   lock.reset();
   if (so.dry_run) return 0;
   bool ok = true;

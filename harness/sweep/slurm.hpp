@@ -12,11 +12,11 @@
 namespace lexdyn::sweep {
 
 struct SlurmOptions {
-  int chunk = 4;              ///< points per array task
-  std::string partition;      ///< "" = the cluster's default
-  int throttle = 0;           ///< at most this many tasks at once (0: no limit)
-  int merge_cpus = 1;         ///< CPUs of the merge job
-  bool dry_run = false;       ///< write the scripts only
+  int chunk = 4;          ///< points per array task
+  std::string partition;  ///< "" = the cluster's default
+  int throttle = 0;       ///< at most this many tasks at once (0: no limit)
+  int merge_cpus = 1;     ///< CPUs of the merge job
+  bool dry_run = false;   ///< write the scripts only
   std::string sbatch = "sbatch";
 };
 

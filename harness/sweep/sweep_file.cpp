@@ -45,9 +45,7 @@ double uniform01(std::uint64_t seed, long point, size_t parameter) {
   return static_cast<double>(h >> 11) * 0x1.0p-53;
 }
 
-cases::Override makeOverride(const std::string& path, const std::string& value) {
-  return {path, value, "--set " + path + "=" + value};
-}
+cases::Override makeOverride(const std::string& path, const std::string& value) { return {path, value, "--set " + path + "=" + value}; }
 
 void readSets(const yaml::Node& n, std::vector<cases::Override>& out) {
   for (const auto& [path, value] : n.entries()) {
@@ -67,16 +65,20 @@ Parameter readParameter(const yaml::Node& node) {
     if (!path) also->fail("also needs path");
     for (const yaml::Node& a : also->elements()) p.paths.push_back(a.asString());
   }
-  if (auto nm = m.optional("name")) p.name = nm->asString();
-  else if (path) p.name = p.paths.front();
-  else node.fail("a parameter with choices needs a name");
+  if (auto nm = m.optional("name"))
+    p.name = nm->asString();
+  else if (path)
+    p.name = p.paths.front();
+  else
+    node.fail("a parameter with choices needs a name");
   int kinds = 0;
   if (auto r = m.optional("range")) {
     ++kinds;
     const Eigen::VectorXd v = r->asVector(2);
     p.lo = v[0];
     p.hi = v[1];
-    if (!(p.lo < p.hi)) r->fail("expected [lo, hi] with lo < hi (an empty range), found [" + numberText(p.lo) + ", " + numberText(p.hi) + "]");
+    if (!(p.lo < p.hi))
+      r->fail("expected [lo, hi] with lo < hi (an empty range), found [" + numberText(p.lo) + ", " + numberText(p.hi) + "]");
     p.distribution = Distribution::Uniform;
     if (auto sc = m.optional("scale")) {
       if (sc->asEnum({"linear", "log"}) == "log") {
@@ -142,8 +144,7 @@ std::string baseValue(const SweepSpec& s, const std::string& path) {
     const cases::doc::Resolved r = cases::doc::resolve(root, path, {}, "");
     if (r.exists && r.node.IsScalar()) return r.node.Scalar();
     if (r.exists) return flowText(r.node);
-  } catch (const InputError&) {
-  }
+  } catch (const InputError&) {}
   return "";
 }
 
@@ -219,7 +220,8 @@ void validateParameter(SweepSpec& s, Parameter& p, const yaml::Node& node, bool 
 std::vector<std::string> gridValues(const Parameter& p) {
   std::vector<std::string> out;
   switch (p.distribution) {
-    case Distribution::Values: return p.values;
+    case Distribution::Values:
+      return p.values;
     case Distribution::Choices:
       for (const auto& c : p.choices) out.push_back(c.label);
       return out;
@@ -240,7 +242,7 @@ std::vector<std::string> gridValues(const Parameter& p) {
       for (int i = 0; i < p.steps; ++i) {
         const double f = static_cast<double>(i) / (p.steps - 1);
         const double v = p.distribution == Distribution::Uniform ? p.lo + (p.hi - p.lo) * f
-                                                                  : std::exp(std::log(p.lo) + (std::log(p.hi) - std::log(p.lo)) * f);
+                                                                 : std::exp(std::log(p.lo) + (std::log(p.hi) - std::log(p.lo)) * f);
         out.push_back(numberText(i == p.steps - 1 ? p.hi : (i == 0 ? p.lo : v)));
       }
       return out;
@@ -267,15 +269,23 @@ Point pointAt(const SweepSpec& s, long index) {
     const Parameter& p = s.parameters[k];
     const double u = uniform01(s.seed, index, k);
     switch (p.distribution) {
-      case Distribution::Uniform: pt.values.push_back(numberText(p.lo + (p.hi - p.lo) * u)); break;
-      case Distribution::LogUniform: pt.values.push_back(numberText(std::exp(std::log(p.lo) + (std::log(p.hi) - std::log(p.lo)) * u))); break;
+      case Distribution::Uniform:
+        pt.values.push_back(numberText(p.lo + (p.hi - p.lo) * u));
+        break;
+      case Distribution::LogUniform:
+        pt.values.push_back(numberText(std::exp(std::log(p.lo) + (std::log(p.hi) - std::log(p.lo)) * u)));
+        break;
       case Distribution::Integers: {
         const long lo = static_cast<long>(p.lo), hi = static_cast<long>(p.hi);
         pt.values.push_back(std::to_string(std::min(hi, lo + static_cast<long>(std::floor(u * static_cast<double>(hi - lo + 1))))));
         break;
       }
-      case Distribution::Values: pt.values.push_back(p.values[std::min(p.values.size() - 1, static_cast<size_t>(u * p.values.size()))]); break;
-      case Distribution::Choices: pt.values.push_back(p.choices[std::min(p.choices.size() - 1, static_cast<size_t>(u * p.choices.size()))].label); break;
+      case Distribution::Values:
+        pt.values.push_back(p.values[std::min(p.values.size() - 1, static_cast<size_t>(u * p.values.size()))]);
+        break;
+      case Distribution::Choices:
+        pt.values.push_back(p.choices[std::min(p.choices.size() - 1, static_cast<size_t>(u * p.choices.size()))].label);
+        break;
     }
   }
   return pt;
@@ -316,7 +326,8 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
     if (f->asString() != "lexdyn-sweep/1") f->fail("expected lexdyn-sweep/1");
   }
   s.name = top.required("name").asString();
-  if (s.name.find_first_of("/ \t\n\\\"'") != std::string::npos) top.required("name").fail("names may not contain slashes, whitespace or quotes");
+  if (s.name.find_first_of("/ \t\n\\\"'") != std::string::npos)
+    top.required("name").fail("names may not contain slashes, whitespace or quotes");
   if (auto d = top.optional("description")) s.description = d->asString();
   const yaml::Node base = top.required("base");
   s.base_case_text = base.asString();
@@ -332,7 +343,8 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
   } catch (const InputError& e) {
     base.fail(std::string("the base case does not load: ") + e.what());
   }
-  if (s.base.controller.type != "lexdyn") base.fail("sweeps run lexdyn cases (the base case's controller is " + s.base.controller.type + ")");
+  if (s.base.controller.type != "lexdyn")
+    base.fail("sweeps run lexdyn cases (the base case's controller is " + s.base.controller.type + ")");
   const yaml::Node methods = top.required("methods");
   if (methods.size() < 1) methods.fail("expected at least one method");
   for (const yaml::Node& mn : methods.elements()) {
@@ -407,7 +419,8 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
             wall_clock = wall_clock || checks::machineDependent(ck);
           }
           if (!found) cn.fail("the base case has no check '" + name + "' (checks: " + cases::joinNames(names) + ")");
-          if (wall_clock) cn.fail("check '" + name + "' is a wall-clock check (machine-dependent): a sweep's verdicts may not depend on the machine");
+          if (wall_clock)
+            cn.fail("check '" + name + "' is a wall-clock check (machine-dependent): a sweep's verdicts may not depend on the machine");
           bool any = false;
           for (const auto& m : s.methods) {
             for (const auto& ck : s.base.checks) any = any || (ck.name == name && checks::appliesTo(ck, m));

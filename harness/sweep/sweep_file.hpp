@@ -39,8 +39,10 @@ struct Parameter {
   /// The value it shrinks toward (YAML text; for Choices a label). Default: the base case's
   /// value at the first path, when that is a value of the distribution's kind.
   std::string simplest;
-  std::string where;                ///< file:line: parameters[i]
-  bool numeric() const { return distribution == Distribution::Uniform || distribution == Distribution::LogUniform || distribution == Distribution::Integers; }
+  std::string where;  ///< file:line: parameters[i]
+  bool numeric() const {
+    return distribution == Distribution::Uniform || distribution == Distribution::LogUniform || distribution == Distribution::Integers;
+  }
 };
 
 /// A comparison between two methods of the same point (checks::ComparisonSpec).
@@ -57,21 +59,21 @@ struct ShrinkSettings {
 struct SweepSpec {
   std::string path;  ///< the sweep file
   std::string name, description;
-  std::string base_case;        ///< resolved path
-  std::string base_case_text;   ///< as written (relative to the sweep file)
+  std::string base_case;       ///< resolved path
+  std::string base_case_text;  ///< as written (relative to the sweep file)
   std::vector<std::string> methods;
   std::uint64_t seed = 0;
   bool grid = false;
-  long points = 0;                          ///< random: the number of points; grid: the product
-  std::optional<double> duration_s;         ///< stop_at_s of every point
-  double timeout_s = 1800.0;                ///< per run (one point, one method)
-  int trace_every_n_ticks = 50;             ///< decimation of the kept traces
-  std::vector<cases::Override> sets;        ///< constant overrides, before the parameters
+  long points = 0;                    ///< random: the number of points; grid: the product
+  std::optional<double> duration_s;   ///< stop_at_s of every point
+  double timeout_s = 1800.0;          ///< per run (one point, one method)
+  int trace_every_n_ticks = 50;       ///< decimation of the kept traces
+  std::vector<cases::Override> sets;  ///< constant overrides, before the parameters
   std::vector<Parameter> parameters;
-  std::vector<std::string> checks;          ///< property checks (names in the base case)
+  std::vector<std::string> checks;  ///< property checks (names in the base case)
   std::vector<Comparison> comparisons;
   ShrinkSettings shrink;
-  cases::CaseSpec base;                     ///< the base case with `sets` (for validation)
+  cases::CaseSpec base;  ///< the base case with `sets` (for validation)
 };
 
 /// Reads and validates a sweep file: the base case loads, every parameter path and every value

@@ -84,10 +84,12 @@ std::string pointRecordProblem(const SweepSpec& s, long index, const json& j) {
   if (!j.is_object()) return "not a JSON object";
   const std::string format = j.contains("format") && j["format"].is_string() ? j["format"].get<std::string>() : "";
   if (format != records::kSweepPointFormat) {
-    return (format.empty() ? std::string("a point record of no format (written by an older build)") : "a point record of format '" + format + "'") +
+    return (format.empty() ? std::string("a point record of no format (written by an older build)")
+                           : "a point record of format '" + format + "'") +
            ", this build reads '" + records::kSweepPointFormat + "'";
   }
-  if (!j.contains("point") || !j["point"].is_number_integer() || j["point"].get<long>() != index) return "not the record of point " + std::to_string(index);
+  if (!j.contains("point") || !j["point"].is_number_integer() || j["point"].get<long>() != index)
+    return "not the record of point " + std::to_string(index);
   if (!j.contains("runs") || !j["runs"].is_object()) return "no runs";
   for (const auto& m : s.methods) {
     if (!j["runs"].contains(m)) return "no run of " + m;
@@ -126,7 +128,8 @@ json pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string,
       if (r->status != records::RunStatus::Completed) stopped.push_back(r == &rb ? c.better : c.worse);
     }
     double value = std::numeric_limits<double>::quiet_NaN();
-    if (stopped.empty() && rb.statistics.count(c.name) && rw.statistics.count(c.name)) value = rb.statistics.at(c.name) - rw.statistics.at(c.name);
+    if (stopped.empty() && rb.statistics.count(c.name) && rw.statistics.count(c.name))
+      value = rb.statistics.at(c.name) - rw.statistics.at(c.name);
     const bool has = std::isfinite(value);
     comps.push_back({{"name", c.name},
                      {"better", c.better},
@@ -137,7 +140,13 @@ json pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string,
                      {"better_wins", has && value <= c.margin},
                      {"stopped_early", stopped}});
   }
-  return {{"format", records::kSweepPointFormat}, {"point", p.index}, {"values", values}, {"overrides", overrides}, {"runs", jruns}, {"comparisons", comps}, {"failures", failures}};
+  return {{"format", records::kSweepPointFormat},
+          {"point", p.index},
+          {"values", values},
+          {"overrides", overrides},
+          {"runs", jruns},
+          {"comparisons", comps},
+          {"failures", failures}};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -149,11 +158,22 @@ json summarize(const SweepSpec& s, const std::vector<json>& records, long points
   for (const auto& p : s.parameters) {
     json jp = {{"name", p.name}, {"paths", p.paths}, {"simplest", p.simplest}};
     switch (p.distribution) {
-      case Distribution::Uniform: jp["range"] = {p.lo, p.hi}; break;
-      case Distribution::LogUniform: jp["range"] = {p.lo, p.hi}; jp["scale"] = "log"; break;
-      case Distribution::Integers: jp["integers"] = {static_cast<long>(p.lo), static_cast<long>(p.hi)}; break;
-      case Distribution::Values: jp["values"] = p.values; break;
-      case Distribution::Choices: jp["choices"] = gridValues(p); break;
+      case Distribution::Uniform:
+        jp["range"] = {p.lo, p.hi};
+        break;
+      case Distribution::LogUniform:
+        jp["range"] = {p.lo, p.hi};
+        jp["scale"] = "log";
+        break;
+      case Distribution::Integers:
+        jp["integers"] = {static_cast<long>(p.lo), static_cast<long>(p.hi)};
+        break;
+      case Distribution::Values:
+        jp["values"] = p.values;
+        break;
+      case Distribution::Choices:
+        jp["choices"] = gridValues(p);
+        break;
     }
     params.push_back(jp);
   }
@@ -182,7 +202,9 @@ json summarize(const SweepSpec& s, const std::vector<json>& records, long points
           unit = c.value("unit", "");
           const double mg = num(c.value("margin", json()));
           // The worst: the lowest margin; a failure without a value ranks below every value.
-          const double key = std::isnan(mg) ? (c.value("passed", false) ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity()) : mg;
+          const double key = std::isnan(mg) ? (c.value("passed", false) ? std::numeric_limits<double>::infinity()
+                                                                        : -std::numeric_limits<double>::infinity())
+                                            : mg;
           if (key < worst || worst_point < 0) {
             worst = key;
             worst_point = r.value("point", -1L);
@@ -230,7 +252,9 @@ json summarize(const SweepSpec& s, const std::vector<json>& records, long points
     json jby = json::object();
     for (const auto& [pn, cells] : by) {
       for (const auto& [v, pw] : cells) {
-        jby[pn][v] = {{"points", pw.first}, {"wins", pw.second}, {"win_rate", pw.first ? static_cast<double>(pw.second) / static_cast<double>(pw.first) : 0.0}};
+        jby[pn][v] = {{"points", pw.first},
+                      {"wins", pw.second},
+                      {"win_rate", pw.first ? static_cast<double>(pw.second) / static_cast<double>(pw.first) : 0.0}};
       }
     }
     comps.push_back({{"name", c.name},
@@ -273,7 +297,8 @@ json summarize(const SweepSpec& s, const std::vector<json>& records, long points
           {"failures", failures}};
 }
 
-std::vector<json> writeMaps(const SweepSpec& s, const std::vector<json>& records, const std::string& out_dir, const std::string& plot_command) {
+std::vector<json> writeMaps(const SweepSpec& s, const std::vector<json>& records, const std::string& out_dir,
+                            const std::string& plot_command) {
   std::vector<json> maps;
   if (!s.grid || s.parameters.size() != 2) return maps;
   const Parameter& px = s.parameters[0];
@@ -281,17 +306,18 @@ std::vector<json> writeMaps(const SweepSpec& s, const std::vector<json>& records
   const fs::path dir = fs::path(out_dir) / "maps";
   std::error_code ec;
   fs::create_directories(dir, ec);
-  auto axis = [](const Parameter& p) { return json{{"name", p.name}, {"path", p.paths.empty() ? p.name : p.paths.front()}, {"values", gridValues(p)}}; };
-  auto row = [&](const json& r) {
-    return r["values"].value(px.name, "") + "," + r["values"].value(py.name, "");
+  auto axis = [](const Parameter& p) {
+    return json{{"name", p.name}, {"path", p.paths.empty() ? p.name : p.paths.front()}, {"values", gridValues(p)}};
   };
+  auto row = [&](const json& r) { return r["values"].value(px.name, "") + "," + r["values"].value(py.name, ""); };
   auto cell = [](double v) { return std::isfinite(v) ? numberText(v) : std::string("nan"); };
   std::vector<std::string> written;
   for (const auto& m : s.methods) {
     std::vector<std::string> names = {kRunCompleted};
     for (const auto& c : propertyChecks(s, m)) names.push_back(c);
     for (const auto& name : names) {
-      std::string csv = "# " + name + " of " + m + " over " + px.name + " x " + py.name + "\n" + px.name + "," + py.name + ",passed,margin,value\n";
+      std::string csv =
+          "# " + name + " of " + m + " over " + px.name + " x " + py.name + "\n" + px.name + "," + py.name + ",passed,margin,value\n";
       for (const auto& r : records) {
         const json& run = r["runs"][m];
         if (name == kRunCompleted) {
@@ -322,15 +348,18 @@ std::vector<json> writeMaps(const SweepSpec& s, const std::vector<json>& records
     }
     const std::string file = c.name + ".csv";
     writeAtomically((dir / file).string(), csv);
-    maps.push_back({{"x", axis(px)}, {"y", axis(py)}, {"property", c.name}, {"method", c.better + " vs " + c.worse}, {"csv", "maps/" + file}});
+    maps.push_back(
+        {{"x", axis(px)}, {"y", axis(py)}, {"property", c.name}, {"method", c.better + " vs " + c.worse}, {"csv", "maps/" + file}});
   }
   if (plot_command.empty() && !maps.empty()) {
-    std::fprintf(stderr, "warning: the map pictures are not drawn (needs /usr/bin/python3 with matplotlib and harness/scripts/sweep_plots.py)\n");
+    std::fprintf(stderr,
+                 "warning: the map pictures are not drawn (needs /usr/bin/python3 with matplotlib and harness/scripts/sweep_plots.py)\n");
   }
   if (!plot_command.empty()) {
     const std::string cmd = plot_command + " " + shellQuote(out_dir) + " > " + shellQuote((dir / "plot.log").string()) + " 2>&1";
     if (std::system(cmd.c_str()) != 0) {
-      std::fprintf(stderr, "warning: the map pictures could not be drawn (%s; see %s)\n", plot_command.c_str(), (dir / "plot.log").string().c_str());
+      std::fprintf(stderr, "warning: the map pictures could not be drawn (%s; see %s)\n", plot_command.c_str(),
+                   (dir / "plot.log").string().c_str());
     }
   }
   for (auto& m : maps) {
@@ -352,7 +381,8 @@ void printSummary(const SweepSpec& s, const json& summary, std::FILE* out) {
     std::string worst = "-";
     if (c["worst_margin"].is_number() && c.value("check", "") != kRunCompleted) {
       char b[96];
-      std::snprintf(b, sizeof(b), "%.6g %s (%ld)", c["worst_margin"].get<double>(), c.value("unit", "").c_str(), c.value("worst_point", -1L));
+      std::snprintf(b, sizeof(b), "%.6g %s (%ld)", c["worst_margin"].get<double>(), c.value("unit", "").c_str(),
+                    c.value("worst_point", -1L));
       worst = b;
     }
     std::fprintf(out, "  %-34s %-6s %-14s %s\n", c.value("check", "").c_str(), c.value("method", "").c_str(), rate, worst.c_str());
@@ -365,9 +395,11 @@ void printSummary(const SweepSpec& s, const json& summary, std::FILE* out) {
       const json& d = c["diff"];
       const long bs = c.value("better_stopped_early", 0L), ws = c.value("worse_stopped_early", 0L);
       std::string stopped;
-      if (bs + ws > 0) stopped = "; left out: " + c.value("better", "") + " stopped early " + std::to_string(bs) + ", " + c.value("worse", "") + " " + std::to_string(ws);
-      std::fprintf(out, "  %-34s %-14s %.4g [%.4g, %.4g]%s\n", c.value("name", "").c_str(), rate, num(d["median"]), num(d["p10"]), num(d["p90"]),
-                   stopped.c_str());
+      if (bs + ws > 0)
+        stopped = "; left out: " + c.value("better", "") + " stopped early " + std::to_string(bs) + ", " + c.value("worse", "") + " " +
+                  std::to_string(ws);
+      std::fprintf(out, "  %-34s %-14s %.4g [%.4g, %.4g]%s\n", c.value("name", "").c_str(), rate, num(d["median"]), num(d["p10"]),
+                   num(d["p90"]), stopped.c_str());
     }
   }
   for (const auto& f : summary["failures"]) {
@@ -391,13 +423,13 @@ bool recordFailures(const SweepSpec& s, const std::vector<json>& failures, const
     if (line.empty()) continue;
     try {
       known.insert(json::parse(line).dump());
-    } catch (const std::exception&) {
-    }
+    } catch (const std::exception&) {}
   }
   if (!text.empty() && text.back() != '\n') text += '\n';  // a cut last line stays skipped, apart
   std::string add;
   for (const auto& f : failures) {
-    const json e = {{"sweep", s.name}, {"method", f["method"]}, {"check", f["check"]}, {"values", f["values"]}, {"duration_s", f["duration_s"]}};
+    const json e = {
+        {"sweep", s.name}, {"method", f["method"]}, {"check", f["check"]}, {"values", f["values"]}, {"duration_s", f["duration_s"]}};
     if (known.insert(e.dump()).second) add += e.dump() + "\n";
   }
   if (add.empty()) return true;
@@ -425,9 +457,10 @@ bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
     std::string bad;
     try {
       e = json::parse(line);
-      if (!e.is_object()) bad = "not a JSON object";
-      else if (!e.contains("sweep") || !e["sweep"].is_string() || !e.contains("method") || !e["method"].is_string() || !e.contains("check") ||
-               !e["check"].is_string() || !e.contains("values") || !e["values"].is_object()) {
+      if (!e.is_object())
+        bad = "not a JSON object";
+      else if (!e.contains("sweep") || !e["sweep"].is_string() || !e.contains("method") || !e["method"].is_string() ||
+               !e.contains("check") || !e["check"].is_string() || !e.contains("values") || !e["values"].is_object()) {
         bad = "expected sweep, method, check and values";
       } else {
         for (auto it = e["values"].begin(); it != e["values"].end(); ++it) {
@@ -438,7 +471,8 @@ bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
       bad = std::string("damaged: ") + ex.what();
     }
     if (!bad.empty()) {
-      std::fprintf(stderr, "[sweep %s] warning: %s:%ld: %s; the line is skipped\n", s.name.c_str(), o.db_path.c_str(), line_no, bad.c_str());
+      std::fprintf(stderr, "[sweep %s] warning: %s:%ld: %s; the line is skipped\n", s.name.c_str(), o.db_path.c_str(), line_no,
+                   bad.c_str());
       continue;
     }
     if (e.value("sweep", "") != s.name) continue;
@@ -450,8 +484,10 @@ bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
     for (auto it = e["values"].begin(); it != e["values"].end(); ++it) {
       size_t p = 0;
       while (p < s.parameters.size() && s.parameters[p].name != it.key()) ++p;
-      if (p == s.parameters.size()) usable = false;
-      else c.values[p] = it.value().get<std::string>();
+      if (p == s.parameters.size())
+        usable = false;
+      else
+        c.values[p] = it.value().get<std::string>();
     }
     if (!usable) continue;  // the sweep no longer has that parameter
     c.duration_s = num(e.value("duration_s", json()));
@@ -479,7 +515,8 @@ bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
   }
   writeAtomically(out, records);
   if (o.progress && replayed > 0) {
-    std::fprintf(stderr, "[sweep %s] replayed %d earlier failure(s) from %s: %d still fail\n", s.name.c_str(), replayed, o.db_path.c_str(), still);
+    std::fprintf(stderr, "[sweep %s] replayed %d earlier failure(s) from %s: %d still fail\n", s.name.c_str(), replayed, o.db_path.c_str(),
+                 still);
   }
   return true;
 }

@@ -43,7 +43,8 @@ std::vector<cases::Override> runOverrides(const SweepSpec& s, const RunConfig& c
   std::vector<cases::Override> o = overridesOf(s, c.values);
   const double d = c.duration_s > 0.0 ? c.duration_s : (s.duration_s ? *s.duration_s : 0.0);
   if (d > 0.0) o.push_back({"stop_at_s", numberText(d), "--duration " + numberText(d)});
-  o.push_back({"trace.every_n_ticks", std::to_string(s.trace_every_n_ticks), "--set trace.every_n_ticks=" + std::to_string(s.trace_every_n_ticks)});
+  o.push_back(
+      {"trace.every_n_ticks", std::to_string(s.trace_every_n_ticks), "--set trace.every_n_ticks=" + std::to_string(s.trace_every_n_ticks)});
   return o;
 }
 
@@ -63,7 +64,8 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
     t.end = Trial::End::kLost;
     std::string tail = lastLines(p.output_tail, 2);
     for (char& c : tail) c = c == '\n' ? ' ' : c;
-    t.why = why + (tail.empty() ? "" : " (" + tail + ")") + (p.log_error.empty() ? "" : " (the log could not be written: " + p.log_error + ")");
+    t.why =
+        why + (tail.empty() ? "" : " (" + tail + ")") + (p.log_error.empty() ? "" : " (the log could not be written: " + p.log_error + ")");
     return t;
   };
   if (p.timed_out) {
@@ -92,7 +94,8 @@ Trial classify(const SweepSpec& s, const std::string& method, const std::string&
   }
   r.status = rec.status;
   r.message = rec.message;
-  if (r.status == records::RunStatus::Interrupted) return lost("stopped by a signal from outside (exit code " + std::to_string(p.exit_code) + ": " + r.message + ")");
+  if (r.status == records::RunStatus::Interrupted)
+    return lost("stopped by a signal from outside (exit code " + std::to_string(p.exit_code) + ": " + r.message + ")");
   if (r.status == records::RunStatus::OutputError) return lost("could not write its outputs: " + r.message);
   // Out of memory says nothing of the configuration: the machine's state, like a kill.
   if (r.status == records::RunStatus::InternalError && r.message.find("out of memory") != std::string::npos) return lost(r.message);
@@ -130,8 +133,7 @@ std::string pointName(long i) {
 // ---------------------------------------------------------------------------------------------
 // One run in this process (the worker).
 
-int runPointHere(const SweepSpec& s, const RunConfig& c, const std::string& out_dir, const std::atomic<bool>* interrupt,
-                 bool progress) {
+int runPointHere(const SweepSpec& s, const RunConfig& c, const std::string& out_dir, const std::atomic<bool>* interrupt, bool progress) {
   cases::CaseSpec spec = cases::loadCase(s.base_case, runOverrides(s, c));
   cases::overrideMethod(spec, c.method, "--method");
   cases::RunOptions o;
@@ -146,8 +148,10 @@ int runPointHere(const SweepSpec& s, const RunConfig& c, const std::string& out_
 std::string reproduceCommand(const SweepSpec& s, const RunConfig& c) {
   std::string cmd = "lexdyn-harness run " + shellQuote(s.base_case) + " --method " + c.method;
   for (const auto& o : runOverrides(s, c)) {
-    if (o.path == "stop_at_s") cmd += " --duration " + o.value;
-    else if (o.path != "trace.every_n_ticks") cmd += " --set " + shellQuote(o.path + "=" + o.value);
+    if (o.path == "stop_at_s")
+      cmd += " --duration " + o.value;
+    else if (o.path != "trace.every_n_ticks")
+      cmd += " --set " + shellQuote(o.path + "=" + o.value);
   }
   return cmd + " --out DIR";
 }
@@ -184,12 +188,13 @@ void prepareOutDir(const SweepSpec& s, const std::string& out_dir) {
       const std::string body = eol == std::string::npos ? "" : stored.substr(eol + 1);
       if (digest != textDigest(body)) {
         throw InputError(recorded, "is damaged (cut or edited: its digest does not match its text), so the results in " + out_dir +
-                                       " cannot be matched to a sweep file; restore it, or remove " + out_dir + " (or use another --out) and run again");
+                                       " cannot be matched to a sweep file; restore it, or remove " + out_dir +
+                                       " (or use another --out) and run again");
       }
       stored = body;
     } else if (stored.empty()) {
-      throw InputError(recorded, "is empty (damaged), so the results in " + out_dir + " cannot be matched to a sweep file; remove " + out_dir +
-                                     " (or use another --out) and run again");
+      throw InputError(recorded, "is empty (damaged), so the results in " + out_dir + " cannot be matched to a sweep file; remove " +
+                                     out_dir + " (or use another --out) and run again");
     }
     if (stored != text) {
       throw InputError(out_dir, "holds the results of another version of " + s.path + " or of its base case (" + recorded +
@@ -234,27 +239,27 @@ class Pool {
     };
     for (int t = 0; t < n; ++t) {
       try {
-      threads.emplace_back([&]() {
-        try {
-          for (;;) {
-            size_t k;
-            {
+        threads.emplace_back([&]() {
+          try {
+            for (;;) {
+              size_t k;
+              {
+                std::lock_guard<std::mutex> lock(m);
+                if (next >= jobs.size() || abort_.load() != 0 || (o_.interrupt && o_.interrupt->load() != 0)) return;
+                k = next++;
+              }
+              const Job& job = jobs[k];
+              const Trial r = execute(job);
+              if (r.end == Trial::End::kInterrupted) continue;  // left for the next run
               std::lock_guard<std::mutex> lock(m);
-              if (next >= jobs.size() || abort_.load() != 0 || (o_.interrupt && o_.interrupt->load() != 0)) return;
-              k = next++;
+              done(job, r);
             }
-            const Job& job = jobs[k];
-            const Trial r = execute(job);
-            if (r.end == Trial::End::kInterrupted) continue;  // left for the next run
+          } catch (...) {
             std::lock_guard<std::mutex> lock(m);
-            done(job, r);
+            if (!error) error = std::current_exception();
+            abort_.store(1);
           }
-        } catch (...) {
-          std::lock_guard<std::mutex> lock(m);
-          if (!error) error = std::current_exception();
-          abort_.store(1);
-        }
-      });
+        });
       } catch (...) {  // no thread could be created: stop, and let the running ones end first
         abort_.store(1);
         joinAll();
@@ -436,15 +441,18 @@ bool runMissing(const SweepSpec& s, const std::vector<long>& points, const Drive
       ++points_done;
       points_failed += point_failed[job.point] ? 1 : 0;
     }
-    progress.finished(t.end == Trial::End::kRecorded && !t.result.failures().empty(), points_done, static_cast<long>(points.size()), points_failed);
+    progress.finished(t.end == Trial::End::kRecorded && !t.result.failures().empty(), points_done, static_cast<long>(points.size()),
+                      points_failed);
   });
   return !(o.interrupt && o.interrupt->load() != 0);
 }
 
 // The end of a sweep command that lost runs: what was lost, and the run failure's exit code.
 int reportLost(const SweepSpec& s, const std::vector<std::string>& lost) {
-  std::fprintf(stderr, "[sweep %s] %zu run(s) lost: killed or stopped from outside twice, or unable to write their outputs; nothing was "
-                       "recorded for them (run the same command again to run them):\n", s.name.c_str(), lost.size());
+  std::fprintf(stderr,
+               "[sweep %s] %zu run(s) lost: killed or stopped from outside twice, or unable to write their outputs; nothing was "
+               "recorded for them (run the same command again to run them):\n",
+               s.name.c_str(), lost.size());
   for (const auto& l : lost) std::fprintf(stderr, "  %s\n", l.c_str());
   return cases::kExitRunFailure;
 }
@@ -504,7 +512,8 @@ int mergeSweep(const SweepSpec& s, const DriverOptions& o) {
   // Shrinking, the failure database, the summary and the maps.
   Pool pool(s, o);
   std::vector<std::string> lost;
-  std::vector<json> failures = o.shrink && s.shrink.enabled ? shrinkFailures(s, records, o, runnerOf(pool), lost) : minimalFailures(s, records, o);
+  std::vector<json> failures =
+      o.shrink && s.shrink.enabled ? shrinkFailures(s, records, o, runnerOf(pool), lost) : minimalFailures(s, records, o);
   if (o.interrupt && o.interrupt->load() != 0) return interruptedCode(o);
   if (!lost.empty()) return reportLost(s, lost);
   if (!o.db_path.empty() && !recordFailures(s, failures, o.db_path, o.interrupt)) return interruptedCode(o);

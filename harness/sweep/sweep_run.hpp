@@ -32,14 +32,14 @@ using RunResult = records::SweepRunRecord;
 
 struct DriverOptions {
   std::string out_dir;
-  int jobs = 0;                 ///< parallel processes (0: the number of cores)
-  long points = -1;             ///< run only the first N points (-1: the sweep's)
-  double timeout_s = 0.0;       ///< per run (0: the sweep's)
-  bool keep_traces = false;     ///< keep the traces of passing runs too
+  int jobs = 0;              ///< parallel processes (0: the number of cores)
+  long points = -1;          ///< run only the first N points (-1: the sweep's)
+  double timeout_s = 0.0;    ///< per run (0: the sweep's)
+  bool keep_traces = false;  ///< keep the traces of passing runs too
   bool shrink = true;
-  std::string db_path;          ///< failure database ("" = none)
+  std::string db_path;  ///< failure database ("" = none)
   bool progress = true;
-  std::string harness_exe;      ///< the lexdyn-harness binary to run points with
+  std::string harness_exe;  ///< the lexdyn-harness binary to run points with
   /// Draws the robustness maps: a command taking OUT (e.g. "/usr/bin/python3
   /// .../sweep_plots.py"); "" for none.
   std::string plot_command;

@@ -58,8 +58,7 @@ class TrialCache {
         std::string why;
         const std::optional<RunResult> r = recordedResult(j.at("result"), why);
         if (r) results_[j.at("key").get<std::string>()] = *r;
-      } catch (const std::exception&) {
-      }
+      } catch (const std::exception&) {}
     }
   }
 
@@ -261,8 +260,10 @@ class Shrinker {
       t.duration_s = mid;
       const int r = tryConfig(t);
       if (r < 0) return false;
-      if (r == 1) hi = mid;
-      else lo = mid;
+      if (r == 1)
+        hi = mid;
+      else
+        lo = mid;
       if (exhausted_) break;
     }
     return true;
@@ -301,8 +302,10 @@ class Shrinker {
       t.values[k] = integers ? std::to_string(static_cast<long>(mid)) : numberText(mid);
       const int r = tryConfig(t);
       if (r < 0) return false;
-      if (r == 1) b = mid;  // best_ moved
-      else a = mid;
+      if (r == 1)
+        b = mid;  // best_ moved
+      else
+        a = mid;
       if (exhausted_) break;
     }
     return true;
@@ -384,27 +387,27 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
   };
   for (size_t i = 0; i < failures.size(); ++i) {
     try {
-    threads.emplace_back([&, i]() {
-      try {
-        const Failure& f = failures[i];
-        // Timeouts are not shrunk (each trial could cost the whole timeout).
-        if (!shrinks(f)) return;
-        Shrinker sh(s, f, cache, cap);
-        if (!sh.run()) {
-          lost_by[i] = sh.lost_;
-          return;
+      threads.emplace_back([&, i]() {
+        try {
+          const Failure& f = failures[i];
+          // Timeouts are not shrunk (each trial could cost the whole timeout).
+          if (!shrinks(f)) return;
+          Shrinker sh(s, f, cache, cap);
+          if (!sh.run()) {
+            lost_by[i] = sh.lost_;
+            return;
+          }
+          out[i] = sh.result(o.out_dir);
+          ok[i] = 1;
+          if (o.progress) {
+            std::fprintf(stderr, "[sweep %s] shrunk %s %s: %s\n", s.name.c_str(), f.method.c_str(), f.check.c_str(),
+                         out[i].value("command", "").c_str());
+          }
+        } catch (...) {
+          std::lock_guard<std::mutex> lock(error_m);
+          if (!error) error = std::current_exception();
         }
-        out[i] = sh.result(o.out_dir);
-        ok[i] = 1;
-        if (o.progress) {
-          std::fprintf(stderr, "[sweep %s] shrunk %s %s: %s\n", s.name.c_str(), f.method.c_str(), f.check.c_str(),
-                       out[i].value("command", "").c_str());
-        }
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(error_m);
-        if (!error) error = std::current_exception();
-      }
-    });
+      });
     } catch (...) {  // no thread could be created: the ones running end first
       joinAll();
       throw;

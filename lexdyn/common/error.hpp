@@ -50,8 +50,8 @@ inline void checkIndex(const char* function, long i, long n) {
 
 }  // namespace lexdyn
 
-#define LEXDYN_ALWAYS_ASSERT(cond, msg)                                   \
-  do {                                                                    \
+#define LEXDYN_ALWAYS_ASSERT(cond, msg)                                        \
+  do {                                                                         \
     if (!(cond)) ::lexdyn::abortWithMessage(__FILE__, __LINE__, #cond, (msg)); \
   } while (0)
 

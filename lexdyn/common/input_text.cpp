@@ -59,9 +59,9 @@ void requireText(const std::string& text, const std::string& file, const char* w
     }
     const std::size_t n = c == 0 ? 0 : utf8Length(text, i);
     if (n == 0) {
-      throw InputError(file + ":" + std::to_string(line),
-                       std::string("expected a text ") + what + " file (UTF-8), found binary data: byte " + hexByte(c) +
-                           " at column " + std::to_string(i - line_start + 1));
+      throw InputError(file + ":" + std::to_string(line), std::string("expected a text ") + what +
+                                                              " file (UTF-8), found binary data: byte " + hexByte(c) + " at column " +
+                                                              std::to_string(i - line_start + 1));
     }
     i += n;
   }
@@ -87,8 +87,7 @@ std::string readTextFile(const std::string& path, const char* what, std::size_t 
   while (in.read(buf, sizeof(buf)) || in.gcount() > 0) {
     text.append(buf, static_cast<std::size_t>(in.gcount()));
     if (text.size() > max_bytes) {
-      throw InputError(path, std::string("the ") + what + " file is larger than the " + std::to_string(max_bytes) +
-                                 " bytes accepted");
+      throw InputError(path, std::string("the ") + what + " file is larger than the " + std::to_string(max_bytes) + " bytes accepted");
     }
   }
   if (in.bad()) throw InputError(path, std::string("read error in the ") + what + " file");

@@ -17,18 +17,21 @@ namespace lexdyn::yaml {
 
 namespace {
 
-std::string joinKey(const std::string& path, const std::string& key) {
-  return path.empty() ? key : path + "." + key;
-}
+std::string joinKey(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
 
 std::string describe(const YAML::Node& n) {
   if (!n.IsDefined()) return "nothing";
   switch (n.Type()) {
-    case YAML::NodeType::Null: return "null";
-    case YAML::NodeType::Scalar: return "'" + n.Scalar() + "'";
-    case YAML::NodeType::Sequence: return "a sequence";
-    case YAML::NodeType::Map: return "a mapping";
-    default: return "an undefined node";
+    case YAML::NodeType::Null:
+      return "null";
+    case YAML::NodeType::Scalar:
+      return "'" + n.Scalar() + "'";
+    case YAML::NodeType::Sequence:
+      return "a sequence";
+    case YAML::NodeType::Map:
+      return "a mapping";
+    default:
+      return "an undefined node";
   }
 }
 
@@ -56,8 +59,7 @@ void KeyRecorder::record(const std::string& path) {
   if (t_recorder) t_recorder->paths_.push_back(path);
 }
 
-Node::Node(YAML::Node node, std::string file, std::string path)
-    : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {}
+Node::Node(YAML::Node node, std::string file, std::string path) : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {}
 
 std::string Node::where() const {
   std::string w = file_;
@@ -100,8 +102,8 @@ std::string fmtRange(double v) { return formatNumber(v); }
 double Node::asDoubleIn(double lo, double hi, const std::string& unit) const {
   const double v = asDouble();
   if (!(v >= lo && v <= hi)) {
-    fail("expected a number in [" + fmtRange(lo) + ", " + fmtRange(hi) + "]" + (unit.empty() ? "" : " " + unit) +
-         ", found " + node_.Scalar());
+    fail("expected a number in [" + fmtRange(lo) + ", " + fmtRange(hi) + "]" + (unit.empty() ? "" : " " + unit) + ", found " +
+         node_.Scalar());
   }
   return v;
 }
@@ -120,8 +122,7 @@ int Node::asInt() const {
   errno = 0;
   char* end = nullptr;
   const long v = std::strtol(s.c_str(), &end, 10);
-  if (s.empty() || end != s.c_str() + s.size() || errno == ERANGE || v < -2147483647L ||
-      v > 2147483647L) {
+  if (s.empty() || end != s.c_str() + s.size() || errno == ERANGE || v < -2147483647L || v > 2147483647L) {
     fail("expected an integer, found '" + s + "'");
   }
   return static_cast<int>(v);
@@ -230,8 +231,9 @@ Node loadString(const std::string& text, const std::string& file) {
   } catch (const YAML::DeepRecursion& e) {
     std::string where = file;
     if (!e.mark.is_null()) where += ":" + std::to_string(e.mark.line + 1);
-    throw InputError(where, "YAML nesting deeper than " + std::to_string(e.depth() - 1) + " levels (sequences or mappings "
-                            "inside each other); case, robot and manifest files need fewer than 10");
+    throw InputError(where, "YAML nesting deeper than " + std::to_string(e.depth() - 1) +
+                                " levels (sequences or mappings "
+                                "inside each other); case, robot and manifest files need fewer than 10");
   } catch (const YAML::Exception& e) {
     std::string where = file;
     if (!e.mark.is_null()) where += ":" + std::to_string(e.mark.line + 1);

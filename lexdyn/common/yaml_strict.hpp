@@ -38,16 +38,16 @@ class Node {
   /// Throws lexdyn::InputError(where(), what).
   [[noreturn]] void fail(const std::string& what) const;
 
-  double asDouble() const;            ///< plain finite number
-  double asPositiveDouble() const;    ///< > 0
-  double asNonNegativeDouble() const; ///< >= 0
+  double asDouble() const;             ///< plain finite number
+  double asPositiveDouble() const;     ///< > 0
+  double asNonNegativeDouble() const;  ///< >= 0
   /// A plain finite number in [lo, hi]; the error names the range and `unit` (e.g. "s", "m").
   double asDoubleIn(double lo, double hi, const std::string& unit = "") const;
   /// A plain integer in [lo, hi].
   int asIntIn(int lo, int hi) const;
-  int asInt() const;                  ///< plain integer
-  bool asBool() const;                ///< true / false
-  std::string asString() const;       ///< any scalar, non-empty
+  int asInt() const;             ///< plain integer
+  bool asBool() const;           ///< true / false
+  std::string asString() const;  ///< any scalar, non-empty
   /// A sequence of exactly `n` numbers.
   Eigen::VectorXd asVector(int n) const;
   /// A sequence of any length >= min_size of numbers.
@@ -97,8 +97,8 @@ class StrictMap {
 
  private:
   Node node_;
-  std::vector<std::string> keys_;       // file order
-  std::vector<std::string> allowed_;    // every key asked for
+  std::vector<std::string> keys_;     // file order
+  std::vector<std::string> allowed_;  // every key asked for
   std::vector<bool> used_;
 };
 

@@ -69,18 +69,18 @@ struct ControllerParams {
   /// sec. VI-A), "ah" (LexDynAH, sec. VI-B), "gn" (pure Gauss-Newton, Fig. 14), "wls" (the
   /// acceleration-domain LSSOL baseline), or one an application registered.
   std::string method = "bfgs";
-  double dt = 0.005;                 ///< control period, s
+  double dt = 0.005;  ///< control period, s
   // Thresholds the paper gives as multiples of dt^2 are stored as those multiples.
   // Switching (eq. 95): a level is augmented while omega = 1/2 ||w_optim||^2 >= nu_dt2 * dt^2,
   // with w_optim = dt * w_ctrl (eq. 37).
   double nu_dt2 = 1e-12;
   NewtonTarget newton_target = NewtonTarget::Zero;
   // LexDynBFGS (sec. VI-A, VII, VIII-A).
-  double xi_dt2 = 1e-12;                ///< curvature threshold on y^T s (units of dt^2)
-  double zeta_dt2 = 1e-3;               ///< eq. 89 lower bound and sign-change increment (dt^2)
-  double new_dof_diagonal_dt2 = 1e-3;   ///< diagonal put on newly occupied dofs, sec. VII (dt^2)
-  bool sign_change_guard = true;        ///< sec. VIII-A
-  bool sr1 = false;                     ///< SR1 instead of BFGS (beyond the paper; off by default)
+  double xi_dt2 = 1e-12;                                    ///< curvature threshold on y^T s (units of dt^2)
+  double zeta_dt2 = 1e-3;                                   ///< eq. 89 lower bound and sign-change increment (dt^2)
+  double new_dof_diagonal_dt2 = 1e-3;                       ///< diagonal put on newly occupied dofs, sec. VII (dt^2)
+  bool sign_change_guard = true;                            ///< sec. VIII-A
+  bool sr1 = false;                                         ///< SR1 instead of BFGS (beyond the paper; off by default)
   BfgsSecant bfgs_secant = BfgsSecant::CurrentMultipliers;  ///< reading of eq. 88 (y)
   /// alpha of the paper's weighted identity alpha I* on the occupied joints of an augmented
   /// level (sec. IX-A: "if the movements are too jerky a weighted and dotted identity matrix
@@ -89,8 +89,8 @@ struct ControllerParams {
   /// 0 (off) by default, as in the paper's experiments.
   double newton_identity_weight = 0.0;
   // LexDynAH (sec. VI-B).
-  double rho_dt2 = 1e-12;               ///< skip Hessian terms with |lambda_optim| <= rho (dt^2)
-  double eps_dt2 = 1e-3;                ///< eps I* added after the Higham regularisation, eq. 91 (dt^2)
+  double rho_dt2 = 1e-12;  ///< skip Hessian terms with |lambda_optim| <= rho (dt^2)
+  double eps_dt2 = 1e-3;   ///< eps I* added after the Higham regularisation, eq. 91 (dt^2)
   /// Adds the Gauss-Newton term J_l^T J_l of the level's own constraining task rows to the
   /// analytic Hessian before Higham's regularisation, H = J_l^T J_l + sum lambda H (the J^T J + H
   /// of the Lagrangian that the paper's B approximates, sec. VI-A). Off by default (eq. 21).
@@ -101,7 +101,7 @@ struct ControllerParams {
   // mu u(k+1) = 0, eq. 81; WLS: mu udot = 0 on the objective level, eq. 50). 0: off. Used by the
   // point-mass study of sec. V-A.
   double damping = 0.0;
-  bool use_qmod = false;                    ///< eq. 73-76 instead of eq. 32
+  bool use_qmod = false;  ///< eq. 73-76 instead of eq. 32
   /// Rank-based switching (the paper's future work): augment when the level's active rows lose
   /// rank after projection, in addition to eq. 95. Off by default.
   bool rank_switching = false;
@@ -127,7 +127,7 @@ struct LevelSpec {
 
 struct ControllerConfig {
   ControllerParams params;
-  std::vector<tasks::ContactSpec> contacts;          ///< every contact the controller may use
+  std::vector<tasks::ContactSpec> contacts;  ///< every contact the controller may use
   std::vector<std::unique_ptr<tasks::TaskModel>> tasks;
   /// Levels after the bounds level, highest priority first. Bounds tasks (kind() == Bounds)
   /// may be listed in any level; they always go to the first (bounds) level of the solver.

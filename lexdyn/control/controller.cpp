@@ -25,11 +25,16 @@ inline size_t z(int i) { return static_cast<size_t>(i); }
 
 const char* toString(TickStatus s) {
   switch (s) {
-    case TickStatus::Ok: return "ok";
-    case TickStatus::SolverStoppedEarly: return "solver_stopped_early";
-    case TickStatus::SolverIterationLimit: return "solver_iteration_limit";
-    case TickStatus::Infeasible: return "infeasible";
-    case TickStatus::NonFinite: return "non_finite";
+    case TickStatus::Ok:
+      return "ok";
+    case TickStatus::SolverStoppedEarly:
+      return "solver_stopped_early";
+    case TickStatus::SolverIterationLimit:
+      return "solver_iteration_limit";
+    case TickStatus::Infeasible:
+      return "infeasible";
+    case TickStatus::NonFinite:
+      return "non_finite";
   }
   return "unknown";
 }
@@ -42,7 +47,7 @@ struct Controller::Impl {
   std::vector<std::unique_ptr<tasks::TaskData>> td;
   tasks::TaskModel* taskPtr(int i) const { return cfg.tasks[z(i)].get(); }
 
-  std::unique_ptr<ControlMethod> method;    // lexdyn/control/methods (registry)
+  std::unique_ptr<ControlMethod> method;  // lexdyn/control/methods (registry)
   int nv = 0, nx = 0, nj = 0, ng = 0;
   std::vector<char> contactActive;
   std::vector<char> used;  // per task: referenced by a level
@@ -50,9 +55,9 @@ struct Controller::Impl {
   // Solver problem.
   solver::Problem problem;
   solver::Solver solver;
-  std::vector<SolverLevel> levels;          // general solver levels, in order
+  std::vector<SolverLevel> levels;  // general solver levels, in order
   bool hasBounds = false;
-  std::vector<int> boundsTasks;             // tasks in the bounds level, with their first row
+  std::vector<int> boundsTasks;  // tasks in the bounds level, with their first row
   std::vector<int> boundsFirstRow;
   bool warm = false;
 
@@ -60,13 +65,13 @@ struct Controller::Impl {
   Eigen::MatrixXd M;
   Eigen::VectorXd N;
   tasks::TickContext ctx;
-  Eigen::MatrixXd Jp;                       // 3 x nv point Jacobian
-  Eigen::MatrixXd JcT;                      // nv x ng, shared by the dynamics tasks (ctx.JcT)
-  std::vector<Eigen::MatrixXd> pointJ;      // with JcT: each contact point's 3 x nv Jacobian of the tick
-  bool sharedJcT = false;                   // more than one used dynamics task
-  bool firstFill = true;                    // fillRows has not run yet (it checks velocity-only rows then)
+  Eigen::MatrixXd Jp;                   // 3 x nv point Jacobian
+  Eigen::MatrixXd JcT;                  // nv x ng, shared by the dynamics tasks (ctx.JcT)
+  std::vector<Eigen::MatrixXd> pointJ;  // with JcT: each contact point's 3 x nv Jacobian of the tick
+  bool sharedJcT = false;               // more than one used dynamics task
+  bool firstFill = true;                // fillRows has not run yet (it checks velocity-only rows then)
   Eigen::Matrix<double, 3, 4> D;
-  Eigen::VectorXd genForce;                 // nv
+  Eigen::VectorXd genForce;  // nv
   Command cmd;
   TickRecord rec;
 
@@ -184,8 +189,8 @@ void Controller::Impl::buildLevels() {
       for (int v : vars) {
         if (v < 0 || v >= nx) throw InputError("task \"" + tm.name() + "\"", "bound variable out of range");
         if (varOwner[z(v)] >= 0) {
-          throw InputError("task \"" + tm.name() + "\"", "bounds variable " + std::to_string(v) + " already bounded by task \"" +
-                                                             taskPtr(varOwner[z(v)])->name() + "\"");
+          throw InputError("task \"" + tm.name() + "\"",
+                           "bounds variable " + std::to_string(v) + " already bounded by task \"" + taskPtr(varOwner[z(v)])->name() + "\"");
         }
         varOwner[z(v)] = t;
       }
@@ -325,8 +330,10 @@ void Controller::Impl::finishTick(const RobotState& s) {
       const Eigen::Vector3d f = D * cmd.gamma.segment(layout.offset(c) + 4 * static_cast<int>(pt), 4);
       // The point's Jacobian of this tick, from the tasks' Jc^T when it was computed there.
       const Eigen::MatrixXd* J = &Jp;
-      if (sharedJcT) J = &pointJ[static_cast<size_t>(layout.offset(c) / 4) + pt];
-      else model->pointJacobian(data, cs.frame, cs.points[pt], Jp);
+      if (sharedJcT)
+        J = &pointJ[static_cast<size_t>(layout.offset(c) / 4) + pt];
+      else
+        model->pointJacobian(data, cs.frame, cs.points[pt], Jp);
       genForce.noalias() -= J->transpose() * f;
       const Eigen::Vector3d pw = X * cs.points[pt];
       rec.contact_wrench.col(c).head<3>() += f;
@@ -337,8 +344,7 @@ void Controller::Impl::finishTick(const RobotState& s) {
   rec.com = model->centerOfMass(data);
 }
 
-Controller::Controller(const model::RobotModel& model, ControllerConfig config)
-    : impl_(std::make_unique<Impl>(model, std::move(config))) {}
+Controller::Controller(const model::RobotModel& model, ControllerConfig config) : impl_(std::make_unique<Impl>(model, std::move(config))) {}
 Controller::~Controller() = default;
 Controller::Controller(Controller&&) noexcept = default;
 Controller& Controller::operator=(Controller&&) noexcept = default;
@@ -380,8 +386,7 @@ const Command& Controller::tick(const RobotState& s) {
   I.method->addRows(mt, I.problem, I.rec);
   const auto t3 = Clock::now();
   // 4. Solve, warm-started from the previous tick.
-  const solver::Result& r = I.warm ? I.solver.solve(I.problem, I.solver.result().active, I.solver.result().x)
-                                   : I.solver.solve(I.problem);
+  const solver::Result& r = I.warm ? I.solver.solve(I.problem, I.solver.result().active, I.solver.result().x) : I.solver.solve(I.problem);
   I.warm = true;
   const auto t4 = Clock::now();
   // 5. Command and record.

@@ -35,17 +35,17 @@ enum class TickStatus {
   Ok,
   SolverStoppedEarly,  ///< the paper's termination rules stopped the active-set search (normal)
   SolverIterationLimit,
-  Infeasible,          ///< WLS: the hard level is infeasible (the paper's LSSOL failure)
-  NonFinite,           ///< NaN/inf in the problem or the solution
+  Infeasible,  ///< WLS: the hard level is infeasible (the paper's LSSOL failure)
+  NonFinite,   ///< NaN/inf in the problem or the solution
 };
 const char* toString(TickStatus s);
 
 struct Command {
-  model::Configuration q;   ///< commanded configuration
-  Eigen::VectorXd u;        ///< commanded velocity (nv)
-  Eigen::VectorXd udot;     ///< (u(k+1) - u(k)) / dt, or the WLS acceleration
-  Eigen::VectorXd tau;      ///< joint torques (nj), N m or N
-  Eigen::VectorXd gamma;    ///< contact wrench generators (ng), N
+  model::Configuration q;  ///< commanded configuration
+  Eigen::VectorXd u;       ///< commanded velocity (nv)
+  Eigen::VectorXd udot;    ///< (u(k+1) - u(k)) / dt, or the WLS acceleration
+  Eigen::VectorXd tau;     ///< joint torques (nj), N m or N
+  Eigen::VectorXd gamma;   ///< contact wrench generators (ng), N
   TickStatus status = TickStatus::Ok;
   bool ok() const { return status == TickStatus::Ok || status == TickStatus::SolverStoppedEarly; }
 };
@@ -55,17 +55,17 @@ struct TickRecord {
   double time = 0.0;
   TickStatus status = TickStatus::Ok;
   solver::Status solver_status = solver::Status::Solved;
-  int iterations = 0;             ///< active-set iterations
+  int iterations = 0;  ///< active-set iterations
   int optimality_iterations = 0;
-  int factorizations = 0;         ///< level stages the solver factorised (solver::Result::factorizations)
+  int factorizations = 0;  ///< level stages the solver factorised (solver::Result::factorizations)
   // Wall time, microseconds (measurement only; never used for decisions).
   double model_us = 0.0, tasks_us = 0.0, hessian_us = 0.0, solver_us = 0.0, tick_us = 0.0;
-  Eigen::VectorXd task_error_norm;        ///< per task: ||e||
-  std::vector<int> task_active_rows;      ///< per task: rows held by the solver (active set)
-  std::vector<int> task_engaged_rows;     ///< per task: rows engaged (inequalities inside their distance)
-  std::vector<char> level_augmented;      ///< per configured level: Newton rows added this tick
-  std::vector<char> level_hessian_updated;///< per configured level: BFGS update accepted this tick
-  Eigen::VectorXd level_violation;        ///< per configured level: ||w_ctrl|| of its task rows
+  Eigen::VectorXd task_error_norm;          ///< per task: ||e||
+  std::vector<int> task_active_rows;        ///< per task: rows held by the solver (active set)
+  std::vector<int> task_engaged_rows;       ///< per task: rows engaged (inequalities inside their distance)
+  std::vector<char> level_augmented;        ///< per configured level: Newton rows added this tick
+  std::vector<char> level_hessian_updated;  ///< per configured level: BFGS update accepted this tick
+  Eigen::VectorXd level_violation;          ///< per configured level: ||w_ctrl|| of its task rows
   /// Per configured level while augmented (level_augmented), NaN otherwise: the size of the
   /// second-order rows R against the level's Gauss-Newton term, trace(R^T R) / trace(J^T J),
   /// J the level's constraining task rows (finite bound) on the velocity columns. R^T R is what

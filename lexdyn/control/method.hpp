@@ -32,8 +32,8 @@ namespace lexdyn::control {
 /// A task's rows inside a solver level.
 struct TaskSlot {
   int task = -1;
-  int row = 0;         ///< first row in the solver level
-  double scale = 1.0;  ///< ControlMethod::rowScale (sqrt(weight) on the WLS objective level)
+  int row = 0;                 ///< first row in the solver level
+  double scale = 1.0;          ///< ControlMethod::rowScale (sqrt(weight) on the WLS objective level)
   bool velocity_only = false;  ///< TaskModel::velocityOnly(): A is zero past its first nv columns
 };
 
@@ -42,10 +42,10 @@ struct SolverLevel {
   int problem_level = -1;  ///< index in the solver problem
   int config_level = -1;   ///< configured level it comes from
   std::vector<TaskSlot> slots;
-  int task_rows = 0;       ///< rows of the tasks
-  int spare_row = -1;      ///< first of the nv rows reserved for Newton / damping rows, -1 if none
+  int task_rows = 0;         ///< rows of the tasks
+  int spare_row = -1;        ///< first of the nv rows reserved for Newton / damping rows, -1 if none
   bool augmentable = false;  ///< reserves nv rows (ControlMethod::reservesRows)
-  bool separate = false;   ///< the equation-of-motion level split off a configured level
+  bool separate = false;     ///< the equation-of-motion level split off a configured level
 };
 
 /// What a method sees of its controller once the solver problem is laid out. The references
@@ -60,10 +60,10 @@ struct MethodSetup {
 
 /// What a method reads at a tick.
 struct MethodTick {
-  const tasks::TickContext& ctx;                           ///< model updated, M, N
+  const tasks::TickContext& ctx;                            ///< model updated, M, N
   const std::vector<std::unique_ptr<tasks::TaskData>>& td;  ///< every task's rows of this tick
   const std::vector<SolverLevel>& levels;
-  const RobotState& state;                                 ///< measured state
+  const RobotState& state;  ///< measured state
   /// addRows: the previous tick's solver result (valid when have_last); afterSolve: this tick's.
   const solver::Result& last;
   bool have_last = false;  ///< a previous solve exists (false after reset)
@@ -119,8 +119,8 @@ class ControlMethod {
 /// A method in the registry.
 using MethodFactory = std::unique_ptr<ControlMethod> (*)(const ControllerParams& params);
 struct MethodInfo {
-  std::string name;          ///< as in ControllerParams::method and case files ("bfgs")
-  std::string description;   ///< one line
+  std::string name;         ///< as in ControllerParams::method and case files ("bfgs")
+  std::string description;  ///< one line
   /// Configured as the two-level weighted hierarchy (hard constraints, weighted objective;
   /// case files: `wls_levels`) rather than the strict hierarchy (`levels`).
   bool weighted_hierarchy = false;

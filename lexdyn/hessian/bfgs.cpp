@@ -49,29 +49,25 @@ void addColumnSums(Eigen::Index rows, Eigen::Index cols, const Term& term, Eigen
 
 }  // namespace
 
-void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J,
-                              const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
+void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J, const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
                               const Eigen::Ref<const Eigen::VectorXd>& lambda, Eigen::Ref<Eigen::VectorXd> y) {
-  LEXDYN_ALWAYS_ASSERT(J.rows() == J_prev.rows() && J.cols() == J_prev.cols() && J.rows() == lambda.size() &&
-                           J.cols() == y.size(),
+  LEXDYN_ALWAYS_ASSERT(J.rows() == J_prev.rows() && J.cols() == J_prev.cols() && J.rows() == lambda.size() && J.cols() == y.size(),
                        "accumulateGradientChange: sizes differ");
   // eq. 88: y_l = grad L_l(k) - grad L_l(k-1) = sum_i (J_i - J_i(k-1))^T lambda_{i,l}
   addColumnSums(
       J.rows(), J.cols(), [&](Eigen::Index r, Eigen::Index c) { return (J(r, c) - J_prev(r, c)) * lambda[r]; }, y);
 }
 
-void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
-                                const Eigen::Ref<const Eigen::VectorXd>& lambda,
+void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev, const Eigen::Ref<const Eigen::VectorXd>& lambda,
                                 const Eigen::Ref<const Eigen::VectorXd>& lambda_prev, Eigen::Ref<Eigen::VectorXd> y) {
   LEXDYN_ALWAYS_ASSERT(J_prev.rows() == lambda.size() && lambda.size() == lambda_prev.size() && J_prev.cols() == y.size(),
                        "accumulateMultiplierChange: sizes differ");
   addColumnSums(
-      J_prev.rows(), J_prev.cols(), [&](Eigen::Index r, Eigen::Index c) { return J_prev(r, c) * (lambda[r] - lambda_prev[r]); },
-      y);
+      J_prev.rows(), J_prev.cols(), [&](Eigen::Index r, Eigen::Index c) { return J_prev(r, c) * (lambda[r] - lambda_prev[r]); }, y);
 }
 
-int choleskyOfOccupied(const Eigen::Ref<const Eigen::MatrixXd>& B, const std::vector<char>& occupied,
-                       Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list, int* zero_pivots) {
+int choleskyOfOccupied(const Eigen::Ref<const Eigen::MatrixXd>& B, const std::vector<char>& occupied, Eigen::Ref<Eigen::MatrixXd> R,
+                       std::vector<int>& occupied_list, int* zero_pivots) {
   const Eigen::Index n = B.rows();
   LEXDYN_ALWAYS_ASSERT(B.cols() == n && static_cast<Eigen::Index>(occupied.size()) == n && R.cols() == n,
                        "choleskyOfOccupied: sizes differ");
@@ -107,11 +103,9 @@ int choleskyOfOccupied(const Eigen::Ref<const Eigen::MatrixXd>& B, const std::ve
 // QuasiNewtonMatrix
 // =============================================================================================
 
-QuasiNewtonMatrix::QuasiNewtonMatrix(int n, const QuasiNewtonOptions& options)
-    : n_(n), options_(options), higham_(n) {
+QuasiNewtonMatrix::QuasiNewtonMatrix(int n, const QuasiNewtonOptions& options) : n_(n), options_(options), higham_(n) {
   LEXDYN_ALWAYS_ASSERT(n >= 0, "QuasiNewtonMatrix: negative size");
-  LEXDYN_ALWAYS_ASSERT(options.xi >= 0.0 && options.sr1_tolerance >= 0.0 && options.eps >= 0.0 &&
-                           options.identity_weight >= 0.0,
+  LEXDYN_ALWAYS_ASSERT(options.xi >= 0.0 && options.sr1_tolerance >= 0.0 && options.eps >= 0.0 && options.identity_weight >= 0.0,
                        "QuasiNewtonMatrix: thresholds must be >= 0");
   B_.setZero(n, n);
   if (options.identity_weight > 0.0) W_.setZero(n, n);
@@ -136,10 +130,8 @@ int QuasiNewtonMatrix::occupiedCount() const {
   return m;
 }
 
-void QuasiNewtonMatrix::initialize(const Eigen::Ref<const Eigen::VectorXd>& diagonal,
-                                   const std::vector<char>& occupied) {
-  LEXDYN_ALWAYS_ASSERT(diagonal.size() == n_ && static_cast<int>(occupied.size()) == n_,
-                       "QuasiNewtonMatrix::initialize: sizes differ");
+void QuasiNewtonMatrix::initialize(const Eigen::Ref<const Eigen::VectorXd>& diagonal, const std::vector<char>& occupied) {
+  LEXDYN_ALWAYS_ASSERT(diagonal.size() == n_ && static_cast<int>(occupied.size()) == n_, "QuasiNewtonMatrix::initialize: sizes differ");
   B_.setZero();
   for (int i = 0; i < n_; ++i) {
     const bool o = occupied[static_cast<size_t>(i)] != 0;
@@ -186,8 +178,7 @@ int QuasiNewtonMatrix::setOccupied(const std::vector<char>& occupied, double new
   return changed;
 }
 
-int QuasiNewtonMatrix::setOccupied(const std::vector<char>& occupied,
-                                   const Eigen::Ref<const Eigen::VectorXd>& new_diagonal) {
+int QuasiNewtonMatrix::setOccupied(const std::vector<char>& occupied, const Eigen::Ref<const Eigen::VectorXd>& new_diagonal) {
   LEXDYN_ALWAYS_ASSERT(initialized_, "QuasiNewtonMatrix::setOccupied: initialize first");
   LEXDYN_ALWAYS_ASSERT(static_cast<int>(occupied.size()) == n_ && new_diagonal.size() == n_,
                        "QuasiNewtonMatrix::setOccupied: sizes differ");
@@ -323,12 +314,8 @@ bool Sr1Matrix::update(const Eigen::Ref<const Eigen::VectorXd>& s, const Eigen::
   return true;
 }
 
-std::unique_ptr<QuasiNewtonMatrix> makeBfgs(int n, const QuasiNewtonOptions& options) {
-  return std::make_unique<BfgsMatrix>(n, options);
-}
-std::unique_ptr<QuasiNewtonMatrix> makeSr1(int n, const QuasiNewtonOptions& options) {
-  return std::make_unique<Sr1Matrix>(n, options);
-}
+std::unique_ptr<QuasiNewtonMatrix> makeBfgs(int n, const QuasiNewtonOptions& options) { return std::make_unique<BfgsMatrix>(n, options); }
+std::unique_ptr<QuasiNewtonMatrix> makeSr1(int n, const QuasiNewtonOptions& options) { return std::make_unique<Sr1Matrix>(n, options); }
 std::unique_ptr<QuasiNewtonMatrix> makeQuasiNewton(int n, const QuasiNewtonOptions& options) {
   return options.update == QuasiNewtonUpdate::Sr1 ? makeSr1(n, options) : makeBfgs(n, options);
 }

@@ -59,14 +59,12 @@ void addOnChain(const std::vector<char>& chain, double value, Eigen::Ref<Eigen::
 /// Eq. 88 for one task block: y += (J - J_prev)^T lambda (J, J_prev: rows x nv; lambda: rows), the
 /// change of the Lagrangian's gradient sum_i J_i^T lambda_i (eq. 20) at fixed multipliers. (The
 /// paper prints y_l with a leading minus, which contradicts eq. 20; docs/controller.md.)
-void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J,
-                              const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
+void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J, const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
                               const Eigen::Ref<const Eigen::VectorXd>& lambda, Eigen::Ref<Eigen::VectorXd> y);
 /// The multiplier part of the full difference of the Lagrangian's gradient (eq. 88 read as
 /// grad L(k) - grad L(k-1) with each gradient's own multipliers, ControllerParams::bfgs_secant
 /// full_difference): y += J_prev^T (lambda - lambda_prev) (J_prev: rows x nv).
-void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
-                                const Eigen::Ref<const Eigen::VectorXd>& lambda,
+void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev, const Eigen::Ref<const Eigen::VectorXd>& lambda,
                                 const Eigen::Ref<const Eigen::VectorXd>& lambda_prev, Eigen::Ref<Eigen::VectorXd> y);
 
 /// Cholesky factor of the occupied block of a positive (semi-)definite B, scattered to the
@@ -74,8 +72,8 @@ void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
 /// in rows 0..m-1, zero elsewhere; `occupied_list` receives the m occupied dofs (its capacity
 /// must be >= n so that nothing is allocated). The factor is computed in place in R. A pivot
 /// <= 0 gives a zero row (counted in *zero_pivots when given). Returns m.
-int choleskyOfOccupied(const Eigen::Ref<const Eigen::MatrixXd>& B, const std::vector<char>& occupied,
-                       Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list, int* zero_pivots = nullptr);
+int choleskyOfOccupied(const Eigen::Ref<const Eigen::MatrixXd>& B, const std::vector<char>& occupied, Eigen::Ref<Eigen::MatrixXd> R,
+                       std::vector<int>& occupied_list, int* zero_pivots = nullptr);
 
 /// The per-level approximation B (n x n). One interface, two update rules (makeBfgs, makeSr1).
 class QuasiNewtonMatrix {

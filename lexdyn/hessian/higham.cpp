@@ -354,8 +354,7 @@ bool HighamRegularizer::clippedBlock(const Eigen::Ref<const Eigen::MatrixXd>& B,
 
 bool HighamRegularizer::nearestPsd(const Eigen::Ref<const Eigen::MatrixXd>& H, Eigen::Ref<Eigen::MatrixXd> X) {
   const int k = static_cast<int>(H.rows());
-  LEXDYN_ALWAYS_ASSERT(H.cols() == k && X.rows() == k && X.cols() == k && k <= n_,
-                       "HighamRegularizer::nearestPsd: bad sizes");
+  LEXDYN_ALWAYS_ASSERT(H.cols() == k && X.rows() == k && X.cols() == k && k <= n_, "HighamRegularizer::nearestPsd: bad sizes");
   failed_ = !H.allFinite() || !clippedBlock(H, X);
   if (failed_) {
     X.setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -365,8 +364,8 @@ bool HighamRegularizer::nearestPsd(const Eigen::Ref<const Eigen::MatrixXd>& H, E
   return true;
 }
 
-int HighamRegularizer::gatherOccupied(const char* caller, const Eigen::Ref<const Eigen::MatrixXd>& H,
-                                      const std::vector<char>& occupied, double eps, Eigen::Ref<Eigen::MatrixXd> R) {
+int HighamRegularizer::gatherOccupied(const char* caller, const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied,
+                                      double eps, Eigen::Ref<Eigen::MatrixXd> R) {
   // (the messages are built only when a check fails: nothing is allocated per call)
   LEXDYN_ALWAYS_ASSERT(H.rows() == n_ && H.cols() == n_, std::string(caller) + ": H must be n x n");
   LEXDYN_ALWAYS_ASSERT(static_cast<int>(occupied.size()) == n_, std::string(caller) + ": mask must have n entries");
@@ -403,8 +402,7 @@ void HighamRegularizer::listOccupied(const char* caller, std::vector<int>& occup
   for (int k = 0; k < m; ++k) occupied_list.push_back(index_[static_cast<size_t>(k)]);
 }
 
-int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H,
-                                           const std::vector<char>& occupied, double eps,
+int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied, double eps,
                                            Eigen::Ref<Eigen::MatrixXd> R) {
   const int m = gatherOccupied("regularizeAndFactor", H, occupied, eps, R);
   if (m == 0) return 0;
@@ -426,8 +424,8 @@ int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixX
   return m;
 }
 
-int HighamRegularizer::regularizedRows(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied,
-                                       double eps, Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list) {
+int HighamRegularizer::regularizedRows(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied, double eps,
+                                       Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list) {
   const int m = gatherOccupied("regularizedRows", H, occupied, eps, R);
   m_ = 0;  // lastRegularized() is not formed here
   listOccupied("regularizedRows", occupied_list, 0);
@@ -455,8 +453,7 @@ int HighamRegularizer::regularizedRows(const Eigen::Ref<const Eigen::MatrixXd>& 
   return m;
 }
 
-int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H,
-                                           const std::vector<char>& occupied, double eps,
+int HighamRegularizer::regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied, double eps,
                                            Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list) {
   const int m = regularizeAndFactor(H, occupied, eps, R);
   listOccupied("regularizeAndFactor", occupied_list, m);

@@ -91,11 +91,11 @@ class HighamRegularizer {
   /// unoccupied columns; rows m .. R.rows()-1 are zeroed (R.rows() >= m). So R^T R equals H~_o
   /// on the occupied block and 0 elsewhere. Returns m. Allocates nothing. A non-finite occupied
   /// block gives no rows: R zeroed, 0 returned, lastFailed() true.
-  int regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied,
-                          double eps, Eigen::Ref<Eigen::MatrixXd> R);
+  int regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied, double eps,
+                          Eigen::Ref<Eigen::MatrixXd> R);
   /// The same, also listing the m occupied dofs in `occupied_list` (capacity >= size()).
-  int regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied,
-                          double eps, Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list);
+  int regularizeAndFactor(const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied, double eps,
+                          Eigen::Ref<Eigen::MatrixXd> R, std::vector<int>& occupied_list);
 
   /// Newton rows of a level from the eigendecomposition instead of a Cholesky factor: with
   /// H_o = V Lambda V^T (eigenvalues of the occupied block, exactly zero rows and columns taking
@@ -129,8 +129,8 @@ class HighamRegularizer {
   /// The common start of regularizeAndFactor and regularizedRows (`caller` names it in the
   /// argument checks): lists the occupied dofs in index_, zeroes R, resets the diagnostics, copies
   /// the occupied block of H into block_ and returns its size m (m_ = m).
-  int gatherOccupied(const char* caller, const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied,
-                     double eps, Eigen::Ref<Eigen::MatrixXd> R);
+  int gatherOccupied(const char* caller, const Eigen::Ref<const Eigen::MatrixXd>& H, const std::vector<char>& occupied, double eps,
+                     Eigen::Ref<Eigen::MatrixXd> R);
   /// A non-finite block (or an eigenproblem that did not converge): no rows; returns 0.
   int failed();
   /// occupied_list = the first m occupied dofs (capacity >= size(): no allocation).

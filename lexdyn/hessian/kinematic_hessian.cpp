@@ -26,9 +26,8 @@ inline void addSymmetric(Eigen::Ref<Eigen::MatrixXd>& H, int i, int j, double h)
 
 }  // namespace
 
-void pointHessianOfTree(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws,
-                        model::FrameId f, const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w,
-                        Eigen::Ref<Eigen::MatrixXd>& H);
+void pointHessianOfTree(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws, model::FrameId f,
+                        const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd>& H);
 void orientationHessianOfTree(const model::RobotModel& model, const KinematicHessianWorkspace& ws, model::FrameId f,
                               const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd>& H);
 void comHessianOfTree(const model::RobotModel& model, const KinematicHessianWorkspace& ws, const Eigen::Vector3d& w,
@@ -124,18 +123,15 @@ void KinematicHessianWorkspace::update(const model::RobotModel& model, const mod
   }
 }
 
-void accumulatePointHessian(const model::RobotModel& model, const model::ModelData& data,
-                            const KinematicHessianWorkspace& ws, model::FrameId f,
-                            const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w,
-                            Eigen::Ref<Eigen::MatrixXd> H) {
+void accumulatePointHessian(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws,
+                            model::FrameId f, const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd> H) {
   const int nv = model.nv();
   LEXDYN_ALWAYS_ASSERT(H.rows() == nv && H.cols() == nv, "accumulatePointHessian: H must be nv x nv");
   accumulateVia(model, ws, H, [&](Eigen::Ref<Eigen::MatrixXd>& Ht) { pointHessianOfTree(model, data, ws, f, p_in_frame, w, Ht); });
 }
 
-void pointHessianOfTree(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws,
-                        model::FrameId f, const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w,
-                        Eigen::Ref<Eigen::MatrixXd>& H) {
+void pointHessianOfTree(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws, model::FrameId f,
+                        const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd>& H) {
   const model::KinematicTree& tree = model.tree();
   const std::vector<int>& chain = tree.bodies[static_cast<size_t>(model.frameBody(f))].ancestor_dofs;
   const Eigen::Vector3d p = model.pointPosition(data, f, p_in_frame);
@@ -144,9 +140,8 @@ void pointHessianOfTree(const model::RobotModel& model, const model::ModelData& 
     const int j = chain[static_cast<size_t>(b)];
     const Eigen::Vector3d a_j = ws.axes().col(j);
     // Jacobian column of the point for dof j.
-    const Eigen::Vector3d J_j = tree.dofs[static_cast<size_t>(j)].type == model::DofType::Revolute
-                                    ? Eigen::Vector3d(a_j.cross(p - ws.points().col(j)))
-                                    : a_j;
+    const Eigen::Vector3d J_j =
+        tree.dofs[static_cast<size_t>(j)].type == model::DofType::Revolute ? Eigen::Vector3d(a_j.cross(p - ws.points().col(j))) : a_j;
     // H_ij = a_i x J_j for revolute i inboard of or equal to j.
     for (int a = 0; a <= b; ++a) {
       const int i = chain[static_cast<size_t>(a)];
@@ -156,13 +151,11 @@ void pointHessianOfTree(const model::RobotModel& model, const model::ModelData& 
   }
 }
 
-void accumulateOrientationHessian(const model::RobotModel& model, const model::ModelData& data,
-                                  const KinematicHessianWorkspace& ws, model::FrameId f,
-                                  const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd> H) {
+void accumulateOrientationHessian(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws,
+                                  model::FrameId f, const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd> H) {
   (void)data;  // the axes in the workspace are all the orientation Hessian needs
   const int nv = model.nv();
-  LEXDYN_ALWAYS_ASSERT(H.rows() == nv && H.cols() == nv,
-                       "accumulateOrientationHessian: H must be nv x nv");
+  LEXDYN_ALWAYS_ASSERT(H.rows() == nv && H.cols() == nv, "accumulateOrientationHessian: H must be nv x nv");
   accumulateVia(model, ws, H, [&](Eigen::Ref<Eigen::MatrixXd>& Ht) { orientationHessianOfTree(model, ws, f, w, Ht); });
 }
 
@@ -187,8 +180,8 @@ void orientationHessianOfTree(const model::RobotModel& model, const KinematicHes
   }
 }
 
-void accumulateComHessian(const model::RobotModel& model, const KinematicHessianWorkspace& ws,
-                          const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd> H) {
+void accumulateComHessian(const model::RobotModel& model, const KinematicHessianWorkspace& ws, const Eigen::Vector3d& w,
+                          Eigen::Ref<Eigen::MatrixXd> H) {
   const int nv_model = model.nv();
   LEXDYN_ALWAYS_ASSERT(H.rows() == nv_model && H.cols() == nv_model, "accumulateComHessian: H must be nv x nv");
   accumulateVia(model, ws, H, [&](Eigen::Ref<Eigen::MatrixXd>& Ht) { comHessianOfTree(model, ws, w, Ht); });

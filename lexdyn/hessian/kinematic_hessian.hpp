@@ -66,18 +66,15 @@ class KinematicHessianWorkspace {
 };
 
 /// Position of a point given in frame f's coordinates.
-void accumulatePointHessian(const model::RobotModel& model, const model::ModelData& data,
-                            const KinematicHessianWorkspace& ws, model::FrameId f,
-                            const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w,
-                            Eigen::Ref<Eigen::MatrixXd> H);
+void accumulatePointHessian(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws,
+                            model::FrameId f, const Eigen::Vector3d& p_in_frame, const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd> H);
 
 /// Orientation of frame f (rotation-vector function, see above).
-void accumulateOrientationHessian(const model::RobotModel& model, const model::ModelData& data,
-                                  const KinematicHessianWorkspace& ws, model::FrameId f,
-                                  const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd> H);
+void accumulateOrientationHessian(const model::RobotModel& model, const model::ModelData& data, const KinematicHessianWorkspace& ws,
+                                  model::FrameId f, const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd> H);
 
 /// Centre of mass of the whole robot.
-void accumulateComHessian(const model::RobotModel& model, const KinematicHessianWorkspace& ws,
-                          const Eigen::Vector3d& w, Eigen::Ref<Eigen::MatrixXd> H);
+void accumulateComHessian(const model::RobotModel& model, const KinematicHessianWorkspace& ws, const Eigen::Vector3d& w,
+                          Eigen::Ref<Eigen::MatrixXd> H);
 
 }  // namespace lexdyn::hessian

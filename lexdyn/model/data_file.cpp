@@ -121,7 +121,7 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
   attempt([&] {
     if (auto u = top.optional("mesh_up_axis")) d.mesh_up_axis_from_file = u->asEnum({"ignore", "file"}) == "file";
   });
-  if (top.has("mimic")) top.optional("mimic");  // read before the tree was built
+  if (top.has("mimic")) top.optional("mimic");                // read before the tree was built
   if (top.has("package_path")) top.optional("package_path");  // read before the URDF's meshes were
   attempt([&] {
     if (auto g = top.optional("gravity")) {
@@ -237,7 +237,8 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
     d.collision_interaction_distance = di.asPositiveDouble();
     d.collision_safety_distance = ds.asNonNegativeDouble();
     if (d.collision_interaction_distance > ranges::kMaxLength_m) di.fail("expected at most " + fmt(ranges::kMaxLength_m) + " m");
-    if (!(d.collision_safety_distance < d.collision_interaction_distance)) ds.fail("safety_distance must be smaller than interaction_distance");
+    if (!(d.collision_safety_distance < d.collision_interaction_distance))
+      ds.fail("safety_distance must be smaller than interaction_distance");
     const yaml::Node list = m.required("pairs");
     for (const yaml::Node& pn : list.elements()) {
       attempt([&] {
@@ -259,7 +260,8 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
           pn.fail("both capsules are on the same link; a self-collision pair needs two links");
         }
         for (const auto& o : d.collision_pairs) {
-          if ((o.capsule_a == cp.capsule_a && o.capsule_b == cp.capsule_b) || (o.capsule_a == cp.capsule_b && o.capsule_b == cp.capsule_a)) {
+          if ((o.capsule_a == cp.capsule_a && o.capsule_b == cp.capsule_b) ||
+              (o.capsule_a == cp.capsule_b && o.capsule_b == cp.capsule_a)) {
             pn.fail("duplicate collision pair");
           }
         }
@@ -277,15 +279,16 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
       attempt([&] {
         const int j = d.findJoint(jname);
         if (j < 0) {
-          ln.fail(lockedJoint(d, jname) ? "joint '" + jname + "' is locked by the loader (" + lockedJoint(d, jname)->reason +
-                                              "): not a joint of the model"
+          ln.fail(lockedJoint(d, jname)
+                      ? "joint '" + jname + "' is locked by the loader (" + lockedJoint(d, jname)->reason + "): not a joint of the model"
                   : coupledJoint(d, jname) ? "joint '" + jname + "' is a mimic joint coupled to its master: give the master's limits"
                                            : "unknown joint '" + jname + "'");
         }
         JointDescription& jd = d.joints[static_cast<size_t>(j)];
         yaml::StrictMap m(ln);
         if (auto e = m.optional("effort")) jd.effort_limit = e->asDoubleIn(ranges::kMinEffortLimit, ranges::kMaxEffortLimit, "N m or N");
-        if (auto v = m.optional("velocity")) jd.velocity_limit = v->asDoubleIn(ranges::kMinVelocityLimit, ranges::kMaxVelocityLimit, "rad/s or m/s");
+        if (auto v = m.optional("velocity"))
+          jd.velocity_limit = v->asDoubleIn(ranges::kMinVelocityLimit, ranges::kMaxVelocityLimit, "rad/s or m/s");
         std::optional<yaml::Node> lo = m.optional("lower"), hi = m.optional("upper");
         if (lo) jd.lower = lo->asDoubleIn(-ranges::kMaxJointLimit, ranges::kMaxJointLimit, "rad or m");
         if (hi) jd.upper = hi->asDoubleIn(-ranges::kMaxJointLimit, ranges::kMaxJointLimit, "rad or m");
@@ -356,10 +359,10 @@ void readDataFile(RobotDescription& d, const yaml::Node& root, ProblemList& prob
             if (c.name != cname) continue;
             const double follows = c.multiplier * q[c.master] + c.offset;
             if (std::abs(v - follows) > 1e-6) {
-              problems.warning(pn.where(), "posture '" + pname + "': mimic joint '" + cname + "' at " + fmt(v) + " is not where its master puts it (" +
-                                               fmt(c.multiplier) + " x " + d.joints[static_cast<size_t>(c.master)].name + " " +
-                                               fmt(q[c.master]) + (c.offset != 0.0 ? " + " + fmt(c.offset) : "") + " = " + fmt(follows) +
-                                               "): the master decides");
+              problems.warning(pn.where(),
+                               "posture '" + pname + "': mimic joint '" + cname + "' at " + fmt(v) + " is not where its master puts it (" +
+                                   fmt(c.multiplier) + " x " + d.joints[static_cast<size_t>(c.master)].name + " " + fmt(q[c.master]) +
+                                   (c.offset != 0.0 ? " + " + fmt(c.offset) : "") + " = " + fmt(follows) + "): the master decides");
             }
           }
         }

@@ -25,7 +25,7 @@ enum class InertiaClass {
 struct InertiaCheck {
   InertiaClass kind = InertiaClass::Valid;
   Eigen::Vector3d moments = Eigen::Vector3d::Zero();  ///< principal moments, ascending, kg m^2
-  std::string problem;  ///< for Noise and Impossible: what is wrong, in words
+  std::string problem;                                ///< for Noise and Impossible: what is wrong, in words
 };
 
 /// Classifies a symmetric inertia about the centre of mass (kg m^2).

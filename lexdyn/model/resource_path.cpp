@@ -121,7 +121,8 @@ ResolvedResource resolveResource(const std::string& uri, const std::string& urdf
         std::string a = e.path().filename().string(), b = want.filename().string();
         if (a.size() != b.size() || a == b) continue;
         bool same = true;
-        for (size_t k = 0; k < a.size() && same; ++k) same = std::tolower(static_cast<unsigned char>(a[k])) == std::tolower(static_cast<unsigned char>(b[k]));
+        for (size_t k = 0; k < a.size() && same; ++k)
+          same = std::tolower(static_cast<unsigned char>(a[k])) == std::tolower(static_cast<unsigned char>(b[k]));
         if (same) {
           r.searched += " (it has " + e.path().filename().string() + ", which differs in case only)";
           break;

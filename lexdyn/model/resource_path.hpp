@@ -9,8 +9,8 @@
 namespace lexdyn::model {
 
 struct ResolvedResource {
-  std::string path;      ///< the existing file; empty when not found
-  std::string searched;  ///< where it was looked for (for the message when not found)
+  std::string path;            ///< the existing file; empty when not found
+  std::string searched;        ///< where it was looked for (for the message when not found)
   bool package_found = false;  ///< a package:// URI whose package was found without the file
 };
 

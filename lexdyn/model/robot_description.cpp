@@ -10,8 +10,7 @@
 namespace lexdyn::model {
 
 Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy) {
-  return (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()) *
+  return (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()) *
           Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()))
       .toRotationMatrix();
 }

@@ -44,13 +44,13 @@ struct LoadOptions {
 /// (their mass is lumped into it and they become frames).
 struct LinkDescription {
   std::string name;
-  int parent_joint = -1;        ///< index into RobotDescription::joints; -1 for the root (and a coupled body)
-  int parent_coupled = -1;      ///< index into RobotDescription::coupled_joints for a body moved by one
-  double mass = 0.0;            ///< kg
-  Eigen::Vector3d com = Eigen::Vector3d::Zero();              ///< in the link frame, m
-  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();          ///< about the CoM, link axes, kg m^2
-  std::vector<std::string> merged_links;                      ///< fixed-joint children lumped in
-  int urdf_line = 0;                                          ///< line of the URDF <link>
+  int parent_joint = -1;                              ///< index into RobotDescription::joints; -1 for the root (and a coupled body)
+  int parent_coupled = -1;                            ///< index into RobotDescription::coupled_joints for a body moved by one
+  double mass = 0.0;                                  ///< kg
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();      ///< in the link frame, m
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  ///< about the CoM, link axes, kg m^2
+  std::vector<std::string> merged_links;              ///< fixed-joint children lumped in
+  int urdf_line = 0;                                  ///< line of the URDF <link>
 };
 
 /// An actuated one-degree-of-freedom joint. Joint i moves links[i + 1] (tree order).
@@ -77,22 +77,22 @@ struct FrameDescription {
   std::string name;
   int link = -1;
   Eigen::Isometry3d placement = Eigen::Isometry3d::Identity();  ///< frame in its link frame
-  bool from_data_file = false;  ///< given by the data file's frames (not a URDF link)
+  bool from_data_file = false;                                  ///< given by the data file's frames (not a URDF link)
 };
 
 /// A <visual> or <collision> shape of a link, placed in its body's frame.
 enum class GeometryType { Box, Sphere, Cylinder, Mesh };
 struct GeometryDescription {
   GeometryType type = GeometryType::Box;
-  bool collision = false;        ///< a <collision> element (else <visual>)
-  int link = -1;                 ///< the body it moves with (index into links)
-  std::string urdf_link;         ///< the URDF link that carries it (a merged link keeps its name)
+  bool collision = false;                                       ///< a <collision> element (else <visual>)
+  int link = -1;                                                ///< the body it moves with (index into links)
+  std::string urdf_link;                                        ///< the URDF link that carries it (a merged link keeps its name)
   Eigen::Isometry3d placement = Eigen::Isometry3d::Identity();  ///< shape frame in the body frame
-  Eigen::Vector3d size = Eigen::Vector3d::Zero();  ///< box edge lengths, m
-  double radius = 0.0;           ///< sphere, cylinder, m
-  double length = 0.0;           ///< cylinder (along its z axis), m
-  std::string mesh_uri;          ///< as written in the URDF
-  std::string mesh_path;         ///< the file it resolves to; empty when it was not found
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();               ///< box edge lengths, m
+  double radius = 0.0;                                          ///< sphere, cylinder, m
+  double length = 0.0;                                          ///< cylinder (along its z axis), m
+  std::string mesh_uri;                                         ///< as written in the URDF
+  std::string mesh_path;                                        ///< the file it resolves to; empty when it was not found
   Eigen::Vector3d scale = Eigen::Vector3d::Ones();
   int urdf_line = 0;
 };
@@ -105,7 +105,7 @@ struct MimicDescription {
   std::string joint, master;
   double multiplier = 1.0, offset = 0.0;
   MimicMode mode = MimicMode::Locked;
-  double locked_value = 0.0;     ///< rad or m
+  double locked_value = 0.0;  ///< rad or m
   int urdf_line = 0;
 };
 
@@ -119,10 +119,10 @@ struct CoupledJointDescription {
   int parent_link = -1, child_link = -1;
   Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  ///< joint frame in the parent body at q = 0
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();           ///< unit, joint frame
-  int master = -1;          ///< model joint index (RobotDescription::joints)
+  int master = -1;                                           ///< model joint index (RobotDescription::joints)
   double multiplier = 1.0, offset = 0.0;
   double lower = 0.0, upper = 0.0;  ///< its own limits (rad or m; +-inf: none)
-  double velocity_limit = 0.0;       ///< its own (rad/s or m/s; inf: none)
+  double velocity_limit = 0.0;      ///< its own (rad/s or m/s; inf: none)
   int urdf_line = 0;
 };
 
@@ -212,7 +212,7 @@ struct RobotDescription {
   /// declare (robot init, robot check, the replay; the dynamics use no mesh). Default `ignore`:
   /// their coordinates as written, as ROS's tools read them.
   bool mesh_up_axis_from_file = false;
-  bool strict = false;    ///< read with LoadOptions::strict
+  bool strict = false;  ///< read with LoadOptions::strict
 
   int findLink(const std::string& name) const;   ///< -1 when absent
   int findJoint(const std::string& name) const;  ///< -1 when absent
@@ -232,14 +232,12 @@ struct RobotDescription {
 
 /// Reads and validates a URDF file and its data file. Throws lexdyn::InputError (every problem of
 /// the files in one message).
-RobotDescription loadRobotDescription(const std::string& urdf_path, const std::string& data_path,
-                                      const LoadOptions& options = {});
+RobotDescription loadRobotDescription(const std::string& urdf_path, const std::string& data_path, const LoadOptions& options = {});
 
 /// Same, from text (used by tests); the names are used in messages and to resolve relative mesh
 /// URIs (relative to the URDF name's folder).
-RobotDescription parseRobotDescription(const std::string& urdf_text, const std::string& urdf_name,
-                                       const std::string& data_text, const std::string& data_name,
-                                       const LoadOptions& options = {});
+RobotDescription parseRobotDescription(const std::string& urdf_text, const std::string& urdf_name, const std::string& data_text,
+                                       const std::string& data_name, const LoadOptions& options = {});
 
 /// A URDF without a data file (robot init, robot check): links, joints, frames of the links,
 /// geometry, mimic joints (coupled to their masters, as without a data file's `mimic`); no surfaces,
@@ -247,7 +245,6 @@ RobotDescription parseRobotDescription(const std::string& urdf_text, const std::
 /// zero (clamped into their limits).
 RobotDescription loadUrdfOnly(const std::string& urdf_path, BaseType base, const LoadOptions& options = {},
                               MimicMode mimic = MimicMode::Coupled);
-
 
 /// Rotation from URDF roll-pitch-yaw (fixed axes X, then Y, then Z: R = Rz(yaw) Ry(pitch) Rx(roll)).
 Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy);

@@ -59,10 +59,8 @@ Eigen::Matrix3d alignAxis(const Eigen::Vector3d& a, int col) {
 SimTK::MassProperties massProperties(const LinkDescription& L) {
   if (L.mass == 0.0) return SimTK::MassProperties(0.0, SimTK::Vec3(0), SimTK::Inertia(0.0));
   const Eigen::Vector3d& c = L.com;
-  const Eigen::Matrix3d I_O =
-      L.inertia + L.mass * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
-  const SimTK::Inertia inertia(SimTK::Vec3(I_O(0, 0), I_O(1, 1), I_O(2, 2)),
-                               SimTK::Vec3(I_O(0, 1), I_O(0, 2), I_O(1, 2)));
+  const Eigen::Matrix3d I_O = L.inertia + L.mass * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+  const SimTK::Inertia inertia(SimTK::Vec3(I_O(0, 0), I_O(1, 1), I_O(2, 2)), SimTK::Vec3(I_O(0, 1), I_O(0, 2), I_O(1, 2)));
   return SimTK::MassProperties(L.mass, toSimTK(c), inertia);
 }
 
@@ -76,7 +74,7 @@ Eigen::Matrix3d rotationFromEulerXYZ(const Eigen::Vector3d& e) {
   const double cb = std::cos(e[1]), sb = std::sin(e[1]);
   const double cc = std::cos(e[2]), sc = std::sin(e[2]);
   Eigen::Matrix3d R;
-  R << cb * cc, -cb * sc, sb,                                 //
+  R << cb * cc, -cb * sc, sb,                                    //
       ca * sc + sa * sb * cc, ca * cc - sa * sb * sc, -sa * cb,  //
       sa * sc - ca * sb * cc, sa * cc + ca * sb * sc, ca * cb;
   return R;
@@ -253,8 +251,7 @@ detail::RobotModelImpl::RobotModelImpl(RobotDescription d) : desc(std::move(d)),
   }
 }
 
-RobotModel::RobotModel(RobotDescription description)
-    : impl_(std::make_unique<Impl>(std::move(description))) {}
+RobotModel::RobotModel(RobotDescription description) : impl_(std::make_unique<Impl>(std::move(description))) {}
 RobotModel RobotModel::fromFiles(const std::string& urdf_path, const std::string& data_path, const LoadOptions& options) {
   return RobotModel(loadRobotDescription(urdf_path, data_path, options));
 }
@@ -296,9 +293,7 @@ FrameId RobotModel::frameId(const std::string& n) const { return impl_->desc.fra
 
 const std::string& RobotModel::frameName(FrameId f) const { return impl_->desc.frames.at(static_cast<size_t>(f)).name; }
 int RobotModel::frameBody(FrameId f) const { return impl_->desc.frames.at(static_cast<size_t>(f)).link; }
-const Eigen::Isometry3d& RobotModel::frameInBody(FrameId f) const {
-  return impl_->desc.frames.at(static_cast<size_t>(f)).placement;
-}
+const Eigen::Isometry3d& RobotModel::frameInBody(FrameId f) const { return impl_->desc.frames.at(static_cast<size_t>(f)).placement; }
 
 const Eigen::VectorXd& RobotModel::posture(const std::string& n) const { return impl_->desc.posture(n); }
 
@@ -311,8 +306,7 @@ Configuration RobotModel::neutralConfiguration() const {
   return q;
 }
 
-void RobotModel::integrate(const Configuration& q, const Eigen::Ref<const Eigen::VectorXd>& u, double dt,
-                           Configuration& out) const {
+void RobotModel::integrate(const Configuration& q, const Eigen::Ref<const Eigen::VectorXd>& u, double dt, Configuration& out) const {
   const Impl& m = *impl_;
   LEXDYN_ALWAYS_ASSERT(u.size() == m.nv && q.joints.size() == m.nj, "integrate: size mismatch");
   const int off = m.free_flyer ? 6 : 0;
@@ -422,8 +416,8 @@ const SimTK::State& realizedState(const RobotModelImpl& m, const ModelDataImpl& 
   return d.state;
 }
 
-void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configuration& q,
-                       const Eigen::Ref<const Eigen::VectorXd>& q_tree, const Eigen::Ref<const Eigen::VectorXd>& u) {
+void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configuration& q, const Eigen::Ref<const Eigen::VectorXd>& q_tree,
+                       const Eigen::Ref<const Eigen::VectorXd>& u) {
   // Placements, velocities and velocity-product accelerations (Jdot u) of the bodies, root to
   // leaves (parents come before their children). The free-flyer's u are the base's angular
   // velocity and origin velocity in the world frame, so its Jdot u is zero; a joint sits at its
@@ -684,8 +678,7 @@ Vector6d RobotModel::frameVelocity(const ModelData& data, FrameId f) const {
   return out;
 }
 
-void RobotModel::pointJacobian(const ModelData& data, FrameId f, const Eigen::Vector3d& p_in_frame,
-                               Eigen::Ref<Eigen::MatrixXd> J) const {
+void RobotModel::pointJacobian(const ModelData& data, FrameId f, const Eigen::Vector3d& p_in_frame, Eigen::Ref<Eigen::MatrixXd> J) const {
   const Impl& m = *impl_;
   const ModelData::Impl& d = data.impl();
   LEXDYN_ALWAYS_ASSERT(J.rows() == 3 && J.cols() == m.nv, "pointJacobian: J must be 3 x nv");
@@ -755,9 +748,8 @@ Eigen::Vector3d massWeightedMean(const detail::RobotModelImpl& m, const detail::
 
 Eigen::Vector3d RobotModel::centerOfMassVelocity(const ModelData& data) const {
   const ModelData::Impl& d = data.impl();
-  return massWeightedMean(*impl_, d, [&d](int b, const Eigen::Vector3d& r) -> Eigen::Vector3d {
-    return d.v.col(b) + d.omega.col(b).cross(r);
-  });
+  return massWeightedMean(*impl_, d,
+                          [&d](int b, const Eigen::Vector3d& r) -> Eigen::Vector3d { return d.v.col(b) + d.omega.col(b).cross(r); });
 }
 
 void RobotModel::centerOfMassJacobian(const ModelData& data, Eigen::Ref<Eigen::MatrixXd> J) const {
@@ -803,8 +795,8 @@ void RobotModel::dofAxes(const ModelData& data, Eigen::Ref<Eigen::Matrix3Xd> axe
 namespace {
 
 // Closest points of segments P0 + s d1 and Q0 + t d2 (s, t in [0, 1]).
-void closestPointsSegments(const Eigen::Vector3d& P0, const Eigen::Vector3d& P1, const Eigen::Vector3d& Q0,
-                           const Eigen::Vector3d& Q1, Eigen::Vector3d& cp, Eigen::Vector3d& cq) {
+void closestPointsSegments(const Eigen::Vector3d& P0, const Eigen::Vector3d& P1, const Eigen::Vector3d& Q0, const Eigen::Vector3d& Q1,
+                           Eigen::Vector3d& cp, Eigen::Vector3d& cq) {
   const Eigen::Vector3d d1 = P1 - P0, d2 = Q1 - Q0, r = P0 - Q0;
   const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
   const double eps = 1e-14;
@@ -848,9 +840,7 @@ CapsuleDistance RobotModel::capsuleDistance(const ModelData& data, int pair,
   const CollisionPairDescription& P = m.desc.collision_pairs[static_cast<size_t>(pair)];
   const CapsuleDescription& A = m.desc.capsules[static_cast<size_t>(P.capsule_a)];
   const CapsuleDescription& B = m.desc.capsules[static_cast<size_t>(P.capsule_b)];
-  auto world = [&](int body, const Eigen::Vector3d& x) {
-    return Eigen::Vector3d(d.p.col(body) + d.R[static_cast<size_t>(body)] * x);
-  };
+  auto world = [&](int body, const Eigen::Vector3d& x) { return Eigen::Vector3d(d.p.col(body) + d.R[static_cast<size_t>(body)] * x); };
   const Eigen::Vector3d a0 = world(A.link, A.p0), a1 = world(A.link, A.p1);
   const Eigen::Vector3d b0 = world(B.link, B.p0), b1 = world(B.link, B.p1);
   CapsuleDistance out;
@@ -869,12 +859,12 @@ CapsuleDistance RobotModel::capsuleDistance(const ModelData& data, int pair,
     LEXDYN_ALWAYS_ASSERT(J.size() == m.nv, "capsuleDistance: J must be 1 x nv");
     J.setZero();
     for (int k : m.tree.bodies[static_cast<size_t>(A.link)].ancestor_dofs) {
-      J[m.tree_dof_model[static_cast<size_t>(k)]] += m.tree_dof_multiplier[static_cast<size_t>(k)] *
-                                                     out.normal.dot(d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(out.point_a));
+      J[m.tree_dof_model[static_cast<size_t>(k)]] +=
+          m.tree_dof_multiplier[static_cast<size_t>(k)] * out.normal.dot(d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(out.point_a));
     }
     for (int k : m.tree.bodies[static_cast<size_t>(B.link)].ancestor_dofs) {
-      J[m.tree_dof_model[static_cast<size_t>(k)]] -= m.tree_dof_multiplier[static_cast<size_t>(k)] *
-                                                     out.normal.dot(d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(out.point_b));
+      J[m.tree_dof_model[static_cast<size_t>(k)]] -=
+          m.tree_dof_multiplier[static_cast<size_t>(k)] * out.normal.dot(d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(out.point_b));
     }
   }
   return out;
@@ -918,7 +908,8 @@ void RobotModel::inverseDynamicsReference(const ModelData& data, const Eigen::Re
   // udot_tree = G udot (G is constant: no G-dot term).
   SimTK::Vector ud(m.simbody_nu), resid;
   for (int k = 0; k < m.ntv; ++k) {
-    ud[m.dof_u_index[static_cast<size_t>(k)]] = m.tree_dof_multiplier[static_cast<size_t>(k)] * udot[m.tree_dof_model[static_cast<size_t>(k)]];
+    ud[m.dof_u_index[static_cast<size_t>(k)]] =
+        m.tree_dof_multiplier[static_cast<size_t>(k)] * udot[m.tree_dof_model[static_cast<size_t>(k)]];
   }
   m.matter.calcResidualForceIgnoringConstraints(detail::realizedState(m, d), SimTK::Vector(), F, ud, resid);
   Eigen::VectorXd rt(m.ntv);

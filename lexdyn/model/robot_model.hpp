@@ -48,19 +48,19 @@ enum class DofType { Revolute, Prismatic };
 struct KinematicTree {
   struct Body {
     std::string name;
-    int parent = -1;                 ///< parent body, -1 for the base
-    double mass = 0.0;               ///< kg
+    int parent = -1;                                    ///< parent body, -1 for the base
+    double mass = 0.0;                                  ///< kg
     Eigen::Vector3d com = Eigen::Vector3d::Zero();      ///< in the body frame
     Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  ///< about the CoM, body axes
-    double subtree_mass = 0.0;       ///< mass of the body and all its descendants
-    std::vector<int> dofs;           ///< dofs of this body's own mobilizer
-    std::vector<int> ancestor_dofs;  ///< every dof that moves this body, from the ground outwards
+    double subtree_mass = 0.0;                          ///< mass of the body and all its descendants
+    std::vector<int> dofs;                              ///< dofs of this body's own mobilizer
+    std::vector<int> ancestor_dofs;                     ///< every dof that moves this body, from the ground outwards
   };
   struct Dof {
     DofType type = DofType::Revolute;
-    int body = -1;   ///< body whose mobilizer this dof belongs to
-    int parent = -1; ///< nearest dof inboard of this one along the chain to the ground (-1: none)
-    int joint = -1;  ///< model joint index, -1 for the free-flyer's dofs
+    int body = -1;    ///< body whose mobilizer this dof belongs to
+    int parent = -1;  ///< nearest dof inboard of this one along the chain to the ground (-1: none)
+    int joint = -1;   ///< model joint index, -1 for the free-flyer's dofs
   };
   std::vector<Body> bodies;
   std::vector<Dof> dofs;
@@ -72,7 +72,7 @@ struct KinematicTree {
 
 /// One self-collision pair evaluation.
 struct CapsuleDistance {
-  double distance = 0.0;                          ///< surface distance, m (< 0: penetration)
+  double distance = 0.0;                              ///< surface distance, m (< 0: penetration)
   Eigen::Vector3d point_a = Eigen::Vector3d::Zero();  ///< witness point on segment a (world)
   Eigen::Vector3d point_b = Eigen::Vector3d::Zero();  ///< witness point on segment b (world)
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< unit, from b towards a
@@ -116,8 +116,8 @@ class RobotModel {
   const RobotDescription& description() const;
   const std::string& name() const;
   bool hasFreeFlyer() const;
-  int nv() const;             ///< size of u
-  int numJoints() const;      ///< actuated joints
+  int nv() const;                                                     ///< size of u
+  int numJoints() const;                                              ///< actuated joints
   int jointVelocityOffset() const { return hasFreeFlyer() ? 6 : 0; }  ///< u index of joint 0
   int numBodies() const;
   int numFrames() const;
@@ -152,8 +152,7 @@ class RobotModel {
   /// q_next = q "+" dt u, consistent with the paper's linear integration: joints and base
   /// position linearly; base rotation R_next = Rx(a) Ry(b) Rz(c) R with (a,b,c) = dt*omega_world
   /// (Euler angles re-zeroed at q). Allocation-free if `out.joints` has the right size.
-  void integrate(const Configuration& q, const Eigen::Ref<const Eigen::VectorXd>& u, double dt,
-                 Configuration& out) const;
+  void integrate(const Configuration& q, const Eigen::Ref<const Eigen::VectorXd>& u, double dt, Configuration& out) const;
   /// The inverse of integrate with dt = 1: out such that integrate(q0, out, 1) == q1
   /// (requires the relative rotation's middle Euler angle away from +-90 deg).
   void difference(const Configuration& q0, const Configuration& q1, Eigen::Ref<Eigen::VectorXd> out) const;
@@ -179,8 +178,7 @@ class RobotModel {
   /// Jdot*u of frameJacobian: [classical acceleration of the origin; angular acceleration].
   Vector6d frameBias(const ModelData& data, FrameId f) const;
   /// 3 x nv Jacobian of a point given in the frame's coordinates.
-  void pointJacobian(const ModelData& data, FrameId f, const Eigen::Vector3d& p_in_frame,
-                     Eigen::Ref<Eigen::MatrixXd> J) const;
+  void pointJacobian(const ModelData& data, FrameId f, const Eigen::Vector3d& p_in_frame, Eigen::Ref<Eigen::MatrixXd> J) const;
   Eigen::Vector3d pointPosition(const ModelData& data, FrameId f, const Eigen::Vector3d& p_in_frame) const;
   Eigen::Vector3d pointVelocity(const ModelData& data, FrameId f, const Eigen::Vector3d& p_in_frame) const;
   Eigen::Vector3d pointBias(const ModelData& data, FrameId f, const Eigen::Vector3d& p_in_frame) const;
@@ -194,14 +192,12 @@ class RobotModel {
   /// Self-collision pair `pair` (index into description().collision_pairs): distance and, if
   /// J is non-empty (1 x nv; may be a row of a column-major matrix), its Jacobian
   /// n^T (J_a - J_b) at the witness points.
-  CapsuleDistance capsuleDistance(const ModelData& data, int pair,
-                                  Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> J) const;
+  CapsuleDistance capsuleDistance(const ModelData& data, int pair, Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> J) const;
   int numCollisionPairs() const;
 
   /// World axis and a point on the axis of every tree dof (3 x numTreeDofs() each), for analytic
   /// derivatives.
-  void dofAxes(const ModelData& data, Eigen::Ref<Eigen::Matrix3Xd> axes,
-               Eigen::Ref<Eigen::Matrix3Xd> points) const;
+  void dofAxes(const ModelData& data, Eigen::Ref<Eigen::Matrix3Xd> axes, Eigen::Ref<Eigen::Matrix3Xd> points) const;
   /// World pose of a body frame.
   Eigen::Isometry3d bodyPlacement(const ModelData& data, int body) const;
 
@@ -211,8 +207,7 @@ class RobotModel {
   void inverseDynamicsReference(const ModelData& data, const Eigen::Ref<const Eigen::VectorXd>& udot,
                                 Eigen::Ref<Eigen::VectorXd> tau) const;
   /// Articulated-body forward dynamics with gravity: udot from generalized forces tau (nv).
-  void forwardDynamicsReference(ModelData& data, const Eigen::Ref<const Eigen::VectorXd>& tau,
-                                Eigen::Ref<Eigen::VectorXd> udot) const;
+  void forwardDynamicsReference(ModelData& data, const Eigen::Ref<const Eigen::VectorXd>& tau, Eigen::Ref<Eigen::VectorXd> udot) const;
   /// calcFrameJacobian, reordered to [linear; angular].
   void frameJacobianReference(const ModelData& data, FrameId f, Eigen::Ref<Eigen::MatrixXd> J) const;
   Eigen::Vector3d centerOfMassReference(const ModelData& data) const;  ///< Simbody's system CoM

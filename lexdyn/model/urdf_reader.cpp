@@ -121,8 +121,8 @@ void refuseXacro(const TiXmlElement* robot, const std::string& file) {
 // A URDF number attribute as urdfdom will read it: `count` whitespace-separated finite numbers,
 // each within [lo, hi]. Absent: returns false and records nothing (urdfdom's default applies).
 // Bad: records the error and returns false.
-bool urdfNumbers(const TiXmlElement* e, const char* name, int count, double lo, double hi, const char* unit,
-                 const std::string& file, const std::string& owner, ProblemList& problems, std::vector<double>* out = nullptr) {
+bool urdfNumbers(const TiXmlElement* e, const char* name, int count, double lo, double hi, const char* unit, const std::string& file,
+                 const std::string& owner, ProblemList& problems, std::vector<double>* out = nullptr) {
   const char* raw = e ? e->Attribute(name) : nullptr;
   if (!raw) return false;
   const std::string where = at(file, e);
@@ -267,7 +267,8 @@ void indexElements(TiXmlElement* robot, const std::string& file, XmlIndex& idx, 
       ok = false;
     }
     if (!supportedType(j.type) && j.type != "floating") {
-      problems.error(where, "joint '" + j.name + "': type '" + j.type + "' is not supported (revolute, continuous, prismatic, fixed; floating only from a massless root link)");
+      problems.error(where, "joint '" + j.name + "': type '" + j.type +
+                                "' is not supported (revolute, continuous, prismatic, fixed; floating only from a massless root link)");
     }
     j.has_mimic = e->FirstChildElement("mimic") != nullptr;
     if (ok) idx.joints.push_back(j);
@@ -279,8 +280,8 @@ void indexElements(TiXmlElement* robot, const std::string& file, XmlIndex& idx, 
   for (const auto& j : idx.joints) {
     auto it = parent_of.find(j.child);
     if (it != parent_of.end()) {
-      problems.error(at(file, j.line), "link '" + j.child + "' is the child of two joints ('" + it->second->name + "' and '" +
-                                           j.name + "'); a URDF must be a tree");
+      problems.error(at(file, j.line), "link '" + j.child + "' is the child of two joints ('" + it->second->name + "' and '" + j.name +
+                                           "'); a URDF must be a tree");
       continue;
     }
     parent_of[j.child] = &j;
@@ -313,8 +314,9 @@ void indexElements(TiXmlElement* robot, const std::string& file, XmlIndex& idx, 
   for (const auto& l : idx.links) {
     if (!reached.count(l.name)) {
       const XmlJoint* j = parent_of.at(l.name);
-      problems.error(at(file, j->line), "link '" + l.name + "' is not connected to the root link '" + idx.root + "': its joint '" + j->name +
-                                            "' hangs it from '" + j->parent + "', and the joints form a cycle there; a URDF must be a tree");
+      problems.error(at(file, j->line), "link '" + l.name + "' is not connected to the root link '" + idx.root + "': its joint '" +
+                                            j->name + "' hangs it from '" + j->parent +
+                                            "', and the joints form a cycle there; a URDF must be a tree");
     }
   }
   problems.throwIfErrors();
@@ -377,7 +379,8 @@ void checkGeometryNumbers(const XmlLink& l, const std::string& file, ProblemList
         if (!s->Attribute("radius")) problems.error(at(file, s), owner + ": <sphere> needs radius=\"...\"");
         urdfNumbers(s, "radius", 1, 0.0, L, "m", file, owner, problems);
       } else if (shape == "cylinder" || shape == "capsule") {
-        if (!s->Attribute("radius") || !s->Attribute("length")) problems.error(at(file, s), owner + ": <" + shape + "> needs radius and length");
+        if (!s->Attribute("radius") || !s->Attribute("length"))
+          problems.error(at(file, s), owner + ": <" + shape + "> needs radius and length");
         urdfNumbers(s, "radius", 1, 0.0, L, "m", file, owner, problems);
         urdfNumbers(s, "length", 1, 0.0, L, "m", file, owner, problems);
       } else if (shape == "mesh") {
@@ -425,7 +428,8 @@ void checkJointNumbers(const XmlJoint& j, const std::string& file, ProblemList& 
   urdfNumbers(lim, "lower", 1, -ranges::kMaxJointLimit, ranges::kMaxJointLimit, "(rad or m)", file, owner, problems);
   urdfNumbers(lim, "upper", 1, -ranges::kMaxJointLimit, ranges::kMaxJointLimit, "(rad or m)", file, owner, problems);
   for (const auto& [name, label, lo, hi, unit] :
-       {std::tuple<const char*, const char*, double, double, const char*>{"effort", "effort limit", ranges::kMinEffortLimit, ranges::kMaxEffortLimit, "N m or N"},
+       {std::tuple<const char*, const char*, double, double, const char*>{"effort", "effort limit", ranges::kMinEffortLimit,
+                                                                          ranges::kMaxEffortLimit, "N m or N"},
         {"velocity", "velocity limit", ranges::kMinVelocityLimit, ranges::kMaxVelocityLimit, "rad/s or m/s"}}) {
     if (!lim->Attribute(name)) {
       problems.error(at(file, lim), owner + ": <limit> has no " + name + " attribute (URDF requires it; urdfdom refuses the file too)");
@@ -436,7 +440,8 @@ void checkJointNumbers(const XmlJoint& j, const std::string& file, ProblemList& 
     if (v[0] < 0.0) {
       problems.error(at(file, lim), owner + ": " + label + " must be > 0, found " + fmt(v[0]));
     } else if (v[0] > 0.0 && (v[0] < lo || v[0] > hi)) {
-      problems.error(at(file, lim), owner + ": " + label + " must be in [" + fmt(lo) + ", " + fmt(hi) + "] " + unit + ", found " + fmt(v[0]));
+      problems.error(at(file, lim),
+                     owner + ": " + label + " must be in [" + fmt(lo) + ", " + fmt(hi) + "] " + unit + ", found " + fmt(v[0]));
     }
   }
   if (const TiXmlElement* m = j.e->FirstChildElement("mimic")) {
@@ -513,8 +518,9 @@ MassProps linkMassProps(const urdf::Link& link, const std::string& where, bool l
   const InertiaCheck c = checkInertia(I);
   const std::string owner = "link '" + link.name + "'";
   if (problems.strict() && c.kind != InertiaClass::Valid) {
-    problems.error(where, owner + ": inertia " + (c.kind == InertiaClass::Zero ? std::string("is zero (mass ") + fmt(in.mass) + " kg)"
-                                                                                : "is not physically possible: " + c.problem) +
+    problems.error(where, owner + ": inertia " +
+                              (c.kind == InertiaClass::Zero ? std::string("is zero (mass ") + fmt(in.mass) + " kg)"
+                                                            : "is not physically possible: " + c.problem) +
                               " (refused in strict mode)");
   } else if (lumped && c.kind == InertiaClass::Impossible) {
     problems.warning(where, owner + ": its own inertia is not physically possible (" + c.problem +
@@ -557,8 +563,10 @@ void readGeometry(const XmlLink& l, int body, const Eigen::Isometry3d& X_body_li
       Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
       if (const TiXmlElement* o = v->FirstChildElement("origin")) {
         std::vector<double> xyz, rpy;
-        if (urdfNumbers(o, "xyz", 3, -kAnyNumber, kAnyNumber, "", file, "", problems, &xyz)) X.translation() = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
-        if (urdfNumbers(o, "rpy", 3, -kAnyNumber, kAnyNumber, "", file, "", problems, &rpy)) X.linear() = rotationFromRpy(Eigen::Vector3d(rpy[0], rpy[1], rpy[2]));
+        if (urdfNumbers(o, "xyz", 3, -kAnyNumber, kAnyNumber, "", file, "", problems, &xyz))
+          X.translation() = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+        if (urdfNumbers(o, "rpy", 3, -kAnyNumber, kAnyNumber, "", file, "", problems, &rpy))
+          X.linear() = rotationFromRpy(Eigen::Vector3d(rpy[0], rpy[1], rpy[2]));
       }
       g.placement = X_body_link * X;
       const std::string shape = s->Value();
@@ -576,14 +584,16 @@ void readGeometry(const XmlLink& l, int body, const Eigen::Isometry3d& X_body_li
       } else {
         g.type = GeometryType::Mesh;
         g.mesh_uri = attr(s, "filename");
-        if (urdfNumbers(s, "scale", 3, -kAnyNumber, kAnyNumber, "", file, "", problems, &v3)) g.scale = Eigen::Vector3d(v3[0], v3[1], v3[2]);
+        if (urdfNumbers(s, "scale", 3, -kAnyNumber, kAnyNumber, "", file, "", problems, &v3))
+          g.scale = Eigen::Vector3d(v3[0], v3[1], v3[2]);
         const ResolvedResource r = resolveResource(g.mesh_uri, file, search);
         g.mesh_path = r.path;
         if (r.path.empty()) {
           const std::string msg = "link '" + l.name + "': <" + std::string(kind) + "> mesh '" + g.mesh_uri + "' not found: " + r.searched;
           if (options.require_meshes) {
-            problems.error(at(file, s), msg + (r.package_found ? " (the package is there without the file; --allow-missing-meshes goes on without it)"
-                                                               : " (give --package-path, or --allow-missing-meshes to go on without it)"));
+            problems.error(at(file, s),
+                           msg + (r.package_found ? " (the package is there without the file; --allow-missing-meshes goes on without it)"
+                                                  : " (give --package-path, or --allow-missing-meshes to go on without it)"));
           } else {
             problems.warning(at(file, s), msg + " (not needed by the dynamics; robot init, robot check and the replay need it)");
           }
@@ -617,7 +627,7 @@ struct TreeBuilder {
   std::vector<MassProps> body_mass;
   std::map<std::string, const XmlLink*> xml_link;
   std::map<std::string, const XmlJoint*> xml_joint;
-  std::map<std::string, double> locked;  // mimic joint -> locked value
+  std::map<std::string, double> locked;     // mimic joint -> locked value
   std::map<std::string, Coupling> coupled;  // coupled mimic joint -> its master
 
   const urdf::Link& link(const std::string& name) const {
@@ -681,8 +691,8 @@ struct TreeBuilder {
         jd.lower = -kInf;
         jd.upper = kInf;
       } else if (!(jd.lower < jd.upper)) {
-        problems.error(at(file, xj.line), "joint '" + xj.name + "': expected limit lower < upper, found lower=" + fmt(jd.lower) +
-                                              " upper=" + fmt(jd.upper));
+        problems.error(at(file, xj.line),
+                       "joint '" + xj.name + "': expected limit lower < upper, found lower=" + fmt(jd.lower) + " upper=" + fmt(jd.upper));
       }
     }
     jd.effort_limit = uj.limits ? uj.limits->effort : 0.0;
@@ -779,8 +789,9 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
     md.mode = policy.mode;
     auto master = by_name.find(md.master);
     if (master == by_name.end() || master->second->type == "fixed" || master->second->type == "floating") {
-      problems.error(at(file, md.urdf_line), "joint '" + xj.name + "': <mimic joint=\"" + md.master + "\"> names " +
-                                                 (master == by_name.end() ? "no joint of the URDF" : "a " + master->second->type + " joint"));
+      problems.error(at(file, md.urdf_line),
+                     "joint '" + xj.name + "': <mimic joint=\"" + md.master + "\"> names " +
+                         (master == by_name.end() ? "no joint of the URDF" : "a " + master->second->type + " joint"));
       continue;
     }
     d.mimics.push_back(md);
@@ -863,8 +874,8 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
       first_line[md.master] = md.urdf_line;
     }
     std::string& t = locked_text[md.master];
-    t += std::string(t.empty() ? "" : ", ") + "'" + md.joint + "' (x " + fmt(md.multiplier) + (md.offset != 0.0 ? " + " + fmt(md.offset) : "") +
-         ": locked at " + fmt(v) + clamped + ")";
+    t += std::string(t.empty() ? "" : ", ") + "'" + md.joint + "' (x " + fmt(md.multiplier) +
+         (md.offset != 0.0 ? " + " + fmt(md.offset) : "") + ": locked at " + fmt(v) + clamped + ")";
   }
   for (const std::string& m : masters) {
     const std::string source = policy.posture.empty() ? "'" + m + "' at " + fmt(valueOf(m, 0))
@@ -876,7 +887,8 @@ void readMimics(const XmlIndex& idx, const urdf::ModelInterface& model, const st
 
 // Coupled mimic joints: one note per master (once the locking is done), a warning without the
 // data file's `mimic` (strict: an error).
-void noteCoupled(const std::string& file, const MimicPolicy& policy, const std::map<std::string, Coupling>& coupled, ProblemList& problems) {
+void noteCoupled(const std::string& file, const MimicPolicy& policy, const std::map<std::string, Coupling>& coupled,
+                 ProblemList& problems) {
   std::vector<std::string> coupled_masters;
   std::map<std::string, std::string> coupled_text;
   std::map<std::string, int> coupled_line;
@@ -886,7 +898,8 @@ void noteCoupled(const std::string& file, const MimicPolicy& policy, const std::
       coupled_line[c.master] = c.line;
     }
     std::string& t = coupled_text[c.master];
-    t += std::string(t.empty() ? "" : ", ") + "'" + joint + "' = " + fmt(c.multiplier) + " q" + (c.offset != 0.0 ? " + " + fmt(c.offset) : "");
+    t += std::string(t.empty() ? "" : ", ") + "'" + joint + "' = " + fmt(c.multiplier) + " q" +
+         (c.offset != 0.0 ? " + " + fmt(c.offset) : "");
   }
   for (const std::string& m : coupled_masters) {
     const std::string what = "mimic joints coupled to '" + m + "' (q its coordinate): " + coupled_text[m] +
@@ -935,7 +948,9 @@ std::vector<double> jointInertias(const RobotDescription& d) {
   {
     const Eigen::Vector3d c = m[0] > 0.0 ? Eigen::Vector3d(h[0] / m[0]) : Eigen::Vector3d::Zero();
     const Eigen::Matrix3d Ic = about(0, c);
-    out[0] = m[0] > 0.0 ? Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(0.5 * (Ic + Ic.transpose()), Eigen::EigenvaluesOnly).eigenvalues()[0] : 0.0;
+    out[0] = m[0] > 0.0
+                 ? Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(0.5 * (Ic + Ic.transpose()), Eigen::EigenvaluesOnly).eigenvalues()[0]
+                 : 0.0;
   }
   for (size_t b = 1; b < nb; ++b) {
     const LinkDescription& L = d.links[b];
@@ -999,10 +1014,12 @@ void checkBodies(RobotDescription& d, BaseType base, const std::string& file, co
       continue;
     }
     if (problems.strict() && l.merged_links.empty()) continue;  // the link's own error says it
-    problems.lenient(where, "body " + bodyName(l) + ": inertia with " + c.problem + ", taken as " +
-                                (c.kind == InertiaClass::Noise ? "rounding noise" : "negligible (" + formatNumber(change, 3) + " kg m^2 against the " +
-                                                                                         fmt(moved[b]) + " kg m^2 its joint moves)") +
-                                ": projected to the nearest physical inertia, principal moments " + formatMoments(checkInertia(P).moments) + " kg m^2");
+    problems.lenient(
+        where, "body " + bodyName(l) + ": inertia with " + c.problem + ", taken as " +
+                   (c.kind == InertiaClass::Noise
+                        ? "rounding noise"
+                        : "negligible (" + formatNumber(change, 3) + " kg m^2 against the " + fmt(moved[b]) + " kg m^2 its joint moves)") +
+                   ": projected to the nearest physical inertia, principal moments " + formatMoments(checkInertia(P).moments) + " kg m^2");
     l.inertia = P;
   }
   if (base == BaseType::FreeFlyer && !(moved[0] >= ranges::kMinPrincipalInertia_kgm2)) {
@@ -1016,11 +1033,12 @@ void checkBodies(RobotDescription& d, BaseType base, const std::string& file, co
       // something (the reduced model would not mind; the tree's mass matrix would be singular).
       const CoupledJointDescription& C = d.coupled_joints[static_cast<size_t>(d.links[b].parent_coupled)];
       if (!(moved[b] >= ranges::kMinPrincipalInertia_kgm2)) {
-        problems.error(at(file, C.urdf_line), "mimic joint '" + C.name + "' moves nothing with mass or inertia about its " +
-                                                  (C.type == JointType::Prismatic ? "direction" : "axis") + " (link '" + d.links[b].name +
-                                                  "' and everything after it: " + fmt(moved[b]) + (C.type == JointType::Prismatic ? " kg" : " kg m^2") +
-                                                  "); the simulator's coupled mechanism would be singular: give those links mass and inertia, "
-                                                  "or hold the mimic joints (`mimic: {mode: locked}` in the data file)");
+        problems.error(at(file, C.urdf_line),
+                       "mimic joint '" + C.name + "' moves nothing with mass or inertia about its " +
+                           (C.type == JointType::Prismatic ? "direction" : "axis") + " (link '" + d.links[b].name +
+                           "' and everything after it: " + fmt(moved[b]) + (C.type == JointType::Prismatic ? " kg" : " kg m^2") +
+                           "); the simulator's coupled mechanism would be singular: give those links mass and inertia, "
+                           "or hold the mimic joints (`mimic: {mode: locked}` in the data file)");
       }
       continue;
     }
@@ -1028,7 +1046,8 @@ void checkBodies(RobotDescription& d, BaseType base, const std::string& file, co
     if (!(moved[b] >= ranges::kMinPrincipalInertia_kgm2)) {
       problems.error(at(file, J.urdf_line), "joint '" + J.name + "' moves nothing with mass or inertia about its " +
                                                 (J.type == JointType::Prismatic ? "direction" : "axis") + " (link '" + d.links[b].name +
-                                                "' and everything after it: " + fmt(moved[b]) + (J.type == JointType::Prismatic ? " kg" : " kg m^2") +
+                                                "' and everything after it: " + fmt(moved[b]) +
+                                                (J.type == JointType::Prismatic ? " kg" : " kg m^2") +
                                                 "); the dynamics would be singular: give those links mass and inertia");
     }
   }
@@ -1039,7 +1058,7 @@ void checkBodies(RobotDescription& d, BaseType base, const std::string& file, co
 // locked mimic joint, with a warning; an error in strict mode.
 void lockMasslessJoints(const XmlIndex& idx, const urdf::ModelInterface& model, const std::string& file, ProblemList& problems,
                         std::map<std::string, double>& locked, RobotDescription& d) {
-  if (problems.strict()) return;  // strict mode: such a link is refused where its body is built
+  if (problems.strict()) return;          // strict mode: such a link is refused where its body is built
   std::map<std::string, double> subtree;  // link -> mass of the link and everything below it
   std::function<double(const std::string&)> massBelow = [&](const std::string& link) {
     auto it = subtree.find(link);
@@ -1149,9 +1168,12 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
       if (l.name == idx.root) root_inertial = l.e->FirstChildElement("inertial");
     }
     if (j.parent != idx.root || root_inertial) {
-      problems.error(at(file, j.line), "joint '" + j.name + "': a floating joint is read only from a massless root link (a `world` link) to the robot's base; use the data file's `base: free_flyer` instead");
+      problems.error(at(file, j.line), "joint '" + j.name +
+                                           "': a floating joint is read only from a massless root link (a `world` link) to the robot's "
+                                           "base; use the data file's `base: free_flyer` instead");
     } else if (base != BaseType::FreeFlyer) {
-      problems.error(at(file, j.line), "joint '" + j.name + "' is a floating joint from '" + j.parent + "': the data file must say `base: free_flyer`");
+      problems.error(at(file, j.line),
+                     "joint '" + j.name + "' is a floating joint from '" + j.parent + "': the data file must say `base: free_flyer`");
     }
   }
   problems.throwIfHardErrors();
@@ -1160,7 +1182,8 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
     for (const auto& j : idx.joints) {
       if (j.type == "fixed") continue;
       const TiXmlElement* dyn = j.e->FirstChildElement("dynamics");
-      if (dyn && (std::strtod(attr(dyn, "damping").c_str(), nullptr) != 0.0 || std::strtod(attr(dyn, "friction").c_str(), nullptr) != 0.0)) {
+      if (dyn &&
+          (std::strtod(attr(dyn, "damping").c_str(), nullptr) != 0.0 || std::strtod(attr(dyn, "friction").c_str(), nullptr) != 0.0)) {
         with_dynamics.push_back(j.name);
       }
     }
@@ -1176,8 +1199,8 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
     std::string names;
     for (size_t k = 0; k < fixed_with_extras.size() && k < 8; ++k) names += (k ? ", '" : "'") + fixed_with_extras[k] + "'";
     if (fixed_with_extras.size() > 8) names += " and " + std::to_string(fixed_with_extras.size() - 8) + " more";
-    problems.warning(file, std::to_string(fixed_with_extras.size()) + " fixed joint" + (fixed_with_extras.size() > 1 ? "s" : "") +
-                               " (" + names + ") carry <axis>, <limit>, <mimic> or <dynamics>: ignored, as URDF does on a fixed joint");
+    problems.warning(file, std::to_string(fixed_with_extras.size()) + " fixed joint" + (fixed_with_extras.size() > 1 ? "s" : "") + " (" +
+                               names + ") carry <axis>, <limit>, <mimic> or <dynamics>: ignored, as URDF does on a fixed joint");
   }
 
   const urdf::ModelInterfaceSharedPtr model = parseWithUrdfdom(doc, file, problems);
@@ -1192,8 +1215,9 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
     }
   }
 
-  TreeBuilder t{idx, *model, file, base, mimic, options, d, problems, packageSearchPath(options.package_paths, options.use_ros_package_path),
-                {}, {}, {}, {}, {}};
+  TreeBuilder t{
+      idx, *model, file, base, mimic, options, d, problems, packageSearchPath(options.package_paths, options.use_ros_package_path),
+      {},  {},     {},   {},   {}};
   for (const auto& l : idx.links) t.xml_link[l.name] = &l;
   for (const auto& j : idx.joints) t.xml_joint[j.name] = &j;
   readMimics(idx, *model, file, mimic, d, problems, t.locked, t.coupled);
@@ -1248,8 +1272,8 @@ void narrowCoupledMasters(RobotDescription& d, ProblemList& problems) {
     const std::string where = at(file, cj.urdf_line);
     if (cj.multiplier == 0.0) {
       if (cj.offset < cj.lower || cj.offset > cj.upper) {
-        problems.error(where, "joint '" + cj.name + "' (a mimic of '" + M.name + "' with multiplier 0) is held at its offset " + fmt(cj.offset) +
-                                  ", outside its limits [" + fmt(cj.lower) + ", " + fmt(cj.upper) + "]");
+        problems.error(where, "joint '" + cj.name + "' (a mimic of '" + M.name + "' with multiplier 0) is held at its offset " +
+                                  fmt(cj.offset) + ", outside its limits [" + fmt(cj.lower) + ", " + fmt(cj.upper) + "]");
       }
       continue;
     }
@@ -1272,13 +1296,14 @@ void narrowCoupledMasters(RobotDescription& d, ProblemList& problems) {
         // its multiplier): ROS's tools never enforce a mimic joint's own limits; neither does
         // lexdyn then (strict mode refuses them).
         problems.lenient(where, "joint '" + cj.name + "' (coupled to '" + M.name + "' by " + fmt(cj.multiplier) + " q" +
-                                    (cj.offset != 0.0 ? " + " + fmt(cj.offset) : "") + "): its limits [" + fmt(cj.lower) + ", " + fmt(cj.upper) +
-                                    "] leave its master no range within [" + fmt(M.lower) + ", " + fmt(M.upper) +
+                                    (cj.offset != 0.0 ? " + " + fmt(cj.offset) : "") + "): its limits [" + fmt(cj.lower) + ", " +
+                                    fmt(cj.upper) + "] leave its master no range within [" + fmt(M.lower) + ", " + fmt(M.upper) +
                                     "]: they contradict the coupling and are ignored (the master's limits hold)");
         continue;
       }
       problems.warning(where, "the range of '" + M.name + "' is narrowed from [" + fmt(M.lower) + ", " + fmt(M.upper) + "] to [" +
-                                  fmt(new_lo) + ", " + fmt(new_hi) + "], where its coupled joint '" + cj.name + "' stays within its own limits");
+                                  fmt(new_lo) + ", " + fmt(new_hi) + "], where its coupled joint '" + cj.name +
+                                  "' stays within its own limits");
       M.lower = new_lo;
       M.upper = new_hi;
       M.continuous = false;
@@ -1290,9 +1315,9 @@ void narrowCoupledMasters(RobotDescription& d, ProblemList& problems) {
       const JointDescription& M = d.joints[static_cast<size_t>(cj.master)];
       const double v = q[cj.master];
       if (v < M.lower - 1e-12 || v > M.upper + 1e-12) {
-        problems.error(d.data_path, "posture '" + pname + "': '" + M.name + "' at " + fmt(v) + " puts its mimic joint '" + cj.name + "' at " +
-                                        fmt(cj.multiplier * v + cj.offset) + ", outside its limits [" + fmt(cj.lower) + ", " + fmt(cj.upper) +
-                                        "] (the master's range there: [" + fmt(M.lower) + ", " + fmt(M.upper) + "])");
+        problems.error(d.data_path, "posture '" + pname + "': '" + M.name + "' at " + fmt(v) + " puts its mimic joint '" + cj.name +
+                                        "' at " + fmt(cj.multiplier * v + cj.offset) + ", outside its limits [" + fmt(cj.lower) + ", " +
+                                        fmt(cj.upper) + "] (the master's range there: [" + fmt(M.lower) + ", " + fmt(M.upper) + "])");
       }
     }
   }
@@ -1323,7 +1348,8 @@ void noteUnspecifiedLimits(const RobotDescription& d, ProblemList& problems) {
                                "in the data file");
   }
   if (!range.empty()) {
-    problems.lenient(file, std::to_string(range.size()) + " revolute or prismatic joint(s) without lower and upper, or with both 0 (" + nameList(range) +
+    problems.lenient(file, std::to_string(range.size()) + " revolute or prismatic joint(s) without lower and upper, or with both 0 (" +
+                               nameList(range) +
                                "): no position limits, as for a continuous joint; give `joint_limits: {JOINT: {lower: ..., upper: ...}}`");
   }
 }

@@ -93,8 +93,7 @@ int HlsFactorization::unitColumnProductRows(int nr, int d, int m, int t) {
 }
 
 int HlsFactorization::blockReflectorUpdate(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXd>& T,
-                                           Eigen::Ref<Eigen::MatrixXd> C, Eigen::Ref<Eigen::MatrixXd> Y,
-                                           Eigen::Ref<Eigen::MatrixXd> Y2) {
+                                           Eigen::Ref<Eigen::MatrixXd> C, Eigen::Ref<Eigen::MatrixXd> Y, Eigen::Ref<Eigen::MatrixXd> Y2) {
   const int d = static_cast<int>(C.rows()), r = static_cast<int>(V.cols()), n = static_cast<int>(C.cols());
   // A part of a product stays in the matrix-product kernel when it has at least two columns
   // (one column would go to the matrix-vector product) and is not small enough for Eigen's
@@ -382,8 +381,8 @@ bool HlsFactorization::eliminateOnce(bool preferSplit) {
   // Blocked LU with partial pivoting of the tall G (Eigen's kernel): P G = [L1; L2] U. The pivot
   // rows are the basic variables.
   int nbTranspositions = 0;
-  Eigen::internal::partial_lu_impl<double, Eigen::ColMajor, int>::blocked_lu(
-      nf_, m0, G_.data(), G_.outerStride(), transp_.data(), nbTranspositions);
+  Eigen::internal::partial_lu_impl<double, Eigen::ColMajor, int>::blocked_lu(nf_, m0, G_.data(), G_.outerStride(), transp_.data(),
+                                                                             nbTranspositions);
   for (int f = 0; f < nf_; ++f) varPerm_[z(f)] = freeVar_[z(f)];
   for (int i = 0; i < m0; ++i) std::swap(varPerm_[z(i)], varPerm_[z(transp_[z(i)])]);
   if (preferSplit) {
@@ -485,7 +484,7 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Ei
   const Eigen::MatrixXd& A = *A_[z(j)];
   const Eigen::Index lda = A.rows();
   const int off = rowOff_[z(j)];
-  int* qs = gatherIdx_.data();      // loaded scratch columns
+  int* qs = gatherIdx_.data();             // loaded scratch columns
   int* rows = qs + gatherIdx_.size() / 2;  // their rows in level j
   int cnt = 0;
   for (int q = p0; q < p1; ++q) {
@@ -742,8 +741,8 @@ void HlsFactorization::swapColumns(int a, int b, int rows) {
 // caller computes it again). With orig, ratio = pivotRatio(nrm, orig). A zero norm stays zero. Two
 // columns at a time where SSE2 is there: the same correctly rounded operations as one at a time,
 // so the same bits, but the divisions and square roots of two columns overlap.
-void HlsFactorization::downdateNorms(int cnt, const double* w, double* nrm, const double* ref, const double* orig,
-                                     double* ratio, char* recompute) {
+void HlsFactorization::downdateNorms(int cnt, const double* w, double* nrm, const double* ref, const double* orig, double* ratio,
+                                     char* recompute) {
   static const double kSqrtEps = std::sqrt(std::numeric_limits<double>::epsilon());
   int q = 0;
 #ifdef __SSE2__
@@ -862,8 +861,8 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
     // Norm downdates of the remaining columns and their new ratios, all columns at once.
     const int first = r + 1;
     const int cnt = m - first;
-    downdateNorms(cnt, top + first, colNorm_.data() + s + first, colNormRef_.data() + s + first, colOrig_.data() + s + first,
-                  ratio + first, recompute_.data());
+    downdateNorms(cnt, top + first, colNorm_.data() + s + first, colNormRef_.data() + s + first, colOrig_.data() + s + first, ratio + first,
+                  recompute_.data());
     for (int q = 0; q < cnt; ++q) {
       if (!recompute_[z(q)]) continue;
       // Cancellation: the norm of the column's remaining rows, computed again (LAPACK xLAQP2).
@@ -994,8 +993,7 @@ bool HlsFactorization::factorSpanning(int k, int d, double rankTol) {
       top[c] = Lm(i, c);
     }
     const int first = i + 1;
-    downdateNorms(d - first, top + first, spanNorm_.data() + first, spanRef_.data() + first, nullptr, nullptr,
-                  recompute_.data());
+    downdateNorms(d - first, top + first, spanNorm_.data() + first, spanRef_.data() + first, nullptr, nullptr, recompute_.data());
     for (int q = 0; q < d - first; ++q) {
       if (!recompute_[z(q)]) continue;
       const int c = first + q;
@@ -1161,9 +1159,7 @@ void HlsFactorization::factorize(double rankTol) {
   dirtyFrom_ = L;
 }
 
-HlsFactorization::Stage HlsFactorization::stage(int k) const {
-  return {act_[z(k)], start_[z(k)], col0_[z(k)], rank_[z(k)]};
-}
+HlsFactorization::Stage HlsFactorization::stage(int k) const { return {act_[z(k)], start_[z(k)], col0_[z(k)], rank_[z(k)]}; }
 
 void HlsFactorization::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x, Eigen::VectorXd& res) {
   const int L = levelCount();

@@ -45,12 +45,13 @@ void Problem::setLevelColumns(int i, int columns) {
   Level& l = level(i);
   if (l.kind != LevelKind::General) throw InputError("problem: level \"" + l.name + "\"", "columns are declared for general levels only");
   if (columns < -1 || columns > n_)
-    throw InputError("problem: level \"" + l.name + "\"", "declared columns " + std::to_string(columns) + " outside -1 .. " + std::to_string(n_));
+    throw InputError("problem: level \"" + l.name + "\"",
+                     "declared columns " + std::to_string(columns) + " outside -1 .. " + std::to_string(n_));
   l.columns = columns;
 }
 
-int Problem::addBoundsLevel(std::string name, std::vector<int> variable, Eigen::VectorXd coefficient,
-                            Eigen::VectorXd lower, Eigen::VectorXd upper) {
+int Problem::addBoundsLevel(std::string name, std::vector<int> variable, Eigen::VectorXd coefficient, Eigen::VectorXd lower,
+                            Eigen::VectorXd upper) {
   if (!levels_.empty()) {
     throw InputError("problem: level \"" + name + "\"", "a bounds level is only allowed as the first level");
   }
@@ -70,17 +71,15 @@ void Problem::validate(const std::string& source) const {
     const std::string where = levelWhere(source, l, lv);
     const int m = static_cast<int>(lv.lower.size());
     if (lv.upper.size() != m) {
-      throw InputError(where, "lower has " + std::to_string(m) + " entries but upper has " +
-                                  std::to_string(lv.upper.size()));
+      throw InputError(where, "lower has " + std::to_string(m) + " entries but upper has " + std::to_string(lv.upper.size()));
     }
     if (lv.kind == LevelKind::General) {
       if (lv.A.rows() != m) {
-        throw InputError(where, "A has " + std::to_string(lv.A.rows()) + " rows but the bounds have " +
-                                    std::to_string(m) + " entries");
+        throw InputError(where, "A has " + std::to_string(lv.A.rows()) + " rows but the bounds have " + std::to_string(m) + " entries");
       }
       if (lv.A.cols() != n_) {
-        throw InputError(where, "A has " + std::to_string(lv.A.cols()) + " columns, expected " +
-                                    std::to_string(n_) + " (the number of variables)");
+        throw InputError(
+            where, "A has " + std::to_string(lv.A.cols()) + " columns, expected " + std::to_string(n_) + " (the number of variables)");
       }
       for (int r = 0; r < m; ++r) {
         for (int c = 0; c < n_; ++c) {

@@ -50,8 +50,8 @@ class Problem {
   /// Appends a general level; returns its index.
   int addLevel(std::string name, Eigen::MatrixXd A, Eigen::VectorXd lower, Eigen::VectorXd upper);
   /// Appends a bounds level (only allowed as the first level); returns its index.
-  int addBoundsLevel(std::string name, std::vector<int> variable, Eigen::VectorXd coefficient,
-                     Eigen::VectorXd lower, Eigen::VectorXd upper);
+  int addBoundsLevel(std::string name, std::vector<int> variable, Eigen::VectorXd coefficient, Eigen::VectorXd lower,
+                     Eigen::VectorXd upper);
 
   const Level& level(int i) const {
     checkIndex("Problem::level", i, static_cast<long>(levels_.size()));

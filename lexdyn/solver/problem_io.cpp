@@ -115,8 +115,10 @@ double readNumber(const json& j, const std::string& where, bool allowNull, doubl
   const double v = j.get<double>();
   if (!std::isfinite(v)) throw InputError(where, "expected a finite number, found " + fmt(v));
   if (std::abs(v) > kMaxProblemMagnitude) {
-    throw InputError(where, "expected a magnitude of at most " + fmt(kMaxProblemMagnitude) + " (beyond, the solver's arithmetic "
-                            "overflows), found " + fmt(v));
+    throw InputError(where, "expected a magnitude of at most " + fmt(kMaxProblemMagnitude) +
+                                " (beyond, the solver's arithmetic "
+                                "overflows), found " +
+                                fmt(v));
   }
   return v;
 }
@@ -144,8 +146,8 @@ Problem parseProblemJson(const std::string& text, const std::string& source) {
   }
   if (jn.is_number_unsigned() ? jn.get<unsigned long long>() > static_cast<unsigned long long>(kMaxProblemVariables)
                               : jn.get<long long>() > kMaxProblemVariables) {
-    throw InputError(source + ": variables", "expected at most " + std::to_string(kMaxProblemVariables) +
-                                                 " variables (size guard), found " + jn.dump());
+    throw InputError(source + ": variables",
+                     "expected at most " + std::to_string(kMaxProblemVariables) + " variables (size guard), found " + jn.dump());
   }
   const int n = static_cast<int>(jn.get<long long>());
   const json& jl = doc["levels"];
@@ -182,10 +184,11 @@ Problem parseProblemJson(const std::string& text, const std::string& source) {
     const json& jup = lv["upper"];
     total_rows += static_cast<long>(jA.size());
     if (total_rows > kMaxProblemRows || total_rows * n > kMaxProblemEntries) {
-      throw InputError(lw + ".A", "the problem has more than " +
-                                      (total_rows > kMaxProblemRows ? std::to_string(kMaxProblemRows) + " rows"
-                                                                    : std::to_string(kMaxProblemEntries) + " matrix entries (rows x variables)") +
-                                      " up to this level (size guard)");
+      throw InputError(lw + ".A",
+                       "the problem has more than " +
+                           (total_rows > kMaxProblemRows ? std::to_string(kMaxProblemRows) + " rows"
+                                                         : std::to_string(kMaxProblemEntries) + " matrix entries (rows x variables)") +
+                           " up to this level (size guard)");
     }
     const int m = static_cast<int>(jA.size());
     if (static_cast<int>(jlo.size()) != m) {

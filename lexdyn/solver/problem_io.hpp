@@ -21,8 +21,8 @@ namespace lexdyn::solver {
 /// paper-shaped problems are far below (about 100 variables, 10 levels).
 inline constexpr long kMaxProblemVariables = 2000;
 inline constexpr long kMaxProblemLevels = 100;
-inline constexpr long kMaxProblemRows = 10000;           ///< all levels together
-inline constexpr long kMaxProblemEntries = 1000000;      ///< rows x variables (8 MB of A)
+inline constexpr long kMaxProblemRows = 10000;       ///< all levels together
+inline constexpr long kMaxProblemEntries = 1000000;  ///< rows x variables (8 MB of A)
 /// |A_ij| and every finite bound are at most this: squares and products of two such numbers stay
 /// well inside the double range (beyond, the arithmetic overflows to inf).
 inline constexpr double kMaxProblemMagnitude = 1e100;

@@ -34,16 +34,15 @@ bool allFiniteFast(const Eigen::DenseBase<Derived>& m) {
 }  // namespace
 
 const char* toString(Status s) {
-  static const char* const kNames[] = {"solved", "stopped_early", "iteration_limit", "non_finite_input",
-                                       "non_finite_result"};
+  static const char* const kNames[] = {"solved", "stopped_early", "iteration_limit", "non_finite_input", "non_finite_result"};
   static_assert(std::size(kNames) == static_cast<size_t>(Status::NonFiniteResult) + 1);
   return enumName(s, kNames);
 }
 
 const char* toString(StopReason r) {
-  static const char* const kNames[] = {"optimal", "slack_below_threshold", "optimality_phase_limit",
-                                       "total_iteration_limit", "hard_iteration_cap", "non_finite_input",
-                                       "non_finite_result"};
+  static const char* const kNames[] = {
+      "optimal",          "slack_below_threshold", "optimality_phase_limit", "total_iteration_limit", "hard_iteration_cap",
+      "non_finite_input", "non_finite_result"};
   static_assert(std::size(kNames) == static_cast<size_t>(StopReason::NonFiniteResult) + 1);
   return enumName(r, kNames);
 }
@@ -81,7 +80,8 @@ void Options::validate() const {
   tolerance("feasibility_tolerance", feasibility_tolerance, false);
   tolerance("zero_tolerance", zero_tolerance, false);
   tolerance("dual_tolerance", dual_tolerance, false);
-  if (!(elimination_tolerance > 0.0 && elimination_tolerance <= 1.0)) fail("elimination_tolerance", "a number in (0, 1]", elimination_tolerance);
+  if (!(elimination_tolerance > 0.0 && elimination_tolerance <= 1.0))
+    fail("elimination_tolerance", "a number in (0, 1]", elimination_tolerance);
   if (split_from_variable < -1) fail("split_from_variable", "-1 (off) or a variable index", split_from_variable);
   count("max_iterations", max_iterations, 1);
   count("bland_after_degenerate_steps", bland_after_degenerate_steps, 1);
@@ -92,8 +92,7 @@ void Options::validate() const {
   count("stop_optimality_iterations", stop_optimality_iterations, 0);
   count("stop_total_iterations", stop_total_iterations, 0);
   if (stop_after_level < -1) fail("stop_after_level", "-1 (any level) or a level index >= 0", stop_after_level);
-  if (last_level_projection != LastLevel::Auto && last_level_projection != LastLevel::Never &&
-      last_level_projection != LastLevel::Always) {
+  if (last_level_projection != LastLevel::Auto && last_level_projection != LastLevel::Never && last_level_projection != LastLevel::Always) {
     fail("last_level_projection", "Auto, Never or Always", static_cast<int>(last_level_projection));
   }
 }
@@ -110,8 +109,8 @@ struct Solver::Impl {
   bool isSetup = false;
   int n = 0, p = 0, lg = 0, first = 0;
   bool hasBounds = false;
-  std::vector<int> rowsOf;      // rows per problem level
-  std::vector<int> stackOff;    // offset of each problem level in the stacked row numbering
+  std::vector<int> rowsOf;    // rows per problem level
+  std::vector<int> stackOff;  // offset of each problem level in the stacked row numbering
   std::vector<LevelKind> kinds;
 
   HlsFactorization fact;
@@ -251,11 +250,9 @@ void Solver::Impl::checkCompatible(const Problem& problem) const {
   bool ok = problem.variables() == n && problem.levelCount() == p;
   for (int l = 0; ok && l < p; ++l) {
     const Level& lv = problem.level(l);
-    ok = lv.rows() == rowsOf[static_cast<size_t>(l)] && lv.kind == kinds[static_cast<size_t>(l)] &&
-         lv.upper.size() == lv.rows() &&
-         (lv.kind == LevelKind::Bounds
-              ? (static_cast<int>(lv.variable.size()) == lv.rows() && lv.coefficient.size() == lv.rows())
-              : (lv.A.rows() == lv.rows() && lv.A.cols() == n));
+    ok = lv.rows() == rowsOf[static_cast<size_t>(l)] && lv.kind == kinds[static_cast<size_t>(l)] && lv.upper.size() == lv.rows() &&
+         (lv.kind == LevelKind::Bounds ? (static_cast<int>(lv.variable.size()) == lv.rows() && lv.coefficient.size() == lv.rows())
+                                       : (lv.A.rows() == lv.rows() && lv.A.cols() == n));
   }
   if (!ok) throw InputError("solver", "the problem's sizes differ from those given to setup(); call setup() again");
 }
@@ -353,10 +350,13 @@ void Solver::Impl::loadData(const Problem& problem) {
 
 double Solver::Impl::target(int gid) const {
   switch (state[static_cast<size_t>(gid)]) {
-    case RowState::Lower: return lo(gid);
+    case RowState::Lower:
+      return lo(gid);
     case RowState::Upper:
-    case RowState::Equality: return up(gid);
-    default: return 0.0;
+    case RowState::Equality:
+      return up(gid);
+    default:
+      return 0.0;
   }
 }
 
@@ -673,9 +673,9 @@ void Solver::Impl::run() {
     const double tiny = 1e-15;
     auto offer = [&](double a, int k, int i, RowState s) {
       if (a < 0.0) a = 0.0;
-      const bool better = bland ? (a < alpha - tiny || (a <= alpha + tiny && blockKind >= 0 &&
-                                                        (k < blockKind || (k == blockKind && i < blockIdx))))
-                                : (a < alpha);
+      const bool better =
+          bland ? (a < alpha - tiny || (a <= alpha + tiny && blockKind >= 0 && (k < blockKind || (k == blockKind && i < blockIdx))))
+                : (a < alpha);
       if (better || (blockKind < 0 && a < alpha)) {
         alpha = std::min(a, alpha);
         blockKind = k;
@@ -687,16 +687,20 @@ void Solver::Impl::run() {
       if (vstate[static_cast<size_t>(i)] != RowState::Inactive) continue;
       const double d = dx(i);
       const double thr = opt.feasibility_tolerance * dxNorm;
-      if (d > thr && std::isfinite(xup(i))) offer((xup(i) - x(i)) / d, 0, i, RowState::Upper);
-      else if (d < -thr && std::isfinite(xlo(i))) offer((xlo(i) - x(i)) / d, 0, i, RowState::Lower);
+      if (d > thr && std::isfinite(xup(i)))
+        offer((xup(i) - x(i)) / d, 0, i, RowState::Upper);
+      else if (d < -thr && std::isfinite(xlo(i)))
+        offer((xlo(i) - x(i)) / d, 0, i, RowState::Lower);
     }
     for (int g = 0; g < M; ++g) {
       if (state[static_cast<size_t>(g)] != RowState::Inactive) continue;
       const double den = Adx(g) - dv(g);
       const double thr = opt.feasibility_tolerance * (rowNorm(g) * dxNorm + std::abs(dv(g)));
       const double s = Ax(g) - v(g);
-      if (den > thr && std::isfinite(up(g))) offer((up(g) - s) / den, 1, g, RowState::Upper);
-      else if (den < -thr && std::isfinite(lo(g))) offer((lo(g) - s) / den, 1, g, RowState::Lower);
+      if (den > thr && std::isfinite(up(g)))
+        offer((up(g) - s) / den, 1, g, RowState::Upper);
+      else if (den < -thr && std::isfinite(lo(g)))
+        offer((lo(g) - s) / den, 1, g, RowState::Lower);
     }
 
     // Step.
@@ -731,8 +735,8 @@ void Solver::Impl::run() {
     lastDropKind = lastDropIdx = -1;
 
     if (opt.trace) {
-      std::fprintf(stderr, "it %d alpha %.3e |dx| %.3e block %d:%d(%s) bland %d x=", out.iterations, alpha, dxNorm, blockKind,
-                   blockIdx, toString(blockState), bland ? 1 : 0);
+      std::fprintf(stderr, "it %d alpha %.3e |dx| %.3e block %d:%d(%s) bland %d x=", out.iterations, alpha, dxNorm, blockKind, blockIdx,
+                   toString(blockState), bland ? 1 : 0);
       for (int i = 0; i < std::min(n, 8); ++i) std::fprintf(stderr, " %.6g", x(i));
       std::fprintf(stderr, "\n");
     }
@@ -830,8 +834,7 @@ void Solver::Impl::run() {
 // Arithmetic that left the double range (coefficients near 1e300, a near-singular level scaled
 // beyond it) must never pass for a solution: x, the violations and the multipliers must be finite.
 void Solver::Impl::checkFiniteResult() {
-  const bool finite = allFiniteFast(out.x) && allFiniteFast(out.violation_norm) &&
-                      (!opt.compute_multipliers || allFiniteFast(out.lambda));
+  const bool finite = allFiniteFast(out.x) && allFiniteFast(out.violation_norm) && (!opt.compute_multipliers || allFiniteFast(out.lambda));
   if (!finite) {
     out.status = Status::NonFiniteResult;
     out.reason = StopReason::NonFiniteResult;

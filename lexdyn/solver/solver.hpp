@@ -131,7 +131,7 @@ struct Options {
   /// above apply only once problem levels 0..L are known optimal (a dual check passed them);
   /// until then the search goes on (up to max_iterations). -1: they apply at any iteration.
   int stop_after_level = -1;
-  bool compute_multipliers = true;     ///< fill Result::lambda
+  bool compute_multipliers = true;  ///< fill Result::lambda
   /// Prints one line per active-set iteration to stderr (debugging; allocates).
   bool trace = false;
 
@@ -167,7 +167,7 @@ struct Result {
   Eigen::MatrixXd lambda;
   ActiveSet active;
   std::vector<int> rank;  ///< rank of each level's active rows after projection (bounds level: fixed vars)
-  int iterations = 0;             ///< active-set iterations (equality sub-problems solved)
+  int iterations = 0;     ///< active-set iterations (equality sub-problems solved)
   /// Level stages factorised in this solve, over all its iterations (a restart at level c of L
   /// factorises L - c stages; the elimination of the first level counts as one): a deterministic
   /// measure of the solve's work, machine-independent unlike its wall time.

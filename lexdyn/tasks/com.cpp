@@ -12,14 +12,12 @@ void markMassiveBodiesChain(const model::RobotModel& model, std::vector<char>& m
   }
 }
 
-void accumulateComRowsHessian(const TickContext& ctx, const Eigen::Ref<const Eigen::VectorXd>& w,
-                              Eigen::Ref<Eigen::MatrixXd> H) {
+void accumulateComRowsHessian(const TickContext& ctx, const Eigen::Ref<const Eigen::VectorXd>& w, Eigen::Ref<Eigen::MatrixXd> H) {
   LEXDYN_ALWAYS_ASSERT(ctx.hessian != nullptr && w.size() == 3, "CoM rows: accumulateHessian needs ctx.hessian, w(3)");
   hessian::accumulateComHessian(*ctx.model, *ctx.hessian, Eigen::Vector3d(w), H);
 }
 
-ComTask::ComTask(std::string name, const model::RobotModel& model, const ComParams& params)
-    : TrackingTask(std::move(name), model, 3, 3) {
+ComTask::ComTask(std::string name, const model::RobotModel& model, const ComParams& params) : TrackingTask(std::move(name), model, 3, 3) {
   if (params.target) setInitialTarget(*params.target);
   pd_ = resolvePd(params.gains, this->name());
 }
@@ -39,8 +37,6 @@ void ComTask::accumulateHessian(const TickContext& ctx, const TaskData&, const E
   accumulateComRowsHessian(ctx, w, H);
 }
 
-void ComTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const {
-  markMassiveBodiesChain(model, mask);
-}
+void ComTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const { markMassiveBodiesChain(model, mask); }
 
 }  // namespace lexdyn::tasks

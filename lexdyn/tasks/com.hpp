@@ -30,7 +30,6 @@ class ComTask : public TrackingTask {
 /// Marks every dof that moves a body of positive mass (the chain of CoM tasks).
 void markMassiveBodiesChain(const model::RobotModel& model, std::vector<char>& mask);
 /// H += sum_i w_i d^2 c_i / dq^2 for the three rows of the CoM c (com, com_box; w: 3 entries).
-void accumulateComRowsHessian(const TickContext& ctx, const Eigen::Ref<const Eigen::VectorXd>& w,
-                              Eigen::Ref<Eigen::MatrixXd> H);
+void accumulateComRowsHessian(const TickContext& ctx, const Eigen::Ref<const Eigen::VectorXd>& w, Eigen::Ref<Eigen::MatrixXd> H);
 
 }  // namespace lexdyn::tasks

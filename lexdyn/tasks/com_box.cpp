@@ -28,9 +28,9 @@ void ComBoxTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& box) const
       throwTaskInput(name(), "upper." + axis, "must be a number or +inf, found " + std::to_string(hi));
     }
     if (!(hi - lo >= 2.0 * damper_.safety)) {
-      throwTaskInput(name(), "upper." + axis,
-                     "must be at least lower + 2 * safety distance (" + std::to_string(lo + 2.0 * damper_.safety) +
-                         "), found " + std::to_string(hi));
+      throwTaskInput(
+          name(), "upper." + axis,
+          "must be at least lower + 2 * safety distance (" + std::to_string(lo + 2.0 * damper_.safety) + "), found " + std::to_string(hi));
     }
   }
 }
@@ -84,8 +84,6 @@ void ComBoxTask::accumulateHessian(const TickContext& ctx, const TaskData&, cons
   accumulateComRowsHessian(ctx, w, H);
 }
 
-void ComBoxTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const {
-  markMassiveBodiesChain(model, mask);
-}
+void ComBoxTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const { markMassiveBodiesChain(model, mask); }
 
 }  // namespace lexdyn::tasks

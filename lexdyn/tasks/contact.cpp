@@ -8,12 +8,11 @@
 
 namespace lexdyn::tasks {
 
-ContactTask::ContactTask(std::string name, const model::RobotModel& model, const ContactLayout& layout,
-                         const ContactTaskParams& params)
+ContactTask::ContactTask(std::string name, const model::RobotModel& model, const ContactLayout& layout, const ContactTaskParams& params)
     : TaskModel(std::move(name)), nv_(model.nv()), ng_(layout.ng()) {
   if (layout.nv() != nv_) {
-    throwTaskInput(this->name(), "", "the contact layout has nv = " + std::to_string(layout.nv()) +
-                                         ", the model nv = " + std::to_string(nv_));
+    throwTaskInput(this->name(), "",
+                   "the contact layout has nv = " + std::to_string(layout.nv()) + ", the model nv = " + std::to_string(nv_));
   }
   contact_ = layout.find(params.contact);
   if (contact_ < 0) {
@@ -81,7 +80,7 @@ void ContactTask::compute(const TickContext& ctx, TaskData& base) const {
   model.frameJacobian(data, frame_, d.J);  // [linear; angular]
   Eigen::Matrix<double, 6, 1> e;
   e.head<3>() = d.position - X.translation();
-  e.tail<3>() = rotationError(d.rotation, X.linear());  // log(R_d R^T)
+  e.tail<3>() = rotationError(d.rotation, X.linear());                 // log(R_d R^T)
   writePdRows<6>(ctx, pd_, e, model.frameBias(data, frame_), nv_, d);  // eq. 61 / 55
   std::fill(d.engaged.begin(), d.engaged.end(), 1);
 }
@@ -95,13 +94,10 @@ void ContactTask::accumulateHessian(const TickContext& ctx, const TaskData& base
     hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, point_in_frame_, Eigen::Vector3d(w.head<3>()), H);
     return;
   }
-  hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, Eigen::Vector3d::Zero(),
-                                  Eigen::Vector3d(w.head<3>()), H);
+  hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, Eigen::Vector3d::Zero(), Eigen::Vector3d(w.head<3>()), H);
   hessian::accumulateOrientationHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, Eigen::Vector3d(w.tail<3>()), H);
 }
 
-void ContactTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const {
-  markBodyChain(model, body_, mask);
-}
+void ContactTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const { markBodyChain(model, body_, mask); }
 
 }  // namespace lexdyn::tasks

@@ -16,20 +16,19 @@
 namespace lexdyn::tasks {
 
 struct ContactTaskParams {
-  std::string contact;        ///< a contact of the ContactLayout (its frame is the task frame)
-  PdGains gains{100.0, {}};   ///< kp default 100 /s^2 (kv 20 /s): stiff, our choice
+  std::string contact;       ///< a contact of the ContactLayout (its frame is the task frame)
+  PdGains gains{100.0, {}};  ///< kp default 100 /s^2 (kv 20 /s): stiff, our choice
 };
 
 struct ContactTaskData : TaskData {
-  bool holding = false;  ///< the pose below is captured and held
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();   ///< p_d, world, m
+  bool holding = false;                                    ///< the pose below is captured and held
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();      ///< p_d, world, m
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< R_d
 };
 
 class ContactTask : public TaskModel {
  public:
-  ContactTask(std::string name, const model::RobotModel& model, const ContactLayout& layout,
-              const ContactTaskParams& params);
+  ContactTask(std::string name, const model::RobotModel& model, const ContactLayout& layout, const ContactTaskParams& params);
 
   /// 6 (the frame's position and orientation), or 3 for a point contact (ContactSpec::point:
   /// the contact point's position).

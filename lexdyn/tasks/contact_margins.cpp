@@ -21,15 +21,15 @@ double cross2(const V2& a, const V2& b) { return a.x() * b.y() - a.y() * b.x(); 
 std::vector<int> hull(const std::vector<V2>& pts) {
   std::vector<int> idx(pts.size());
   std::iota(idx.begin(), idx.end(), 0);
-  std::sort(idx.begin(), idx.end(), [&](int a, int b) {
-    return pts[a].x() < pts[b].x() || (pts[a].x() == pts[b].x() && pts[a].y() < pts[b].y());
-  });
+  std::sort(idx.begin(), idx.end(),
+            [&](int a, int b) { return pts[a].x() < pts[b].x() || (pts[a].x() == pts[b].x() && pts[a].y() < pts[b].y()); });
   std::vector<int> h;
   const double eps = 1e-12;
   for (int pass = 0; pass < 2; ++pass) {
     const size_t start = h.size();
     for (int i : idx) {
-      while (h.size() >= start + 2 && cross2(pts[h[h.size() - 1]] - pts[h[h.size() - 2]], pts[i] - pts[h[h.size() - 2]]) <= eps) h.pop_back();
+      while (h.size() >= start + 2 && cross2(pts[h[h.size() - 1]] - pts[h[h.size() - 2]], pts[i] - pts[h[h.size() - 2]]) <= eps)
+        h.pop_back();
       h.push_back(i);
     }
     h.pop_back();
@@ -139,8 +139,8 @@ std::vector<std::string> applyContactMargins(ContactSpec& spec, const ContactMar
   if (m.cop_m > 0.0 && !spec.point && spec.points.size() >= 2) {
     double room = 0.0;
     if (!shrinkSupport(spec.points, spec.normal_in_frame, m.cop_m, room)) {
-      problems.push_back("cop_m: " + formatNumber(m.cop_m) + " m leaves no support polygon of contact " + spec.name + " (its points allow less than " +
-                         formatNumber(room) + " m)");
+      problems.push_back("cop_m: " + formatNumber(m.cop_m) + " m leaves no support polygon of contact " + spec.name +
+                         " (its points allow less than " + formatNumber(room) + " m)");
     }
   }
   spec.friction *= 1.0 - m.friction;

@@ -53,9 +53,9 @@ inline void validateDamper(const DamperParams& p, const std::string& task, const
   requirePositive(p.interaction, task, prefix + "interaction");
   requireNonNegative(p.safety, task, prefix + "safety");
   if (!(p.safety < p.interaction)) {
-    throwTaskInput(task, prefix + "safety",
-                   "must be smaller than " + prefix + "interaction (" + std::to_string(p.interaction) + "), found " +
-                       std::to_string(p.safety));
+    throwTaskInput(
+        task, prefix + "safety",
+        "must be smaller than " + prefix + "interaction (" + std::to_string(p.interaction) + "), found " + std::to_string(p.safety));
   }
   requirePositive(p.xi, task, prefix + "xi");
 }
@@ -86,16 +86,14 @@ inline double damperVelocityBound(double d, double ddot, const DamperParams& p, 
 }
 
 /// Acceleration-domain bound with the adaptive gain (bias = Jdot_d u).
-inline double damperAccelerationBound(double d, double ddot, double bias, double dt, const DamperParams& p,
-                                      DamperState& st) {
+inline double damperAccelerationBound(double d, double ddot, double bias, double dt, const DamperParams& p, DamperState& st) {
   const double v = damperVelocityBound(d, ddot, p, st);
   if (v == -std::numeric_limits<double>::infinity()) return v;
   return (v - ddot) / dt - bias;
 }
 
 /// Lower bound on J_d udot in the acceleration domain (ddot = J_d u now, bias = Jdot_d u).
-inline double damperAccelerationBound(double d, double d_i, double d_s, double xi, double ddot, double bias,
-                                      double dt) {
+inline double damperAccelerationBound(double d, double d_i, double d_s, double xi, double ddot, double bias, double dt) {
   if (!damperEngaged(d, d_i)) return -std::numeric_limits<double>::infinity();
   return (damperVelocityBound(d, d_i, d_s, xi) - ddot) / dt - bias;
 }

@@ -9,8 +9,7 @@
 namespace lexdyn::tasks {
 
 JointLimitsTask::JointLimitsTask(std::string name, const model::RobotModel& model, const JointLimitsParams& params)
-    : TaskModel(std::move(name)), params_(params), nv_(model.nv()), nj_(model.numJoints()),
-      offset_(model.jointVelocityOffset()) {
+    : TaskModel(std::move(name)), params_(params), nv_(model.nv()), nj_(model.numJoints()), offset_(model.jointVelocityOffset()) {
   requirePositive(params.interaction_fraction, this->name(), "interaction_fraction");
   if (params.interaction_fraction > 0.5) {
     throwTaskInput(this->name(), "interaction_fraction",
@@ -19,14 +18,13 @@ JointLimitsTask::JointLimitsTask(std::string name, const model::RobotModel& mode
   requireNonNegative(params.safety_fraction, this->name(), "safety_fraction");
   if (!(params.safety_fraction < params.interaction_fraction)) {
     throwTaskInput(this->name(), "safety_fraction",
-                   "must be smaller than interaction_fraction (" + std::to_string(params.interaction_fraction) +
-                       "), found " + std::to_string(params.safety_fraction));
+                   "must be smaller than interaction_fraction (" + std::to_string(params.interaction_fraction) + "), found " +
+                       std::to_string(params.safety_fraction));
   }
   requirePositive(params.xi, this->name(), "xi");
   q_min_ = model.jointLowerLimits();
   q_max_ = model.jointUpperLimits();
-  v_max_ = params.velocity_limits ? model.jointVelocityLimits()
-                                  : Eigen::VectorXd::Constant(nj_, std::numeric_limits<double>::infinity());
+  v_max_ = params.velocity_limits ? model.jointVelocityLimits() : Eigen::VectorXd::Constant(nj_, std::numeric_limits<double>::infinity());
 }
 
 std::unique_ptr<TaskData> JointLimitsTask::createData(const ContactLayout& layout) const {

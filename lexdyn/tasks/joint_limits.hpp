@@ -24,8 +24,8 @@ struct JointLimitsParams {
   /// Fractions of each joint's range (mc_rtc's defaults): 0 <= safety < interaction <= 0.5.
   double interaction_fraction = 0.1;
   double safety_fraction = 0.01;
-  double xi = 0.5;  ///< rad/s (m/s for prismatic joints)
-  bool adaptive = true;  ///< gain raised to the approach speed at engagement (damper.hpp)
+  double xi = 0.5;              ///< rad/s (m/s for prismatic joints)
+  bool adaptive = true;         ///< gain raised to the approach speed at engagement (damper.hpp)
   bool velocity_limits = true;  ///< also bound |qdot_j| by the URDF velocity limit
 };
 

@@ -9,8 +9,7 @@ namespace lexdyn::tasks {
 namespace {
 
 // The model joints named by `names` (field "joints"): at least one, none twice.
-std::vector<int> resolveJoints(const model::RobotModel& model, const std::vector<std::string>& names,
-                               const std::string& task) {
+std::vector<int> resolveJoints(const model::RobotModel& model, const std::vector<std::string>& names, const std::string& task) {
   if (names.empty()) throwTaskInput(task, "joints", "must name at least one joint, found none");
   std::vector<int> joints;
   for (size_t k = 0; k < names.size(); ++k) {
@@ -28,13 +27,13 @@ std::vector<int> resolveJoints(const model::RobotModel& model, const std::vector
 
 JointTrackingTask::JointTrackingTask(std::string name, const model::RobotModel& model, std::vector<int> joints)
     : TrackingTask(std::move(name), model, static_cast<int>(joints.size()), static_cast<int>(joints.size())),
-      offset_(model.jointVelocityOffset()), joints_(std::move(joints)) {}
+      offset_(model.jointVelocityOffset()),
+      joints_(std::move(joints)) {}
 
 void JointTrackingTask::setInitialJointTarget(const Eigen::VectorXd& target) {
   if (target.size() == 0) return;
   if (target.size() != rows()) {
-    throwTaskInput(name(), "target", "needs " + std::to_string(rows()) + " values (one per joint), found " +
-                                         std::to_string(target.size()));
+    throwTaskInput(name(), "target", "needs " + std::to_string(rows()) + " values (one per joint), found " + std::to_string(target.size()));
   }
   setInitialTarget(target);
 }

@@ -46,8 +46,8 @@ void OrientationTask::compute(const TickContext& ctx, TaskData& base) const {
   const Eigen::Matrix3d R = model.framePlacement(data, frame_).linear();
   holdTarget(d, rotationToTarget(R));
   const Eigen::Vector3d e = rotationError(rotationFromTarget(d.target), R);  // log(R_d R^T)
-  const Eigen::Vector3d bias = model.frameBias(data, frame_).tail<3>();       // angular Jdot u
-  writePdRows<3>(ctx, pd_, e, bias, nv_, d);                                  // eq. 61 / 55
+  const Eigen::Vector3d bias = model.frameBias(data, frame_).tail<3>();      // angular Jdot u
+  writePdRows<3>(ctx, pd_, e, bias, nv_, d);                                 // eq. 61 / 55
 }
 
 void OrientationTask::accumulateHessian(const TickContext& ctx, const TaskData&, const Eigen::Ref<const Eigen::VectorXd>& w,
@@ -56,8 +56,6 @@ void OrientationTask::accumulateHessian(const TickContext& ctx, const TaskData&,
   hessian::accumulateOrientationHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, Eigen::Vector3d(w), H);
 }
 
-void OrientationTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const {
-  markBodyChain(model, body_, mask);
-}
+void OrientationTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const { markBodyChain(model, body_, mask); }
 
 }  // namespace lexdyn::tasks

@@ -47,7 +47,7 @@ inline double pdAcceleration(const Pd& pd, double e, double Ju) { return -pd.kp 
 /// Right-hand side of one PD row (the row reads J x = rhs, x = u(k+1) or udot(k+1)):
 /// velocity domain eq. 61, acceleration domain eq. 55. bias = the row's Jdot u.
 inline double pdRowTarget(Domain domain, double dt, const Pd& pd, double e, double Ju, double bias) {
-  const double eddot_ctrl = pdAcceleration(pd, e, Ju);  // eq. 55
+  const double eddot_ctrl = pdAcceleration(pd, e, Ju);                   // eq. 55
   if (domain == Domain::Velocity) return Ju - dt * (eddot_ctrl + bias);  // eq. 61
   return -eddot_ctrl - bias;
 }
@@ -56,8 +56,8 @@ inline double pdRowTarget(Domain domain, double dt, const Pd& pd, double e, doub
 /// bias Jdot u: A = [J, 0], error = e, lower = upper = pdRowTarget per row (eq. 61 / 55).
 /// Fixed-size vectors: allocation-free.
 template <int N>
-void writePdRows(const TickContext& ctx, const Pd& pd, const Eigen::Matrix<double, N, 1>& e,
-                 const Eigen::Matrix<double, N, 1>& bias, int nv, TaskData& d) {
+void writePdRows(const TickContext& ctx, const Pd& pd, const Eigen::Matrix<double, N, 1>& e, const Eigen::Matrix<double, N, 1>& bias,
+                 int nv, TaskData& d) {
   Eigen::Matrix<double, N, 1> Ju;
   Ju.noalias() = d.J * (*ctx.u);
   d.A.leftCols(nv) = d.J;

@@ -31,8 +31,6 @@ void PositionTask::accumulateHessian(const TickContext& ctx, const TaskData&, co
   hessian::accumulatePointHessian(*ctx.model, *ctx.data, *ctx.hessian, frame_, point_, Eigen::Vector3d(w), H);
 }
 
-void PositionTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const {
-  markBodyChain(model, body_, mask);
-}
+void PositionTask::chainDofs(const model::RobotModel& model, std::vector<char>& mask) const { markBodyChain(model, body_, mask); }
 
 }  // namespace lexdyn::tasks

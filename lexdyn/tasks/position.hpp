@@ -11,10 +11,10 @@
 namespace lexdyn::tasks {
 
 struct PositionParams {
-  std::string frame;                                      ///< model frame name
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();        ///< in the frame, m
-  std::optional<Eigen::Vector3d> target;                  ///< world, m; absent: hold
-  PdGains gains;                                          ///< kp default 1 /s^2
+  std::string frame;                                ///< model frame name
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< in the frame, m
+  std::optional<Eigen::Vector3d> target;            ///< world, m; absent: hold
+  PdGains gains;                                    ///< kp default 1 /s^2
 };
 
 class PositionTask : public TrackingTask {

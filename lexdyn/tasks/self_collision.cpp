@@ -26,8 +26,8 @@ SelfCollisionTask::SelfCollisionTask(std::string name, const model::RobotModel& 
         if ((cp.capsule_a == a && cp.capsule_b == b) || (cp.capsule_a == b && cp.capsule_b == a)) found = p;
       }
       if (found < 0) {
-        throwTaskInput(this->name(), field, "[" + params.pairs[k].first + ", " + params.pairs[k].second +
-                                                "] is not a collision pair of the robot data file");
+        throwTaskInput(this->name(), field,
+                       "[" + params.pairs[k].first + ", " + params.pairs[k].second + "] is not a collision pair of the robot data file");
       }
       for (int prev : indices) {
         if (prev == found) throwTaskInput(this->name(), field, "pair listed twice");
@@ -93,8 +93,8 @@ void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
   }
 }
 
-void SelfCollisionTask::accumulateHessian(const TickContext& ctx, const TaskData& base,
-                                          const Eigen::Ref<const Eigen::VectorXd>& w, Eigen::Ref<Eigen::MatrixXd> H) const {
+void SelfCollisionTask::accumulateHessian(const TickContext& ctx, const TaskData& base, const Eigen::Ref<const Eigen::VectorXd>& w,
+                                          Eigen::Ref<Eigen::MatrixXd> H) const {
   const auto& d = static_cast<const SelfCollisionTaskData&>(base);
   LEXDYN_ALWAYS_ASSERT(ctx.hessian != nullptr && w.size() == rows(), "self_collision: accumulateHessian needs ctx.hessian, w(rows)");
   for (int r = 0; r < rows(); ++r) {

@@ -28,7 +28,7 @@ struct SelfCollisionParams {
   std::vector<std::pair<std::string, std::string>> pairs;
   /// d_i, d_s in m; absent: the data file's collision_pairs.interaction_distance / safety_distance.
   std::optional<double> interaction_distance, safety_distance;
-  double xi = 0.5;  ///< m/s
+  double xi = 0.5;       ///< m/s
   bool adaptive = true;  ///< gain raised to the approach speed at engagement (damper.hpp)
 };
 

@@ -36,8 +36,10 @@ void ContactLayout::generators(const Eigen::Matrix3d& R, const Eigen::Vector3d& 
 }
 
 void ContactLayout::generators(const ContactSpec& spec, const Eigen::Matrix3d& R, Eigen::Ref<Eigen::Matrix<double, 3, 4>> D) {
-  if (spec.point) generators(Eigen::Matrix3d::Identity(), Eigen::Vector3d::UnitZ(), spec.friction, D);
-  else generators(R, spec.normal_in_frame, spec.friction, D);
+  if (spec.point)
+    generators(Eigen::Matrix3d::Identity(), Eigen::Vector3d::UnitZ(), spec.friction, D);
+  else
+    generators(R, spec.normal_in_frame, spec.friction, D);
 }
 
 void TaskModel::requireLayoutNv(const ContactLayout& layout, int nv) const {
@@ -48,9 +50,9 @@ void TaskModel::requireLayoutNv(const ContactLayout& layout, int nv) const {
 
 void TaskModel::requireLayoutSizes(const ContactLayout& layout, int nv, int ng) const {
   if (layout.nv() != nv || layout.ng() != ng) {
-    throwTaskInput(name(), "", "built for a contact layout with nv = " + std::to_string(nv) + ", ng = " +
-                                   std::to_string(ng) + ", given nv = " + std::to_string(layout.nv()) +
-                                   ", ng = " + std::to_string(layout.ng()));
+    throwTaskInput(name(), "",
+                   "built for a contact layout with nv = " + std::to_string(nv) + ", ng = " + std::to_string(ng) +
+                       ", given nv = " + std::to_string(layout.nv()) + ", ng = " + std::to_string(layout.ng()));
   }
 }
 
@@ -81,8 +83,8 @@ void TaskModel::chainDofs(const model::RobotModel&, std::vector<char>&) const {}
 void TaskModel::setTarget(TaskData& d, const Eigen::Ref<const Eigen::VectorXd>& target) const {
   if (targetSize() == 0) throw InputError("task \"" + name() + "\"", "has no target to set");
   if (target.size() != targetSize()) {
-    throw InputError("task \"" + name() + "\"", "target needs " + std::to_string(targetSize()) + " values, got " +
-                                                    std::to_string(target.size()));
+    throw InputError("task \"" + name() + "\"",
+                     "target needs " + std::to_string(targetSize()) + " values, got " + std::to_string(target.size()));
   }
   checkTarget(target);
   d.target = target;

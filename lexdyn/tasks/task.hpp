@@ -39,11 +39,11 @@ enum class Domain { Velocity, Acceleration };
 /// One contact of the controller: a set of points on one frame, 4 friction-pyramid generators per
 /// point. A friction contact has gamma >= 0; a fixed (grasp) contact has no sign bound.
 struct ContactSpec {
-  std::string name;               ///< e.g. "RIGHT_FOOT", "LEFT_HAND_POLE"
-  model::FrameId frame = -1;      ///< points are given in this frame
+  std::string name;           ///< e.g. "RIGHT_FOOT", "LEFT_HAND_POLE"
+  model::FrameId frame = -1;  ///< points are given in this frame
   std::vector<Eigen::Vector3d> points;
-  bool fixed = false;             ///< fixed contact: no sign bound on its generators
-  double friction = 0.7;          ///< friction coefficient of the pyramid
+  bool fixed = false;     ///< fixed contact: no sign bound on its generators
+  double friction = 0.7;  ///< friction coefficient of the pyramid
   /// Contact normal in the frame (direction of the force the environment applies on the robot).
   Eigen::Vector3d normal_in_frame = Eigen::Vector3d::UnitZ();
   /// A point contact (one point): its contact task holds the point's position only (3 rows) and
@@ -63,8 +63,8 @@ class ContactLayout {
   ContactLayout() = default;
   ContactLayout(int nv, std::vector<ContactSpec> contacts);
   int nv() const { return nv_; }
-  int ng() const { return ng_; }                 ///< number of generator variables
-  int nx() const { return nv_ + ng_; }           ///< total number of decision variables
+  int ng() const { return ng_; }        ///< number of generator variables
+  int nx() const { return nv_ + ng_; }  ///< total number of decision variables
   int count() const { return static_cast<int>(contacts_.size()); }
   const ContactSpec& contact(int c) const {
     checkIndex("ContactLayout::contact", c, static_cast<long>(contacts_.size()));
@@ -73,12 +73,12 @@ class ContactLayout {
   int offset(int c) const {  ///< first generator of contact c (relative to nv)
     checkIndex("ContactLayout::offset", c, static_cast<long>(offset_.size()));
     return offset_[static_cast<size_t>(c)];
-  }  ///< first generator of contact c (relative to nv)
-  int find(const std::string& name) const;       ///< -1 when absent
+  }                                         ///< first generator of contact c (relative to nv)
+  int find(const std::string& name) const;  ///< -1 when absent
   /// 3 x 4 matrix of unit generator directions of a point in world coordinates, given the
   /// contact frame's world rotation: normalized (n + mu t_k) for t_k = +t1, -t1, +t2, -t2.
-  static void generators(const Eigen::Matrix3d& R_world_frame, const Eigen::Vector3d& normal_in_frame,
-                         double mu, Eigen::Ref<Eigen::Matrix<double, 3, 4>> D);
+  static void generators(const Eigen::Matrix3d& R_world_frame, const Eigen::Vector3d& normal_in_frame, double mu,
+                         Eigen::Ref<Eigen::Matrix<double, 3, 4>> D);
   /// The generators of a contact's points given its frame's world rotation: about the frame's
   /// normal, or the world's +z for a point contact.
   static void generators(const ContactSpec& spec, const Eigen::Matrix3d& R_world_frame, Eigen::Ref<Eigen::Matrix<double, 3, 4>> D);
@@ -92,17 +92,17 @@ class ContactLayout {
 /// Per-tick inputs shared by all tasks. Everything is valid for the current tick only.
 struct TickContext {
   const model::RobotModel* model = nullptr;
-  model::ModelData* data = nullptr;       ///< updated at the measured state of this tick
+  model::ModelData* data = nullptr;  ///< updated at the measured state of this tick
   const model::Configuration* q = nullptr;
-  const Eigen::VectorXd* u = nullptr;     ///< measured velocity (nv)
+  const Eigen::VectorXd* u = nullptr;  ///< measured velocity (nv)
   const ContactLayout* contacts = nullptr;
   const std::vector<char>* contact_active = nullptr;  ///< per contact
-  double dt = 0.005;                      ///< control period, s
-  double time = 0.0;                      ///< s
+  double dt = 0.005;                                  ///< control period, s
+  double time = 0.0;                                  ///< s
   Domain domain = Domain::Velocity;
   /// Shared per-tick quantities computed once by the controller before the tasks.
-  const Eigen::MatrixXd* M = nullptr;     ///< mass matrix (nv x nv)
-  const Eigen::VectorXd* N = nullptr;     ///< Coriolis + gravity (nv)
+  const Eigen::MatrixXd* M = nullptr;  ///< mass matrix (nv x nv)
+  const Eigen::VectorXd* N = nullptr;  ///< Coriolis + gravity (nv)
   /// Jc^T of the active contacts (nv x ng, contactJacobianTranspose), when the controller computed
   /// it for this tick; null: each dynamics task computes its own.
   const Eigen::MatrixXd* JcT = nullptr;
@@ -119,8 +119,8 @@ struct TaskData {
   /// Task function value, error and Jacobian with respect to u (rows x nv), for recording,
   /// switching, BFGS (eq. 88) and the analytic Hessian. Tasks without a task function
   /// (dynamics, bounds) leave J zero and return false from TaskModel::hasFunction().
-  Eigen::VectorXd error;     ///< e = f_d - f(q) (or the distance-like quantity of an inequality)
-  Eigen::MatrixXd J;         ///< d f / d u
+  Eigen::VectorXd error;  ///< e = f_d - f(q) (or the distance-like quantity of an inequality)
+  Eigen::MatrixXd J;      ///< d f / d u
   /// Per row: true when the row constrains the solution at this tick (an inequality inside its
   /// interaction distance, or any equality row); for recording "which constraints are active".
   std::vector<char> engaged;

@@ -49,14 +49,13 @@ void requireRotation(const Eigen::Matrix3d& R, const std::string& task, const st
   if (!R.allFinite()) throwTaskInput(task, field, "must be a rotation matrix, found non-finite entries");
   const double orth = (R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (orth > 1e-6 || R.determinant() <= 0.0) {
-    throwTaskInput(task, field,
-                   "must be a rotation matrix (orthonormal to 1e-6, det 1), found |R R^T - I| = " + str(orth) +
-                       ", det = " + str(R.determinant()));
+    throwTaskInput(
+        task, field,
+        "must be a rotation matrix (orthonormal to 1e-6, det 1), found |R R^T - I| = " + str(orth) + ", det = " + str(R.determinant()));
   }
 }
 
-model::FrameId resolveFrame(const model::RobotModel& model, const std::string& name, const std::string& task,
-                            const std::string& field) {
+model::FrameId resolveFrame(const model::RobotModel& model, const std::string& name, const std::string& task, const std::string& field) {
   try {
     return model.frameId(name);
   } catch (const InputError& e) {
@@ -64,8 +63,7 @@ model::FrameId resolveFrame(const model::RobotModel& model, const std::string& n
   }
 }
 
-int resolveJoint(const model::RobotModel& model, const std::string& name, const std::string& task,
-                 const std::string& field) {
+int resolveJoint(const model::RobotModel& model, const std::string& name, const std::string& task, const std::string& field) {
   try {
     return model.jointIndex(name);
   } catch (const InputError& e) {

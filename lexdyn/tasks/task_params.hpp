@@ -24,11 +24,9 @@ void requireRotation(const Eigen::Matrix3d& R, const std::string& task, const st
 
 /// The model's frame of that name; an unknown name becomes an InputError naming the task and
 /// the field (and listing the model's frames, as RobotModel::frameId does).
-model::FrameId resolveFrame(const model::RobotModel& model, const std::string& name, const std::string& task,
-                            const std::string& field);
+model::FrameId resolveFrame(const model::RobotModel& model, const std::string& name, const std::string& task, const std::string& field);
 /// The model's joint of that name (model joint order), as resolveFrame.
-int resolveJoint(const model::RobotModel& model, const std::string& name, const std::string& task,
-                 const std::string& field);
+int resolveJoint(const model::RobotModel& model, const std::string& name, const std::string& task, const std::string& field);
 
 /// Sets mask[k] = 1 for every dof that moves `body` (KinematicTree::bodies[body].ancestor_dofs).
 /// mask must have nv entries.

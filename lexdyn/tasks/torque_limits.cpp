@@ -9,8 +9,7 @@ TorqueLimitsTask::TorqueLimitsTask(std::string name, const model::RobotModel& mo
     : DynamicsTask(std::move(name), model, model.jointVelocityOffset(), model.numJoints()) {
   requirePositive(params.scale, this->name(), "scale");
   if (params.scale > 1.0) {
-    throwTaskInput(this->name(), "scale", "must be in (0, 1] (a fraction of the effort limits), found " +
-                                              std::to_string(params.scale));
+    throwTaskInput(this->name(), "scale", "must be in (0, 1] (a fraction of the effort limits), found " + std::to_string(params.scale));
   }
   tau_max_ = params.scale * model.jointTorqueLimits();
 }

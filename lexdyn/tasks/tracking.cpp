@@ -7,18 +7,14 @@ namespace lexdyn::tasks {
 TrackingTask::TrackingTask(std::string name, const model::RobotModel& model, int rows, int target_size)
     : TaskModel(std::move(name)), nv_(model.nv()), rows_(rows), target_size_(target_size) {}
 
-void TrackingTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) const {
-  requireFinite(target, name(), "target");
-}
+void TrackingTask::checkTarget(const Eigen::Ref<const Eigen::VectorXd>& target) const { requireFinite(target, name(), "target"); }
 
 void TrackingTask::setInitialTarget(const Eigen::Ref<const Eigen::VectorXd>& target) {
   checkTarget(target);
   initial_target_ = target;
 }
 
-std::unique_ptr<TaskData> TrackingTask::createData(const ContactLayout& layout) const {
-  return makeTrackingData<TaskData>(layout);
-}
+std::unique_ptr<TaskData> TrackingTask::createData(const ContactLayout& layout) const { return makeTrackingData<TaskData>(layout); }
 
 void TrackingTask::reset(TaskData& d) const {
   d.target_set = initial_target_.size() != 0;

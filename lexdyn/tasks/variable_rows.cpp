@@ -2,8 +2,7 @@
 
 namespace lexdyn::tasks {
 
-VelocityRowsTask::VelocityRowsTask(std::string name, const model::RobotModel& model)
-    : TaskModel(std::move(name)), nv_(model.nv()) {}
+VelocityRowsTask::VelocityRowsTask(std::string name, const model::RobotModel& model) : TaskModel(std::move(name)), nv_(model.nv()) {}
 
 std::unique_ptr<TaskData> VelocityRowsTask::createData(const ContactLayout& layout) const {
   requireLayoutNv(layout, nv_);

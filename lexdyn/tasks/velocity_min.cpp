@@ -4,8 +4,7 @@
 
 namespace lexdyn::tasks {
 
-VelocityMinTask::VelocityMinTask(std::string name, const model::RobotModel& model)
-    : VelocityRowsTask(std::move(name), model) {}
+VelocityMinTask::VelocityMinTask(std::string name, const model::RobotModel& model) : VelocityRowsTask(std::move(name), model) {}
 
 void VelocityMinTask::compute(const TickContext& ctx, TaskData& d) const {
   LEXDYN_ALWAYS_ASSERT(ctx.domain == Domain::Velocity, "velocity_min: velocity domain only");

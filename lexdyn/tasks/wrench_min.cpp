@@ -2,8 +2,7 @@
 
 namespace lexdyn::tasks {
 
-WrenchMinTask::WrenchMinTask(std::string name, const ContactLayout& layout)
-    : GeneratorRowsTask(std::move(name), layout) {}
+WrenchMinTask::WrenchMinTask(std::string name, const ContactLayout& layout) : GeneratorRowsTask(std::move(name), layout) {}
 
 void WrenchMinTask::compute(const TickContext&, TaskData& d) const {
   d.lower.setZero();

@@ -55,8 +55,7 @@ Eigen::VectorXd boundVector(const py::object& v, long rows, double none_value, c
   if (v.is_none()) return Eigen::VectorXd::Constant(rows, none_value);
   Eigen::VectorXd out = v.cast<Eigen::VectorXd>();
   if (out.size() != rows) {
-    valueError(std::string(what) + ": expected " + std::to_string(rows) + " entries (one per row), found " +
-               std::to_string(out.size()));
+    valueError(std::string(what) + ": expected " + std::to_string(rows) + " entries (one per row), found " + std::to_string(out.size()));
   }
   return out;
 }
@@ -64,8 +63,7 @@ Eigen::VectorXd boundVector(const py::object& v, long rows, double none_value, c
 Eigen::MatrixXd levelMatrix(const py::object& A, int variables) {
   Eigen::MatrixXd out = A.cast<Eigen::MatrixXd>();
   if (out.cols() != variables) {
-    valueError("A: expected " + std::to_string(variables) + " columns (the problem's variables), found " +
-               std::to_string(out.cols()));
+    valueError("A: expected " + std::to_string(variables) + " columns (the problem's variables), found " + std::to_string(out.cols()));
   }
   return out;
 }
@@ -101,8 +99,7 @@ ls::ActiveSet activeSetFrom(const py::object& obj) {
     row.reserve(static_cast<size_t>(codes.size()));
     for (int i = 0; i < codes.size(); ++i) {
       if (codes(i) < 0 || codes(i) > 3) {
-        valueError("active set: expected row states 0 (inactive), 1 (lower), 2 (upper), 3 (equality), found " +
-                   std::to_string(codes(i)));
+        valueError("active set: expected row states 0 (inactive), 1 (lower), 2 (upper), 3 (equality), found " + std::to_string(codes(i)));
       }
       row.push_back(static_cast<ls::RowState>(codes(i)));
     }
@@ -204,8 +201,8 @@ struct PyModel {
   lm::Configuration configuration(const Eigen::VectorXd& qv) const {
     if (qv.size() != nq()) {
       valueError("q: expected " + std::to_string(nq()) + " entries (" +
-                 (model.hasFreeFlyer() ? "base position 3, quaternion w x y z 4, joints " : "joints ") +
-                 std::to_string(model.numJoints()) + "), found " + std::to_string(qv.size()));
+                 (model.hasFreeFlyer() ? "base position 3, quaternion w x y z 4, joints " : "joints ") + std::to_string(model.numJoints()) +
+                 "), found " + std::to_string(qv.size()));
     }
     if (!qv.allFinite()) valueError("q: expected finite numbers");
     lm::Configuration c;
@@ -260,8 +257,8 @@ using CaseOverride = std::tuple<std::string, std::string, std::string>;
 // Python's signals every 100 ms: Ctrl-C stops the run after its current tick (the trace gets the
 // end mark of an interrupted run, the summary is written) and is raised once the run has ended.
 py::dict runCaseBound(const std::string& case_path, const std::string& method, const std::vector<CaseOverride>& overrides,
-                      const std::string& out_dir, bool progress, bool wall_clock_checks, const std::string& dump_dir,
-                      double dump_from, double dump_to) {
+                      const std::string& out_dir, bool progress, bool wall_clock_checks, const std::string& dump_dir, double dump_from,
+                      double dump_to) {
   std::vector<lexdyn::cases::Override> ov;
   ov.reserve(overrides.size());
   for (const CaseOverride& o : overrides) ov.push_back({std::get<0>(o), std::get<1>(o), std::get<2>(o)});
@@ -338,18 +335,17 @@ PYBIND11_MODULE(_core, m) {
   py::register_exception<lexdyn::OutputError>(m, "OutputError", PyExc_OSError);
 
   // ---------------------------------------------------------------- solver
-  py::class_<ls::Options>(m, "Options",
-                          "Solver options (lexdyn/solver/solver.hpp, docs/solver.md); keyword arguments set fields.")
+  py::class_<ls::Options>(m, "Options", "Solver options (lexdyn/solver/solver.hpp, docs/solver.md); keyword arguments set fields.")
       .def(py::init([](const py::kwargs& kw) {
-             auto o = std::make_unique<ls::Options>();
-             py::object self = py::cast(o.get(), py::return_value_policy::reference);
-             for (const auto& item : kw) {
-               const std::string key = item.first.cast<std::string>();
-               if (!py::hasattr(self, key.c_str()) || key.rfind("_", 0) == 0) valueError("Options: unknown field '" + key + "'");
-               py::setattr(self, key.c_str(), item.second);
-             }
-             return o;
-           }))
+        auto o = std::make_unique<ls::Options>();
+        py::object self = py::cast(o.get(), py::return_value_policy::reference);
+        for (const auto& item : kw) {
+          const std::string key = item.first.cast<std::string>();
+          if (!py::hasattr(self, key.c_str()) || key.rfind("_", 0) == 0) valueError("Options: unknown field '" + key + "'");
+          py::setattr(self, key.c_str(), item.second);
+        }
+        return o;
+      }))
       .def_static("paper", &ls::Options::paper, "dt"_a,
                   "The paper's termination rules for a control period dt: slack 1e-12 dt^2, 10 optimality-phase "
                   "iterations, 30 in total.")
@@ -365,16 +361,23 @@ PYBIND11_MODULE(_core, m) {
           "last_level_projection",
           [](const ls::Options& o) {
             switch (o.last_level_projection) {
-              case ls::Options::LastLevel::Never: return "never";
-              case ls::Options::LastLevel::Always: return "always";
-              default: return "auto";
+              case ls::Options::LastLevel::Never:
+                return "never";
+              case ls::Options::LastLevel::Always:
+                return "always";
+              default:
+                return "auto";
             }
           },
           [](ls::Options& o, const std::string& v) {
-            if (v == "auto") o.last_level_projection = ls::Options::LastLevel::Auto;
-            else if (v == "never") o.last_level_projection = ls::Options::LastLevel::Never;
-            else if (v == "always") o.last_level_projection = ls::Options::LastLevel::Always;
-            else valueError("last_level_projection: expected auto, never or always, found '" + v + "'");
+            if (v == "auto")
+              o.last_level_projection = ls::Options::LastLevel::Auto;
+            else if (v == "never")
+              o.last_level_projection = ls::Options::LastLevel::Never;
+            else if (v == "always")
+              o.last_level_projection = ls::Options::LastLevel::Always;
+            else
+              valueError("last_level_projection: expected auto, never or always, found '" + v + "'");
           },
           "auto | never | always")
       .def_readwrite("spanning_stages", &ls::Options::spanning_stages)
@@ -389,8 +392,8 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("stop_after_level", &ls::Options::stop_after_level)
       .def_readwrite("compute_multipliers", &ls::Options::compute_multipliers)
       .def("__repr__", [](const ls::Options& o) {
-        return "Options(max_iterations=" + std::to_string(o.max_iterations) + ", rank_tolerance=" +
-               py::repr(py::float_(o.rank_tolerance)).cast<std::string>() + ", ...)";
+        return "Options(max_iterations=" + std::to_string(o.max_iterations) +
+               ", rank_tolerance=" + py::repr(py::float_(o.rank_tolerance)).cast<std::string>() + ", ...)";
       });
 
   py::class_<ls::Problem>(m, "Problem",
@@ -431,8 +434,8 @@ PYBIND11_MODULE(_core, m) {
           "Appends a general level lower <= A x <= upper (None: unbounded side); returns its index.")
       .def(
           "add_bounds_level",
-          [](ls::Problem& p, std::vector<int> variable, const py::object& coefficient, const py::object& lower,
-             const py::object& upper, const std::string& name) {
+          [](ls::Problem& p, std::vector<int> variable, const py::object& coefficient, const py::object& lower, const py::object& upper,
+             const std::string& name) {
             const long rows = static_cast<long>(variable.size());
             Eigen::VectorXd c = coefficient.is_none() ? Eigen::VectorXd::Ones(rows) : boundVector(coefficient, rows, 1.0, "coefficient");
             return p.addBoundsLevel(name.empty() ? "bounds" : name, std::move(variable), std::move(c),
@@ -447,8 +450,8 @@ PYBIND11_MODULE(_core, m) {
             if (!A.is_none()) {
               if (lv.kind == ls::LevelKind::Bounds) valueError("update_level: a bounds level has no A");
               Eigen::MatrixXd M = levelMatrix(A, p.variables());
-              if (M.rows() != lv.rows()) valueError("A: expected " + std::to_string(lv.rows()) + " rows (the level's), found " +
-                                                    std::to_string(M.rows()));
+              if (M.rows() != lv.rows())
+                valueError("A: expected " + std::to_string(lv.rows()) + " rows (the level's), found " + std::to_string(M.rows()));
               lv.A = std::move(M);
             }
             if (!lower.is_none()) lv.lower = boundVector(lower, lv.rows(), -ls::kInf, "lower");
@@ -471,26 +474,31 @@ PYBIND11_MODULE(_core, m) {
                                return out;
                              })
       .def("to_json", &ls::problemToJson, "The problem file's text (docs/file-formats.md).")
-      .def("save", [](const ls::Problem& p, const std::string& path) { ls::writeProblemJson(p, path); }, "path"_a,
-           "Writes the problem file (atomically), for lexdyn-solve.")
+      .def(
+          "save", [](const ls::Problem& p, const std::string& path) { ls::writeProblemJson(p, path); }, "path"_a,
+          "Writes the problem file (atomically), for lexdyn-solve.")
       .def("__repr__", [](const ls::Problem& p) {
         return "Problem(variables=" + std::to_string(p.variables()) + ", levels=" + std::to_string(p.levelCount()) +
                ", rows=" + std::to_string(p.totalRows()) + ")";
       });
 
   py::class_<ls::Result>(m, "Result", "A solve's result (lexdyn/solver/solver.hpp); arrays are copies.")
-      .def_property_readonly("status", [](const ls::Result& r) { return ls::toString(r.status); },
-                             "solved | stopped_early | iteration_limit | non_finite_input | non_finite_result")
+      .def_property_readonly(
+          "status", [](const ls::Result& r) { return ls::toString(r.status); },
+          "solved | stopped_early | iteration_limit | non_finite_input | non_finite_result")
       .def_property_readonly("reason", [](const ls::Result& r) { return ls::toString(r.reason); })
       .def_property_readonly("x", [](const ls::Result& r) { return Eigen::VectorXd(r.x); })
-      .def_property_readonly("level_violation", [](const ls::Result& r) { return Eigen::VectorXd(r.violation_norm); },
-                             "per level: the Euclidean norm of its violation")
-      .def_property_readonly("violation", [](const ls::Result& r) { return r.violation; },
-                             "per level: a x - clamp(a x, lower, upper) of each row")
-      .def_property_readonly("multipliers", [](const ls::Result& r) { return Eigen::MatrixXd(r.lambda); },
-                             "all rows x levels: column l the multipliers of the level-l problem")
-      .def_property_readonly("active", [](const ls::Result& r) { return activeSetList(r.active); },
-                             "per level: int8 row states 0 inactive, 1 lower, 2 upper, 3 equality")
+      .def_property_readonly(
+          "level_violation", [](const ls::Result& r) { return Eigen::VectorXd(r.violation_norm); },
+          "per level: the Euclidean norm of its violation")
+      .def_property_readonly(
+          "violation", [](const ls::Result& r) { return r.violation; }, "per level: a x - clamp(a x, lower, upper) of each row")
+      .def_property_readonly(
+          "multipliers", [](const ls::Result& r) { return Eigen::MatrixXd(r.lambda); },
+          "all rows x levels: column l the multipliers of the level-l problem")
+      .def_property_readonly(
+          "active", [](const ls::Result& r) { return activeSetList(r.active); },
+          "per level: int8 row states 0 inactive, 1 lower, 2 upper, 3 equality")
       .def_property_readonly("active_names",
                              [](const ls::Result& r) {
                                std::vector<std::vector<std::string>> out;
@@ -622,12 +630,17 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("joint_upper_limits", [](const PyModel& p) { return Eigen::VectorXd(p.model.jointUpperLimits()); })
       .def_property_readonly("joint_velocity_limits", [](const PyModel& p) { return Eigen::VectorXd(p.model.jointVelocityLimits()); })
       .def_property_readonly("joint_torque_limits", [](const PyModel& p) { return Eigen::VectorXd(p.model.jointTorqueLimits()); })
-      .def_property_readonly("q", [](const PyModel& p) { return Eigen::VectorXd(p.q); }, "q of the last update")
-      .def_property_readonly("u", [](const PyModel& p) { return Eigen::VectorXd(p.u); }, "u of the last update")
-      .def("frame_id", [](const PyModel& p, const std::string& name) { return p.model.frameId(name); }, "name"_a)
-      .def("joint_index", [](const PyModel& p, const std::string& name) { return p.model.jointIndex(name); }, "name"_a)
-      .def("neutral", [](const PyModel& p) { return p.flat(p.model.neutralConfiguration()); },
-           "The neutral configuration: identity base at the origin, joints 0.")
+      .def_property_readonly(
+          "q", [](const PyModel& p) { return Eigen::VectorXd(p.q); }, "q of the last update")
+      .def_property_readonly(
+          "u", [](const PyModel& p) { return Eigen::VectorXd(p.u); }, "u of the last update")
+      .def(
+          "frame_id", [](const PyModel& p, const std::string& name) { return p.model.frameId(name); }, "name"_a)
+      .def(
+          "joint_index", [](const PyModel& p, const std::string& name) { return p.model.jointIndex(name); }, "name"_a)
+      .def(
+          "neutral", [](const PyModel& p) { return p.flat(p.model.neutralConfiguration()); },
+          "The neutral configuration: identity base at the origin, joints 0.")
       .def(
           "posture",
           [](const PyModel& p, const std::string& name) {
@@ -717,7 +730,8 @@ PYBIND11_MODULE(_core, m) {
             return J;
           },
           "frame"_a, "point"_a = Eigen::Vector3d::Zero().eval(), "3 x nv Jacobian of a point given in the frame.")
-      .def("com", [](const PyModel& p) { return Eigen::Vector3d(p.model.centerOfMass(p.data)); }, "Centre of mass, world.")
+      .def(
+          "com", [](const PyModel& p) { return Eigen::Vector3d(p.model.centerOfMass(p.data)); }, "Centre of mass, world.")
       .def("com_velocity", [](const PyModel& p) { return Eigen::Vector3d(p.model.centerOfMassVelocity(p.data)); })
       .def(
           "com_jacobian",
@@ -733,8 +747,8 @@ PYBIND11_MODULE(_core, m) {
       });
 
   // ---------------------------------------------------------------- cases
-  m.def("_run_case", &runCaseBound, "case_path"_a, "method"_a, "overrides"_a, "out_dir"_a, "progress"_a,
-        "wall_clock_checks"_a, "dump_dir"_a, "dump_from"_a, "dump_to"_a,
+  m.def("_run_case", &runCaseBound, "case_path"_a, "method"_a, "overrides"_a, "out_dir"_a, "progress"_a, "wall_clock_checks"_a,
+        "dump_dir"_a, "dump_from"_a, "dump_to"_a,
         "lexdyn-harness run CASE --out OUT_DIR (lexdyn.run_case wraps it); returns exit_code, status, message, "
         "method and the paths written.");
 }

@@ -52,7 +52,9 @@ inline std::map<std::string, std::string> minimalCase(double duration_s = 0.5) {
 inline std::string lexdynController(const std::string& method = "bfgs", const std::string& extra = "") {
   return "controller:\n"
          "  type: lexdyn\n"
-         "  method: " + method + "\n"
+         "  method: " +
+         method +
+         "\n"
          "  state_feedback: integrated\n"
          "  solver: {paper_rules: true}\n"
          "  contacts:\n"
@@ -95,8 +97,9 @@ inline std::string lexdynController(const std::string& method = "bfgs", const st
 inline std::map<std::string, std::string> minimalLexdynCase(double duration_s = 0.3, const std::string& method = "bfgs") {
   auto s = minimalCase(duration_s);
   s["e_controller"] = lexdynController(method);
-  s["f_sim"] += "  grasps:\n    - {name: left, frame: LGRASP, stiffness_N_per_m: 2e4, damping_Ns_per_m: 400,"
-                " rot_stiffness_Nm_per_rad: 500, rot_damping_Nms_per_rad: 10}\n";
+  s["f_sim"] +=
+      "  grasps:\n    - {name: left, frame: LGRASP, stiffness_N_per_m: 2e4, damping_Ns_per_m: 400,"
+      " rot_stiffness_Nm_per_rad: 500, rot_damping_Nms_per_rad: 10}\n";
   s["g_trace"] = "trace:\n  frames: [WAIST, RGRASP]\n";
   s["h_checks"] = "checks:\n  - {name: hands, type: task_error, tasks: [right_hand], statistic: final, limit: 10.0}\n";
   return s;
@@ -112,8 +115,8 @@ inline std::string dataFileWithOneLegPosture(const std::string& dir) {
   const size_t b = text.find("\n\n", a);
   std::string posture = text.substr(a, b == std::string::npos ? std::string::npos : b - a);
   posture.replace(0, 15, "  one_leg:");
-  for (const auto& [joint, value] : {std::pair<std::string, std::string>{"RLEG_JOINT2: -0.4538", "RLEG_JOINT2: -1.2"},
-                                     {"RLEG_JOINT3: 0.8727", "RLEG_JOINT3: 1.8"}}) {
+  for (const auto& [joint, value] :
+       {std::pair<std::string, std::string>{"RLEG_JOINT2: -0.4538", "RLEG_JOINT2: -1.2"}, {"RLEG_JOINT3: 0.8727", "RLEG_JOINT3: 1.8"}}) {
     posture.replace(posture.find(joint), joint.size(), value);
   }
   text.insert(b == std::string::npos ? text.size() : b, "\n" + posture);

@@ -25,10 +25,10 @@ TEST(CaseFile, RepositoryCasesLoad) {
   EXPECT_DOUBLE_EQ(stand.control_period_s, 0.005);
   ASSERT_EQ(stand.sim.servo.kp.size(), 32);
   // Gains: later groups override earlier ones.
-  EXPECT_EQ(stand.sim.servo.kp[3], 20000.0);   // RLEG_JOINT3
-  EXPECT_EQ(stand.sim.servo.kp[14], 500.0);    // HEAD_JOINT0
-  EXPECT_EQ(stand.sim.servo.kp[16], 2000.0);   // RARM_JOINT0
-  EXPECT_EQ(stand.sim.servo.kp[23], 100.0);    // RARM_JOINT7
+  EXPECT_EQ(stand.sim.servo.kp[3], 20000.0);  // RLEG_JOINT3
+  EXPECT_EQ(stand.sim.servo.kp[14], 500.0);   // HEAD_JOINT0
+  EXPECT_EQ(stand.sim.servo.kp[16], 2000.0);  // RARM_JOINT0
+  EXPECT_EQ(stand.sim.servo.kp[23], 100.0);   // RARM_JOINT7
   EXPECT_EQ(stand.sim.servo.profile, sim::SetpointProfile::Hermite);
   EXPECT_DOUBLE_EQ(stand.sim.contact.friction_coefficient, 0.7);  // from the data file
   ASSERT_EQ(stand.checks.size(), 3u);
@@ -55,8 +55,7 @@ TEST(CaseFile, InitialStateSettleDefaultsToTheStaticEquilibrium) {
     const CaseSpec cv = loadCase(writeCase(outputDir("case_file_settle"), s));
     EXPECT_STREQ(sim::toString(cv.initial_state.settle), v);
     EXPECT_TRUE(cv.initial_state.settle_given);
-    EXPECT_NE(cv.initial_state.settle_where.find("case.yaml:8: initial_state.settle"), std::string::npos)
-        << cv.initial_state.settle_where;
+    EXPECT_NE(cv.initial_state.settle_where.find("case.yaml:8: initial_state.settle"), std::string::npos) << cv.initial_state.settle_where;
   }
   auto s = minimalCase();
   s["d_initial"] = "initial_state:\n  posture: half_sitting\n  settle: yes\n";
@@ -75,8 +74,7 @@ TEST(CaseFile, UnknownKeysAreErrorsWithFileLineAndPath) {
 TEST(CaseFile, WrongTypesAreErrors) {
   auto s = minimalCase();
   s["c_duration"] = "duration_s: ten\n";
-  EXPECT_NE(errorOf(s).find("case.yaml:5: duration_s: expected a finite number, found 'ten'"), std::string::npos)
-      << errorOf(s);
+  EXPECT_NE(errorOf(s).find("case.yaml:5: duration_s: expected a finite number, found 'ten'"), std::string::npos) << errorOf(s);
   s = minimalCase();
   s["c_duration"] = "duration_s: -1\n";
   EXPECT_NE(errorOf(s).find("expected a number > 0"), std::string::npos);
@@ -88,13 +86,13 @@ TEST(CaseFile, WrongTypesAreErrors) {
   EXPECT_TRUE(containsAll(errorOf(s), {"sim.integrator.rtol"}));
   s = minimalCase();
   s["f_sim"] += "  integrator: {linear_solver: sparse_lu}\n";
-  EXPECT_TRUE(containsAll(errorOf(s), {"case.yaml:", "sim.integrator.linear_solver", "expected one of {block_elimination, dense_lu}",
-                                       "found 'sparse_lu'"}))
+  EXPECT_TRUE(containsAll(
+      errorOf(s), {"case.yaml:", "sim.integrator.linear_solver", "expected one of {block_elimination, dense_lu}", "found 'sparse_lu'"}))
       << errorOf(s);
   s = minimalCase();
   s["f_sim"] += "  integrator: {jacobian: analytic}\n";
-  EXPECT_TRUE(containsAll(errorOf(s), {"case.yaml:", "sim.integrator.jacobian",
-                                       "expected one of {difference_quotient, applied_forces}", "found 'analytic'"}))
+  EXPECT_TRUE(containsAll(
+      errorOf(s), {"case.yaml:", "sim.integrator.jacobian", "expected one of {difference_quotient, applied_forces}", "found 'analytic'"}))
       << errorOf(s);
 }
 
@@ -140,8 +138,9 @@ TEST(CaseFile, UnknownReferencesAreErrors) {
   EXPECT_TRUE(containsAll(errorOf(s), {"checks[0].type", "frame_drift"}));
 
   s = minimalCase();
-  s["e_controller"] = "controller:\n  type: posture_servo\n  posture: half_sitting\n  motions:\n"
-                      "    - {joints: [RKNEE], amplitude: 0.1, period_s: 1}\n";
+  s["e_controller"] =
+      "controller:\n  type: posture_servo\n  posture: half_sitting\n  motions:\n"
+      "    - {joints: [RKNEE], amplitude: 0.1, period_s: 1}\n";
   EXPECT_TRUE(containsAll(errorOf(s), {"controller.motions[0].joints[0]"}));
 
   s = minimalCase();
@@ -166,8 +165,9 @@ TEST(CaseFile, GainGroupsMustMatchAndCoverEveryJoint) {
 
 TEST(CaseFile, EventsAndGrasps) {
   auto s = minimalCase();
-  s["f_sim"] += "  grasps:\n    - {name: left, frame: LGRASP, stiffness_N_per_m: 2e4, damping_Ns_per_m: 400,"
-                " rot_stiffness_Nm_per_rad: 500, rot_damping_Nms_per_rad: 10}\n";
+  s["f_sim"] +=
+      "  grasps:\n    - {name: left, frame: LGRASP, stiffness_N_per_m: 2e4, damping_Ns_per_m: 400,"
+      " rot_stiffness_Nm_per_rad: 500, rot_damping_Nms_per_rad: 10}\n";
   s["e_controller"] += "events:\n  - {at_s: 0.3, action: grasp_off, grasp: left}\n  - {at_s: 0.1, action: grasp_on, grasp: left}\n";
   const CaseSpec c = loadCase(writeCase(outputDir("case_file_events"), s));
   ASSERT_EQ(c.events.size(), 2u);
@@ -175,18 +175,21 @@ TEST(CaseFile, EventsAndGrasps) {
   EXPECT_DOUBLE_EQ(c.events[1].at_s, 0.3);
 
   auto bad = s;
-  bad["e_controller"] = "controller:\n  type: posture_servo\n  posture: half_sitting\n"
-                        "events:\n  - {at_s: 0.1, action: grasp_on, grasp: right}\n";
+  bad["e_controller"] =
+      "controller:\n  type: posture_servo\n  posture: half_sitting\n"
+      "events:\n  - {at_s: 0.1, action: grasp_on, grasp: right}\n";
   EXPECT_TRUE(containsAll(errorOf(bad), {"events[0].grasp"}));
-  bad["e_controller"] = "controller:\n  type: posture_servo\n  posture: half_sitting\n"
-                        "events:\n  - {at_s: 9, action: grasp_on, grasp: left}\n";
+  bad["e_controller"] =
+      "controller:\n  type: posture_servo\n  posture: half_sitting\n"
+      "events:\n  - {at_s: 9, action: grasp_on, grasp: left}\n";
   EXPECT_TRUE(containsAll(errorOf(bad), {"after the end of the run"}));
 }
 
 TEST(CaseFile, DuplicateCheckNamesAreErrors) {
   auto s = minimalCase();
-  s["h_checks"] = "checks:\n  - {type: frame_drift, frame: WAIST, limit_m: 0.01}\n"
-                  "  - {type: frame_drift, frame: WAIST, limit_m: 0.02}\n";
+  s["h_checks"] =
+      "checks:\n  - {type: frame_drift, frame: WAIST, limit_m: 0.01}\n"
+      "  - {type: frame_drift, frame: WAIST, limit_m: 0.02}\n";
   EXPECT_TRUE(containsAll(errorOf(s), {"duplicate check name 'frame_drift'"}));
 }
 

@@ -46,8 +46,8 @@ TEST(CaseOverrides, ParseSplitsAtTheFirstEqualsSign) {
 TEST(CaseOverrides, ElementsByNameOrIndexInAnySpelling) {
   const CaseSpec base = loadCase(src("cases/exp1.yaml"));
   EXPECT_DOUBLE_EQ(task(base, "right_hand").paramsAs<tasks::PositionParams>().gains.kp, 0.3);
-  for (const char* path : {"controller.tasks.right_hand.gains.kp", "controller.tasks[right_hand].gains.kp",
-                           "controller.tasks[9].gains.kp", "controller.tasks.9.gains.kp"}) {
+  for (const char* path : {"controller.tasks.right_hand.gains.kp", "controller.tasks[right_hand].gains.kp", "controller.tasks[9].gains.kp",
+                           "controller.tasks.9.gains.kp"}) {
     const CaseSpec c = withSets("cases/exp1.yaml", {std::string(path) + "=0.7"});
     EXPECT_DOUBLE_EQ(task(c, "right_hand").paramsAs<tasks::PositionParams>().gains.kp, 0.7) << path;
     EXPECT_DOUBLE_EQ(task(c, "left_hand").paramsAs<tasks::PositionParams>().gains.kp, 0.3) << path;
@@ -76,31 +76,30 @@ TEST(CaseOverrides, ValidKeysTheFileLeavesOutCanBeSet) {
 // controller.solver): each key is checked against the keys read there, a misspelt one still names
 // the nearest valid paths.
 TEST(CaseOverrides, SeveralKeysOfASectionAnOverrideCreated) {
-  const CaseSpec c = withSets("cases/pointmass-damping.yaml",
-                              {"controller.solver.spanning_stages=false", "controller.solver.lazy_snapshots=false",
-                               "controller.solver.max_iterations=77"});
+  const CaseSpec c = withSets(
+      "cases/pointmass-damping.yaml",
+      {"controller.solver.spanning_stages=false", "controller.solver.lazy_snapshots=false", "controller.solver.max_iterations=77"});
   EXPECT_FALSE(c.controller.lexdyn.params.solver.spanning_stages);
   EXPECT_FALSE(c.controller.lexdyn.params.solver.lazy_snapshots);
   EXPECT_EQ(c.controller.lexdyn.params.solver.max_iterations, 77);
-  EXPECT_TRUE(containsAll(errorOf("cases/pointmass-damping.yaml",
-                                  {"controller.solver.spanning_stages=false", "controller.solver.lazy_snapshotz=false"}),
-                          {"no key 'lazy_snapshotz'", "nearest valid paths: controller.solver.lazy_snapshots"}));
+  EXPECT_TRUE(containsAll(
+      errorOf("cases/pointmass-damping.yaml", {"controller.solver.spanning_stages=false", "controller.solver.lazy_snapshotz=false"}),
+      {"no key 'lazy_snapshotz'", "nearest valid paths: controller.solver.lazy_snapshots"}));
 }
 
 TEST(CaseOverrides, AWrongPathNamesTheNearestValidPaths) {
-  EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"controller.tasks.right_hand.gainz.kp=1"}),
-                          {"--set controller.tasks.right_hand.gainz.kp=1", "no key 'gainz'",
-                           "nearest valid paths: controller.tasks[right_hand].gains.kp"}));
+  EXPECT_TRUE(containsAll(
+      errorOf("cases/exp1.yaml", {"controller.tasks.right_hand.gainz.kp=1"}),
+      {"--set controller.tasks.right_hand.gainz.kp=1", "no key 'gainz'", "nearest valid paths: controller.tasks[right_hand].gains.kp"}));
   EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"controller.tasks.rihgt_hand.gains.kp=1"}),
                           {"no element named 'rihgt_hand'", "nearest valid paths: controller.tasks[right_hand].gains.kp"}));
-  EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"checks[3].limit=2"}),
-                          {"nearest valid paths: checks[torques].limit_fraction"}));
+  EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"checks[3].limit=2"}), {"nearest valid paths: checks[torques].limit_fraction"}));
   EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"durration_s=1"}), {"nearest valid paths: duration_s"}));
   EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"checks.99.limit=2"}), {"has 20 elements, no element 99"}));
   EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"duration_s.x=1"}), {"'duration_s' is a value"}));
   // Below a key being created nothing can be checked at once; the reader says what it allows.
-  EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"sim.integrator.rtoll=1e-5"}),
-                          {"--set sim.integrator.rtoll=1e-5", "allowed here: rtol"}));
+  EXPECT_TRUE(
+      containsAll(errorOf("cases/exp1.yaml", {"sim.integrator.rtoll=1e-5"}), {"--set sim.integrator.rtoll=1e-5", "allowed here: rtol"}));
 }
 
 TEST(CaseOverrides, ABadValueIsReportedAtTheOverride) {
@@ -113,8 +112,7 @@ TEST(CaseOverrides, ABadValueIsReportedAtTheOverride) {
   EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"controller.tasks.right_hand.gains={kp: -2}"}),
                           {"--set controller.tasks.right_hand.gains={kp: -2} (controller.tasks[right_hand].gains.kp)"}));
   // An error elsewhere keeps its file line.
-  EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"controller.method=gn", "controller.levels=[]"}),
-                          {"--set controller.levels=[]"}));
+  EXPECT_TRUE(containsAll(errorOf("cases/exp1.yaml", {"controller.method=gn", "controller.levels=[]"}), {"--set controller.levels=[]"}));
 }
 
 TEST(CaseOverrides, StopAtCutsTheRunButKeepsTheScenario) {
@@ -150,8 +148,8 @@ TEST(CaseOverrides, TheEffectiveCaseReproducesTheRunBitForBit) {
   }
   EXPECT_NE(text.find("#   --set controller.params.damping=0.6"), std::string::npos) << text;
   // The model's path relative to the effective case's folder (wherever the build directory is).
-  const std::string urdf = std::filesystem::relative(src("models/point_mass/point_mass.urdf"),
-                                                     std::filesystem::weakly_canonical(dir + "/a")).string();
+  const std::string urdf =
+      std::filesystem::relative(src("models/point_mass/point_mass.urdf"), std::filesystem::weakly_canonical(dir + "/a")).string();
   EXPECT_NE(text.find("urdf: " + urdf), std::string::npos) << urdf << "\n" << text;
   CaseSpec again = loadCase(a.case_path);
   overrideMethod(again, "wls", "test");
@@ -172,7 +170,8 @@ TEST(CaseOverrides, TheEffectiveCaseReproducesTheRunBitForBit) {
   EXPECT_TRUE(ta == tb) << "the traces differ";
   // Without a destination the paths are absolute.
   const std::string abs = effectiveCaseText(c, "");
-  EXPECT_NE(abs.find("urdf: " + std::filesystem::absolute(src("models/point_mass/point_mass.urdf")).lexically_normal().string()), std::string::npos);
+  EXPECT_NE(abs.find("urdf: " + std::filesystem::absolute(src("models/point_mass/point_mass.urdf")).lexically_normal().string()),
+            std::string::npos);
 }
 
 TEST(CaseOverrides, PosturePerturbationIsSeededSmallAndWithinLimits) {
@@ -192,12 +191,14 @@ TEST(CaseOverrides, PosturePerturbationIsSeededSmallAndWithinLimits) {
   EXPECT_LE(d.cwiseAbs().maxCoeff(), 0.01);
   EXPECT_GT(d.cwiseAbs().maxCoeff(), 0.001);
   EXPECT_EQ(d.head(16).cwiseAbs().maxCoeff(), 0.0);  // legs, chest, head untouched
-  EXPECT_GT(d.tail(16).cwiseAbs().minCoeff(), 0.0);   // every arm joint moved
-  EXPECT_NE(errorOf("cases/exp1.yaml", {"initial_state.perturbation={seed: 1, amplitude_rad: 2}"}).find("amplitude <= 0.5"), std::string::npos);
+  EXPECT_GT(d.tail(16).cwiseAbs().minCoeff(), 0.0);  // every arm joint moved
+  EXPECT_NE(errorOf("cases/exp1.yaml", {"initial_state.perturbation={seed: 1, amplitude_rad: 2}"}).find("amplitude <= 0.5"),
+            std::string::npos);
 }
 
 TEST(CaseOverrides, TheSimulatedRobotCarriesTheModelPerturbation) {
-  const CaseSpec c = withSets("cases/exp1.yaml", {"sim.model={mass_scale: [{match: \"RARM_*\", scale: 2}], com_offset_m: [{match: WAIST, offset: [0.01, 0, 0]}]}"});
+  const CaseSpec c = withSets(
+      "cases/exp1.yaml", {"sim.model={mass_scale: [{match: \"RARM_*\", scale: 2}], com_offset_m: [{match: WAIST, offset: [0.01, 0, 0]}]}"});
   const model::RobotDescription nominal = model::loadRobotDescription(c.urdf_path, c.data_path);
   const model::RobotDescription d = simulatedRobot(c);
   double arm = 0.0;

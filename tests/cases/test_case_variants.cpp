@@ -23,8 +23,10 @@ void diff(const YAML::Node& a, const YAML::Node& b, const std::string& path, std
     for (const auto& kv : b) keys.insert(kv.first.as<std::string>());
     for (const std::string& k : keys) {
       const std::string p = path.empty() ? k : path + "." + k;
-      if (!a[k] || !b[k]) out.push_back(p);
-      else diff(a[k], b[k], p, out);
+      if (!a[k] || !b[k])
+        out.push_back(p);
+      else
+        diff(a[k], b[k], p, out);
     }
   } else if (a.IsSequence()) {
     if (a.size() != b.size()) {
@@ -47,8 +49,8 @@ std::vector<std::string> differences(const std::string& base, const std::string&
 // own: each variant documents its own or none.
 TEST(CaseVariants, Exp1GnIsExp1WithPureGaussNewton) {
   EXPECT_EQ(differences("exp1.yaml", "exp1-gn.yaml"),
-            (std::vector<std::string>{"comparisons[0].expected_to_fail", "comparisons[1].expected_to_fail", "controller.method", "description",
-                                      "expected_failures", "name"}));
+            (std::vector<std::string>{"comparisons[0].expected_to_fail", "comparisons[1].expected_to_fail", "controller.method",
+                                      "description", "expected_failures", "name"}));
 }
 
 TEST(CaseVariants, Exp1WlsWeakIsExp1WithThePostureWeight1e6) {

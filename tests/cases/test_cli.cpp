@@ -103,8 +103,7 @@ TEST(HarnessCli, SigintStopsTheRunAndKeepsTraceAndSummary) {
   EXPECT_NE(t.end_message.find("interrupted by SIGINT at t = "), std::string::npos) << t.end_message;
   const CliResult r = harness("check " + c + " " + out + "/trace.csv", dir);
   expectExit(r, 1, {" rows, t = 0 .. "});
-  EXPECT_NE(r.err.find("is not the trace of a complete run (the run did not complete: interrupted"), std::string::npos)
-      << r.err;
+  EXPECT_NE(r.err.find("is not the trace of a complete run (the run did not complete: interrupted"), std::string::npos) << r.err;
 }
 
 TEST(HarnessCli, AKilledRunLeavesItsPartialTraceAndNoOldOutputs) {
@@ -118,7 +117,7 @@ TEST(HarnessCli, AKilledRunLeavesItsPartialTraceAndNoOldOutputs) {
   std::ofstream(out + "/trace.csv") << "# case: old\nt\n0\n";
   // Killed once the trace holds more than 600 kB: at least the first 200 rows (one flush, t >= 1 s).
   EXPECT_EQ(runAndSignal(binPath("lexdyn-harness") + " run " + c + " --out " + out + " --quiet 2> " + dir + "/stderr.txt",
-                                  "[ $(stat -c %s " + out + "/trace.csv.partial 2>/dev/null || echo 0) -ge 600000 ]", "KILL", dir + "/code"),
+                         "[ $(stat -c %s " + out + "/trace.csv.partial 2>/dev/null || echo 0) -ge 600000 ]", "KILL", dir + "/code"),
             128 + 9);
   EXPECT_FALSE(std::filesystem::exists(out + "/summary.json"));
   EXPECT_FALSE(std::filesystem::exists(out + "/trace.csv"));
@@ -145,9 +144,10 @@ TEST(HarnessCli, CheckWarnsWhenTheTraceIsOfAnotherCase) {
 TEST(HarnessCli, TwoProcessesWriteIdenticalTraces) {
   const std::string dir = outputDir("cli_determinism");
   auto s = minimalCase(0.5);
-  s["e_controller"] = "controller:\n  type: posture_servo\n  posture: half_sitting\n  motions:\n"
-                      "    - {joints: [RLEG_JOINT3, LLEG_JOINT3], amplitude: 0.4, period_s: 1.0, waveform: raised_cosine}\n"
-                      "    - {joints: [RARM_JOINT0], amplitude: 0.5, period_s: 1.0}\n";
+  s["e_controller"] =
+      "controller:\n  type: posture_servo\n  posture: half_sitting\n  motions:\n"
+      "    - {joints: [RLEG_JOINT3, LLEG_JOINT3], amplitude: 0.4, period_s: 1.0, waveform: raised_cosine}\n"
+      "    - {joints: [RARM_JOINT0], amplitude: 0.5, period_s: 1.0}\n";
   s["h_checks"] = "checks:\n  - {name: upright, type: frame_height, frame: WAIST, min_m: 0.5}\n";
   const std::string c = writeCase(dir, s);
   expectIdenticalTracesOfTwoRuns(c, dir, 10000u, "traces");
@@ -156,8 +156,9 @@ TEST(HarnessCli, TwoProcessesWriteIdenticalTraces) {
 TEST(HarnessCli, ControllerCaseMethodOverrideCheckAndCompare) {
   const std::string dir = outputDir("cli_controller");
   auto s = testing::minimalLexdynCase(0.2);
-  s["i_comparisons"] = "comparisons:\n  - {name: bfgs_vs_wls, type: method_comparison, tasks: [right_hand],"
-                       " statistic: final, better: bfgs, worse: wls, margin: 10.0}\n";
+  s["i_comparisons"] =
+      "comparisons:\n  - {name: bfgs_vs_wls, type: method_comparison, tasks: [right_hand],"
+      " statistic: final, better: bfgs, worse: wls, margin: 10.0}\n";
   const std::string c = writeCase(dir, s);
   CliResult r = runQuiet(c, dir, "bfgs");
   ASSERT_EQ(r.code, 0) << r.err;

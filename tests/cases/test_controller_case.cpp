@@ -51,14 +51,13 @@ TEST(ControllerCase, RepositoryCasesLoadWithEveryMethod) {
     const char* method;
     std::vector<std::string> methods;
   };
-  for (const Expect& e : {Expect{"cases/exp1.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
-                          Expect{"cases/exp1-gn.yaml", "gn", {"bfgs", "ah", "gn", "wls"}},
-                          Expect{"cases/exp1-wls-weak.yaml", "wls", {"bfgs", "ah", "gn", "wls"}},
-                          Expect{"cases/exp1-wls-unbiased.yaml", "wls", {"bfgs", "ah", "gn", "wls"}},
-                          Expect{"cases/exp2.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
-                          Expect{"cases/exp3.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
-                          Expect{"cases/pointmass-damping.yaml", "gn", {"bfgs", "ah", "gn", "wls"}},
-                          Expect{"cases/hrp2kai_heavy/exp1.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}}}) {
+  for (const Expect& e :
+       {Expect{"cases/exp1.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}}, Expect{"cases/exp1-gn.yaml", "gn", {"bfgs", "ah", "gn", "wls"}},
+        Expect{"cases/exp1-wls-weak.yaml", "wls", {"bfgs", "ah", "gn", "wls"}},
+        Expect{"cases/exp1-wls-unbiased.yaml", "wls", {"bfgs", "ah", "gn", "wls"}},
+        Expect{"cases/exp2.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}}, Expect{"cases/exp3.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}},
+        Expect{"cases/pointmass-damping.yaml", "gn", {"bfgs", "ah", "gn", "wls"}},
+        Expect{"cases/hrp2kai_heavy/exp1.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}}}) {
     CaseSpec c = loadCase(src(e.file));
     EXPECT_EQ(c.controller.type, "lexdyn") << e.file;
     EXPECT_EQ(methodName(c), e.method) << e.file;
@@ -74,7 +73,7 @@ TEST(ControllerCase, RepositoryCasesLoadWithEveryMethod) {
   EXPECT_TRUE(lx.contacts[2].fixed);
   EXPECT_EQ(lx.contacts[2].grasp, "left_pole");
   EXPECT_EQ(lx.contacts[0].points.size(), 4u);  // the sole corners of the data file
-  EXPECT_EQ(lx.levels.size(), 11u);              // the paper's sec. IX hierarchy
+  EXPECT_EQ(lx.levels.size(), 11u);             // the paper's sec. IX hierarchy
   ASSERT_EQ(lx.wls_levels.size(), 2u);
   EXPECT_EQ(lx.wls_levels[1].weights, (std::vector<double>{1.0, 1.0, 5e-2, 1e-4}));
   // The posture task's head yaw override became its target.
@@ -115,8 +114,11 @@ TEST(ControllerCase, EveryTaskTypeIsBuiltWithEveryParamsField) {
       "    - {name: cb, type: com_box, lower: [-0.1, -.inf, -.inf], upper: [0.1, .inf, .inf],"
       " damper: {interaction: 0.03, safety: 0.005, xi: 0.2, adaptive: false}}\n"
       "    - {name: jp, type: joint_position, joints: [HEAD_JOINT0, HEAD_JOINT1], target: [0.1, -0.1], gains: {kp: 6.0}}\n"
-      "    - {name: pt, type: posture, target: [" + std::string("0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, "
-                                                             "0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0") + "], gains: {kp: 0.5}}\n"
+      "    - {name: pt, type: posture, target: [" +
+      std::string(
+          "0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, "
+          "0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0") +
+      "], gains: {kp: 0.5}}\n"
       "    - {name: vm, type: velocity_min}\n"
       "    - {name: wm, type: wrench_min}\n"
       "    - {name: eom, type: equation_of_motion}\n"
@@ -206,8 +208,7 @@ TEST(ControllerCase, ErrorsNameFileLineAndKeyPath) {
               {"controller.tasks[4].delta", "> 0"});
   expectError(with("{name: trust, type: trust_region}", "{name: trust, type: trust_region, radius: 1}"),
               {"controller.tasks[4].radius", "unknown key", "delta"});
-  expectError(with("{name: trust, type: trust_region}", "{name: trust, type: trust_zone}"),
-              {"controller.tasks[4].type", "trust_region"});
+  expectError(with("{name: trust, type: trust_region}", "{name: trust, type: trust_zone}"), {"controller.tasks[4].type", "trust_region"});
   expectError(with("frame: RGRASP, target", "frame: RHAND, target"), {"controller.tasks[9].frame", "unknown frame 'RHAND'"});
   expectError(with("gains: {kp: 0.3}}\n    - {name: left_hand", "gains: {kp: fast}}\n    - {name: left_hand"),
               {"controller.tasks[9].gains.kp", "expected a finite number"});
@@ -251,8 +252,8 @@ TEST(ControllerCase, ErrorsNameFileLineAndKeyPath) {
   const size_t w = s["e_controller"].find("  wls_levels:");
   s["e_controller"] = s["e_controller"].substr(0, w);
   CaseSpec c = loadCase(writeCase(outputDir("controller_case_nowls"), s));
-  EXPECT_TRUE(containsAll(inputErrorOf([&] { overrideMethod(c, "wls", "--method"); }),
-                          {"--method: method wls needs controller.wls_levels"}));
+  EXPECT_TRUE(
+      containsAll(inputErrorOf([&] { overrideMethod(c, "wls", "--method"); }), {"--method: method wls needs controller.wls_levels"}));
 }
 
 // A case without controller.contact_margins plans with exp1's margins scaled to each contact and
@@ -331,7 +332,8 @@ TEST(ControllerCase, EventAndCheckErrors) {
   EXPECT_TRUE(containsAll(inputErrorOf([&] { loadCase(path); }), {"events[0].file", "bad.csv:3: expected 4 values"}));
   expectError(withCheck(s, "{name: p, type: task_error, tasks: [posture], statistic: final, limit: 1}"),
               {"checks[0].tasks", "not in the hierarchy of method bfgs", "methods:"});
-  EXPECT_EQ(errorOf(withCheck(s, "{name: p, type: task_error, tasks: [posture], statistic: final, limit: 1, methods: [wls]}")), "<no error>");
+  EXPECT_EQ(errorOf(withCheck(s, "{name: p, type: task_error, tasks: [posture], statistic: final, limit: 1, methods: [wls]}")),
+            "<no error>");
   expectError(withCheck(s, "{name: c, type: contact_wrench_match, contact: RIGHT_FOOT, limit_Nm: 3}"),
               {"checks[0]", "missing required key 'limit_N'"});
   expectError(withCheck(s, "{name: c, type: contact_cop, contact: POLE}"), {"checks[0].contact", "support polygon"});

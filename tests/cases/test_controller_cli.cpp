@@ -35,46 +35,52 @@ using namespace lexdyn::testing;  // the command-line test helpers
 std::string pointMassCase(const std::string& dir, double duration_s, const std::string& extra_controller = "") {
   const std::string models = std::string(LEXDYN_SOURCE_DIR) + "/models/point_mass/";
   const std::string path = dir + "/pm.yaml";
-  std::ofstream(path) << "name: pm\n"
-                         "robot: {urdf: " + models + "point_mass.urdf, data: " + models + "point_mass.yaml}\n"
-                         "duration_s: " + std::to_string(duration_s) + "\n"
-                         "initial_state: {posture: zero, joints: {x: 0.5}, settle: none}\n"
-                         "controller:\n"
-                         "  type: lexdyn\n"
-                         "  method: gn\n"
-                         "  state_feedback: integrated\n"
-                         "  params: {damping: 1.0}\n" + extra_controller +
-                         "  tasks:\n"
-                         "    - {name: position, type: position, frame: mass, target: [0, 0, 0], gains: {kp: 4.0}}\n"
-                         "    - {name: torque, type: torque_limits}\n"
-                         "  levels:\n"
-                         "    - {name: limits, tasks: [torque]}\n"
-                         "    - {name: position, tasks: [position]}\n"
-                         "  wls_levels:\n"
-                         "    - {name: hard, tasks: [torque]}\n"
-                         "    - {name: objective, tasks: [position], weights: {position: 1.0}}\n"
-                         "sim:\n"
-                         "  contact: {stiffness: 2.0e6, exponent: 1.5, dissipation_s_per_m: 5.0, slip_velocity_m_per_s: 1.0e-3}\n"
-                         "  servo: {setpoint_profile: hermite, gains: [{match: x, kp: 10000, kd: 200}]}\n"
-                         "trace: {frames: [mass]}\n"
-                         "checks:\n"
-                         "  - {name: final, type: task_error, tasks: [position], statistic: final, limit: 0.1}\n"
-                         "  - {name: mean, type: task_error, tasks: [position], statistic: mean, from_s: 0.5, limit: 0.2}\n"
-                         "  - {name: torques, type: torque_limits, source: both, limit_fraction: 0.05}\n"
-                         "  - {name: accel, type: joint_acceleration_sign_changes, source: commanded, limit_per_s: 1.0}\n"
-                         "  - {name: hf, type: joint_velocity_hf_energy, source: measured, cutoff_hz: 5.0, limit_rad2_per_s2: 1e-4}\n"
-                         "  - {name: rate, type: task_error_rate_sign_changes, task: position, limit_per_s: 1.0}\n"
-                         "  - {name: overshoot, type: task_overshoot, task: position, limit_rel: 0.001}\n"
-                         "  - {name: closed, type: task_error_closed_form, task: position, limit_rel: 0.01}\n"
-                         "  - {name: status, type: controller_status}\n"
-                         "  - {name: peak, type: active_set_peak, limit_iterations: 30}\n"
-                         "  - {name: augmented, type: augmented_fraction, level: position, max_fraction: 1.0, methods: [bfgs, ah, gn]}\n"
-                         "  - {name: tick, type: tick_time, timer: tick, percentile: 99, limit_us: 1.0e6}\n"
-                         "comparisons:\n"
-                         "  - {name: gn_not_worse_than_wls, type: method_comparison, tasks: [position], statistic: mean,"
-                         " better: gn, worse: wls}\n"
-                         "  - {name: wls_not_worse_than_gn, type: method_comparison, tasks: [position], statistic: mean,"
-                         " better: wls, worse: gn}\n";
+  std::ofstream(path)
+      << "name: pm\n"
+         "robot: {urdf: " +
+             models + "point_mass.urdf, data: " + models +
+             "point_mass.yaml}\n"
+             "duration_s: " +
+             std::to_string(duration_s) +
+             "\n"
+             "initial_state: {posture: zero, joints: {x: 0.5}, settle: none}\n"
+             "controller:\n"
+             "  type: lexdyn\n"
+             "  method: gn\n"
+             "  state_feedback: integrated\n"
+             "  params: {damping: 1.0}\n" +
+             extra_controller +
+             "  tasks:\n"
+             "    - {name: position, type: position, frame: mass, target: [0, 0, 0], gains: {kp: 4.0}}\n"
+             "    - {name: torque, type: torque_limits}\n"
+             "  levels:\n"
+             "    - {name: limits, tasks: [torque]}\n"
+             "    - {name: position, tasks: [position]}\n"
+             "  wls_levels:\n"
+             "    - {name: hard, tasks: [torque]}\n"
+             "    - {name: objective, tasks: [position], weights: {position: 1.0}}\n"
+             "sim:\n"
+             "  contact: {stiffness: 2.0e6, exponent: 1.5, dissipation_s_per_m: 5.0, slip_velocity_m_per_s: 1.0e-3}\n"
+             "  servo: {setpoint_profile: hermite, gains: [{match: x, kp: 10000, kd: 200}]}\n"
+             "trace: {frames: [mass]}\n"
+             "checks:\n"
+             "  - {name: final, type: task_error, tasks: [position], statistic: final, limit: 0.1}\n"
+             "  - {name: mean, type: task_error, tasks: [position], statistic: mean, from_s: 0.5, limit: 0.2}\n"
+             "  - {name: torques, type: torque_limits, source: both, limit_fraction: 0.05}\n"
+             "  - {name: accel, type: joint_acceleration_sign_changes, source: commanded, limit_per_s: 1.0}\n"
+             "  - {name: hf, type: joint_velocity_hf_energy, source: measured, cutoff_hz: 5.0, limit_rad2_per_s2: 1e-4}\n"
+             "  - {name: rate, type: task_error_rate_sign_changes, task: position, limit_per_s: 1.0}\n"
+             "  - {name: overshoot, type: task_overshoot, task: position, limit_rel: 0.001}\n"
+             "  - {name: closed, type: task_error_closed_form, task: position, limit_rel: 0.01}\n"
+             "  - {name: status, type: controller_status}\n"
+             "  - {name: peak, type: active_set_peak, limit_iterations: 30}\n"
+             "  - {name: augmented, type: augmented_fraction, level: position, max_fraction: 1.0, methods: [bfgs, ah, gn]}\n"
+             "  - {name: tick, type: tick_time, timer: tick, percentile: 99, limit_us: 1.0e6}\n"
+             "comparisons:\n"
+             "  - {name: gn_not_worse_than_wls, type: method_comparison, tasks: [position], statistic: mean,"
+             " better: gn, worse: wls}\n"
+             "  - {name: wls_not_worse_than_gn, type: method_comparison, tasks: [position], statistic: mean,"
+             " better: wls, worse: gn}\n";
   return path;
 }
 
@@ -99,7 +105,8 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
     // Re-evaluated on the stored trace: the same checks, values, verdicts and details.
     const CliResult check = harness("check " + out + "/trace.csv --case " + c + " --json", dir);
     const nlohmann::json stored = nlohmann::json::parse(check.out);
-    EXPECT_EQ(stored["checks"], summary["checks"]) << method << "\nstored: " << stored.dump(1) << "\nsummary: " << summary["checks"].dump(1);
+    EXPECT_EQ(stored["checks"], summary["checks"])
+        << method << "\nstored: " << stored.dump(1) << "\nsummary: " << summary["checks"].dump(1);
     EXPECT_EQ(stored["all_checks_passed"], summary["all_checks_passed"]);
     EXPECT_EQ(check.code, summary["all_checks_passed"].get<bool>() ? 0 : 1) << check.err;
     // The expected outcomes: gn (mu 0.01) converges without overshoot, wls (mu 1) overshoots.
@@ -144,8 +151,9 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
   };
   const std::string documented_fail = withExpected("wls_not_worse_than_gn", "expected_fail.yaml");
   cmp = harness("compare --case " + documented_fail + " " + dir + "/gn/trace.csv " + dir + "/wls/trace.csv", dir);
-  expectExit(cmp, 0, {"xfail wls_not_worse_than_gn", "expected failure of wls_not_worse_than_gn, as the case says",
-                      "documented: wls_not_worse_than_gn fails here", "every comparison as documented"});
+  expectExit(cmp, 0,
+             {"xfail wls_not_worse_than_gn", "expected failure of wls_not_worse_than_gn, as the case says",
+              "documented: wls_not_worse_than_gn fails here", "every comparison as documented"});
   const std::string documented_pass = withExpected("gn_not_worse_than_wls", "expected_pass.yaml");
   cmp = harness("compare --case " + documented_pass + " " + dir + "/gn/trace.csv " + dir + "/wls/trace.csv", dir);
   expectExit(cmp, 1, {"NOT as the case says: gn_not_worse_than_wls passed", "the outcome changed"});
@@ -172,9 +180,10 @@ TEST(ControllerCli, ShortRunsSkipLateChecksAndCoverWhatWasRun) {
   const std::string dir = outputDir("ctl_cli_short");
   const std::string src = LEXDYN_SOURCE_DIR;
   const CliResult run = harness("run " + src + "/cases/exp2.yaml --duration 1 --out " + dir + "/exp2 --quiet", dir);
-  expectExit(run, 0, {"skip pole_held", "its window [10.1, 120] s starts after the run's end at 1 s (stop_at_s, run --duration)",
-                      "skip pole_computed_vs_sensed", "no row of its window in what was run (no row with contact 'POLE' active",
-                      "[part of its window]", "the run stopped at 1 s of the scenario's 120 s"});
+  expectExit(run, 0,
+             {"skip pole_held", "its window [10.1, 120] s starts after the run's end at 1 s (stop_at_s, run --duration)",
+              "skip pole_computed_vs_sensed", "no row of its window in what was run (no row with contact 'POLE' active",
+              "[part of its window]", "the run stopped at 1 s of the scenario's 120 s"});
   const nlohmann::json s = nlohmann::json::parse(slurp(dir + "/exp2/summary.json"));
   EXPECT_TRUE(s["all_checks_passed"].get<bool>());
   EXPECT_EQ(s["scenario_duration_s"], 120.0);
@@ -264,9 +273,9 @@ TEST(ControllerCli, TwoProcessesWriteBitIdenticalTracesButForTheWallTimes) {
   for (const Run& run : {Run{pm, "gn", "2", 401}, Run{pm, "wls", "2", 401}, Run{exp1, "ah", "0.3", 61}}) {
     const std::string method = run.method;
     for (const char* k : {"a", "b"}) {
-      const CliResult r = harness("run " + run.case_file + " --method " + method + " --duration " + run.duration + " --out " + dir + "/" +
-                                   method + k + " --quiet",
-                               dir);
+      const CliResult r = harness(
+          "run " + run.case_file + " --method " + method + " --duration " + run.duration + " --out " + dir + "/" + method + k + " --quiet",
+          dir);
       ASSERT_TRUE(r.code == 0 || r.code == 1) << r.err;
     }
     const checks::TraceTable a = checks::readTrace(dir + "/" + method + "a/trace.csv");
@@ -306,8 +315,8 @@ TEST(ControllerCli, DumpProblemsWritesEachTicksProblemWithoutChangingTheRun) {
   const std::string pm = pointMassCase(dir, 1.0);
   const CliResult plain = harness("run " + pm + " --method bfgs --out " + dir + "/plain --quiet", dir);
   ASSERT_TRUE(plain.code == 0 || plain.code == 1) << plain.err;
-  const CliResult dumped =
-      harness("run " + pm + " --method bfgs --out " + dir + "/dumped --quiet --dump-problems " + dir + "/problems --dump-window 0.2:0.3", dir);
+  const CliResult dumped = harness(
+      "run " + pm + " --method bfgs --out " + dir + "/dumped --quiet --dump-problems " + dir + "/problems --dump-window 0.2:0.3", dir);
   ASSERT_EQ(dumped.code, plain.code) << dumped.err;
   // Ticks t = k dt with 0.2 <= t <= 0.3 (dt 5 ms): k = 40 ... 60, give or take the rounding of k dt.
   const std::vector<std::string> files = sortedFileNames(dir + "/problems");
@@ -334,19 +343,20 @@ TEST(ControllerCli, DumpProblemsWritesEachTicksProblemWithoutChangingTheRun) {
   }
   // "FROM:" runs to the end of the run: ticks 190 ... 199 (t = 0.995 s), give or take the rounding
   // of k dt. The final row's tick at t = 1 s, whose command is never applied, is not dumped.
-  const CliResult open = harness("run " + pm + " --method bfgs --out " + dir + "/open --quiet --dump-problems " + dir +
-                                     "/open_problems --dump-window 0.95:",
-                                 dir);
+  const CliResult open = harness(
+      "run " + pm + " --method bfgs --out " + dir + "/open --quiet --dump-problems " + dir + "/open_problems --dump-window 0.95:", dir);
   ASSERT_EQ(open.code, plain.code) << open.err;
   const std::vector<std::string> tail = sortedFileNames(dir + "/open_problems");
   ASSERT_GE(tail.size(), 9u);
   ASSERT_LE(tail.size(), 10u);
   EXPECT_EQ(tail.back(), "tick_000199.json");
   // Misuse.
-  expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-window 0.1:0.2", dir), 2, {"--dump-window", "needs --dump-problems"});
+  expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-window 0.1:0.2", dir), 2,
+             {"--dump-window", "needs --dump-problems"});
   expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-problems " + dir + "/p2 --dump-window 0.3:0.2", dir), 2,
              {"--dump-window", "FROM <= TO", "0.3:0.2"});
-  expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-problems " + dir + "/p2 --dump-window x", dir), 2, {"--dump-window"});
+  expectExit(harness("run " + pm + " --out " + dir + "/w --quiet --dump-problems " + dir + "/p2 --dump-window x", dir), 2,
+             {"--dump-window"});
   const std::string stand = std::string(LEXDYN_SOURCE_DIR) + "/cases/stand.yaml";
   expectExit(harness("run " + stand + " --duration 0.1 --out " + dir + "/s --quiet --dump-problems " + dir + "/p3", dir), 2,
              {dir + "/p3", "lexdyn controller"});
@@ -372,13 +382,10 @@ TEST(ControllerCli, BadMethodOverridesAreInputErrors) {
 
 TEST(ControllerCli, MethodParamsErrorsNameFileLineAndKey) {
   const std::string dir = outputDir("ctl_cli_method_params");
-  auto errorOf = [&](const std::string& extra) {
-    return inputErrorOf([&] { loadCase(pointMassCase(dir, 0.1, extra)); });
-  };
-  EXPECT_TRUE(containsAll(errorOf("  method_params: {lm: {damping: 0.1}}\n"),
-                          {"pm.yaml:10: controller.method_params.lm: unknown method 'lm'"}));
-  EXPECT_TRUE(containsAll(errorOf("  method_params: {gn: {dampng: 0.1}}\n"),
-                          {"controller.method_params.gn.dampng", "unknown key"}));
+  auto errorOf = [&](const std::string& extra) { return inputErrorOf([&] { loadCase(pointMassCase(dir, 0.1, extra)); }); };
+  EXPECT_TRUE(
+      containsAll(errorOf("  method_params: {lm: {damping: 0.1}}\n"), {"pm.yaml:10: controller.method_params.lm: unknown method 'lm'"}));
+  EXPECT_TRUE(containsAll(errorOf("  method_params: {gn: {dampng: 0.1}}\n"), {"controller.method_params.gn.dampng", "unknown key"}));
   EXPECT_TRUE(containsAll(errorOf("  method_params: {gn: {damping: -1}}\n"), {"controller.method_params.gn.damping"}));
   // Without an override every method takes `params`.
   const CaseSpec spec = loadCase(pointMassCase(dir, 0.1, "  method_params: {wls: {damping: 0.5}}\n"));
@@ -394,9 +401,7 @@ TEST(ControllerCli, ClosedFormAndOvershootChecksInTheCaseFile) {
     std::ofstream(dir + "/pm.yaml") << text;
     return loadCase(dir + "/pm.yaml");
   };
-  auto errorOf = [&](const std::string& check) {
-    return inputErrorOf([&] { load(check); });
-  };
+  auto errorOf = [&](const std::string& check) { return inputErrorOf([&] { load(check); }); };
   // The gains default to the task's: kp 4, kv 2 sqrt(kp) = 4; kv given, or kp alone (kv critical).
   CaseSpec c = load("{name: cf, type: task_error_closed_form, task: position, limit_rel: 0.01}");
   auto closedForm = [&]() -> const checks::TaskClosedFormParams& { return c.checks.back().paramsAs<checks::TaskClosedFormParams>(); };
@@ -417,8 +422,8 @@ TEST(ControllerCli, ClosedFormAndOvershootChecksInTheCaseFile) {
   EXPECT_TRUE(containsAll(errorOf("{name: cf, type: task_error_closed_form, task: hand, limit_rel: 0.01}"),
                           {"checks[12].task: unknown task 'hand'"}));
   EXPECT_TRUE(containsAll(errorOf("{name: os, type: task_overshoot, task: position}"), {"missing required key 'limit_rel'"}));
-  EXPECT_TRUE(containsAll(errorOf("{name: os, type: task_overshoot, task: position, limit_rel: 0.1, kp: 1}"),
-                          {"checks[12].kp", "unknown key"}));
+  EXPECT_TRUE(
+      containsAll(errorOf("{name: os, type: task_overshoot, task: position, limit_rel: 0.1, kp: 1}"), {"checks[12].kp", "unknown key"}));
 }
 
 TEST(ControllerCli, SigintKeepsTheTraceAndWritesTheControllerSummary) {

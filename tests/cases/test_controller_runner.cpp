@@ -51,11 +51,26 @@ TEST(ControllerRunner, EveryMethodRunsAndWritesTheControllerChannelsAndSummary) 
     const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");
     ASSERT_EQ(t.rows.size(), 41u);  // t = 0 .. 0.2 s
     EXPECT_EQ(*checks::findMetadata(t.metadata, "method"), method);
-    for (const char* c : {"ctrl.status", "solver.status", "solver.iterations", "time.tick_us", "time.solver_us",
-                          "task.right_hand.error", "task.right_hand.active", "task.right_hand.engaged", "cmd.q.RLEG_JOINT3",
-                          "cmd.qd.RLEG_JOINT3", "cmd.tau.RLEG_JOINT3", "tau.RLEG_JOINT3", "ctrl_contact.RIGHT_FOOT.active",
-                          "wrench.RIGHT_FOOT.fz", "wrench_sensed.RIGHT_FOOT.fz", "wrench.POLE.fx", "wrench_sensed.POLE.tz",
-                          "target.right_hand.x", "target.com_box.lower_x", "com.x"}) {
+    for (const char* c : {"ctrl.status",
+                          "solver.status",
+                          "solver.iterations",
+                          "time.tick_us",
+                          "time.solver_us",
+                          "task.right_hand.error",
+                          "task.right_hand.active",
+                          "task.right_hand.engaged",
+                          "cmd.q.RLEG_JOINT3",
+                          "cmd.qd.RLEG_JOINT3",
+                          "cmd.tau.RLEG_JOINT3",
+                          "tau.RLEG_JOINT3",
+                          "ctrl_contact.RIGHT_FOOT.active",
+                          "wrench.RIGHT_FOOT.fz",
+                          "wrench_sensed.RIGHT_FOOT.fz",
+                          "wrench.POLE.fx",
+                          "wrench_sensed.POLE.tz",
+                          "target.right_hand.x",
+                          "target.com_box.lower_x",
+                          "com.x"}) {
       EXPECT_GE(t.column(c), 0) << c << " (" << method << ")";
     }
     const bool wls = std::string(method) == "wls";
@@ -190,8 +205,9 @@ TEST(ControllerRunner, ControllerFailureStopsTheRunKeepingTheTrace) {
   // Two contradicting joint targets in the WLS hard level: infeasible at the first tick.
   const std::string dir = outputDir("ctl_runner_failure");
   auto sections = minimalLexdynCase(0.3, "wls");
-  std::string ctl = lexdynController("wls", "    - {name: head_a, type: joint_position, joints: [HEAD_JOINT0], target: [0.3]}\n"
-                                            "    - {name: head_b, type: joint_position, joints: [HEAD_JOINT0], target: [-0.3]}\n");
+  std::string ctl = lexdynController("wls",
+                                     "    - {name: head_a, type: joint_position, joints: [HEAD_JOINT0], target: [0.3]}\n"
+                                     "    - {name: head_b, type: joint_position, joints: [HEAD_JOINT0], target: [-0.3]}\n");
   const std::string from = "{name: hard, tasks: [joint_limits,";
   ctl.replace(ctl.find(from), from.size(), "{name: hard, tasks: [head_a, head_b, joint_limits,");
   sections["e_controller"] = ctl;
@@ -251,11 +267,10 @@ TEST(ControllerRunner, DivergenceGuardCriteriaNameTheirThresholds) {
     const char* message;
     double before_s;  // the run stops before this time
   };
-  for (const Case& c : {Case{"{angle_rad: 1.0e-9}", "from the plan's position (limit 1e-09, divergence_guard.angle_rad)", 0.1},
-                        Case{"{contact_lost_fraction: 0.9, contact_lost_s: 0.2}",
-                             "but the simulated robot has left it since t = 0 s", 0.25},
-                        Case{"{torque_factor: 1.0, angle_rad: 10}", "", 0.0},
-                        Case{"{task_error: 0.01}", "task right_hand has an error of", 0.01}}) {
+  for (const Case& c :
+       {Case{"{angle_rad: 1.0e-9}", "from the plan's position (limit 1e-09, divergence_guard.angle_rad)", 0.1},
+        Case{"{contact_lost_fraction: 0.9, contact_lost_s: 0.2}", "but the simulated robot has left it since t = 0 s", 0.25},
+        Case{"{torque_factor: 1.0, angle_rad: 10}", "", 0.0}, Case{"{task_error: 0.01}", "task right_hand has an error of", 0.01}}) {
     const std::string dir = outputDir("ctl_runner_guard");
     const RunSummary s = run(loadCase(exp1, {{"controller.divergence_guard", c.guard, ""}, {"stop_at_s", "1", ""}}), dir);
     if (*c.message == 0) {

@@ -92,7 +92,8 @@ TEST(ExpectedFailures, TheOutcomeMustMatchExactly) {
             (std::vector<std::string>{"c failed (not expected)"}));
   EXPECT_EQ(expectationMismatches(x, lexdyn::records::RunStatus::Completed, {result("a", false), result("b", true)}),
             (std::vector<std::string>{"b passed (expected to fail)"}));
-  EXPECT_EQ(expectationMismatches(x, lexdyn::records::RunStatus::Completed, {result("a", false)}), (std::vector<std::string>{"b was not evaluated (expected to fail)"}));
+  EXPECT_EQ(expectationMismatches(x, lexdyn::records::RunStatus::Completed, {result("a", false)}),
+            (std::vector<std::string>{"b was not evaluated (expected to fail)"}));
   EXPECT_EQ(expectationMismatches(x, lexdyn::records::RunStatus::ControllerFailure, as_expected),
             (std::vector<std::string>{"status controller_failure (expected completed)"}));
 }
@@ -148,8 +149,8 @@ TEST(ExpectedFailures, ThePointMassWlsRunFailsAsItsCaseSays) {
   EXPECT_EQ(exitCode(plain), kExitCheckFailed);
 
   // Expecting only one of the two failures: the other is reported and the run fails.
-  const RunSummary partial =
-      runWls(pointMassWith("expected_failures_partial", "[{method: wls, checks: [no_overshoot], reason: r}]"), "expected_failures_pm_partial");
+  const RunSummary partial = runWls(pointMassWith("expected_failures_partial", "[{method: wls, checks: [no_overshoot], reason: r}]"),
+                                    "expected_failures_pm_partial");
   EXPECT_EQ(partial.expectation_mismatches, (std::vector<std::string>{"closed_form_eq49 failed (not expected)"}));
   EXPECT_EQ(exitCode(partial), kExitCheckFailed);
 }
@@ -158,8 +159,10 @@ TEST(ExpectedFailures, ThePointMassWlsRunFailsAsItsCaseSays) {
 // as declared, 1 with the mismatch otherwise.
 TEST(ExpectedFailures, CheckJudgesAStoredTraceAsRunDid) {
   const std::string dir = outputDir("expected_failures_check");
-  const std::string declared = pointMassWith("expected_failures_check_case", "[{method: wls, checks: [closed_form_eq49, no_overshoot], reason: r}]");
-  lexdyn::testing::CliResult r = lexdyn::testing::harness("run " + declared + " --method wls --duration 10 --out " + dir + "/out --quiet", dir);
+  const std::string declared =
+      pointMassWith("expected_failures_check_case", "[{method: wls, checks: [closed_form_eq49, no_overshoot], reason: r}]");
+  lexdyn::testing::CliResult r =
+      lexdyn::testing::harness("run " + declared + " --method wls --duration 10 --out " + dir + "/out --quiet", dir);
   ASSERT_EQ(r.code, 0) << r.err;
   r = lexdyn::testing::harness("check " + dir + "/out/trace.csv --case " + declared, dir);
   EXPECT_EQ(r.code, 0) << r.err;

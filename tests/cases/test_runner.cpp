@@ -63,8 +63,8 @@ TEST(Runner, StandCaseHoldsHalfSittingAndPassesItsChecks) {
   EXPECT_EQ(exitCode(s), 0);
   // Files: the trace header records the model, integrator, compiler, flags and versions.
   const checks::TraceTable t = checks::readTrace(dir + "/trace.csv");
-  for (const char* key : {"model", "integrator", "contact", "servo", "compiler", "cxx_flags", "eigen", "simbody",
-                          "sundials", "urdfdom", "yaml_cpp", "robot_weight_N"}) {
+  for (const char* key : {"model", "integrator", "contact", "servo", "compiler", "cxx_flags", "eigen", "simbody", "sundials", "urdfdom",
+                          "yaml_cpp", "robot_weight_N"}) {
     EXPECT_NE(checks::findMetadata(t.metadata, key), nullptr) << key;
   }
   EXPECT_EQ(t.rows.size(), 2001u);
@@ -165,8 +165,7 @@ struct TwoRuns {
   checks::TraceTable ta, tb;
 };
 template <class Change>
-TwoRuns runTwoWays(CaseSpec spec, const std::string& base, const std::string& first, const std::string& second,
-                   Change change) {
+TwoRuns runTwoWays(CaseSpec spec, const std::string& base, const std::string& first, const std::string& second, Change change) {
   TwoRuns r;
   r.a = run(spec, base + "/" + first);
   change(spec);
@@ -186,18 +185,18 @@ TEST(Runner, TheTwoNewtonSystemSolversAgree) {
   const std::string base = outputDir("runner_linear_solver");
   CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 0.5, base));
   ASSERT_EQ(spec.sim.integrator.linear_solver, sim::LinearSolver::BlockElimination);  // the default
-  const TwoRuns r = runTwoWays(spec, base, "block", "dense",
-                               [](CaseSpec& s) { s.sim.integrator.linear_solver = sim::LinearSolver::DenseLU; });
+  const TwoRuns r =
+      runTwoWays(spec, base, "block", "dense", [](CaseSpec& s) { s.sim.integrator.linear_solver = sim::LinearSolver::DenseLU; });
   ASSERT_EQ(r.a.status, lexdyn::records::RunStatus::Completed);
   ASSERT_EQ(r.b.status, lexdyn::records::RunStatus::Completed);
   EXPECT_EQ(r.b.integrator.lin_full_setups, 0);
   EXPECT_EQ(checks::findMetadata(r.ta.metadata, "integrator")->find("linear_solver"), std::string::npos);
   EXPECT_NE(checks::findMetadata(r.tb.metadata, "integrator")->find("linear_solver dense_lu"), std::string::npos);
   const TraceDifference d = largestDifference(r.ta, r.tb);
-  EXPECT_LT(d.q, 1e-4) << "joint positions";  // 2.4e-5 rad
-  EXPECT_LT(d.tau, 5.0) << "joint torques";   // 1.7 N m, at the friction transient of t = 0.32 s
+  EXPECT_LT(d.q, 1e-4) << "joint positions";     // 2.4e-5 rad
+  EXPECT_LT(d.tau, 5.0) << "joint torques";      // 1.7 N m, at the friction transient of t = 0.32 s
   EXPECT_LT(d.waist, 1e-4) << "WAIST position";  // 1.2e-5 m
-  EXPECT_GT(d.q + d.tau, 0.0);  // really two different solvers
+  EXPECT_GT(d.q + d.tau, 0.0);                   // really two different solvers
 }
 
 // sim.integrator.jacobian: the Jacobian of the applied forces instead of CVODE's difference
@@ -210,8 +209,8 @@ TEST(Runner, TheAppliedForcesJacobianAgreesWithoutDifferenceQuotients) {
   CaseSpec spec = loadCase(shortenedCopy("cases/squat_sway.yaml", 2.0, base));
   ASSERT_EQ(spec.sim.integrator.jacobian, sim::IntegratorJacobian::AppliedForces);  // the default
   spec.sim.integrator.jacobian = sim::IntegratorJacobian::DifferenceQuotient;
-  const TwoRuns r = runTwoWays(spec, base, "dq", "forces",
-                               [](CaseSpec& s) { s.sim.integrator.jacobian = sim::IntegratorJacobian::AppliedForces; });
+  const TwoRuns r =
+      runTwoWays(spec, base, "dq", "forces", [](CaseSpec& s) { s.sim.integrator.jacobian = sim::IntegratorJacobian::AppliedForces; });
   ASSERT_EQ(r.a.status, lexdyn::records::RunStatus::Completed);
   ASSERT_EQ(r.b.status, lexdyn::records::RunStatus::Completed);
   const RunSummary& a = r.a;
@@ -227,7 +226,7 @@ TEST(Runner, TheAppliedForcesJacobianAgreesWithoutDifferenceQuotients) {
   EXPECT_NE(checks::findMetadata(r.ta.metadata, "integrator")->find("difference-quotient Jacobian"), std::string::npos);
   EXPECT_NE(checks::findMetadata(r.tb.metadata, "integrator")->find("Jacobian of the applied forces"), std::string::npos);
   const TraceDifference d = largestDifference(r.ta, r.tb);
-  EXPECT_LT(d.q, 1e-4) << "joint positions";    // 3.0e-5 rad
+  EXPECT_LT(d.q, 1e-4) << "joint positions";     // 3.0e-5 rad
   EXPECT_LT(d.tau, 5.0) << "joint torques";      // 1.6 N m
   EXPECT_LT(d.waist, 1e-4) << "WAIST position";  // 1.7e-5 m
   EXPECT_GT(d.q + d.tau, 0.0);
@@ -303,10 +302,12 @@ TEST(Runner, AFailedCheckGivesExitCodeOne) {
 TEST(Runner, GraspEventsSwitchTheContactAtTheirTimes) {
   const std::string dir = outputDir("runner_grasp");
   auto sections = minimalCase(0.4);
-  sections["f_sim"] += "  grasps:\n    - {name: left, frame: LGRASP, stiffness_N_per_m: 2e4, damping_Ns_per_m: 400,"
-                       " rot_stiffness_Nm_per_rad: 500, rot_damping_Nms_per_rad: 10}\n";
-  sections["e_controller"] += "events:\n  - {at_s: 0.1, action: grasp_on, grasp: left}\n"
-                              "  - {at_s: 0.3, action: grasp_off, grasp: left}\n";
+  sections["f_sim"] +=
+      "  grasps:\n    - {name: left, frame: LGRASP, stiffness_N_per_m: 2e4, damping_Ns_per_m: 400,"
+      " rot_stiffness_Nm_per_rad: 500, rot_damping_Nms_per_rad: 10}\n";
+  sections["e_controller"] +=
+      "events:\n  - {at_s: 0.1, action: grasp_on, grasp: left}\n"
+      "  - {at_s: 0.3, action: grasp_off, grasp: left}\n";
   const RunSummary s = run(loadCase(writeCase(dir, sections)), dir + "/out");
   ASSERT_EQ(s.status, lexdyn::records::RunStatus::Completed);
   const checks::TraceTable t = checks::readTrace(dir + "/out/trace.csv");

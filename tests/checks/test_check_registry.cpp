@@ -99,7 +99,8 @@ TEST(CheckRegistry, EveryBuiltInTypeHasAParserAndAnEvaluator) {
     EXPECT_NE(makeCheck(s), nullptr);
   }
   // Flags: what reads the controller, the direction of the bound, machine dependence.
-  for (const char* sim : {"frame_drift", "force_balance", "contact_slip", "frame_height"}) EXPECT_FALSE(r.find(sim)->readsController()) << sim;
+  for (const char* sim : {"frame_drift", "force_balance", "contact_slip", "frame_height"})
+    EXPECT_FALSE(r.find(sim)->readsController()) << sim;
   EXPECT_TRUE(r.find("task_error")->readsController());
   std::set<std::string> below, machine;
   for (const CheckType& t : r.types()) {
@@ -128,18 +129,21 @@ TEST(CheckRegistry, ParsersReadTheirParamsFromTheContext) {
   EXPECT_EQ(s.methods, std::vector<std::string>{"bfgs"});
   EXPECT_EQ(s.to_s, 2.0);
   EXPECT_EQ(s.paramsAs<ControllerStatusParams>().allowed, (std::vector<std::string>{"ok", "solver_stopped_early"}));
-  EXPECT_NE(errorOf([&] { readCheck(firstCheck("{type: controller_status, methods: [ah]}"), x); })
-                .find("case.yaml:2: checks[0].methods[0]: the case has no hierarchy for method ah"),
+  EXPECT_NE(errorOf([&] {
+              readCheck(firstCheck("{type: controller_status, methods: [ah]}"), x);
+            }).find("case.yaml:2: checks[0].methods[0]: the case has no hierarchy for method ah"),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { readCheck(firstCheck("{type: frame_drift, frame: F, limit_m: 1, to_s: 2}"), x); })
-                .find("checks[0].to_s: unknown key 'to_s'"),
+  EXPECT_NE(errorOf([&] {
+              readCheck(firstCheck("{type: frame_drift, frame: F, limit_m: 1, to_s: 2}"), x);
+            }).find("checks[0].to_s: unknown key 'to_s'"),
             std::string::npos)
       << errorOf([&] { readCheck(firstCheck("{type: frame_drift, frame: F, limit_m: 1, to_s: 2}"), x); });
   // A controller check in a case without the lexdyn controller.
   CheckContext servo;
   servo.controller = "posture_servo";
-  EXPECT_NE(errorOf([&] { readCheck(firstCheck(entries().at("task_error")), servo); })
-                .find("checks[0].type: check type task_error reads the lexdyn controller's channels; the controller is posture_servo"),
+  EXPECT_NE(errorOf([&] {
+              readCheck(firstCheck(entries().at("task_error")), servo);
+            }).find("checks[0].type: check type task_error reads the lexdyn controller's channels; the controller is posture_servo"),
             std::string::npos);
 }
 

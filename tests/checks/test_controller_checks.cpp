@@ -151,8 +151,7 @@ TEST(TaskErrorCheck, NonFiniteErrorsFailAndMissingChannelsAreInputErrors) {
 
 TEST(FrameHeightCheck, LowestHeightInTheWindowAndItsTime) {
   // z dips to 0.4 m at t = 0.2 s, then stays at 0.8 m.
-  const TraceTable t =
-      makeTrace({{frameChannel("WAIST", 'z'), [](double t) { return std::abs(t - 0.2) < 1e-9 ? 0.4 : 0.8; }}}, 0.01, 101);
+  const TraceTable t = makeTrace({{frameChannel("WAIST", 'z'), [](double t) { return std::abs(t - 0.2) < 1e-9 ? 0.4 : 0.8; }}}, 0.01, 101);
   CheckSpec s = spec("frame_height", 0.5);
   auto& sp = s.params.emplace<FrameParams>();
   sp.frame = "WAIST";
@@ -269,10 +268,14 @@ CheckSpec contactSpec(const std::string& type, double limit, const std::string& 
   ContactParams c;
   c.contact = "C";
   c.source = source;
-  if (type == "contact_friction") s.params = ContactFrictionParams{c, 0.0, 1.0};
-  else if (type == "contact_cop") s.params = ContactCopParams{c, {}, 1.0};
-  else if (type == "contact_wrench_match") s.params = WrenchMatchParams{c.contact};
-  else s.params = c;
+  if (type == "contact_friction")
+    s.params = ContactFrictionParams{c, 0.0, 1.0};
+  else if (type == "contact_cop")
+    s.params = ContactCopParams{c, {}, 1.0};
+  else if (type == "contact_wrench_match")
+    s.params = WrenchMatchParams{c.contact};
+  else
+    s.params = c;
   return s;
 }
 
@@ -300,8 +303,13 @@ TEST(ContactUnilateralCheck, LowestNormalForceWhileActive) {
   EXPECT_TRUE(r.passed) << r.detail;
   EXPECT_TRUE(contains(r.detail, "sensed normal force at t = 0.3 s")) << r.detail;
   // A real pull (-1 N) fails.
-  const TraceTable pull = contactTrace([](double t) { return WrenchRow{{0, 0, at(t, 0.6) ? -1.0 : 10.0}, {0, 0, 0}}; },
-                                       [](double) { return WrenchRow{{0, 0, 1}, {0, 0, 0}}; });
+  const TraceTable pull = contactTrace(
+      [](double t) {
+        return WrenchRow{{0, 0, at(t, 0.6) ? -1.0 : 10.0}, {0, 0, 0}};
+      },
+      [](double) {
+        return WrenchRow{{0, 0, 1}, {0, 0, 0}};
+      });
   r = runOne(contactSpec("contact_unilateral", 0.0), pull);
   EXPECT_EQ(r.value, -1.0);
   EXPECT_FALSE(r.passed);
@@ -310,8 +318,13 @@ TEST(ContactUnilateralCheck, LowestNormalForceWhileActive) {
 
 TEST(ContactUnilateralCheck, NormalDirectionAndNoActiveRows) {
   // Normal along -x of the contact frame (e.g. a wall): f_n = -fx.
-  const TraceTable t = contactTrace([](double) { return WrenchRow{{-20.0, 0.0, 7.0}, {0, 0, 0}}; },
-                                    [](double) { return WrenchRow{{0, 0, 0}, {0, 0, 0}}; });
+  const TraceTable t = contactTrace(
+      [](double) {
+        return WrenchRow{{-20.0, 0.0, 7.0}, {0, 0, 0}};
+      },
+      [](double) {
+        return WrenchRow{{0, 0, 0}, {0, 0, 0}};
+      });
   CheckSpec s = contactSpec("contact_unilateral", 15.0);
   auto& sp = s.paramsAs<ContactParams>();
   sp.normal[0] = -1.0;
@@ -333,7 +346,9 @@ TEST(ContactFrictionCheck, RatioToTheConeWithRoundOffOnItsSurface) {
         if (at(t, 0.6)) return WrenchRow{{5.0, 0.0, 0.5}, {0, 0, 0}};
         return WrenchRow{{10.0, 0.0, 100.0}, {0, 0, 0}};
       },
-      [=](double t) { return WrenchRow{{at(t, 0.5) ? 1.2 * mu * 80.0 : 0.0, 0.0, 80.0}, {0, 0, 0}}; });
+      [=](double t) {
+        return WrenchRow{{at(t, 0.5) ? 1.2 * mu * 80.0 : 0.0, 0.0, 80.0}, {0, 0, 0}};
+      });
   CheckSpec s = contactSpec("contact_friction", 1.0);
   auto& sp = s.paramsAs<ContactFrictionParams>();
   sp.friction = mu;
@@ -394,7 +409,9 @@ TEST(ContactWrenchMatchCheck, RmsAndMaxOfTheDifferenceWhileActive) {
         if (at(t, 0.9)) return WrenchRow{{100.0, 0.0, 50.0}, {0.2, 0, 0}};
         return WrenchRow{{0.0, 0.0, 51.0}, {0.2, 0, 0}};
       },
-      [](double) { return WrenchRow{{0.0, 0.0, 50.0}, {0.0, 0, 0}}; });
+      [](double) {
+        return WrenchRow{{0.0, 0.0, 50.0}, {0.0, 0, 0}};
+      });
   CheckSpec s = contactSpec("contact_wrench_match", 5.0);
   auto& sp = s.paramsAs<WrenchMatchParams>();
   sp.component = "force";
@@ -431,7 +448,8 @@ TEST(JointAccelerationSignChangesCheck, CountsPerSecondOfTheWorstJoint) {
                                  0.005, 401);
   CheckSpec s = spec("joint_acceleration_sign_changes", 10.0);
   auto& sp = measuredJoints<JointSignChangesParams>(s, {"J1", "J2", "J3"});
-  CheckResult r = expectOutcome(s, t, {20.0 / 2.0, 1e-12}, kPass, {"J2: 20 sign changes of the measured acceleration over 2 s"});  // 10 <= 10
+  CheckResult r =
+      expectOutcome(s, t, {20.0 / 2.0, 1e-12}, kPass, {"J2: 20 sign changes of the measured acceleration over 2 s"});  // 10 <= 10
   s.limit = 9.0;
   EXPECT_FALSE(runOne(s, t).passed);
   // A dead band above J2's amplitude leaves J1's 8 changes.
@@ -496,8 +514,8 @@ TEST(JointVelocityHfEnergyCheck, ARowAtAnotherSpacingIsLeftOut) {
 TEST(TaskErrorRateSignChangesCheck, OscillatingErrorNorm) {
   // |e| = 1 + 0.1 sin(2 pi 1.5 t + 0.2) over 0 .. 2 s: d|e|/dt changes sign 3 times a second
   // (6 changes), with a rate of amplitude 0.1 * 2 pi 1.5 = 0.94 /s.
-  const TraceTable t = makeTrace(
-      {{taskChannel("hand", "error"), [](double t) { return 1.0 + 0.1 * std::sin(2 * M_PI * 1.5 * t + 0.2); }}}, 0.005, 401);
+  const TraceTable t =
+      makeTrace({{taskChannel("hand", "error"), [](double t) { return 1.0 + 0.1 * std::sin(2 * M_PI * 1.5 * t + 0.2); }}}, 0.005, 401);
   CheckSpec s = spec("task_error_rate_sign_changes", 3.0);
   auto& sp = s.params.emplace<TaskErrorRateParams>();
   sp.task = "hand";
@@ -567,9 +585,10 @@ TEST(TaskErrorClosedFormCheck, MatchesTheCriticallyDampedResponseOfEq49) {
   EXPECT_GT(runOne(s, t).value, 0.05);
   // Eq. 49 with w = sqrt(kp) = 3 (kv = 6): (1 + 3 t) e^{-3 t}, and over-damped kp 1, kv 2.5:
   // roots -0.5 and -2, x = (4 e^{-t/2} - e^{-2 t}) / 3.
-  const TraceTable u = makeTrace({{taskChannel("w3", "error"), [](double t) { return (1.0 + 3.0 * t) * std::exp(-3.0 * t); }},
-                                  {taskChannel("over", "error"), [](double t) { return (4.0 * std::exp(-0.5 * t) - std::exp(-2.0 * t)) / 3.0; }}},
-                                 0.01, 501);
+  const TraceTable u =
+      makeTrace({{taskChannel("w3", "error"), [](double t) { return (1.0 + 3.0 * t) * std::exp(-3.0 * t); }},
+                 {taskChannel("over", "error"), [](double t) { return (4.0 * std::exp(-0.5 * t) - std::exp(-2.0 * t)) / 3.0; }}},
+                0.01, 501);
   setResponse(sp, "w3", 9.0, 6.0);
   s.limit = 1e-12;
   EXPECT_TRUE(runOne(s, u).passed) << runOne(s, u).detail;
@@ -592,8 +611,8 @@ TEST(TaskErrorClosedFormCheck, MatchesTheCriticallyDampedResponseOfEq49) {
     x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
     v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
   }
-  const TraceTable rk = makeTrace({{taskChannel("u", "error"), [&](double t) { return xs[static_cast<size_t>(std::lround(t * 100.0))]; }}},
-                                  0.01, 1001);
+  const TraceTable rk =
+      makeTrace({{taskChannel("u", "error"), [&](double t) { return xs[static_cast<size_t>(std::lround(t * 100.0))]; }}}, 0.01, 1001);
   setResponse(sp, "u", 1.0, 1.0);
   s.limit = 1e-10;
   EXPECT_TRUE(runOne(s, rk).passed) << runOne(s, rk).detail;
@@ -601,8 +620,8 @@ TEST(TaskErrorClosedFormCheck, MatchesTheCriticallyDampedResponseOfEq49) {
 
 TEST(TaskErrorClosedFormCheck, TheWindowStartsTheResponse) {
   // The error is 2 until t = 1 s (target not yet moved), then the critically damped response.
-  const TraceTable t = makeTrace({{taskChannel("p", "error"), [](double t) { return t < 1.0 - 1e-9 ? 2.0 : critical(t - 1.0); }}},
-                                 0.01, 601);
+  const TraceTable t =
+      makeTrace({{taskChannel("p", "error"), [](double t) { return t < 1.0 - 1e-9 ? 2.0 : critical(t - 1.0); }}}, 0.01, 601);
   CheckSpec s = closedFormSpec(1e-9);
   EXPECT_FALSE(runOne(s, t).passed);  // from t = 0 the held error is not the response
   s.from_s = 1.0;
@@ -692,8 +711,7 @@ TEST(ActiveSetPeakCheck, LargestIterationCountAndItsTime) {
 }
 
 TEST(FactorizationPeakCheck, LargestStageCountAndItsTime) {
-  const TraceTable t =
-      makeTrace({{kSolverFactorizationsChannel, [](double t) { return at(t, 0.4) ? 194.0 : 9.0; }}}, 0.1, 11);
+  const TraceTable t = makeTrace({{kSolverFactorizationsChannel, [](double t) { return at(t, 0.4) ? 194.0 : 9.0; }}}, 0.1, 11);
   CheckSpec s = spec("factorization_peak", 450.0);
   CheckResult r = expectOutcome(s, t, 194.0, kPass);
   EXPECT_FALSE(r.machine_dependent);
@@ -706,8 +724,8 @@ TEST(FactorizationPeakCheck, LargestStageCountAndItsTime) {
 
 TEST(AugmentedFractionCheck, FractionOfRowsAndTheMethodsFilter) {
   // Level "hands" augmented from t = 0.6 s: 5 of 11 rows (0.6 .. 1.0).
-  const TraceTable t = makeTrace({{levelChannel("hands", "augmented"), [](double t) { return t > 0.55 ? 1.0 : 0.0; }}}, 0.1,
-                                 11, {{kMethodMetadata, "bfgs"}});
+  const TraceTable t = makeTrace({{levelChannel("hands", "augmented"), [](double t) { return t > 0.55 ? 1.0 : 0.0; }}}, 0.1, 11,
+                                 {{kMethodMetadata, "bfgs"}});
   CheckSpec s = spec("augmented_fraction", 0.5);
   auto& sp = s.params.emplace<AugmentedFractionParams>();
   sp.level = "hands";
@@ -733,7 +751,8 @@ TEST(AugmentedFractionCheck, FractionOfRowsAndTheMethodsFilter) {
 
 TEST(TickTimeCheck, NearestRankPercentiles) {
   // Tick times 1 .. 100 us in a scrambled order.
-  const TraceTable t = makeTrace({{timerChannel("tick"), [](double t) {
+  const TraceTable t = makeTrace({{timerChannel("tick"),
+                                   [](double t) {
                                      const int k = static_cast<int>(std::lround(t * 100.0));
                                      return static_cast<double>((k * 37) % 100 + 1);
                                    }}},
@@ -766,9 +785,9 @@ TEST(TickTimeCheck, NearestRankPercentiles) {
 
 TEST(MethodComparison, DifferenceOfTheStatisticsOfTwoMethods) {
   auto trace = [](const std::string& method, double final_error) {
-    return makeTrace({{taskChannel("r", "error"), [=](double t) { return final_error + (1.0 - t); }},
-                      {taskChannel("l", "error"), constant(0.5)}},
-                     0.01, 101, {{kMethodMetadata, method}});
+    return makeTrace(
+        {{taskChannel("r", "error"), [=](double t) { return final_error + (1.0 - t); }}, {taskChannel("l", "error"), constant(0.5)}}, 0.01,
+        101, {{kMethodMetadata, method}});
   };
   ComparisonSpec c;
   c.name = "bfgs_not_worse";

@@ -28,13 +28,15 @@ using testing::kFail;
 using testing::kNoValue;
 using testing::kPass;
 
-CheckSpec legacy(const std::string& name, const std::string& type, const std::string& frame,
-                 const std::vector<std::string>& surfaces, double from_s, double limit, const std::string& where) {
+CheckSpec legacy(const std::string& name, const std::string& type, const std::string& frame, const std::vector<std::string>& surfaces,
+                 double from_s, double limit, const std::string& where) {
   CheckSpec s;
   s.name = name;
   s.type = type;
-  if (frame.empty()) s.params = SurfacesParams{surfaces};
-  else s.params = FrameParams{frame};
+  if (frame.empty())
+    s.params = SurfacesParams{surfaces};
+  else
+    s.params = FrameParams{frame};
   s.from_s = from_s;
   s.limit = limit;
   s.where = where;
@@ -248,9 +250,16 @@ TEST(Trace, DuplicateOrInvalidChannelNamesAreInputErrors) {
 TraceTable synthetic() {
   TraceTable t;
   t.metadata = {{kWeightMetadata, "600"}};
-  t.names = {"t", frameChannel("WAIST", 'x'), frameChannel("WAIST", 'y'), frameChannel("WAIST", 'z'),
-             contactForceChannel("R"), contactForceChannel("L"), contactPointChannel("R", 0, 'x'),
-             contactPointChannel("R", 0, 'y'), contactPointChannel("R", 1, 'x'), contactPointChannel("R", 1, 'y'),
+  t.names = {"t",
+             frameChannel("WAIST", 'x'),
+             frameChannel("WAIST", 'y'),
+             frameChannel("WAIST", 'z'),
+             contactForceChannel("R"),
+             contactForceChannel("L"),
+             contactPointChannel("R", 0, 'x'),
+             contactPointChannel("R", 0, 'y'),
+             contactPointChannel("R", 1, 'x'),
+             contactPointChannel("R", 1, 'y'),
              frameChannel("HEAD", 'z')};
   for (int k = 0; k <= 400; ++k) {
     const double time = 0.01 * k;
@@ -280,7 +289,7 @@ TEST(Checks, KnownValuesOnASyntheticTrace) {
   EXPECT_TRUE(r[2].passed);
   EXPECT_NEAR(r[3].value, 0.0003, 1e-12);
   EXPECT_TRUE(r[3].passed);
-  EXPECT_NEAR(r[4].value, 0.0, 1e-15);   // measured from its own start at 2.5 s
+  EXPECT_NEAR(r[4].value, 0.0, 1e-15);  // measured from its own start at 2.5 s
   EXPECT_TRUE(r[4].passed);
   EXPECT_NEAR(r[5].value, 0.7, 1e-12);
   EXPECT_FALSE(r[5].passed);  // went below 0.75 m
@@ -316,24 +325,24 @@ TraceTable controllerTrace() {
   for (const char* p : {"wrench.C.", "wrench_sensed.C."}) {
     for (const char* c : {"fx", "fy", "fz", "tx", "ty", "tz"}) t.names.push_back(std::string(p) + c);
   }
-  for (const char* n : {"qd.J1", "qd.J2", "cmd.qd.J1", "cmd.qd.J2", "ctrl.status", "solver.iterations", "level.L.augmented",
-                        "time.tick_us"}) {
+  for (const char* n :
+       {"qd.J1", "qd.J2", "cmd.qd.J1", "cmd.qd.J2", "ctrl.status", "solver.iterations", "level.L.augmented", "time.tick_us"}) {
     t.names.push_back(n);
   }
   for (int k = 0; k <= 400; ++k) {
     const double time = 0.01 * k;
     const bool active = time >= 1.0 - 1e-9 && time <= 3.0 + 1e-9;
-    std::vector<double> r = {time, 1.0 - 0.1 * time, 0.5, 1.0 + 0.5 * std::sin(M_PI * time), 50.0 * std::sin(time),
-                             k == 200 ? 60.0 : 10.0, active ? 1.0 : 0.0};
+    std::vector<double> r = {
+        time, 1.0 - 0.1 * time, 0.5, 1.0 + 0.5 * std::sin(M_PI * time), 50.0 * std::sin(time), k == 200 ? 60.0 : 10.0, active ? 1.0 : 0.0};
     // Computed: f = (30, 40, 100), torque (5, -2, 0): CoP (0.02, 0.05). Inactive rows: garbage.
     const double cw[6] = {30, 40, 100, 5, -2, 0};
     const double sensed_fz = time < 2.0 - 1e-9 ? 90.0 : 110.0;
     for (int i = 0; i < 6; ++i) r.push_back(active ? cw[i] : -1000.0);
     for (int i = 0; i < 6; ++i) r.push_back(active ? (i == 2 ? sensed_fz : cw[i]) : -1000.0);
-    r.push_back(std::sin(2.0 * M_PI * 2.1 * time));     // qd.J1: acceleration sign changes
-    r.push_back(0.1 * time);                            // qd.J2: constant acceleration
-    r.push_back(std::sin(2.0 * M_PI * 20.0 * time));    // cmd.qd.J1: 20 Hz
-    r.push_back(std::sin(2.0 * M_PI * 0.5 * time));     // cmd.qd.J2: 0.5 Hz
+    r.push_back(std::sin(2.0 * M_PI * 2.1 * time));   // qd.J1: acceleration sign changes
+    r.push_back(0.1 * time);                          // qd.J2: constant acceleration
+    r.push_back(std::sin(2.0 * M_PI * 20.0 * time));  // cmd.qd.J1: 20 Hz
+    r.push_back(std::sin(2.0 * M_PI * 0.5 * time));   // cmd.qd.J2: 0.5 Hz
     r.push_back(k == 300 ? 3.0 : (k % 50 == 0 ? 1.0 : 0.0));
     r.push_back(k == 250 ? 17.0 : 1.0);
     r.push_back(time >= 3.0 - 1e-9 ? 1.0 : 0.0);
@@ -384,7 +393,7 @@ TEST(ControllerChecks, TorqueLimits) {
   expectOne(s, {0.5, 1e-4}, kPass);  // 50 sin(t) peaks near t = pi / 2
   sp.source = "both";
   expectOne(s, {0.6, 1e-12}, kFail, {"commanded torque of J1 60"});  // commanded 60 N m at t = 2
-  s.limit = 0.6;  // on the limit passes
+  s.limit = 0.6;                                                     // on the limit passes
   EXPECT_TRUE(one(s).passed);
 }
 

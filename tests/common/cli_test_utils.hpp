@@ -58,10 +58,10 @@ inline CliResult harness(const std::string& args, const std::string& dir) { retu
 /// background, waits until the shell condition `started` holds (or the command has ended), sends
 /// it SIG`sig` (INT, TERM, KILL) and waits for it. Returns its exit status (128 + the signal's
 /// number when it did not handle it), or -1 when the shell failed; `code_file` holds the status.
-inline int runAndSignal(const std::string& command, const std::string& started, const std::string& sig,
-                        const std::string& code_file) {
-  const std::string script = "(" + command + " & pid=$!; while ! (" + started + ") && kill -0 $pid 2>/dev/null; do sleep 0.01; done; kill -" +
-                             sig + " $pid; { wait $pid; } 2>/dev/null; echo $? > " + code_file + ")";
+inline int runAndSignal(const std::string& command, const std::string& started, const std::string& sig, const std::string& code_file) {
+  const std::string script = "(" + command + " & pid=$!; while ! (" + started +
+                             ") && kill -0 $pid 2>/dev/null; do sleep 0.01; done; kill -" + sig +
+                             " $pid; { wait $pid; } 2>/dev/null; echo $? > " + code_file + ")";
   if (std::system(("bash -c '" + script + "'").c_str()) != 0) return -1;
   int code = -1;
   std::ifstream(code_file) >> code;

@@ -36,7 +36,8 @@ std::string ofException(F&& f, Part part, const char* none) {
 /// The message of the exception of type E that `f()` throws, or "<no error>".
 template <class E, class F>
 std::string exceptionMessage(F&& f) {
-  return ofException<E>(f, [](const E& e) { return std::string(e.what()); }, "<no error>");
+  return ofException<E>(
+      f, [](const E& e) { return std::string(e.what()); }, "<no error>");
 }
 
 /// The message of the lexdyn::InputError that `f()` throws, or "<no error>".
@@ -48,7 +49,8 @@ std::string inputErrorOf(F&& f) {
 /// Where the lexdyn::InputError that `f()` throws was found (InputError::where()), or "none".
 template <class F>
 std::string inputErrorWhere(F&& f) {
-  return ofException<InputError>(f, [](const InputError& e) { return e.where(); }, "none");
+  return ofException<InputError>(
+      f, [](const InputError& e) { return e.where(); }, "none");
 }
 
 }  // namespace lexdyn::testing

@@ -86,12 +86,11 @@ inline ControllerConfig exp1Config(const model::RobotModel& m, const std::string
   pp.posture = "half_sitting";
   const int post = add(std::make_unique<tasks::PostureTask>("posture", m, pp));
   if (method == "wls") {
-    cfg.levels = {{"hard", {jl, fb, eom, tl, sc, crf, clf, com}, {}},
-                  {"objective", {rhi, lhi, post, wm}, {1.0, 1.0, 1e-3, 1e-5}}};
+    cfg.levels = {{"hard", {jl, fb, eom, tl, sc, crf, clf, com}, {}}, {"objective", {rhi, lhi, post, wm}, {1.0, 1.0, 1e-3, 1e-5}}};
   } else {
-    cfg.levels = {{"bounds", {jl, fb}, {}},        {"dynamics", {eom, tl}, {}}, {"trust", {tr}, {}},
-                  {"collisions", {sc}, {}},        {"contacts", {crf, clf}, {}}, {"com", {com}, {}},
-                  {"hands", {rhi, lhi}, {}},       {"velocity", {vm}, {}},       {"wrench", {wm}, {}}};
+    cfg.levels = {{"bounds", {jl, fb}, {}},  {"dynamics", {eom, tl}, {}},  {"trust", {tr}, {}},
+                  {"collisions", {sc}, {}},  {"contacts", {crf, clf}, {}}, {"com", {com}, {}},
+                  {"hands", {rhi, lhi}, {}}, {"velocity", {vm}, {}},       {"wrench", {wm}, {}}};
   }
   return cfg;
 }

@@ -102,8 +102,8 @@ TEST(ContactMargins, ApplyScalesFrictionAndRefusesBadValues) {
 struct Extremes {
   bool ok = true;
   double min_point_normal = std::numeric_limits<double>::infinity();  // N
-  double max_friction_use = 0.0;     // (|f_t1| + |f_t2|) / (mu f_n) of the real coefficient
-  double min_cop_to_edge = std::numeric_limits<double>::infinity();  // m, of the real sole
+  double max_friction_use = 0.0;                                      // (|f_t1| + |f_t2|) / (mu f_n) of the real coefficient
+  double min_cop_to_edge = std::numeric_limits<double>::infinity();   // m, of the real sole
 };
 
 // The humanoid's exp. 1-like plan with both hands' targets out of reach, closed on its own

@@ -94,10 +94,11 @@ TEST(MethodRegistry, UnknownNameListsTheKnownOnes) {
 }
 
 TEST(MethodRegistry, RegistrationErrors) {
-  EXPECT_NE(errorOf([] { registerMethod({"gn", "again", false, findMethod("gn", "").make}); }).find("registered already"),
+  EXPECT_NE(errorOf([] {
+              registerMethod({"gn", "again", false, findMethod("gn", "").make});
+            }).find("registered already"),
             std::string::npos);
-  EXPECT_NE(errorOf([] { registerMethod({"", "nameless", false, findMethod("gn", "").make}); }).find("expected a name"),
-            std::string::npos);
+  EXPECT_NE(errorOf([] { registerMethod({"", "nameless", false, findMethod("gn", "").make}); }).find("expected a name"), std::string::npos);
   EXPECT_NE(errorOf([] { registerMethod({"nofactory", "", false, nullptr}); }).find("expected a factory"), std::string::npos);
 }
 

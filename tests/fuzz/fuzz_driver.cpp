@@ -83,11 +83,59 @@ bool runOne(const Bytes& b, std::string& what) {
 
 // Tokens of the formats the parsers read (YAML, XML, JSON, CSV) and values at the edges of
 // their ranges.
-const char* const kTokens[] = {
-    "nan", ".nan", "inf", ".inf", "-.inf", "1e308", "-1e308", "1e-300", "1e400", "0", "-0", "-1", "2147483648",
-    "9223372036854775808", "1e6", "0.005", "1e-9", "\"", "'", "[", "]", "{", "}", ":", ",", "\n", "\r\n", "- ", "  ",
-    "&a ", "*a", "!!str ", "null", "true", "~", "#", "<", ">", "/>", "</", "<link name=\"l\">", "<joint", "=\"", "xyz=\"",
-    "<!--", "-->", "<![CDATA[", "\\u0000", "# end: completed\n", "# end: interrupted\n", "t,", ",nan", "\t"};
+const char* const kTokens[] = {"nan",
+                               ".nan",
+                               "inf",
+                               ".inf",
+                               "-.inf",
+                               "1e308",
+                               "-1e308",
+                               "1e-300",
+                               "1e400",
+                               "0",
+                               "-0",
+                               "-1",
+                               "2147483648",
+                               "9223372036854775808",
+                               "1e6",
+                               "0.005",
+                               "1e-9",
+                               "\"",
+                               "'",
+                               "[",
+                               "]",
+                               "{",
+                               "}",
+                               ":",
+                               ",",
+                               "\n",
+                               "\r\n",
+                               "- ",
+                               "  ",
+                               "&a ",
+                               "*a",
+                               "!!str ",
+                               "null",
+                               "true",
+                               "~",
+                               "#",
+                               "<",
+                               ">",
+                               "/>",
+                               "</",
+                               "<link name=\"l\">",
+                               "<joint",
+                               "=\"",
+                               "xyz=\"",
+                               "<!--",
+                               "-->",
+                               "<![CDATA[",
+                               "\\u0000",
+                               "# end: completed\n",
+                               "# end: interrupted\n",
+                               "t,",
+                               ",nan",
+                               "\t"};
 
 struct Mutator {
   std::mt19937_64 rng;
@@ -189,14 +237,22 @@ int main(int argc, char** argv) {
       return argv[++i];
     };
     try {
-      if (a == "--seconds") seconds = std::stod(value());
-      else if (a == "--runs") runs = std::stol(value());
-      else if (a == "--seed") seed = std::stoull(value());
-      else if (a == "--timeout") timeout = static_cast<unsigned>(std::stoul(value()));
-      else if (a == "--max-len") max_len = std::stoul(value());
-      else if (a == "--out") out_dir = value();
-      else if (a.rfind("--", 0) == 0) return usage();
-      else inputs.push_back(a);
+      if (a == "--seconds")
+        seconds = std::stod(value());
+      else if (a == "--runs")
+        runs = std::stol(value());
+      else if (a == "--seed")
+        seed = std::stoull(value());
+      else if (a == "--timeout")
+        timeout = static_cast<unsigned>(std::stoul(value()));
+      else if (a == "--max-len")
+        max_len = std::stoul(value());
+      else if (a == "--out")
+        out_dir = value();
+      else if (a.rfind("--", 0) == 0)
+        return usage();
+      else
+        inputs.push_back(a);
     } catch (const std::exception&) {
       return usage();
     }
@@ -216,8 +272,8 @@ int main(int argc, char** argv) {
       }
       alarm(0);
     }
-    std::fprintf(stderr, "replayed %zu inputs: %ld refused with an input error, %d findings\n", files.size(),
-                 lexdyn::fuzz::rejectedCount(), failed);
+    std::fprintf(stderr, "replayed %zu inputs: %ld refused with an input error, %d findings\n", files.size(), lexdyn::fuzz::rejectedCount(),
+                 failed);
     return failed == 0 ? 0 : 1;
   }
 
@@ -242,8 +298,9 @@ int main(int argc, char** argv) {
     }
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::fprintf(stderr, "mutation runner: %ld runs in %.1f s (%.0f/s) from %zu seeds, seed %llu: %ld refused with an input error, %ld findings\n",
-               n, secs, secs > 0 ? static_cast<double>(n) / secs : 0.0, seeds.size(), seed, lexdyn::fuzz::rejectedCount(), findings);
+  std::fprintf(stderr,
+               "mutation runner: %ld runs in %.1f s (%.0f/s) from %zu seeds, seed %llu: %ld refused with an input error, %ld findings\n", n,
+               secs, secs > 0 ? static_cast<double>(n) / secs : 0.0, seeds.size(), seed, lexdyn::fuzz::rejectedCount(), findings);
   if (!out_dir.empty()) fs::remove(fs::path(out_dir) / "current.bin");
   return findings == 0 ? 0 : 1;
 }

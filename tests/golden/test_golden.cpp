@@ -102,8 +102,7 @@ TEST(Golden, StructuralDifferencesAreMismatches) {
   f.metadata[1].second = "controller_failure";
   c = compare(table(), f, Tolerance{}, {});
   EXPECT_FALSE(c.ok);
-  EXPECT_NE(c.report().find("row count: golden 10 rows, t = 0 .. 0.9 s; fresh 6 rows, t = 0 .. 0.5 s"), std::string::npos)
-      << c.report();
+  EXPECT_NE(c.report().find("row count: golden 10 rows, t = 0 .. 0.9 s; fresh 6 rows, t = 0 .. 0.5 s"), std::string::npos) << c.report();
   EXPECT_NE(c.report().find("run status: golden completed, fresh controller_failure"), std::string::npos) << c.report();
   f = table();
   f.rows[2][0] += 0.05;
@@ -136,8 +135,8 @@ TEST(Golden, SelectionDropsTheWallTimeChannelsAndFilesKeepProvenance) {
   writeGolden(dir + "/c.bfgs.csv", s, provenance(e, "bfgs", lexdyn::records::RunStatus::Completed, dir));
   const checks::TraceTable r = checks::readTrace(dir + "/c.bfgs.csv");
   EXPECT_EQ(r.rows, s.rows);
-  for (const char* key : {"golden_format", "golden_case", "golden_method", "golden_duration_s", "golden_every_n_ticks",
-                          "golden_run_status", "git_revision", "case"}) {
+  for (const char* key : {"golden_format", "golden_case", "golden_method", "golden_duration_s", "golden_every_n_ticks", "golden_run_status",
+                          "git_revision", "case"}) {
     EXPECT_NE(checks::findMetadata(r.metadata, key), nullptr) << key;
   }
   EXPECT_EQ(*checks::findMetadata(r.metadata, "golden_method"), "bfgs");

@@ -122,9 +122,15 @@ int main(int argc, char** argv) {
   std::vector<Eigen::MatrixXd> H(levels.size(), Eigen::MatrixXd::Zero(nv, nv));
   auto accumulate = [&](const Term& t, const Eigen::Vector3d& w, Eigen::MatrixXd& Hl) {
     switch (t.kind) {
-      case Term::Point: hessian::accumulatePointHessian(m, data, ws, t.frame, t.point, w, Hl); break;
-      case Term::Orientation: hessian::accumulateOrientationHessian(m, data, ws, t.frame, w, Hl); break;
-      case Term::Com: hessian::accumulateComHessian(m, ws, w, Hl); break;
+      case Term::Point:
+        hessian::accumulatePointHessian(m, data, ws, t.frame, t.point, w, Hl);
+        break;
+      case Term::Orientation:
+        hessian::accumulateOrientationHessian(m, data, ws, t.frame, w, Hl);
+        break;
+      case Term::Com:
+        hessian::accumulateComHessian(m, ws, w, Hl);
+        break;
     }
   };
   int calls = 0;
@@ -157,37 +163,27 @@ int main(int argc, char** argv) {
   const double dt = 0.005, eps = 1e-3 * dt * dt;
 
   std::printf("%d repeats of each line's timed calls; min med: the smallest of the repeats' medians\n", g_repeats);
-  std::printf("Hessians on %s (nv = %d), %d accumulate calls for the 5 augmented levels\n\n", m.name().c_str(), nv,
-              calls);
+  std::printf("Hessians on %s (nv = %d), %d accumulate calls for the 5 augmented levels\n\n", m.name().c_str(), nv, calls);
   header();
   report("workspace update (axes, subtree CoMs)", 20000, [&] { ws.update(m, data); });
   Eigen::MatrixXd Hc = Eigen::MatrixXd::Zero(nv, nv);
-  report("CoM Hessian (accumulateComHessian)", 20000, [&] {
-    hessian::accumulateComHessian(m, ws, weights[0], Hc);
-  });
+  report("CoM Hessian (accumulateComHessian)", 20000, [&] { hessian::accumulateComHessian(m, ws, weights[0], Hc); });
   report("CoM Hessian incl. workspace update and H = 0", 20000, [&] {
     ws.update(m, data);
     Hc.setZero();
     hessian::accumulateComHessian(m, ws, weights[0], Hc);
   });
-  report("hand point Hessian (RGRASP)", 20000, [&] {
-    hessian::accumulatePointHessian(m, data, ws, frame("RGRASP"), o, weights[1], Hc);
-  });
-  report("sole orientation Hessian (RSOLE)", 20000, [&] {
-    hessian::accumulateOrientationHessian(m, data, ws, frame("RSOLE"), weights[2], Hc);
-  });
+  report("hand point Hessian (RGRASP)", 20000, [&] { hessian::accumulatePointHessian(m, data, ws, frame("RGRASP"), o, weights[1], Hc); });
+  report("sole orientation Hessian (RSOLE)", 20000,
+         [&] { hessian::accumulateOrientationHessian(m, data, ws, frame("RSOLE"), weights[2], Hc); });
   report("all Hessians, 5 levels (56 calls, incl. update and H = 0)", 5000, allHessians);
-  report("Higham + eps + Cholesky, level 9, 38 occupied dofs", 2000, [&] {
-    higham.regularizeAndFactor(H[4], occupied[4], eps, R);
-  });
-  report("Higham + eps + Cholesky, level 4, " + std::to_string(std::count(occupied[0].begin(), occupied[0].end(), 1)) +
-             " occupied dofs",
+  report("Higham + eps + Cholesky, level 9, 38 occupied dofs", 2000, [&] { higham.regularizeAndFactor(H[4], occupied[4], eps, R); });
+  report("Higham + eps + Cholesky, level 4, " + std::to_string(std::count(occupied[0].begin(), occupied[0].end(), 1)) + " occupied dofs",
          2000, [&] { higham.regularizeAndFactor(H[0], occupied[0], eps, R); });
   std::vector<int> occList;
   occList.reserve(static_cast<size_t>(nv));
-  report("Higham + eps as eigen-rows (LexDynAH), level 9, 38 occupied dofs", 2000, [&] {
-    higham.regularizedRows(H[4], occupied[4], eps, R, occList);
-  });
+  report("Higham + eps as eigen-rows (LexDynAH), level 9, 38 occupied dofs", 2000,
+         [&] { higham.regularizedRows(H[4], occupied[4], eps, R, occList); });
   report("all 5 levels: Hessians + Higham + Cholesky", 1000, [&] {
     allHessians();
     for (size_t l = 0; l < levels.size(); ++l) higham.regularizeAndFactor(H[l], occupied[l], eps, R);
@@ -202,9 +198,7 @@ int main(int argc, char** argv) {
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ees(nv);
     report("(reference) Eigen SelfAdjointEigenSolver, 38 x 38", 2000, [&] { ees.compute(H[4]); });
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(nv, nv, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    report("(reference) Eigen JacobiSVD (full U, V), 38 x 38", 200, [&] {
-      svd.compute(H[4], Eigen::ComputeFullU | Eigen::ComputeFullV);
-    });
+    report("(reference) Eigen JacobiSVD (full U, V), 38 x 38", 200, [&] { svd.compute(H[4], Eigen::ComputeFullU | Eigen::ComputeFullV); });
     lexdyn::test::AllocationScope scope;
     ees.compute(H[4]);
     const std::size_t same = scope.finish();
@@ -215,9 +209,10 @@ int main(int argc, char** argv) {
     es.compute(H[4]);
     es.compute(H[0].topLeftCorner(20, 20));
     const std::size_t ours = scope3.finish();
-    std::printf("\nheap allocations per compute(): Eigen SelfAdjointEigenSolver %zu (same size), %zu (other size); "
-                "lexdyn SymmetricEigenSolver %zu\n",
-                same, other, ours);
+    std::printf(
+        "\nheap allocations per compute(): Eigen SelfAdjointEigenSolver %zu (same size), %zu (other size); "
+        "lexdyn SymmetricEigenSolver %zu\n",
+        same, other, ours);
   }
   {
     auto B = hessian::makeBfgs(nv);

@@ -63,12 +63,10 @@ class Rng {
 /// A random configuration: joints `spread` around `posture` (or uniform in the limits when the
 /// posture is empty), clipped to the limits; a free-flyer base rotated by Euler angles up to
 /// 0.6 rad in roll/pitch and any yaw, and displaced.
-inline model::Configuration randomConfiguration(const model::RobotModel& m, Rng& rng, const std::string& posture,
-                                                double spread) {
+inline model::Configuration randomConfiguration(const model::RobotModel& m, Rng& rng, const std::string& posture, double spread) {
   model::Configuration q = m.neutralConfiguration();
   if (m.hasFreeFlyer()) {
-    q.base_rotation = model::rotationFromEulerXYZ(
-        Eigen::Vector3d(rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-3.0, 3.0)));
+    q.base_rotation = model::rotationFromEulerXYZ(Eigen::Vector3d(rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-3.0, 3.0)));
     q.base_position = Eigen::Vector3d(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), rng.uniform(0.5, 1.0));
   }
   for (int j = 0; j < m.numJoints(); ++j) {

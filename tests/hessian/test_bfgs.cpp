@@ -187,15 +187,13 @@ TEST(Bfgs, StaysPositiveDefiniteSatisfiesSecantAndSkipsOnCurvature) {
         ++updates;
         // Rounding of B s: ~ n eps |B| |s|.
         const Eigen::VectorXd residual = B.matrix() * s - y;
-        EXPECT_LE(residual.norm(), 1e-12 * (B.matrix().norm() * s.norm() + y.norm()))
-            << "secant, run " << run << " k " << k;
+        EXPECT_LE(residual.norm(), 1e-12 * (B.matrix().norm() * s.norm() + y.norm())) << "secant, run " << run << " k " << k;
       } else {
         ++skips;
         EXPECT_EQ(B.matrix(), before);  // B kept exactly
       }
       EXPECT_EQ((B.matrix() - B.matrix().transpose()).cwiseAbs().maxCoeff(), 0.0);
-      const Eigen::VectorXd lambda =
-          Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(B.matrix(), Eigen::EigenvaluesOnly).eigenvalues();
+      const Eigen::VectorXd lambda = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(B.matrix(), Eigen::EigenvaluesOnly).eigenvalues();
       if (spd_model) {
         ASSERT_GT(lambda[0], 0.0) << "run " << run << " k " << k;
         ASSERT_EQ(Eigen::LLT<Eigen::MatrixXd>(B.matrix()).info(), Eigen::Success);
@@ -208,8 +206,7 @@ TEST(Bfgs, StaysPositiveDefiniteSatisfiesSecantAndSkipsOnCurvature) {
       }
       regularized_factors += B.lastFactorRegularized() ? 1 : 0;
       const Eigen::MatrixXd RtR = R.transpose() * R;
-      EXPECT_LE((RtR - B.matrix()).norm(), 1e-12 * B.matrix().norm() + n * B.options().eps)
-          << "run " << run << " k " << k;
+      EXPECT_LE((RtR - B.matrix()).norm(), 1e-12 * B.matrix().norm() + n * B.options().eps) << "run " << run << " k " << k;
     }
     EXPECT_GT(updates, 0);
     if (!spd_model) {
@@ -261,8 +258,8 @@ TEST(Bfgs, OccupancyChangesKeepTheRestAndNeverReinitialise) {
   const Eigen::MatrixXd& after = B.matrix();
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
-      const bool keep = m1[static_cast<size_t>(i)] && m2[static_cast<size_t>(i)] && m1[static_cast<size_t>(j)] &&
-                        m2[static_cast<size_t>(j)];
+      const bool keep =
+          m1[static_cast<size_t>(i)] && m2[static_cast<size_t>(i)] && m1[static_cast<size_t>(j)] && m2[static_cast<size_t>(j)];
       const bool fresh_i = !m1[static_cast<size_t>(i)] && m2[static_cast<size_t>(i)];
       if (keep) {
         EXPECT_EQ(after(i, j), before(i, j)) << i << "," << j;
@@ -376,18 +373,17 @@ TEST(Sr1, SecantEquationSkipRuleAndIndefiniteFactor) {
   ASSERT_EQ(B.factor(R), n);
   EXPECT_TRUE(B.lastFactorRegularized());
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(B.matrix());
-  const Eigen::MatrixXd expected =
-      es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose() +
-      o.eps * Eigen::MatrixXd::Identity(n, n);
+  const Eigen::MatrixXd expected = es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose() +
+                                   o.eps * Eigen::MatrixXd::Identity(n, n);
   EXPECT_LE((R.transpose() * R - expected).norm(), 1e-12 * A.norm());
 
   // Skip rule: r orthogonal to s (r^T s = 0) is skipped; a tiny relative r^T s is skipped.
   Sr1Matrix C(3, o);
   C.initialize(Eigen::Vector3d(1, 1, 1), std::vector<char>(3, 1));
   const Eigen::Vector3d s(1, 0, 0);
-  EXPECT_FALSE(C.update(s, Eigen::Vector3d(1, 1, 0)));                              // r = (0,1,0)
-  EXPECT_FALSE(C.update(s, Eigen::Vector3d(1 + 0.5 * o.sr1_tolerance, 1, 0)));      // |r^T s| < tol |r||s|
-  EXPECT_FALSE(C.update(s, Eigen::Vector3d(1, 0, 0)));                              // r = 0
+  EXPECT_FALSE(C.update(s, Eigen::Vector3d(1, 1, 0)));                          // r = (0,1,0)
+  EXPECT_FALSE(C.update(s, Eigen::Vector3d(1 + 0.5 * o.sr1_tolerance, 1, 0)));  // |r^T s| < tol |r||s|
+  EXPECT_FALSE(C.update(s, Eigen::Vector3d(1, 0, 0)));                          // r = 0
   EXPECT_EQ(C.matrix(), Eigen::Matrix3d::Identity());
   EXPECT_TRUE(C.update(s, Eigen::Vector3d(1 + 2.0 * o.sr1_tolerance, 1e-3, 0)));
 }
@@ -422,8 +418,7 @@ TEST(SignChangeGuard, TriggersOnTheSecondConsecutiveSignChangeOnly) {
   //  dof 3: + 0 - 0 +    -> zeros carry no sign: changes at ticks 2 and 4 are consecutive
   //  dof 4: + + + + +    -> never
   //  dof 5: - + + - +    -> flagged at tick 4 only
-  const double a[6][5] = {{1, -1, 1, 1, 1},  {1, -1, -1, 1, 1}, {1, -1, 1, -1, 1},
-                          {1, 0, -1, 0, 1},  {1, 1, 1, 1, 1},   {-1, 1, 1, -1, 1}};
+  const double a[6][5] = {{1, -1, 1, 1, 1}, {1, -1, -1, 1, 1}, {1, -1, 1, -1, 1}, {1, 0, -1, 0, 1}, {1, 1, 1, 1, 1}, {-1, 1, 1, -1, 1}};
   const std::vector<std::vector<int>> expected = {{}, {}, {0, 2}, {}, {2, 3, 5}};
   SignChangeGuard g(6);
   for (int t = 0; t < 5; ++t) {

@@ -51,9 +51,7 @@ Eigen::VectorXd indefiniteSpectrum() {
   lambda << -2.0, -0.5, 0.0, 0.3, 1.0, 4.0;
   return lambda;
 }
-Eigen::VectorXd clippedPlusEps(const Eigen::VectorXd& lambda, double eps) {
-  return (lambda.cwiseMax(0.0).array() + eps).matrix();
-}
+Eigen::VectorXd clippedPlusEps(const Eigen::VectorXd& lambda, double eps) { return (lambda.cwiseMax(0.0).array() + eps).matrix(); }
 
 std::vector<Eigen::MatrixXd> testMatrices(Rng& rng) {
   std::vector<Eigen::MatrixXd> out;
@@ -359,12 +357,11 @@ TEST(Higham, ZeroRowsOfAPositiveDefiniteBlockReportEigenvalueZero) {
 TEST(SymmetricEigenSolver, TinyEigenvalueClusterDeflatesAtTheMatrixRoundingLevel) {
   Rng rng(111);
   Eigen::VectorXd lambda(35);
-  lambda << -4.89265311e-09, -2.56548414e-09, -4.43330961e-10, -4.40677466e-10, 2.09320192e-12, 3.63947141e-10,
-      3.66476612e-10, 1.67572919e-09, 4.85218311e-09, 3.88926478e-08, 4.19545009e-08, 2.33272683e-07,
-      2.34444529e-07, 2.36815887e-07, 2.40952321e-07, 2.80124806e-07, 2.80443092e-07, 3.66570040e-07,
-      4.96601689e-07, 6.70049757e-07, 7.07640412e-07, 7.62404118e-07, 9.54269705e-07, 1.06561482e-06,
-      1.23791476e-06, 1.34442818e-06, 1.85795860e-06, 2.67226158e-06, 3.69628192e-06, 4.12508573e-06,
-      4.88765419e-06, 9.01812810e-06, 1.34833985e-05, 2.99238592e-05, 3.19734372e-05;
+  lambda << -4.89265311e-09, -2.56548414e-09, -4.43330961e-10, -4.40677466e-10, 2.09320192e-12, 3.63947141e-10, 3.66476612e-10,
+      1.67572919e-09, 4.85218311e-09, 3.88926478e-08, 4.19545009e-08, 2.33272683e-07, 2.34444529e-07, 2.36815887e-07, 2.40952321e-07,
+      2.80124806e-07, 2.80443092e-07, 3.66570040e-07, 4.96601689e-07, 6.70049757e-07, 7.07640412e-07, 7.62404118e-07, 9.54269705e-07,
+      1.06561482e-06, 1.23791476e-06, 1.34442818e-06, 1.85795860e-06, 2.67226158e-06, 3.69628192e-06, 4.12508573e-06, 4.88765419e-06,
+      9.01812810e-06, 1.34833985e-05, 2.99238592e-05, 3.19734372e-05;
   // Ten random eigenvector bases: the sweeps summed (each basis's own count moves by a few with
   // the rounding of the tridiagonalisation).
   SymmetricEigenSolver es(35);

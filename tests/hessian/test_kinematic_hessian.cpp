@@ -202,8 +202,8 @@ double maxAbs(const Eigen::MatrixXd& A) { return A.cwiseAbs().maxCoeff(); }
 
 /// Compares the analytic Hessians at q0 with a reference, for the unit weights (each component)
 /// and for a random weight accumulated onto a random symmetric matrix.
-void compare(const RobotModel& m, const Configuration& q0, const std::vector<Probe>& probes, const Hessians& ref,
-             double tol, Rng& rng, const std::string& what, double& worst) {
+void compare(const RobotModel& m, const Configuration& q0, const std::vector<Probe>& probes, const Hessians& ref, double tol, Rng& rng,
+             const std::string& what, double& worst) {
   const int nv = m.nv();
   model::ModelData data = m.createData();
   m.update(data, q0, Eigen::VectorXd::Zero(nv));
@@ -265,9 +265,10 @@ void runCase(const ModelCase& mc, std::uint64_t seed) {
     compare(m, q0, probes, B, 1e-8, rng, what + " (Jacobian differences)", worstB);
   }
   // Recorded for the docs; the assertions are above.
-  std::printf("%s: max |analytic - reference|: second differences %.2e, Jacobian differences %.2e "
-              "(largest Hessian entry %.2f)\n",
-              mc.name.c_str(), worstA, worstB, scale);
+  std::printf(
+      "%s: max |analytic - reference|: second differences %.2e, Jacobian differences %.2e "
+      "(largest Hessian entry %.2f)\n",
+      mc.name.c_str(), worstA, worstB, scale);
   // The comparison must not be vacuous: the Hessians are far from zero.
   EXPECT_GT(scale, 0.1) << mc.name;
 }
@@ -277,9 +278,7 @@ TEST(KinematicHessian, HumanoidNearHalfSittingWithRotatedFreeFlyer) {
 }
 TEST(KinematicHessian, Planar3r) { runCase({"planar_3r", &testing::loadPlanar3r, "", 0.0, 5}, 42); }
 TEST(KinematicHessian, Arm7dof) { runCase({"arm_7dof", &testing::loadArm7, "", 0.0, 5}, 43); }
-TEST(KinematicHessian, FreeFlyerWithPrismaticBetweenRevolutes) {
-  runCase({"branched_rpr", &testing::loadBranched, "", 0.0, 5}, 44);
-}
+TEST(KinematicHessian, FreeFlyerWithPrismaticBetweenRevolutes) { runCase({"branched_rpr", &testing::loadBranched, "", 0.0, 5}, 44); }
 TEST(KinematicHessian, CoupledMimicJoints) { runCase({"coupled", &testing::loadCoupled, "", 0.0, 5}, 45); }
 
 // The humanoid at a random configuration near half-sitting (seeded, zero velocity) with its

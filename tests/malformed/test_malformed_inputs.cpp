@@ -90,8 +90,8 @@ TEST(MalformedInputs, EachGivesItsExitCodeAndMessage) {
     ASSERT_FALSE(cmd.empty()) << "expectations.txt:" << lineno << ": unknown command " << f[0];
     const Outcome o = runIn(kDir, cmd, tag);
     EXPECT_EQ(o.code, std::stoi(f[1])) << "expectations.txt:" << lineno << ": " << f[0] << "\n" << o.err;
-    EXPECT_NE(o.err.find(f[2]), std::string::npos) << "expectations.txt:" << lineno << ": " << f[0] << "\nexpected: " << f[2]
-                                                   << "\nfound: " << o.err;
+    EXPECT_NE(o.err.find(f[2]), std::string::npos)
+        << "expectations.txt:" << lineno << ": " << f[0] << "\nexpected: " << f[2] << "\nfound: " << o.err;
     ++n;
   }
   EXPECT_GE(n, 140);
@@ -149,7 +149,8 @@ TEST(MalformedInputs, LargeGeneratedInputs) {
   write(g + "/levels.json", levels + "]}");
   cases.push_back({kBin + "lexdyn-solve levels.json", 2, "levels.json: levels: expected at most 100 levels (size guard"});
   write(g + "/vars.json", "{\"variables\": 2147483648, \"levels\": [{\"A\": [[1]], \"lower\": [0], \"upper\": [0]}]}");
-  cases.push_back({kBin + "lexdyn-solve vars.json", 2, "vars.json: variables: expected at most 2000 variables (size guard), found 2147483648"});
+  cases.push_back(
+      {kBin + "lexdyn-solve vars.json", 2, "vars.json: variables: expected at most 2000 variables (size guard), found 2147483648"});
   // A trace of 100000 channels took 28 s in a quadratic duplicate check.
   std::string wide = "t";
   for (int i = 0; i < 100000; ++i) wide += ",c" + std::to_string(i);

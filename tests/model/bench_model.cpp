@@ -73,8 +73,7 @@ void BM_ControllerBundle(benchmark::State& st) {
   Eigen::MatrixXd M(38, 38), J(6, 38), Jc(3, 38);
   Eigen::VectorXd N(38);
   Eigen::RowVectorXd Jd(38);
-  const FrameId frames[] = {f.model.frameId("RSOLE"), f.model.frameId("LSOLE"), f.model.frameId("RGRASP"),
-                            f.model.frameId("LGRASP")};
+  const FrameId frames[] = {f.model.frameId("RSOLE"), f.model.frameId("LSOLE"), f.model.frameId("RGRASP"), f.model.frameId("LGRASP")};
   for (auto _ : st) {
     f.model.update(f.data, f.q, f.u);
     f.model.massMatrix(f.data, M);

@@ -176,8 +176,8 @@ TEST(ModelAllocation, SimbodyReferenceOperatorsAllocateAndAreSeen) {
     jacobian = g_allocations.exchange(0);
     g_counting = false;
   }
-  std::printf("allocations per call: calcM %ld, calcResidualForceIgnoringConstraints %ld, calcFrameJacobian %ld\n",
-              calcM, residual, jacobian);
+  std::printf("allocations per call: calcM %ld, calcResidualForceIgnoringConstraints %ld, calcFrameJacobian %ld\n", calcM, residual,
+              jacobian);
   EXPECT_GT(calcM, 0);
   EXPECT_GT(residual, 0);
   EXPECT_GT(jacobian, 0);

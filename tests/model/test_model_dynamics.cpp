@@ -27,9 +27,8 @@ struct ModelCase {
 };
 
 const ModelCase kCases[] = {
-    {"models/hrp2kai_like", "hrp2kai_like"}, {"models/arm_7dof", "arm_7dof"},
-    {"models/planar_3r", "planar_3r"},       {"models/point_mass", "point_mass"},
-    {"tests/data/model", "free_body"},       {"tests/data/model", "merged"},
+    {"models/hrp2kai_like", "hrp2kai_like"}, {"models/arm_7dof", "arm_7dof"},   {"models/planar_3r", "planar_3r"},
+    {"models/point_mass", "point_mass"},     {"tests/data/model", "free_body"}, {"tests/data/model", "merged"},
     {"tests/data/model", "coupled"},
 };
 
@@ -40,8 +39,7 @@ constexpr double kH = 1e-5;
   const double scale = std::max(1.0, std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff()));
   const double err = (a - b).cwiseAbs().maxCoeff();
   if (err <= tol * scale) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "max error " << err << " > " << tol * scale << "\nA=\n"
-                                       << a << "\nB=\n" << b;
+  return ::testing::AssertionFailure() << "max error " << err << " > " << tol * scale << "\nA=\n" << a << "\nB=\n" << b;
 }
 
 class ModelDynamics : public ::testing::TestWithParam<ModelCase> {
@@ -170,9 +168,7 @@ TEST_P(ModelDynamics, FrameJacobiansAndBiasesMatchFiniteDifferencesAndSimbody) {
       EXPECT_TRUE(near(J, Jref, 1e-12));
       // J u against the finite difference of the placement.
       const Eigen::Isometry3d X0 = model().framePlacement(data(), f);
-      const Eigen::MatrixXd dp = centralDifference(q, u, [&] {
-        return Eigen::MatrixXd(model().framePlacement(data(), f).translation());
-      });
+      const Eigen::MatrixXd dp = centralDifference(q, u, [&] { return Eigen::MatrixXd(model().framePlacement(data(), f).translation()); });
       Configuration qp = q, qm = q;
       model().integrate(q, u, kH, qp);
       model().integrate(q, u, -kH, qm);
@@ -195,9 +191,7 @@ TEST_P(ModelDynamics, FrameJacobiansAndBiasesMatchFiniteDifferencesAndSimbody) {
       const Eigen::Vector3d pt(0.05, -0.02, 0.1);
       Eigen::MatrixXd Jp(3, n);
       model().pointJacobian(data(), f, pt, Jp);
-      const Eigen::MatrixXd dpt = centralDifference(q, u, [&] {
-        return Eigen::MatrixXd(model().pointPosition(data(), f, pt));
-      });
+      const Eigen::MatrixXd dpt = centralDifference(q, u, [&] { return Eigen::MatrixXd(model().pointPosition(data(), f, pt)); });
       EXPECT_TRUE(near(Jp * u, dpt, 1e-6));
       EXPECT_TRUE(near(model().pointVelocity(data(), f, pt), Jp * u, 1e-12));
       const Eigen::MatrixXd Jpdot = centralDifference(q, u, [&] { return matrixOf(3, n, &RobotModel::pointJacobian, f, pt); });
@@ -405,8 +399,7 @@ TEST(EulerAngles, RoundTripIncludingGimbalLock) {
     const Eigen::Matrix3d R = rotationFromEulerXYZ(e);
     EXPECT_TRUE(eulerXYZFromRotation(R).isApprox(e, 1e-12)) << e.transpose();
     // Rx(a) Ry(b) Rz(c) written with Eigen's angle-axis products.
-    const Eigen::Matrix3d R2 = (Eigen::AngleAxisd(e[0], Eigen::Vector3d::UnitX()) *
-                                Eigen::AngleAxisd(e[1], Eigen::Vector3d::UnitY()) *
+    const Eigen::Matrix3d R2 = (Eigen::AngleAxisd(e[0], Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(e[1], Eigen::Vector3d::UnitY()) *
                                 Eigen::AngleAxisd(e[2], Eigen::Vector3d::UnitZ()))
                                    .toRotationMatrix();
     EXPECT_TRUE(R.isApprox(R2, 1e-14));

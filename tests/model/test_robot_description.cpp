@@ -26,15 +26,14 @@ struct UrdfParts {
   std::string extra;
 
   std::string text() const {
-    return std::string("<?xml version=\"1.0\"?>\n") +         // line 1
-           "<robot name=\"chain\">\n" +                       // line 2
-           "  <link name=\"base\"/>\n" +                      // line 3
+    return std::string("<?xml version=\"1.0\"?>\n") +                  // line 1
+           "<robot name=\"chain\">\n" +                                // line 2
+           "  <link name=\"base\"/>\n" +                               // line 3
            "  <link name=\"link1\">" + link1_inertial + "</link>\n" +  // line 4
            "  <joint name=\"j1\" type=\"" + joint1_type + "\">\n" +    // line 5
            "    <parent link=\"" + joint1_parent + "\"/>\n" +          // line 6
-           "    <child link=\"link1\"/>\n" +                            // line 7
-           "    <axis xyz=\"0 1 0\"/>\n" + "    " + joint1_limit + "\n" +
-           "  </joint>\n" + extra + "</robot>\n";
+           "    <child link=\"link1\"/>\n" +                           // line 7
+           "    <axis xyz=\"0 1 0\"/>\n" + "    " + joint1_limit + "\n" + "  </joint>\n" + extra + "</robot>\n";
   }
 };
 
@@ -58,8 +57,7 @@ std::string errorWithInertial(const std::string& inertial) {
 }
 
 // An <inertial> element (no origin) of this mass and these attributes of <inertia>.
-std::string inertial(const std::string& mass,
-                     const std::string& inertia = R"(ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01")") {
+std::string inertial(const std::string& mass, const std::string& inertia = R"(ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01")") {
   return "<inertial><mass value=\"" + mass + "\"/><inertia " + inertia + "/></inertial>";
 }
 
@@ -93,9 +91,7 @@ TEST(RobotDescription, ZeroMassIsLockedOrAnErrorInStrictMode) {
                           {"chain.urdf:4", "link 'link1': mass must be > 0, found 0 (a moving body"}));
 }
 
-TEST(RobotDescription, NegativeMassIsAnError) {
-  EXPECT_TRUE(containsAll(errorWithInertial(inertial("-2")), {"chain.urdf:4", "found -2"}));
-}
+TEST(RobotDescription, NegativeMassIsAnError) { EXPECT_TRUE(containsAll(errorWithInertial(inertial("-2")), {"chain.urdf:4", "found -2"})); }
 
 TEST(RobotDescription, MissingInertialIsAnErrorInStrictMode) {
   UrdfParts p;
@@ -142,12 +138,15 @@ TEST(RobotDescription, BadLimitsAreErrors) {
 // under AddressSanitizer). It is refused before urdfdom, naming the joint.
 TEST(RobotDescription, ADetachedCycleOfJointsIsAnError) {
   UrdfParts p;
-  p.extra = "  <link name=\"a\"><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.01\"/></inertial></link>\n"
-            "  <link name=\"b\"><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.01\"/></inertial></link>\n"
-            "  <joint name=\"ja\" type=\"fixed\"><parent link=\"b\"/><child link=\"a\"/></joint>\n"
-            "  <joint name=\"jb\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint>\n";
-  EXPECT_TRUE(containsAll(errorOf(p.text(), kData),
-                          {"chain.urdf:13: link 'a' is not connected to the root link 'base'", "joints form a cycle"}));
+  p.extra =
+      "  <link name=\"a\"><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" "
+      "izz=\"0.01\"/></inertial></link>\n"
+      "  <link name=\"b\"><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" "
+      "izz=\"0.01\"/></inertial></link>\n"
+      "  <joint name=\"ja\" type=\"fixed\"><parent link=\"b\"/><child link=\"a\"/></joint>\n"
+      "  <joint name=\"jb\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint>\n";
+  EXPECT_TRUE(
+      containsAll(errorOf(p.text(), kData), {"chain.urdf:13: link 'a' is not connected to the root link 'base'", "joints form a cycle"}));
 }
 
 TEST(RobotDescription, TwoRootsIsAnError) {
@@ -169,8 +168,7 @@ TEST(RobotDescription, DataFileErrorsNameFileLineAndKey) {
   // Unknown key.
   EXPECT_TRUE(containsAll(errorOf(urdf, std::string(kData) + "colour: red\n"), {"chain.yaml:4: colour", "unknown key"}));
   // Wrong type.
-  EXPECT_TRUE(containsAll(errorOf(urdf, std::string(kData) + "frames:\n  - {name: f, parent: link1, xyz: [0, 0]}\n"),
-                          {"frames[0].xyz"}));
+  EXPECT_TRUE(containsAll(errorOf(urdf, std::string(kData) + "frames:\n  - {name: f, parent: link1, xyz: [0, 0]}\n"), {"frames[0].xyz"}));
   EXPECT_TRUE(containsAll(errorOf(urdf, std::string(kData) + "gravity: [0, 0, \"-9.81\"]\n"), {"gravity[2]"}));
   // Robot name mismatch.
   EXPECT_TRUE(containsAll(errorOf(urdf, "format: lexdyn-robot-data/1\nrobot: other\nbase: fixed\n"), {"chain.yaml:2: robot"}));
@@ -179,16 +177,17 @@ TEST(RobotDescription, DataFileErrorsNameFileLineAndKey) {
   EXPECT_TRUE(containsAll(errorOf(urdf, std::string(kData) + "postures:\n  p: {j1: 2.5}\n"), {"outside the joint limits"}));
   EXPECT_TRUE(containsAll(errorOf(urdf, std::string(kData) + "postures:\n  p: {}\n"), {"missing: j1"}));
   // Unknown capsule in a pair; capsules on the same link.
-  EXPECT_TRUE(containsAll(errorOf(urdf, std::string(kData) +
-                                            "capsules:\n  - {name: c1, parent: link1, p0: [0,0,0], p1: [0,0,1], radius: 0.1}\n"
-                                            "collision_pairs:\n  interaction_distance: 0.05\n  safety_distance: 0.01\n"
-                                            "  pairs: [[c1, c2]]\n"),
-                          {"collision_pairs.pairs[0][1]", "'c2'"}));
+  EXPECT_TRUE(
+      containsAll(errorOf(urdf, std::string(kData) + "capsules:\n  - {name: c1, parent: link1, p0: [0,0,0], p1: [0,0,1], radius: 0.1}\n"
+                                                     "collision_pairs:\n  interaction_distance: 0.05\n  safety_distance: 0.01\n"
+                                                     "  pairs: [[c1, c2]]\n"),
+                  {"collision_pairs.pairs[0][1]", "'c2'"}));
   // Missing base.
   EXPECT_TRUE(containsAll(errorOf(urdf, "format: lexdyn-robot-data/1\nrobot: chain\n"), {"'base'"}));
   // Negative radius.
-  EXPECT_TRUE(containsAll(errorOf(urdf, std::string(kData) + "capsules:\n  - {name: c1, parent: link1, p0: [0,0,0], p1: [0,0,1], radius: -0.1}\n"),
-                          {"capsules[0].radius"}));
+  EXPECT_TRUE(
+      containsAll(errorOf(urdf, std::string(kData) + "capsules:\n  - {name: c1, parent: link1, p0: [0,0,0], p1: [0,0,1], radius: -0.1}\n"),
+                  {"capsules[0].radius"}));
 }
 
 TEST(RobotDescription, MissingFilesAreNamed) {
@@ -197,8 +196,8 @@ TEST(RobotDescription, MissingFilesAreNamed) {
 }
 
 TEST(RobotDescription, HumanoidJointOrderFollowsTheFile) {
-  const RobotDescription d = loadRobotDescription(sourcePath("models/hrp2kai_like/hrp2kai_like.urdf"),
-                                                  sourcePath("models/hrp2kai_like/hrp2kai_like.yaml"));
+  const RobotDescription d =
+      loadRobotDescription(sourcePath("models/hrp2kai_like/hrp2kai_like.urdf"), sourcePath("models/hrp2kai_like/hrp2kai_like.yaml"));
   ASSERT_EQ(d.joints.size(), 32u);
   const std::vector<std::string> expected_prefix = {"RLEG_JOINT0", "RLEG_JOINT1", "RLEG_JOINT2", "RLEG_JOINT3",
                                                     "RLEG_JOINT4", "RLEG_JOINT5", "LLEG_JOINT0"};
@@ -222,8 +221,7 @@ TEST(RobotDescription, HumanoidJointOrderFollowsTheFile) {
 }
 
 TEST(RobotDescription, FixedJointsAreMergedWithLumpedMass) {
-  const RobotDescription d = loadRobotDescription(sourcePath("tests/data/model/merged.urdf"),
-                                                  sourcePath("tests/data/model/merged.yaml"));
+  const RobotDescription d = loadRobotDescription(sourcePath("tests/data/model/merged.urdf"), sourcePath("tests/data/model/merged.yaml"));
   ASSERT_EQ(d.joints.size(), 2u);  // hinge, wrist
   ASSERT_EQ(d.links.size(), 3u);   // base, arm(+tip+sensor), slider
   const LinkDescription& arm = d.links[1];
@@ -251,8 +249,7 @@ TEST(RobotDescription, FixedJointsAreMergedWithLumpedMass) {
   const int probe = d.findFrame("probe");
   ASSERT_GE(probe, 0);
   EXPECT_EQ(d.frames[static_cast<size_t>(probe)].link, 1);
-  EXPECT_TRUE(d.frames[static_cast<size_t>(probe)].placement.translation().isApprox(
-      X_tip * Eigen::Vector3d(0.01, 0, 0.1), 1e-12));
+  EXPECT_TRUE(d.frames[static_cast<size_t>(probe)].placement.translation().isApprox(X_tip * Eigen::Vector3d(0.01, 0, 0.1), 1e-12));
 }
 
 }  // namespace

@@ -31,8 +31,8 @@ std::string inertial(const std::string& mass, const std::string& inertia = kVali
 // A small legged robot written the way exporters and description packages write one. Each piece
 // can be replaced by a test.
 struct RosStyleRobot {
-  std::string base_link = "<link name=\"base_link\"/>";  // the massless ROS base frame
-  std::string base_joint_extra = "<axis xyz=\"0 0 0\"/>";   // CAD exporters write it on fixed joints
+  std::string base_link = "<link name=\"base_link\"/>";    // the massless ROS base frame
+  std::string base_joint_extra = "<axis xyz=\"0 0 0\"/>";  // CAD exporters write it on fixed joints
   std::string imu_inertial = inertial("0.05", R"(ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0")");
   std::string hip_limit = R"(<limit lower="-1" upper="1" effort="0" velocity="0"/>)";
   // Principal moments 0.01, 0.01, 0.020001 (the triangle inequality violated by 1e-6) and an
@@ -45,29 +45,33 @@ struct RosStyleRobot {
   std::string data_extra;
 
   std::string urdf() const {
-    return std::string("<?xml version=\"1.0\"?>\n") +
-           "<robot name=\"ros_style\">\n" +                                                       // 2
-           "  " + base_link + "\n" +                                                              // 3
+    return std::string("<?xml version=\"1.0\"?>\n") + "<robot name=\"ros_style\">\n" +  // 2
+           "  " + base_link + "\n" +                                                    // 3
            "  <joint name=\"base_to_pelvis\" type=\"fixed\"><parent link=\"base_link\"/><child link=\"pelvis\"/>"
-           "<origin xyz=\"0 0 0.1\"/>" + base_joint_extra + "</joint>\n" +                         // 4
-           "  <link name=\"pelvis\">" + inertial("5") + "</link>\n" +                             // 5
+           "<origin xyz=\"0 0 0.1\"/>" +
+           base_joint_extra + "</joint>\n" +                           // 4
+           "  <link name=\"pelvis\">" + inertial("5") + "</link>\n" +  // 5
            "  <joint name=\"imu_joint\" type=\"fixed\"><parent link=\"pelvis\"/><child link=\"imu_link\"/>"
-           "<origin xyz=\"0.1 0 0\"/><limit lower=\"0\" upper=\"0\"/></joint>\n" +                // 6
-           "  <link name=\"imu_link\">" + imu_inertial + "</link>\n" +                            // 7
+           "<origin xyz=\"0.1 0 0\"/><limit lower=\"0\" upper=\"0\"/></joint>\n" +  // 6
+           "  <link name=\"imu_link\">" +
+           imu_inertial + "</link>\n" +  // 7
            "  <joint name=\"hip\" type=\"revolute\"><parent link=\"pelvis\"/><child link=\"thigh\"/>"
-           "<origin xyz=\"0 0 -0.1\"/><axis xyz=\"0 1 0\"/>" + hip_limit + "</joint>\n" +         // 8
+           "<origin xyz=\"0 0 -0.1\"/><axis xyz=\"0 1 0\"/>" +
+           hip_limit + "</joint>\n" +                                                             // 8
            "  <link name=\"thigh\">" + inertial("2", thigh_inertia, "0 0 -0.15") + "</link>\n" +  // 9
            "  <joint name=\"knee\" type=\"continuous\"><parent link=\"thigh\"/><child link=\"shank\"/>"
-           "<origin xyz=\"0 0 -0.3\"/><axis xyz=\"0 1 0\"/></joint>\n" +                          // 10
-           "  <link name=\"shank\">" + shank_inertial +
+           "<origin xyz=\"0 0 -0.3\"/><axis xyz=\"0 1 0\"/></joint>\n" +  // 10
+           "  <link name=\"shank\">" +
+           shank_inertial +
            "<collision><origin xyz=\"0 0 -0.3\"/><geometry><sphere radius=\"0.02\"/></geometry></collision></link>\n" +  // 11
-           "  <joint name=\"finger\" type=\"" + finger_joint_type + "\"><parent link=\"shank\"/><child link=\"finger_link\"/>"
+           "  <joint name=\"finger\" type=\"" + finger_joint_type +
+           "\"><parent link=\"shank\"/><child link=\"finger_link\"/>"
            "<origin xyz=\"0 0.05 0\"/><axis xyz=\"1 0 0\"/><limit lower=\"0\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/>" +
-           finger_mimic + "</joint>\n" +                                                           // 12
-           "  <link name=\"finger_link\">" + finger_inertial + "</link>\n" +                    // 13
+           finger_mimic + "</joint>\n" +                                      // 12
+           "  <link name=\"finger_link\">" + finger_inertial + "</link>\n" +  // 13
            "  <joint name=\"cover_joint\" type=\"fixed\"><parent link=\"shank\"/><child link=\"cover\"/>"
-           "<mimic joint=\"knee\"/></joint>\n" +                                                  // 14
-           "  <link name=\"cover\"/>\n" +                                                         // 15
+           "<mimic joint=\"knee\"/></joint>\n" +  // 14
+           "  <link name=\"cover\"/>\n" +         // 15
            "</robot>\n";
   }
   std::string data() const { return "format: lexdyn-robot-data/1\nrobot: ros_style\nbase: free_flyer\n" + data_extra; }
@@ -114,8 +118,9 @@ TEST(UrdfConventions, APackageStyleRobotLoadsWithItsWarnings) {
   EXPECT_TRUE(containsAll(w, {"ros.urdf:9", "body 'thigh'", "rounding noise", "projected"})) << w;
   EXPECT_TRUE(containsAll(w, {"'hip'", "effort limit is unspecified", "unlimited"})) << w;
   EXPECT_TRUE(containsAll(w, {"velocity limit is unspecified"})) << w;
-  EXPECT_TRUE(containsAll(w, {"ros.urdf:12", "mimic joints coupled to 'knee' (q its coordinate): 'finger' = 0.5 q + 0.1",
-                              "`mimic: {mode: locked}`"})) << w;
+  EXPECT_TRUE(containsAll(
+      w, {"ros.urdf:12", "mimic joints coupled to 'knee' (q its coordinate): 'finger' = 0.5 q + 0.1", "`mimic: {mode: locked}`"}))
+      << w;
   EXPECT_TRUE(containsAll(w, {"'cover_joint')", "<mimic>", "ignored"})) << w;
   // The finger's limits [0, 0.5] narrow its master's range: 0.5 q + 0.1 in [0, 0.5].
   EXPECT_TRUE(containsAll(w, {"ros.urdf:12", "the range of 'knee' is narrowed", "to [-0.2, 0.8]"})) << w;
@@ -159,16 +164,11 @@ TEST(UrdfConventions, LockedMimicsAreLumpedIntoTheirParent) {
 
 TEST(UrdfConventions, StrictModeKeepsTheOlderRulesAndListsEveryProblem) {
   const std::string e = inputErrorOf([] { RosStyleRobot().load(strict()); });
-  EXPECT_TRUE(containsAll(e, {"ros.urdf: ", "problems:",
-                              "ros.urdf:4: fixed joint 'base_to_pelvis' has <axis>",
-                              "ros.urdf:6: fixed joint 'imu_joint' has <limit>",
-                              "ros.urdf:14: fixed joint 'cover_joint' has <mimic>",
-                              "link 'imu_link': inertia is zero (mass 0.05 kg)",
-                              "link 'thigh': inertia is not physically possible",
-                              "mimic joints coupled to 'knee'",
-                              "link 'base_link' has no <inertial>",
-                              "effort limit is unspecified",
-                              "strict mode"}))
+  EXPECT_TRUE(containsAll(
+      e, {"ros.urdf: ", "problems:", "ros.urdf:4: fixed joint 'base_to_pelvis' has <axis>",
+          "ros.urdf:6: fixed joint 'imu_joint' has <limit>", "ros.urdf:14: fixed joint 'cover_joint' has <mimic>",
+          "link 'imu_link': inertia is zero (mass 0.05 kg)", "link 'thigh': inertia is not physically possible",
+          "mimic joints coupled to 'knee'", "link 'base_link' has no <inertial>", "effort limit is unspecified", "strict mode"}))
       << e;
 }
 
@@ -222,15 +222,19 @@ TEST(UrdfConventions, TheDataFileFillsUnspecifiedLimitsAndLocksMimicsAtAPosture)
 
 // A small arm whose gripper fingers are mimic joints, for the coupled mimic joints' edge cases.
 // `fingers` are the mimic joints' lines: each a joint from 'palm' with a link of its own.
-std::string gripperUrdf(const std::string& fingers, const std::string& grip_limit = R"(<limit lower="-1" upper="1" effort="5" velocity="2"/>)") {
+std::string gripperUrdf(const std::string& fingers,
+                        const std::string& grip_limit = R"(<limit lower="-1" upper="1" effort="5" velocity="2"/>)") {
   return std::string("<?xml version=\"1.0\"?>\n<robot name=\"gripper\">\n<link name=\"world\"/>\n") +
-         "<joint name=\"grip\" type=\"revolute\"><parent link=\"world\"/><child link=\"palm\"/><axis xyz=\"0 0 1\"/>" + grip_limit + "</joint>\n" +
-         "<link name=\"palm\">" + inertial("0.5", kValidInertia, "0.05 0 0") + "</link>\n" + fingers + "</robot>\n";
+         "<joint name=\"grip\" type=\"revolute\"><parent link=\"world\"/><child link=\"palm\"/><axis xyz=\"0 0 1\"/>" + grip_limit +
+         "</joint>\n" + "<link name=\"palm\">" + inertial("0.5", kValidInertia, "0.05 0 0") + "</link>\n" + fingers + "</robot>\n";
 }
-std::string finger(const std::string& name, const std::string& mimic, const std::string& limit = R"(<limit lower="-2" upper="2" effort="1" velocity="3"/>)",
+std::string finger(const std::string& name, const std::string& mimic,
+                   const std::string& limit = R"(<limit lower="-2" upper="2" effort="1" velocity="3"/>)",
                    const std::string& link_inertial = inertial("0.1", kValidInertia, "0.02 0 0")) {
-  return "<joint name=\"" + name + "\" type=\"revolute\"><parent link=\"palm\"/><child link=\"" + name + "_link\"/><origin xyz=\"0.1 0 0\"/>"
-         "<axis xyz=\"0 1 0\"/>" + limit + mimic + "</joint>\n<link name=\"" + name + "_link\">" + link_inertial + "</link>\n";
+  return "<joint name=\"" + name + "\" type=\"revolute\"><parent link=\"palm\"/><child link=\"" + name +
+         "_link\"/><origin xyz=\"0.1 0 0\"/>"
+         "<axis xyz=\"0 1 0\"/>" +
+         limit + mimic + "</joint>\n<link name=\"" + name + "_link\">" + link_inertial + "</link>\n";
 }
 RobotDescription loadGripper(const std::string& urdf, const std::string& data_extra = "", const LoadOptions& o = {}) {
   return parseRobotDescription(urdf, "g.urdf", "format: lexdyn-robot-data/1\nrobot: gripper\nbase: fixed\n" + data_extra, "g.yaml", o);
@@ -238,18 +242,18 @@ RobotDescription loadGripper(const std::string& urdf, const std::string& data_ex
 
 TEST(UrdfConventions, CoupledMimicJointsEdgeCases) {
   // A cycle of two (a mimics b, b mimics a) is an error naming it, not a crash.
-  std::string e = inputErrorOf([] {
-    loadGripper(gripperUrdf(finger("a", "<mimic joint=\"b\"/>") + finger("b", "<mimic joint=\"a\"/>")));
-  });
+  std::string e = inputErrorOf([] { loadGripper(gripperUrdf(finger("a", "<mimic joint=\"b\"/>") + finger("b", "<mimic joint=\"a\"/>"))); });
   EXPECT_TRUE(containsAll(e, {"g.urdf:", "its <mimic> joints form a cycle ('a' -> 'b' -> 'a')"})) << e;
   // A chain into a cycle too.
   e = inputErrorOf([] {
-    loadGripper(gripperUrdf(finger("a", "<mimic joint=\"b\"/>") + finger("b", "<mimic joint=\"c\"/>") + finger("c", "<mimic joint=\"b\"/>")));
+    loadGripper(
+        gripperUrdf(finger("a", "<mimic joint=\"b\"/>") + finger("b", "<mimic joint=\"c\"/>") + finger("c", "<mimic joint=\"b\"/>")));
   });
   EXPECT_TRUE(containsAll(e, {"form a cycle ('b' -> 'c' -> 'b')"})) << e;
   // A long chain composes to its independent master.
   std::string chain = finger("f0", "<mimic joint=\"grip\" multiplier=\"0.9\"/>");
-  for (int k = 1; k < 40; ++k) chain += finger("f" + std::to_string(k), "<mimic joint=\"f" + std::to_string(k - 1) + "\" multiplier=\"1\"/>");
+  for (int k = 1; k < 40; ++k)
+    chain += finger("f" + std::to_string(k), "<mimic joint=\"f" + std::to_string(k - 1) + "\" multiplier=\"1\"/>");
   const RobotDescription long_chain = loadGripper(gripperUrdf(chain));
   ASSERT_EQ(long_chain.coupled_joints.size(), 40u);
   for (const auto& c : long_chain.coupled_joints) {
@@ -284,19 +288,23 @@ TEST(UrdfConventions, CoupledMimicJointsEdgeCases) {
   EXPECT_TRUE(containsAll(allWarnings(d), {"posture 'half': mimic joint 'a' at 0.3 is not where its master puts it (2 x grip 0.2 = 0.4)"}));
   // Limits written for the other sign of the multiplier (as a gripper package ships them): they
   // contradict the coupling and are ignored with a warning; strict mode refuses them.
-  const std::string g = finger("a", "<mimic joint=\"grip\" multiplier=\"-1\"/>", R"(<limit lower="0" upper="0.9" effort="1" velocity="3"/>)");
+  const std::string g =
+      finger("a", "<mimic joint=\"grip\" multiplier=\"-1\"/>", R"(<limit lower="0" upper="0.9" effort="1" velocity="3"/>)");
   d = loadGripper(gripperUrdf(g, R"(<limit lower="0" upper="0.8" effort="5" velocity="2"/>)"));
   EXPECT_DOUBLE_EQ(d.joints[0].lower, 0.0);
   EXPECT_DOUBLE_EQ(d.joints[0].upper, 0.8);
-  EXPECT_TRUE(containsAll(allWarnings(d), {"its limits [0, 0.9] leave its master no range within [0, 0.8]", "contradict the coupling and are ignored"}));
-  EXPECT_TRUE(containsAll(inputErrorOf([&] { loadGripper(gripperUrdf(g, R"(<limit lower="0" upper="0.8" effort="5" velocity="2"/>)"), "", strict()); }),
-                          {"contradict the coupling", "refused in strict mode"}));
+  EXPECT_TRUE(containsAll(allWarnings(d),
+                          {"its limits [0, 0.9] leave its master no range within [0, 0.8]", "contradict the coupling and are ignored"}));
+  EXPECT_TRUE(containsAll(
+      inputErrorOf([&] { loadGripper(gripperUrdf(g, R"(<limit lower="0" upper="0.8" effort="5" velocity="2"/>)"), "", strict()); }),
+      {"contradict the coupling", "refused in strict mode"}));
   // lower="0" upper="0" (a CAD exporter's "not set"): no position limits; strict refuses it.
   d = loadGripper(gripperUrdf("", R"(<limit lower="0" upper="0" effort="5" velocity="2"/>)"));
   EXPECT_TRUE(std::isinf(d.joints[0].lower) && std::isinf(d.joints[0].upper));
   EXPECT_TRUE(containsAll(allWarnings(d), {"without lower and upper, or with both 0 ('grip')"}));
-  EXPECT_TRUE(containsAll(inputErrorOf([&] { loadGripper(gripperUrdf("", R"(<limit lower="0" upper="0" effort="5" velocity="2"/>)"), "", strict()); }),
-                          {"expected limit lower < upper, found lower=0 upper=0"}));
+  EXPECT_TRUE(containsAll(
+      inputErrorOf([&] { loadGripper(gripperUrdf("", R"(<limit lower="0" upper="0" effort="5" velocity="2"/>)"), "", strict()); }),
+      {"expected limit lower < upper, found lower=0 upper=0"}));
 }
 
 TEST(UrdfConventions, AMimicOfAnUnknownJointIsAnError) {
@@ -312,14 +320,15 @@ TEST(UrdfConventions, AMimicOfAnUnknownJointIsAnError) {
 TEST(UrdfConventions, AFreeFlyerRobotNeedsMassSomewhere) {
   RosStyleRobot r;
   std::string u = r.urdf();
-  u.replace(u.find("<link name=\"pelvis\">"), std::string("<link name=\"pelvis\">").size() + inertial("5").size(), "<link name=\"pelvis\">");
-  u.replace(u.find("<link name=\"imu_link\">"), std::string("<link name=\"imu_link\">").size() + r.imu_inertial.size(), "<link name=\"imu_link\">");
+  u.replace(u.find("<link name=\"pelvis\">"), std::string("<link name=\"pelvis\">").size() + inertial("5").size(),
+            "<link name=\"pelvis\">");
+  u.replace(u.find("<link name=\"imu_link\">"), std::string("<link name=\"imu_link\">").size() + r.imu_inertial.size(),
+            "<link name=\"imu_link\">");
   const RobotDescription d = parseRobotDescription(u, "ros.urdf", r.data(), "ros.yaml");
   EXPECT_EQ(d.links[0].mass, 0.0);
   EXPECT_GT(d.totalMass(), 3.0);
-  const std::string e = inputErrorOf([&] {
-    parseRobotDescription("<robot name=\"ros_style\"><link name=\"a\"/></robot>", "one.urdf", r.data(), "ros.yaml");
-  });
+  const std::string e = inputErrorOf(
+      [&] { parseRobotDescription("<robot name=\"ros_style\"><link name=\"a\"/></robot>", "one.urdf", r.data(), "ros.yaml"); });
   EXPECT_TRUE(containsAll(e, {"one.urdf", "free-flyer robot (base 'a') has no mass"})) << e;
 }
 

@@ -110,8 +110,8 @@ TEST(RunRecord, EveryBadFieldIsNamedAtOnce) {
   } catch (const lexdyn::InputError& e) {
     const std::string what = e.what();
     EXPECT_EQ(what.rfind("run/summary.json: not a run summary this build can read: ", 0), 0u) << what;
-    for (const char* part : {"simulated_s: missing", "checks[1].passed: not true or false", "status: 'fell_over' is no run status (completed |",
-                             "controller.status_counts.ok: not an integer"}) {
+    for (const char* part : {"simulated_s: missing", "checks[1].passed: not true or false",
+                             "status: 'fell_over' is no run status (completed |", "controller.status_counts.ok: not an integer"}) {
       EXPECT_NE(what.find(part), std::string::npos) << part << " in " << what;
     }
   }

@@ -93,23 +93,25 @@ TEST(RobotInit, EveryRepositoryRobotIsDraftedAndItsCasesRun) {
 TEST(RobotInit, AHumanoidsDraftComesFromItsGeometry) {
   const std::string dir = scratch("g1_like_draft");
   const std::string out = dir + "/draft";
-  const CliResult init = harness("robot init " + kSrc + "/models/g1_like/urdf/g1_like.urdf --srdf " + kSrc +
-                                     "/models/g1_like/srdf/g1_like.srdf --out " + out,
-                                 dir);
-  expectExit(init, 0, {"base: free_flyer (2 chains reach the ground below the root link (legs))",
-                       "foot LEFT_FOOT on link 'left_ankle_roll_link': 4 contact point(s)", "collision box",
-                       "arm LEFT: hand link", "posture 'standing' (the SRDF group state 'standing'", "mimic joints coupled to 'left_hand_thumb_0_joint'"});
+  const CliResult init = harness(
+      "robot init " + kSrc + "/models/g1_like/urdf/g1_like.urdf --srdf " + kSrc + "/models/g1_like/srdf/g1_like.srdf --out " + out, dir);
+  expectExit(init, 0,
+             {"base: free_flyer (2 chains reach the ground below the root link (legs))",
+              "foot LEFT_FOOT on link 'left_ankle_roll_link': 4 contact point(s)", "collision box", "arm LEFT: hand link",
+              "posture 'standing' (the SRDF group state 'standing'", "mimic joints coupled to 'left_hand_thumb_0_joint'"});
   EXPECT_EQ(init.err.find("cannot hold the arm"), std::string::npos) << init.err;  // its shoulders hold the arms out
   const std::string data = slurp(out + "/g1_like.yaml");
-  EXPECT_TRUE(containsAll(data, {"base: free_flyer", "friction_coefficient: 0.7", "mimic: {mode: coupled}",
-                                 "- {name: LEFT_SOLE, parent: left_ankle_roll_link", "- {name: LEFT_GRASP", "name: LEFT_FOOT",
-                                 "frame: LEFT_SOLE", "- {name: LEFT_FOOT_SENSOR, frame: LEFT_SOLE}", "standing:   # the SRDF group state"}));
+  EXPECT_TRUE(
+      containsAll(data, {"base: free_flyer", "friction_coefficient: 0.7", "mimic: {mode: coupled}",
+                         "- {name: LEFT_SOLE, parent: left_ankle_roll_link", "- {name: LEFT_GRASP", "name: LEFT_FOOT", "frame: LEFT_SOLE",
+                         "- {name: LEFT_FOOT_SENSOR, frame: LEFT_SOLE}", "standing:   # the SRDF group state"}));
   const std::string reach = slurp(out + "/reach.yaml");
-  EXPECT_TRUE(containsAll(reach, {"- {name: left_hand, type: position, frame: LEFT_GRASP", "action: set_target, task: left_hand",
-                                  "type: com_box", "sensor: LEFT_FOOT_SENSOR",
-                                  "- {name: left_hand_reached, type: task_error, tasks: [left_hand], statistic: max, from_s: 15, to_s: 19.99, limit: 0.01}",
-                                  "- {name: right_hand_reached, type: task_error, tasks: [right_hand], statistic: max, from_s: 15, to_s: 19.99, limit: 0.01}",
-                                  "- {name: trunk_up, type: frame_height, frame:"}));
+  EXPECT_TRUE(containsAll(
+      reach, {"- {name: left_hand, type: position, frame: LEFT_GRASP", "action: set_target, task: left_hand", "type: com_box",
+              "sensor: LEFT_FOOT_SENSOR",
+              "- {name: left_hand_reached, type: task_error, tasks: [left_hand], statistic: max, from_s: 15, to_s: 19.99, limit: 0.01}",
+              "- {name: right_hand_reached, type: task_error, tasks: [right_hand], statistic: max, from_s: 15, to_s: 19.99, limit: 0.01}",
+              "- {name: trunk_up, type: frame_height, frame:"}));
   // The grasp point is between the fingertips of the hand (g1_like's hand: three fingers, each
   // at the end of its own chain below the wrist).
   EXPECT_TRUE(containsAll(data, {"between the tips of the 3 fingers of the hand, link 'left_wrist_yaw_link'"})) << data;
@@ -147,9 +149,11 @@ TEST(RobotInit, AShoulderThatCannotHoldTheArmOutIsAWarning) {
   const std::string dir = scratch("weak_shoulder");
   const std::string pkg =
       editedG1Like(dir, "urdf/g1_like.urdf", "<joint name=\"left_shoulder_roll_joint\"", "effort=\"25\"", "effort=\"2\"");
-  const CliResult init = harness("robot init " + pkg + "/urdf/g1_like.urdf --srdf " + pkg + "/srdf/g1_like.srdf --out " + dir + "/draft", dir);
-  expectExit(init, 0, {"the left arm's joint 'left_shoulder_roll_joint' cannot hold the arm stretched out level: that takes about",
-                       "its effort limit is 2 N m", "A heavier humanoid"});
+  const CliResult init =
+      harness("robot init " + pkg + "/urdf/g1_like.urdf --srdf " + pkg + "/srdf/g1_like.srdf --out " + dir + "/draft", dir);
+  expectExit(init, 0,
+             {"the left arm's joint 'left_shoulder_roll_joint' cannot hold the arm stretched out level: that takes about",
+              "its effort limit is 2 N m", "A heavier humanoid"});
   EXPECT_EQ(init.err.find("right_shoulder_roll_joint' cannot hold"), std::string::npos) << init.err;
 }
 
@@ -158,9 +162,10 @@ TEST(RobotInit, AShoulderThatCannotHoldTheArmOutIsAWarning) {
 // CoM box of the reach keeps its faces 1.5 times its half extent inside the support's edge.
 TEST(RobotInit, AnArmJointOnItsStopIsMovedInside) {
   const std::string dir = scratch("elbow_on_stop");
-  const std::string pkg = editedG1Like(dir, "srdf/g1_like.srdf", "<joint name=\"left_elbow_joint\" value=", "value=\"0.9\"",
-                                       "value=\"-1.0472\"");
-  const CliResult init = harness("robot init " + pkg + "/urdf/g1_like.urdf --srdf " + pkg + "/srdf/g1_like.srdf --out " + dir + "/draft", dir);
+  const std::string pkg =
+      editedG1Like(dir, "srdf/g1_like.srdf", "<joint name=\"left_elbow_joint\" value=", "value=\"0.9\"", "value=\"-1.0472\"");
+  const CliResult init =
+      harness("robot init " + pkg + "/urdf/g1_like.urdf --srdf " + pkg + "/srdf/g1_like.srdf --out " + dir + "/draft", dir);
   // -1.0472 + 0.25 * (2.0944 + 1.0472) = -0.2618
   expectExit(init, 0, {"left_elbow_joint: at its limit -1.0472", "taken as -0.2618 (25 % of its range inside)"});
   EXPECT_EQ(init.err.find("right_elbow_joint: at its limit"), std::string::npos) << init.err;
@@ -178,12 +183,17 @@ std::string colladaBox(const std::string& up, const std::array<double, 3>& c, co
   }
   const char* tri = "0 1 3 0 3 2 4 6 7 4 7 5 0 4 5 0 5 1 2 3 7 2 7 6 0 2 6 0 6 4 1 5 7 1 7 3";
   return "<?xml version=\"1.0\"?>\n<COLLADA xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" version=\"1.4.1\">\n"
-         "<asset><unit meter=\"1\"/><up_axis>" + up + "</up_axis></asset>\n"
-         "<library_geometries><geometry id=\"g\"><mesh><source id=\"p\"><float_array id=\"pa\" count=\"24\">" + v.str() +
+         "<asset><unit meter=\"1\"/><up_axis>" +
+         up +
+         "</up_axis></asset>\n"
+         "<library_geometries><geometry id=\"g\"><mesh><source id=\"p\"><float_array id=\"pa\" count=\"24\">" +
+         v.str() +
          "</float_array><technique_common><accessor source=\"#pa\" count=\"8\" stride=\"3\"><param name=\"X\" type=\"float\"/>"
          "<param name=\"Y\" type=\"float\"/><param name=\"Z\" type=\"float\"/></accessor></technique_common></source>"
          "<vertices id=\"v\"><input semantic=\"POSITION\" source=\"#p\"/></vertices><triangles count=\"12\">"
-         "<input semantic=\"VERTEX\" source=\"#v\" offset=\"0\"/><p>" + tri + "</p></triangles></mesh></geometry></library_geometries>\n"
+         "<input semantic=\"VERTEX\" source=\"#v\" offset=\"0\"/><p>" +
+         tri +
+         "</p></triangles></mesh></geometry></library_geometries>\n"
          "<library_visual_scenes><visual_scene id=\"s\"><node id=\"n\"><instance_geometry url=\"#g\"/></node></visual_scene>"
          "</library_visual_scenes><scene><instance_visual_scene url=\"#s\"/></scene>\n</COLLADA>\n";
 }
@@ -201,9 +211,14 @@ TEST(RobotInit, AColladaUpAxisIsAppliedWhenTheLinksSayItIsMeant) {
     const char* names[] = {"a", "b", "c"};
     for (int k = 0; k < 3; ++k) {
       const std::string n = names[k], parent = k == 0 ? "world" : names[k - 1];
-      u += "  <joint name=\"j" + n + "\" type=\"revolute\"><parent link=\"" + parent + "\"/><child link=\"" + n + "\"/>"
-           "<origin xyz=\"0 0 " + std::string(k == 0 ? "0" : "0.4") + "\"/><axis xyz=\"0 1 0\"/><limit lower=\"-2\" upper=\"2\" effort=\"100\" velocity=\"2\"/></joint>\n"
-           "  <link name=\"" + n + "\"><inertial><origin xyz=\"" + com + "\"/><mass value=\"1\"/>"
+      u += "  <joint name=\"j" + n + "\" type=\"revolute\"><parent link=\"" + parent + "\"/><child link=\"" + n +
+           "\"/>"
+           "<origin xyz=\"0 0 " +
+           std::string(k == 0 ? "0" : "0.4") +
+           "\"/><axis xyz=\"0 1 0\"/><limit lower=\"-2\" upper=\"2\" effort=\"100\" velocity=\"2\"/></joint>\n"
+           "  <link name=\"" +
+           n + "\"><inertial><origin xyz=\"" + com +
+           "\"/><mass value=\"1\"/>"
            "<inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.001\"/></inertial>"
            "<collision><geometry><mesh filename=\"meshes/link.dae\"/></geometry></collision></link>\n";
     }
@@ -212,7 +227,9 @@ TEST(RobotInit, AColladaUpAxisIsAppliedWhenTheLinksSayItIsMeant) {
   std::ofstream(dir + "/turned.urdf") << urdf("0 0 0.2");   // the mass along z: the file's y is the link's z
   std::ofstream(dir + "/written.urdf") << urdf("0 0.2 0");  // the mass along y: as written
   const CliResult t = harness("robot init " + dir + "/turned.urdf --out " + dir + "/t", dir);
-  expectExit(t, 0, {"meshes: of the COLLADA files, 1 declare Y_UP", "lie 0.0 cm on average from their meshes' centres with the up axis applied, 28.3 cm as written (3 meshes): turned to z up"});
+  expectExit(t, 0,
+             {"meshes: of the COLLADA files, 1 declare Y_UP",
+              "lie 0.0 cm on average from their meshes' centres with the up axis applied, 28.3 cm as written (3 meshes): turned to z up"});
   EXPECT_TRUE(containsAll(slurp(dir + "/t/stick.yaml"), {"mesh_up_axis: file ", "(file: COLLADA meshes turned by their <up_axis>)"}));
   const CliResult w = harness("robot init " + dir + "/written.urdf --out " + dir + "/w", dir);
   expectExit(w, 0, {"meshes: of the COLLADA files, 1 declare Y_UP", "taken as written"});
@@ -245,8 +262,9 @@ TEST(RobotInit, APostureThatTiltsTheFeetStandsOnThemFlat) {
   std::ofstream(dir + "/tilted.srdf") << srdf;
   const std::string urdf = kSrc + "/models/hrp2kai_like/hrp2kai_like.urdf";
   const CliResult init = harness("robot init " + urdf + " --srdf " + dir + "/tilted.srdf --out " + dir + "/draft", dir);
-  expectExit(init, 0, {"the posture tilts the feet by 2.86 deg from their zero-configuration attitude: the robot is turned to stand them flat",
-                       "centre of mass", "inside the support polygon's nearest edge"});
+  expectExit(init, 0,
+             {"the posture tilts the feet by 2.86 deg from their zero-configuration attitude: the robot is turned to stand them flat",
+              "centre of mass", "inside the support polygon's nearest edge"});
   const CliResult check = harness("robot check " + dir + "/draft/hrp2kai_like.yaml --png -", dir);
   expectExit(check, 0);
   EXPECT_TRUE(containsAll(check.out, {"the base is turned by 2.86 deg so that the feet stand flat", "forward: +x"})) << check.out;
@@ -305,8 +323,8 @@ TEST(RobotInit, PerGroupSrdfStatesMergeAndPostureProblemsAreWarned) {
                      "</robot>\n";
   std::ofstream(dir + "/r.srdf") << srdf;
   const CliResult init = harness("robot init " + urdf + " --srdf " + dir + "/r.srdf --out " + dir + "/ready", dir);
-  expectExit(init, 0, {"SRDF state 'ready' of group 'left_leg'", "merged with the one of group 'right_leg'", "6 more joint(s)",
-                       "posture 'ready'"});
+  expectExit(init, 0,
+             {"SRDF state 'ready' of group 'left_leg'", "merged with the one of group 'right_leg'", "6 more joint(s)", "posture 'ready'"});
   EXPECT_EQ(init.err.find("near a singularity"), std::string::npos) << init.err;
   EXPECT_EQ(init.err.find("above the lowest foot"), std::string::npos) << init.err;
   EXPECT_TRUE(containsAll(slurp(dir + "/ready/hrp2kai_like.yaml"), {"ready:"}));
@@ -316,11 +334,13 @@ TEST(RobotInit, PerGroupSrdfStatesMergeAndPostureProblemsAreWarned) {
   expectExit(one, 0, {"posture 'one_leg' (the SRDF's) gives 6 of the", "the others are at 0: is it a state of one group only?"});
   // A foot in the air: warned by init and by robot check, whose support polygon leaves it out.
   const CliResult lifted = harness("robot init " + urdf + " --srdf " + dir + "/r.srdf --posture lifted --out " + dir + "/lifted", dir);
-  expectExit(lifted, 0, {"posture 'lifted': foot on link 'RLEG_LINK5' is", "mm above the lowest foot in the posture: the robot does not stand on it"});
+  expectExit(lifted, 0,
+             {"posture 'lifted': foot on link 'RLEG_LINK5' is", "mm above the lowest foot in the posture: the robot does not stand on it"});
   const CliResult lifted_check = harness("robot check " + dir + "/lifted/hrp2kai_like.yaml --png -", dir);
   expectExit(lifted_check, 0, {});
-  EXPECT_TRUE(containsAll(lifted_check.out, {"contact point(s) more than 2 mm above the lowest: in the air, left out",
-                                             "foot on link 'RLEG_LINK5' is"})) << lifted_check.out;
+  EXPECT_TRUE(containsAll(lifted_check.out,
+                          {"contact point(s) more than 2 mm above the lowest: in the air, left out", "foot on link 'RLEG_LINK5' is"}))
+      << lifted_check.out;
   // Joint names under a namespace prefix (a multi-robot configuration's 'hrp/RLEG_JOINT0'):
   // matched without it, noted once.
   std::string prefixed = state("ready", "right_leg", "RLEG") + state("ready", "left_leg", "LLEG") + state("ready", "right_arm", "RARM") +
@@ -330,8 +350,9 @@ TEST(RobotInit, PerGroupSrdfStatesMergeAndPostureProblemsAreWarned) {
   }
   std::ofstream(dir + "/prefixed.srdf") << head + prefixed + "</robot>\n";
   const CliResult pre = harness("robot init " + urdf + " --srdf " + dir + "/prefixed.srdf --out " + dir + "/prefixed", dir);
-  expectExit(pre, 0, {"SRDF joint names with the prefix 'hrp/' (e.g. 'hrp/RLEG_JOINT0', line", "matched to the URDF's joints without it",
-                      "posture 'ready'"});
+  expectExit(pre, 0,
+             {"SRDF joint names with the prefix 'hrp/' (e.g. 'hrp/RLEG_JOINT0', line", "matched to the URDF's joints without it",
+              "posture 'ready'"});
   // The same joint values as the unprefixed states (the lines after the posture's comment).
   auto postureValues = [](const std::string& data) {
     const size_t p = data.find("postures:");
@@ -347,7 +368,8 @@ TEST(RobotInit, PerGroupSrdfStatesMergeAndPostureProblemsAreWarned) {
   EXPECT_GT(values_prefixed.size(), 200u);
   EXPECT_EQ(values_prefixed, postureValues(slurp(dir + "/ready/hrp2kai_like.yaml")));
   // Straight elbows: both arms near a singularity.
-  const CliResult straight = harness("robot init " + urdf + " --srdf " + dir + "/r.srdf --posture arms_straight --out " + dir + "/straight", dir);
+  const CliResult straight =
+      harness("robot init " + urdf + " --srdf " + dir + "/r.srdf --posture arms_straight --out " + dir + "/straight", dir);
   expectExit(straight, 0, {"posture 'arms_straight': the right arm is near a singularity", "the left arm is near a singularity"});
   // The mimic mode and the package path go into the data file; the data file's package path,
   // relative to it, finds the meshes.
@@ -359,8 +381,8 @@ TEST(RobotInit, PerGroupSrdfStatesMergeAndPostureProblemsAreWarned) {
   const std::string srdf_g1 = kSrc + "/models/g1_like/srdf/g1_like.srdf";
   const CliResult without = harness("robot check " + dir + "/alone/g1_like.urdf --png -", dir);
   EXPECT_TRUE(containsAll(without.out + without.err, {"package 'g1_like_description' not found"})) << without.out << without.err;
-  const CliResult g1 = harness("robot init " + dir + "/alone/g1_like.urdf --srdf " + srdf_g1 + " --package-path " + dir + "/pkgs --mimic locked --out " +
-                                   dir + "/g1",
+  const CliResult g1 = harness("robot init " + dir + "/alone/g1_like.urdf --srdf " + srdf_g1 + " --package-path " + dir +
+                                   "/pkgs --mimic locked --out " + dir + "/g1",
                                dir);
   expectExit(g1, 0, {"posture 'standing'"});
   const std::string g1_data = slurp(dir + "/g1/g1_like.yaml");
@@ -395,7 +417,8 @@ TEST(RobotInit, AFixedBaseWithTwoArmsGetsAReachOfBothHands) {
 TEST(RobotInit, AQuadrupedOnPointFeetMovesItsBase) {
   const std::string dir = scratch("quadruped");
   const std::string m = kSrc + "/models/quadruped_like/";
-  const CliResult init = harness("robot init " + m + "urdf/quadruped_like.urdf --srdf " + m + "srdf/quadruped_like.srdf --out " + dir + "/draft", dir);
+  const CliResult init =
+      harness("robot init " + m + "urdf/quadruped_like.urdf --srdf " + m + "srdf/quadruped_like.srdf --out " + dir + "/draft", dir);
   expectExit(init, 0, {"foot FRONT_LEFT_FOOT on link 'fl_shank': 1 contact point(s)", "wrote " + dir + "/draft/base.yaml"});
   EXPECT_FALSE(fs::exists(dir + "/draft/reach.yaml"));
   // Ball feet: the collision sphere's centre and radius (the simulator rolls it).
@@ -403,9 +426,9 @@ TEST(RobotInit, AQuadrupedOnPointFeetMovesItsBase) {
   const CliResult check = harness("robot check " + dir + "/draft/quadruped_like.yaml --png -", dir);
   EXPECT_TRUE(containsAll(check.out, {"(balls of radius 0.02 m, where they touch)", "support polygon: 4 corners"})) << check.out;
   const std::string base = slurp(dir + "/draft/base.yaml");
-  EXPECT_TRUE(containsAll(base, {"- {name: FRONT_LEFT_FOOT, surface: FRONT_LEFT_FOOT", "- {name: base_position, type: position, frame: base",
-                                 "action: set_target, task: base_orientation", "action: set_target, task: base_position",
-                                 "- {name: base_reached", "- {name: base_tilted"}))
+  EXPECT_TRUE(containsAll(base, {"- {name: FRONT_LEFT_FOOT, surface: FRONT_LEFT_FOOT",
+                                 "- {name: base_position, type: position, frame: base", "action: set_target, task: base_orientation",
+                                 "action: set_target, task: base_position", "- {name: base_reached", "- {name: base_tilted"}))
       << base;
   // The whole case (40 s) passes: the base to its target (by 6 s), tilted (by 14 s), then held
   // out of reach; the feet's friction ratios are judged about the ground's normal (the wrenches
@@ -446,8 +469,9 @@ TEST(RobotInit, AQuadrupedOnPointFeetMovesItsBase) {
     }
   }
   // Bad input: dims other than 3 or 6; a point contact of several points; a normal on a point contact.
-  expectExit(harness("run " + dir + "/draft/base.yaml --duration 1 --set controller.contacts[FRONT_LEFT_FOOT].dims=4 --out " + dir + "/bad1", dir), 2,
-             {"dims", "expected 3 (a point contact: its position held) or 6 (the frame's pose held)"});
+  expectExit(
+      harness("run " + dir + "/draft/base.yaml --duration 1 --set controller.contacts[FRONT_LEFT_FOOT].dims=4 --out " + dir + "/bad1", dir),
+      2, {"dims", "expected 3 (a point contact: its position held) or 6 (the frame's pose held)"});
   EXPECT_FALSE(fs::exists(dir + "/bad1/summary.json") && nlohmann::json::parse(slurp(dir + "/bad1/summary.json"))["status"] == "completed");
   // A ball of negative radius; a point contact on a frame the robot does not have.
   std::string bad_data = slurp(dir + "/draft/quadruped_like.yaml");
@@ -459,10 +483,14 @@ TEST(RobotInit, AQuadrupedOnPointFeetMovesItsBase) {
   std::string bad_case = slurp(dir + "/draft/base.yaml");
   bad_case.replace(bad_case.find("surface: FRONT_LEFT_FOOT,"), 25, "frame: NO_SUCH_FRAME, points: [[0, 0, 0]],");
   std::ofstream(dir + "/draft/bad_frame.yaml") << bad_case;
-  expectExit(harness("run " + dir + "/draft/bad_frame.yaml --duration 1 --out " + dir + "/bad4", dir), 2, {"bad_frame.yaml:", "NO_SUCH_FRAME"});
-  expectExit(harness("run " + kSrc + "/cases/exp1.yaml --duration 1 --set controller.contacts[RIGHT_FOOT].dims=3 --out " + dir + "/bad2", dir), 2,
-             {"dims 3 is a point contact: it needs exactly one point (this contact has 4)"});
-  expectExit(harness("run " + dir + "/draft/base.yaml --duration 1 --set controller.contacts[FRONT_LEFT_FOOT].normal=[0,0,1] --out " + dir + "/bad3", dir),
+  expectExit(harness("run " + dir + "/draft/bad_frame.yaml --duration 1 --out " + dir + "/bad4", dir), 2,
+             {"bad_frame.yaml:", "NO_SUCH_FRAME"});
+  expectExit(
+      harness("run " + kSrc + "/cases/exp1.yaml --duration 1 --set controller.contacts[RIGHT_FOOT].dims=3 --out " + dir + "/bad2", dir), 2,
+      {"dims 3 is a point contact: it needs exactly one point (this contact has 4)"});
+  expectExit(harness("run " + dir + "/draft/base.yaml --duration 1 --set controller.contacts[FRONT_LEFT_FOOT].normal=[0,0,1] --out " + dir +
+                         "/bad3",
+                     dir),
              2, {"a point contact (dims 3) takes the ground's normal"});
 }
 
@@ -472,13 +500,14 @@ TEST(RobotCheck, ReadsCasesAndUrdfs) {
   const std::string dir = scratch("check");
   const CliResult c = harness("robot check " + kSrc + "/cases/exp1.yaml --png -", dir);
   expectExit(c, 0);
-  EXPECT_TRUE(containsAll(c.out, {"robot hrp2kai_like", "posture 'half_sitting'", "RIGHT_FOOT", "support polygon: ",
-                                  "inside its nearest edge", "RARM_JOINT3"}))
+  EXPECT_TRUE(containsAll(
+      c.out, {"robot hrp2kai_like", "posture 'half_sitting'", "RIGHT_FOOT", "support polygon: ", "inside its nearest edge", "RARM_JOINT3"}))
       << c.out;
   const CliResult u = harness("robot check " + kSrc + "/models/panda_like/urdf/panda_like.urdf --png -", dir);
   expectExit(u, 0);
   EXPECT_TRUE(containsAll(u.out, {"robot panda_like", "data: (none: the URDF alone)", "panda_joint4", "coupled mimic joints",
-                                  "panda_finger_joint2       = 1 x panda_finger_joint1"})) << u.out;
+                                  "panda_finger_joint2       = 1 x panda_finger_joint1"}))
+      << u.out;
 }
 
 // What the user gets wrong: one clear error (exit code 2), naming the file and the element, and
@@ -498,14 +527,16 @@ TEST(RobotInit, BadInputIsRefusedAndLeavesNothing) {
   std::ofstream(dir + "/pkg/package.xml") << "<package><name>panda_like_description</name></package>";
   std::ofstream(dir + "/pkg/urdf/panda_like.urdf") << urdf;
   const CliResult mesh = harness("robot init " + dir + "/pkg/urdf/panda_like.urdf --out " + out, dir);
-  expectExit(mesh, 2, {"pkg/urdf/panda_like.urdf:", "mesh 'package://panda_like_description/meshes/", "not found",
-                       "which has no file meshes/", "the package is there without the file; --allow-missing-meshes"});
+  expectExit(mesh, 2,
+             {"pkg/urdf/panda_like.urdf:", "mesh 'package://panda_like_description/meshes/", "not found", "which has no file meshes/",
+              "the package is there without the file; --allow-missing-meshes"});
   EXPECT_EQ(mesh.err.find("--package-path"), std::string::npos) << mesh.err;  // the package was found
   EXPECT_FALSE(fs::exists(out));
   // An SRDF naming a joint the URDF lacks.
   std::ofstream(dir + "/bad.srdf") << "<?xml version=\"1.0\"?>\n<robot name=\"panda_like\">\n  <group_state name=\"ready\" group=\"arm\">\n"
                                       "    <joint name=\"panda_joint9\" value=\"0.1\"/>\n  </group_state>\n</robot>\n";
-  const CliResult srdf = harness("robot init " + kSrc + "/models/panda_like/urdf/panda_like.urdf --srdf " + dir + "/bad.srdf --out " + out, dir);
+  const CliResult srdf =
+      harness("robot init " + kSrc + "/models/panda_like/urdf/panda_like.urdf --srdf " + dir + "/bad.srdf --out " + out, dir);
   expectExit(srdf, 2, {"bad.srdf:4", "group state 'ready' names joint 'panda_joint9', which the URDF does not have"});
   EXPECT_FALSE(fs::exists(out));
   // A xacro file.
@@ -516,7 +547,8 @@ TEST(RobotInit, BadInputIsRefusedAndLeavesNothing) {
   // An output folder that is not empty is never overwritten.
   fs::create_directories(out);
   std::ofstream(out + "/mine.txt") << "keep";
-  expectExit(harness("robot init " + kSrc + "/models/point_mass/point_mass.urdf --out " + out, dir), 2, {"exists and is not an empty folder"});
+  expectExit(harness("robot init " + kSrc + "/models/point_mass/point_mass.urdf --out " + out, dir), 2,
+             {"exists and is not an empty folder"});
   EXPECT_EQ(slurp(out + "/mine.txt"), "keep");
   EXPECT_FALSE(fs::exists(out + "/stand.yaml"));
   expectExit(harness("robot init " + kSrc + "/models/point_mass/point_mass.urdf --out " + dir + "/x --base floating", dir), 2,
@@ -536,7 +568,8 @@ TEST(RobotFiles, OverridesDoNotMaskTheRobotFilesError) {
   c.replace(c.find("../models/point_mass/point_mass.urdf"), 36, "point_mass.urdf");
   c.replace(c.find("../models/point_mass/point_mass.yaml"), 36, "point_mass.yaml");
   std::ofstream(dir + "/case.yaml") << c;
-  for (const std::string& extra : {std::string(""), std::string(" --duration 5"), std::string(" --set controller.tasks[position].gains.kp=2")}) {
+  for (const std::string& extra :
+       {std::string(""), std::string(" --duration 5"), std::string(" --set controller.tasks[position].gains.kp=2")}) {
     SCOPED_TRACE(extra);
     expectExit(harness("run " + dir + "/case.yaml --out " + dir + "/out --quiet" + extra, dir), 2,
                {"point_mass.urdf:", "link 'mass': mass must be > 0, found -1"});

@@ -176,9 +176,9 @@ class OscillatorWithJacobian : public Oscillator {
     ++jacobians;
     if (throw_in_jacobian) throw std::runtime_error("Jacobian failed on purpose");
     for (int i = 0; i < 9; ++i) J[i] = 0.0;
-    J[0 + 3 * 1] = 1.0;                // dx'/dv
-    J[1 + 3 * 0] = -w * w;             // dv'/dx
-    J[1 + 3 * 1] = -2 * z * w;         // dv'/dv
+    J[0 + 3 * 1] = 1.0;         // dx'/dv
+    J[1 + 3 * 0] = -w * w;      // dv'/dx
+    J[1 + 3 * 1] = -2 * z * w;  // dv'/dv
     J[2 + 3 * 2] = -lambda * stiff_term;
   }
 };
@@ -191,9 +191,9 @@ TEST(CvodeIntegrator, SystemJacobianReplacesTheDifferenceQuotients) {
     LinearSolver solver;
     bool own;
   };
-  for (const Path& path : {Path{"block elimination, own system", LinearSolver::BlockElimination, true},
-                           Path{"block elimination, CVODE's system", LinearSolver::BlockElimination, false},
-                           Path{"dense LU", LinearSolver::DenseLU, true}}) {
+  for (const Path& path :
+       {Path{"block elimination, own system", LinearSolver::BlockElimination, true},
+        Path{"block elimination, CVODE's system", LinearSolver::BlockElimination, false}, Path{"dense LU", LinearSolver::DenseLU, true}}) {
     OscillatorWithJacobian a;
     Oscillator b;
     CvodeSettings s = tight(3);

@@ -163,8 +163,8 @@ Worst crossCheck(const std::string& dir, const std::string& name, unsigned seed,
     // The simulator's own centre of mass (the trace's com.*) against Simbody's.
     worst.com = std::max(worst.com, (simu.centerOfMass(sd) - c_ref).cwiseAbs().maxCoeff() / c_scale);
   }
-  std::printf("%-14s %3d states: M %.2e  N %.2e  J %.2e  CoM %.2e  frames %.2e  udot %.2e\n", name.c_str(), states,
-              worst.mass_matrix, worst.bias, worst.jacobian, worst.com, worst.placement, worst.acceleration);
+  std::printf("%-14s %3d states: M %.2e  N %.2e  J %.2e  CoM %.2e  frames %.2e  udot %.2e\n", name.c_str(), states, worst.mass_matrix,
+              worst.bias, worst.jacobian, worst.com, worst.placement, worst.acceleration);
   EXPECT_LE(worst.mass_matrix, kRelativeTolerance) << name << ": mass matrix";
   EXPECT_LE(worst.bias, kRelativeTolerance) << name << ": bias forces";
   EXPECT_LE(worst.jacobian, kRelativeTolerance) << name << ": frame Jacobians";
@@ -211,7 +211,8 @@ TEST(ModelVsSimulator, CoupledJointsSitAtTheirOffsetsAtZero) {
     model::ModelData cd = ctrl.createData();
     ctrl.update(cd, ctrl.neutralConfiguration(), Eigen::VectorXd::Zero(ctrl.nv()));
     for (const char* f : {"fingertip", "nail_end", "tail_end"}) {
-      const Eigen::Vector3d a = ctrl.framePlacement(cd, ctrl.frameId(f)).translation(), b = simu.framePlacement(sd, simu.frameId(f)).translation();
+      const Eigen::Vector3d a = ctrl.framePlacement(cd, ctrl.frameId(f)).translation(),
+                            b = simu.framePlacement(sd, simu.frameId(f)).translation();
       EXPECT_LT((a - b).norm(), 1e-12) << f << ": model " << a.transpose() << ", simulator " << b.transpose();
     }
   }

@@ -35,9 +35,7 @@ SimulatorSettings tightSettings(int nj, double period) {
   return ::testing::AssertionFailure() << "status " << toString(r.status) << " msg " << r.message << " t " << sim.time();
 }
 
-JointCommand hold(const Eigen::VectorXd& q) {
-  return JointCommand{q, Eigen::VectorXd::Zero(q.size()), Eigen::VectorXd::Zero(q.size())};
-}
+JointCommand hold(const Eigen::VectorXd& q) { return JointCommand{q, Eigen::VectorXd::Zero(q.size()), Eigen::VectorXd::Zero(q.size())}; }
 
 using lexdyn::testing::agm;
 
@@ -61,10 +59,8 @@ TEST(Simulator, FreePendulumHalfPeriodMatchesClosedForm) {
       double s = om_prev / (om_prev - om);
       for (int it = 0; it < 20; ++it) {
         const double s2 = s * s, s3 = s2 * s;
-        const double v = (2 * s3 - 3 * s2 + 1) * om_prev + (s3 - 2 * s2 + s) * h * a0 + (-2 * s3 + 3 * s2) * om +
-                         (s3 - s2) * h * a1;
-        const double dv = (6 * s2 - 6 * s) * om_prev + (3 * s2 - 4 * s + 1) * h * a0 + (-6 * s2 + 6 * s) * om +
-                          (3 * s2 - 2 * s) * h * a1;
+        const double v = (2 * s3 - 3 * s2 + 1) * om_prev + (s3 - 2 * s2 + s) * h * a0 + (-2 * s3 + 3 * s2) * om + (s3 - s2) * h * a1;
+        const double dv = (6 * s2 - 6 * s) * om_prev + (3 * s2 - 4 * s + 1) * h * a0 + (-6 * s2 + 6 * s) * om + (3 * s2 - 2 * s) * h * a1;
         s -= v / dv;
       }
       t_turn = t_prev + s * h;
@@ -165,9 +161,8 @@ class PointMass : public ::testing::Test {
 TEST_F(PointMass, StepResponseOfTheServoIsCriticallyDamped) {
   // m = 1, kp = 100, kd = 20: x(t) = x_ref (1 - (1 + 10 t) exp(-10 t)).
   Simulator sim = make(100.0, 20.0, SetpointProfile::Step);
-  holdFromRest(sim, 0.1, 200, [&](double t) {
-    EXPECT_NEAR(sim.sensors().q[0], 0.1 * (1.0 - (1.0 + 10.0 * t) * std::exp(-10.0 * t)), 1e-8) << t;
-  });
+  holdFromRest(sim, 0.1, 200,
+               [&](double t) { EXPECT_NEAR(sim.sensors().q[0], 0.1 * (1.0 - (1.0 + 10.0 * t) * std::exp(-10.0 * t)), 1e-8) << t; });
 }
 
 TEST_F(PointMass, HermiteAndLinearSetPointsFollowARampExactlyAStepDoesNot) {
@@ -219,9 +214,7 @@ TEST_F(PointMass, GraspBushingIsADampedSpringThatSwitchesOff) {
   ASSERT_TRUE(sim.graspActive(0));
   const double w0 = 20.0, z = 0.1, wd = w0 * std::sqrt(1 - z * z);
   auto x = [&](double t) { return v0 / wd * std::exp(-z * w0 * t) * std::sin(wd * t); };
-  auto xd = [&](double t) {
-    return v0 * std::exp(-z * w0 * t) * (std::cos(wd * t) - z * w0 / wd * std::sin(wd * t));
-  };
+  auto xd = [&](double t) { return v0 * std::exp(-z * w0 * t) * (std::cos(wd * t) - z * w0 / wd * std::sin(wd * t)); };
   const JointCommand cmd = hold(Eigen::VectorXd::Zero(1));
   for (int k = 1; k <= 100; ++k) {
     ASSERT_TRUE(stepped(sim, cmd));
@@ -427,8 +420,8 @@ TEST_F(Humanoid, StaticEquilibriumStartIsAtRestFromTheFirstTick) {
   // The first 0.1 s: nothing moves beyond integrator noise (the unsettled starts of the next
   // test sink 0.3 mm and lose 9 % of the contact force in the same time).
   const StartTransient tr = firstTenthOfASecond(sim, hs);
-  EXPECT_LT(tr.waist_drift_m, 2e-6);     // measured 0.3 um (atol_position 1e-6)
-  EXPECT_LT(tr.force_error_rel, 1e-4);   // measured 1.4e-5
+  EXPECT_LT(tr.waist_drift_m, 2e-6);    // measured 0.3 um (atol_position 1e-6)
+  EXPECT_LT(tr.force_error_rel, 1e-4);  // measured 1.4e-5
 }
 
 TEST_F(Humanoid, UnsettledStartsSinkWhileTheServosTakeUpTheLoad) {
@@ -552,8 +545,7 @@ TEST(SimulatorFailure, BadSettingsAreInputErrors) {
   SimulatorSettings s;
   s.servo.kp = Eigen::VectorXd::Constant(3, 1.0);  // wrong size
   s.servo.kd = Eigen::VectorXd::Constant(3, 1.0);
-  EXPECT_THROW(Simulator(src("models/hrp2kai_like/hrp2kai_like.urdf"), src("models/hrp2kai_like/hrp2kai_like.yaml"), s),
-               InputError);
+  EXPECT_THROW(Simulator(src("models/hrp2kai_like/hrp2kai_like.urdf"), src("models/hrp2kai_like/hrp2kai_like.yaml"), s), InputError);
 }
 
 }  // namespace

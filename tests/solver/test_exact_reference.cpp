@@ -95,7 +95,8 @@ TEST(ExactReference, AgreesWithTheSolverAndTheBruteForce) {
     ++proven;
     if (p.totalRows() <= 8) {
       const auto ref = test::bruteForce(p);
-      for (int l = 0; l < p.levelCount(); ++l) EXPECT_NEAR(v.violation_norm[static_cast<size_t>(l)], ref[static_cast<size_t>(l)], 1e-7) << seed;
+      for (int l = 0; l < p.levelCount(); ++l)
+        EXPECT_NEAR(v.violation_norm[static_cast<size_t>(l)], ref[static_cast<size_t>(l)], 1e-7) << seed;
       ++brute;
     }
   }

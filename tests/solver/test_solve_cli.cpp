@@ -137,7 +137,8 @@ TEST(SolveCli, BenchReportsEachTicksBestOverTheRepeats) {
   const nlohmann::json j = benchOnCopies("--repeats 5", 4);
   for (const char* k : {"cold", "warm"}) {
     const nlohmann::json& s = j[k];
-    for (const char* f : {"tick_best_median_us", "tick_best_p99_us", "tick_best_max_us", "tick_best_p99_qr_units", "tick_best_max_qr_units"}) {
+    for (const char* f :
+         {"tick_best_median_us", "tick_best_p99_us", "tick_best_max_us", "tick_best_p99_qr_units", "tick_best_max_qr_units"}) {
       ASSERT_TRUE(s.contains(f) && s[f].is_number()) << k << "." << f << ": " << s.dump();
     }
     EXPECT_EQ(s["count"].get<int>(), std::string(k) == "cold" ? 20 : 15) << k;
@@ -158,8 +159,8 @@ TEST(SolveCli, BenchReportsColdAndWarmStatistics) {
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_GT(j["qr_unit_us"].get<double>(), 0.0);
   for (const char* k : {"cold", "warm"}) {
-    for (const char* f : {"median_us", "p99_us", "max_us", "mean_iterations", "max_iterations", "iteration_limit_hits",
-                          "median_qr_units", "p99_qr_units", "max_qr_units"}) {
+    for (const char* f : {"median_us", "p99_us", "max_us", "mean_iterations", "max_iterations", "iteration_limit_hits", "median_qr_units",
+                          "p99_qr_units", "max_qr_units"}) {
       EXPECT_TRUE(j[k].contains(f)) << k << "." << f;
     }
   }

@@ -314,7 +314,8 @@ TEST(Solver, ProductWithSingleNonzeroColumnsIsAScaledRow) {
     for (int j = 0; j < m; ++j) {
       const int i = at[static_cast<size_t>(j)];
       const Eigen::VectorXd row = (A(i, j) * Z.row(i).transpose()).array() + 0.0;
-      ASSERT_EQ(std::memcmp(row.data(), P.col(j).data(), sizeof(double) * static_cast<size_t>(d)), 0) << "trial " << trial << " column " << j;
+      ASSERT_EQ(std::memcmp(row.data(), P.col(j).data(), sizeof(double) * static_cast<size_t>(d)), 0)
+          << "trial " << trial << " column " << j;
     }
   }
 }
@@ -465,7 +466,8 @@ TEST(Solver, DeclaredLeadingColumnsKeepEveryBit) {
   EXPECT_THROW(p.setLevelColumns(1, 4), InputError);
   EXPECT_THROW(p.setLevelColumns(1, -2), InputError);
   p.setLevelColumns(1, 2);
-  EXPECT_TRUE(lexdyn::testing::containsAll(lexdyn::testing::inputErrorOf([&] { p.validate("test"); }), {"A[1][2] is 0.5", "first 2 columns"}));
+  EXPECT_TRUE(
+      lexdyn::testing::containsAll(lexdyn::testing::inputErrorOf([&] { p.validate("test"); }), {"A[1][2] is 0.5", "first 2 columns"}));
   p.level(1).A(1, 2) = -0.0;
   EXPECT_NO_THROW(p.validate("test"));
 }
@@ -661,8 +663,8 @@ TEST(Solver, SpanningStagesGiveTheStandardAnswer) {
   }
   EXPECT_EQ(checked, 320);
   EXPECT_GE(sameActive, 300);
-  EXPECT_GE(spanned, 200);    // the wrench level, and often the velocity level, span what is left
-  EXPECT_GE(notSpanned, 1);   // e.g. a level over some of its half only
+  EXPECT_GE(spanned, 200);   // the wrench level, and often the velocity level, span what is left
+  EXPECT_GE(notSpanned, 1);  // e.g. a level over some of its half only
 }
 
 // Spanning stages decide the stage's rank as the standard factorisation does, rank_tolerance
@@ -1121,8 +1123,7 @@ TEST(SolverOptions, LevelIndicesAreChecked) {
   Problem p(2);
   p.addLevel("a", mat(1, 2, {1, 1}), vec({1}), vec({1}));
   EXPECT_EQ(p.level(0).name, "a");
-  EXPECT_EQ(lexdyn::testing::exceptionMessage<std::out_of_range>([&] { (void)p.level(1); }),
-            "Problem::level: index 1 out of range [0, 1)");
+  EXPECT_EQ(lexdyn::testing::exceptionMessage<std::out_of_range>([&] { (void)p.level(1); }), "Problem::level: index 1 out of range [0, 1)");
   EXPECT_THROW((void)p.level(-1), std::out_of_range);
 }
 

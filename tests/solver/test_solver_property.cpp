@@ -53,8 +53,7 @@ RC_GTEST_PROP(SolverProperty, RandomHierarchiesAreSolvedWithAKktCertificate, ())
       firstNorms = r.violation_norm;
       continue;
     }
-    for (int l = 0; l < p.levelCount(); ++l)
-      RC_ASSERT(std::abs(r.violation_norm(l) - firstNorms(l)) <= 1e-7 * (1 + firstNorms(l)));
+    for (int l = 0; l < p.levelCount(); ++l) RC_ASSERT(std::abs(r.violation_norm(l) - firstNorms(l)) <= 1e-7 * (1 + firstNorms(l)));
   }
 }
 
@@ -84,15 +83,16 @@ RC_GTEST_PROP(SolverProperty, EqualityHierarchiesMatchNullSpaceRecursion, ()) {
   const auto ref = test::nullSpaceReference(p);
   Options noElim;
   noElim.eliminate_first_level = false;
-  for (const Options& o : {Options{}, noElim, withLastLevel(Options::LastLevel::Always),
-                           withLastLevel(Options::LastLevel::Always, false)}) {
+  for (const Options& o :
+       {Options{}, noElim, withLastLevel(Options::LastLevel::Always), withLastLevel(Options::LastLevel::Always, false)}) {
     Solver s;
     s.setup(p, o);
     const Result& r = s.solve(p);
     RC_ASSERT(r.status == Status::Solved);
     RC_ASSERT(r.iterations == 1);
     for (int l = 0; l < p.levelCount(); ++l)
-      RC_ASSERT(std::abs(r.violation_norm(l) - ref.residualNorm[static_cast<size_t>(l)]) <= 1e-8 * (1 + ref.residualNorm[static_cast<size_t>(l)]));
+      RC_ASSERT(std::abs(r.violation_norm(l) - ref.residualNorm[static_cast<size_t>(l)]) <=
+                1e-8 * (1 + ref.residualNorm[static_cast<size_t>(l)]));
     // Unique optimum, or no elimination: the minimum-norm optimum, as the reference.
     if (ref.nullity == 0 || !o.eliminate_first_level) RC_ASSERT((r.x - ref.x).norm() <= 1e-8 * (1 + ref.x.norm()));
     RC_ASSERT(test::checkKkt(p, r).empty());

@@ -127,7 +127,9 @@ inline bool lpFeasible(const Mat& A, const std::vector<Q>& b, int k) {
   std::vector<int> basis(static_cast<size_t>(m));
   for (int r = 0; r < m; ++r) {
     const bool flip = sgn(b[static_cast<size_t>(r)]) < 0;
-    for (int c = 0; c < k; ++c) T[static_cast<size_t>(r)][static_cast<size_t>(c)] = flip ? -A[static_cast<size_t>(r)][static_cast<size_t>(c)] : A[static_cast<size_t>(r)][static_cast<size_t>(c)];
+    for (int c = 0; c < k; ++c)
+      T[static_cast<size_t>(r)][static_cast<size_t>(c)] =
+          flip ? -A[static_cast<size_t>(r)][static_cast<size_t>(c)] : A[static_cast<size_t>(r)][static_cast<size_t>(c)];
     T[static_cast<size_t>(r)][static_cast<size_t>(k + r)] = 1;
     T[static_cast<size_t>(r)][static_cast<size_t>(k + m)] = flip ? -b[static_cast<size_t>(r)] : b[static_cast<size_t>(r)];
     basis[static_cast<size_t>(r)] = k + r;
@@ -221,9 +223,12 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
   std::vector<int> held(static_cast<size_t>(M), 0);
   for (int j = 0; j < M; ++j) {
     const Row& row = rows[static_cast<size_t>(j)];
-    if (row.equality() || row.state == RowState::Equality) held[static_cast<size_t>(j)] = 1;
-    else if (row.state == RowState::Lower && row.has_lo) held[static_cast<size_t>(j)] = 1;
-    else if (row.state == RowState::Upper && row.has_up) held[static_cast<size_t>(j)] = 2;
+    if (row.equality() || row.state == RowState::Equality)
+      held[static_cast<size_t>(j)] = 1;
+    else if (row.state == RowState::Lower && row.has_lo)
+      held[static_cast<size_t>(j)] = 1;
+    else if (row.state == RowState::Upper && row.has_up)
+      held[static_cast<size_t>(j)] = 2;
   }
   const std::vector<int> solver_held = held;  // every level starts from the solver's active set
   std::vector<char> frozen(static_cast<size_t>(M), 0);
@@ -285,7 +290,8 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
     if (!exact::solveLinear(N, rhs, f, y, nullptr)) return false;  // cannot happen: normal equations
     for (int c = 0; c < f; ++c) {
       if (sgn(y[static_cast<size_t>(c)]) == 0) continue;
-      for (int i = 0; i < n; ++i) x[static_cast<size_t>(i)] += y[static_cast<size_t>(c)] * Z[static_cast<size_t>(c)][static_cast<size_t>(i)];
+      for (int i = 0; i < n; ++i)
+        x[static_cast<size_t>(i)] += y[static_cast<size_t>(c)] * Z[static_cast<size_t>(c)][static_cast<size_t>(i)];
     }
     return true;
   };
@@ -308,8 +314,10 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
           // the working set has no feasible point.
           const bool above = row.has_up && ax > row.up, below = row.has_lo && ax < row.lo;
           if ((above && hj == 2) || (below && hj == 1)) return false;
-          if (above) h[static_cast<size_t>(j)] = 2, changed = true;
-          else if (below) h[static_cast<size_t>(j)] = 1, changed = true;
+          if (above)
+            h[static_cast<size_t>(j)] = 2, changed = true;
+          else if (below)
+            h[static_cast<size_t>(j)] = 1, changed = true;
         } else if (!row.equality()) {
           // A level row held on the wrong side of its bound: release it.
           if ((hj == 2 && ax < row.up) || (hj == 1 && ax > row.lo)) h[static_cast<size_t>(j)] = 0, changed = true;

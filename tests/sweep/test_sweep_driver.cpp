@@ -1,8 +1,8 @@
 // The sweep driver on a real sweep (cases/sweeps/pointmass-damping.yaml, the sec. V-A point
 // mass over the damping mu and the gain kp): one record per point, resumption after SIGKILL
 // giving the same records as an uninterrupted run, a hang recorded as that run's failure (its
-// timeout; a process killed from outside is run again, tests/faults), and the shrinker finding the failure boundary known in closed form (eq. 51: the
-// acceleration-domain PD overshoots by exp(-pi/mu) for every kp).
+// timeout; a process killed from outside is run again, tests/faults), and the shrinker finding the failure boundary known in closed form
+// (eq. 51: the acceleration-domain PD overshoots by exp(-pi/mu) for every kp).
 #include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
@@ -130,7 +130,8 @@ TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
-    execl(kHarness.c_str(), kHarness.c_str(), "sweep", "run", kSweep.c_str(), "--out", b.c_str(), "-j", "2", "--no-db", "--quiet", (char*)nullptr);
+    execl(kHarness.c_str(), kHarness.c_str(), "sweep", "run", kSweep.c_str(), "--out", b.c_str(), "-j", "2", "--no-db", "--quiet",
+          (char*)nullptr);
     _exit(127);
   }
   // Wait until some points are done, then kill the driver.
@@ -146,7 +147,8 @@ TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
   EXPECT_LT(done_before, 12) << "the driver finished before it was killed";
   EXPECT_FALSE(fs::exists(b + "/results.jsonl"));
   // Merging what is there: the summary of the points done, exit code 3 (incomplete).
-  EXPECT_EQ(run("sweep merge " + kSweep + " --out " + b + " --no-shrink --no-db", dir + "/b-merge.log"), 3) << readText(dir + "/b-merge.log");
+  EXPECT_EQ(run("sweep merge " + kSweep + " --out " + b + " --no-shrink --no-db", dir + "/b-merge.log"), 3)
+      << readText(dir + "/b-merge.log");
   EXPECT_NE(readText(dir + "/b-merge.log").find("points have no result yet"), std::string::npos) << readText(dir + "/b-merge.log");
   ASSERT_EQ(run("sweep run " + kSweep + " --out " + b + " -j 2 --no-db", dir + "/b.log"), 1) << readText(dir + "/b.log");
   EXPECT_NE(readText(dir + "/b.log").find("runs done"), std::string::npos);
@@ -170,7 +172,8 @@ TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
 TEST(SweepDriver, TheTotalShrinkBudgetIsSharedEvenly) {
   const std::string dir = dirFor("sweep_budget");
   std::string text = readText(kSweep);
-  text.replace(text.find("base: ../pointmass-damping.yaml"), 31, "base: " + std::string(LEXDYN_SOURCE_DIR) + "/cases/pointmass-damping.yaml");
+  text.replace(text.find("base: ../pointmass-damping.yaml"), 31,
+               "base: " + std::string(LEXDYN_SOURCE_DIR) + "/cases/pointmass-damping.yaml");
   text.replace(text.find("sampling: {points: 12}"), 22, "sampling: {points: 4}");
   text.replace(text.find("checks: [no_overshoot, controller_ok]"), 37, "checks: [no_overshoot, closed_form_eq49, controller_ok]");
   text.replace(text.find("shrink: {max_runs: 30,"), 22, "shrink: {max_runs: 30, max_total_runs: 6,");
@@ -207,7 +210,8 @@ TEST(SweepDriver, AHangIsThatRunsRecordedFailure) {
   EXPECT_EQ(s["checks"][0]["passed"], 0);
   // Another sweep in the same folder is refused (its results would mix).
   std::string other = readText(kSweep);
-  other.replace(other.find("base: ../pointmass-damping.yaml"), 31, "base: " + std::string(LEXDYN_SOURCE_DIR) + "/cases/pointmass-damping.yaml");
+  other.replace(other.find("base: ../pointmass-damping.yaml"), 31,
+                "base: " + std::string(LEXDYN_SOURCE_DIR) + "/cases/pointmass-damping.yaml");
   std::ofstream(dir + "/other.yaml") << other << "# changed\n";
   EXPECT_EQ(run("sweep run " + dir + "/other.yaml --out " + dir + "/out --no-db", dir + "/log2"), 2);
   EXPECT_NE(readText(dir + "/log2").find("holds the results of another version"), std::string::npos) << readText(dir + "/log2");

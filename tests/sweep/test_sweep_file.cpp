@@ -82,7 +82,8 @@ TEST(SweepFile, PointValuesDependOnlyOnSeedAndIndex) {
   }
   const SweepSpec other = loadSweep(writeSweep(dir, kParams, "description: the same seed\n"));
   EXPECT_EQ(pointAt(other, 7).values, p7.values);  // same seed
-  std::ofstream(dir + "/s4.yaml") << "name: t\nbase: " << LEXDYN_SOURCE_DIR << "/cases/pointmass-damping.yaml\nmethods: [wls]\nseed: 4\n" << kParams;
+  std::ofstream(dir + "/s4.yaml") << "name: t\nbase: " << LEXDYN_SOURCE_DIR << "/cases/pointmass-damping.yaml\nmethods: [wls]\nseed: 4\n"
+                                  << kParams;
   EXPECT_NE(loadSweep(dir + "/s4.yaml").parameters.size(), 0u);
   EXPECT_NE(pointAt(loadSweep(dir + "/s4.yaml"), 7).values, p7.values);
   // The overrides of a point: each parameter's paths; an empty value leaves the base's.
@@ -124,7 +125,8 @@ TEST(SweepFile, BadSweepsAreRejectedBeforeAnyRunNamingFileAndField) {
   // A property that names no check, a comparison with a method the sweep does not run.
   EXPECT_TRUE(containsAll(errorOf(std::string(kParams) + "properties:\n  checks: [no_such_check]\n"),
                           {"properties.checks[0]: the base case has no check 'no_such_check' (checks: no_overshoot"}));
-  EXPECT_TRUE(containsAll(errorOf(std::string(kParams) + "properties:\n  comparisons: [{name: c, type: method_comparison, tasks: [position], statistic: final, better: gn, worse: wls}]\n"),
+  EXPECT_TRUE(containsAll(errorOf(std::string(kParams) + "properties:\n  comparisons: [{name: c, type: method_comparison, tasks: "
+                                                         "[position], statistic: final, better: gn, worse: wls}]\n"),
                           {"needs method gn, which the sweep does not run"}));
   // A base case that does not load.
   const std::string dir = dirFor("sweep_file_bad_base");
@@ -157,8 +159,8 @@ TEST(SweepFile, WallClockChecksAreNeverASweepsVerdict) {
     loadSweep(dir + "/named.yaml");
     ADD_FAILURE() << "no error";
   } catch (const InputError& err) {
-    EXPECT_TRUE(containsAll(err.what(),
-                            {"named.yaml:9: properties.checks[0]: check 'tick_time_p99' is a wall-clock check (machine-dependent)"}));
+    EXPECT_TRUE(
+        containsAll(err.what(), {"named.yaml:9: properties.checks[0]: check 'tick_time_p99' is a wall-clock check (machine-dependent)"}));
   }
 }
 

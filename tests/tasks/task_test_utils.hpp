@@ -65,8 +65,7 @@ inline std::vector<ContactSpec> testContacts(const RobotModel& model) {
 /// Everything a task needs for one tick.
 struct TickFixture {
   explicit TickFixture(const std::string& model_name)
-      : model(loadModel(model_name)), data(model.createData()), layout(model.nv(), testContacts(model)),
-        ws(model) {
+      : model(loadModel(model_name)), data(model.createData()), layout(model.nv(), testContacts(model)), ws(model) {
     q = model.neutralConfiguration();
     u = Eigen::VectorXd::Zero(model.nv());
     M.setZero(model.nv(), model.nv());
@@ -112,14 +111,12 @@ struct TickFixture {
 /// Relative comparison with an absolute floor of 1.
 inline ::testing::AssertionResult near(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double tol) {
   if (a.rows() != b.rows() || a.cols() != b.cols()) {
-    return ::testing::AssertionFailure() << "sizes " << a.rows() << "x" << a.cols() << " vs " << b.rows() << "x"
-                                         << b.cols();
+    return ::testing::AssertionFailure() << "sizes " << a.rows() << "x" << a.cols() << " vs " << b.rows() << "x" << b.cols();
   }
   const double scale = std::max(1.0, std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff()));
   const double err = (a - b).cwiseAbs().maxCoeff();
   if (err <= tol * scale) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "max error " << err << " > " << tol * scale << "\nA=\n"
-                                       << a << "\nB=\n" << b;
+  return ::testing::AssertionFailure() << "max error " << err << " > " << tol * scale << "\nA=\n" << a << "\nB=\n" << b;
 }
 
 /// f at q(h) and at q(-h), q(t) = integrate(q, v, t) (the fixture's u is kept). Restores the

@@ -28,10 +28,10 @@ TEST(Damper, FormulaAndSigns) {
   EXPECT_EQ(damperVelocityBound(0.1, d_i, d_s, xi), -kInf);  // at d_i: not yet
   EXPECT_EQ(damperVelocityBound(0.5, d_i, d_s, xi), -kInf);
   EXPECT_EQ(damperVelocityBound(kInf, d_i, d_s, xi), -kInf);
-  EXPECT_NEAR(damperVelocityBound(0.06, d_i, d_s, xi), -0.25, 1e-15);         // halfway: -xi / 2
+  EXPECT_NEAR(damperVelocityBound(0.06, d_i, d_s, xi), -0.25, 1e-15);  // halfway: -xi / 2
   EXPECT_NEAR(damperVelocityBound(std::nextafter(0.1, 0.0), d_i, d_s, xi), -0.5, 1e-12);
-  EXPECT_EQ(damperVelocityBound(0.02, d_i, d_s, xi), 0.0);                    // at d_s: no approach
-  EXPECT_NEAR(damperVelocityBound(0.0, d_i, d_s, xi), 0.125, 1e-15);          // below: pushed back
+  EXPECT_EQ(damperVelocityBound(0.02, d_i, d_s, xi), 0.0);            // at d_s: no approach
+  EXPECT_NEAR(damperVelocityBound(0.0, d_i, d_s, xi), 0.125, 1e-15);  // below: pushed back
   // Acceleration form: u + dt udot obeys the velocity bound.
   const double ddot = -0.3, bias = 0.7, dt = 0.005;
   const double a = damperAccelerationBound(0.06, d_i, d_s, xi, ddot, bias, dt);
@@ -258,9 +258,15 @@ TEST(ComBox, DamperEngagesTwoCentimetresBeforeEachEdgeOnly) {
       for (double gap : {0.0201, 0.0199, -0.01}) {
         Eigen::VectorXd box(6);
         box << Eigen::Vector3d::Constant(-kInf), Eigen::Vector3d::Constant(kInf);
-        if (side == 0) box[axis] = c[axis] - gap; else box[3 + axis] = c[axis] + gap;
+        if (side == 0)
+          box[axis] = c[axis] - gap;
+        else
+          box[3 + axis] = c[axis] + gap;
         if (gap < 0) {  // outside the box: the other side must stay above it
-          if (side == 0) box[3 + axis] = kInf; else box[axis] = -kInf;
+          if (side == 0)
+            box[3 + axis] = kInf;
+          else
+            box[axis] = -kInf;
         }
         task.setTarget(*d, box);
         task.compute(fx.ctx, *d);
@@ -300,21 +306,23 @@ TEST(ComBox, DamperEngagesTwoCentimetresBeforeEachEdgeOnly) {
   fx.ctx.domain = Domain::Acceleration;
   task.compute(fx.ctx, *d);
   fx.ctx.domain = Domain::Velocity;
-  const Eigen::VectorXd Jdot_u = centralDifference(fx, fx.u, [&] {
-    Eigen::MatrixXd J(3, fx.model.nv());
-    fx.model.centerOfMassJacobian(fx.data, J);
-    return J;
-  }) * fx.u;
+  const Eigen::VectorXd Jdot_u = centralDifference(fx, fx.u,
+                                                   [&] {
+                                                     Eigen::MatrixXd J(3, fx.model.nv());
+                                                     fx.model.centerOfMassJacobian(fx.data, J);
+                                                     return J;
+                                                   }) *
+                                 fx.u;
   const Eigen::VectorXd Ju = Jc * fx.u;
   for (int i = 0; i < 3; ++i) {
     if (std::isfinite(vlo[i])) {
       EXPECT_NEAR(Ju[i] + fx.ctx.dt * (d->lower[i] + Jdot_u[i]), vlo[i], 1e-8);
-    }
-    else EXPECT_EQ(d->lower[i], -kInf);
+    } else
+      EXPECT_EQ(d->lower[i], -kInf);
     if (std::isfinite(vhi[i])) {
       EXPECT_NEAR(Ju[i] + fx.ctx.dt * (d->upper[i] + Jdot_u[i]), vhi[i], 1e-8);
-    }
-    else EXPECT_EQ(d->upper[i], kInf);
+    } else
+      EXPECT_EQ(d->upper[i], kInf);
   }
   EXPECT_TRUE(std::isfinite(vlo[0]) && std::isfinite(vhi[1]) && std::isfinite(vlo[2]));
 }
@@ -403,7 +411,6 @@ TEST(AdaptiveDamper, ComBoxIsContinuousWhenTheCentreOfMassEntersTheBand) {
   task.reset(*d);
   EXPECT_FALSE(static_cast<DamperTaskData&>(*d).dampers[0].engaged);
 }
-
 
 }  // namespace
 }  // namespace lexdyn::tasks

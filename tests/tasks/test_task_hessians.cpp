@@ -78,8 +78,7 @@ std::vector<Eigen::MatrixXd> fdHessians(TickFixture& fx, int rows, Gradient grad
 
 /// TaskData::J at the current state, composed into the gradient of the exact task function.
 /// orientation_row: first row of a 3-row orientation block (-1: none), of frame `f`.
-std::vector<Eigen::MatrixXd> taskHessiansFd(TickFixture& fx, const TaskModel& task, TaskData& d, int orientation_row,
-                                            model::FrameId f) {
+std::vector<Eigen::MatrixXd> taskHessiansFd(TickFixture& fx, const TaskModel& task, TaskData& d, int orientation_row, model::FrameId f) {
   const Eigen::Matrix3d R0 = f >= 0 ? Eigen::Matrix3d(fx.model.framePlacement(fx.data, f).linear()) : Eigen::Matrix3d::Identity();
   return fdHessians(fx, task.rows(), [&](const Eigen::VectorXd& s) {
     task.compute(fx.ctx, d);
@@ -98,8 +97,8 @@ std::vector<Eigen::MatrixXd> taskHessiansFd(TickFixture& fx, const TaskModel& ta
 // a random weight vector; chainDofs against the sparsity of J and H.
 // nontrivial: the Hessian must have entries above 1e-3 (false for orientations of a planar arm,
 // whose parallel axes give a_i x a_j = 0).
-void checkTask(TickFixture& fx, const TaskModel& task, TaskData& d, const std::vector<Eigen::MatrixXd>& Hfd,
-               RandomStates& rs, bool nontrivial = true) {
+void checkTask(TickFixture& fx, const TaskModel& task, TaskData& d, const std::vector<Eigen::MatrixXd>& Hfd, RandomStates& rs,
+               bool nontrivial = true) {
   const int nv = fx.model.nv(), m = task.rows();
   ASSERT_TRUE(task.geometric());
   task.compute(fx.ctx, d);

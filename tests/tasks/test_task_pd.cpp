@@ -30,8 +30,7 @@ using namespace testing;
 // re-centring done by the caller) through finite differences: edot = -df/dt, Jdot u = dJ/dt u.
 // jac() is the reference Jacobian (j_tol: 0 when it is the model's, more for finite differences).
 template <class F, class JF>
-void expectPdRows(TickFixture& fx, const TaskModel& task, const Pd& pd, F f, JF jac, const Eigen::VectorXd& e,
-                  double j_tol = 0.0) {
+void expectPdRows(TickFixture& fx, const TaskModel& task, const Pd& pd, F f, JF jac, const Eigen::VectorXd& e, double j_tol = 0.0) {
   const int nv = fx.model.nv();
   const Eigen::VectorXd u = fx.u;
   const Eigen::VectorXd fdot = centralDifference(fx, u, f);
@@ -50,9 +49,8 @@ void expectPdRows(TickFixture& fx, const TaskModel& task, const Pd& pd, F f, JF 
     EXPECT_EQ(d->A.rightCols(fx.layout.ng()).cwiseAbs().maxCoeff(), 0.0);
     EXPECT_TRUE(near(d->J, J, j_tol));
     EXPECT_EQ(d->lower, d->upper);
-    const Eigen::VectorXd expected = dom == Domain::Velocity
-                                         ? Eigen::VectorXd(J * u - fx.ctx.dt * (eddot_ctrl + Jdot_u))  // eq. 61
-                                         : Eigen::VectorXd(-eddot_ctrl - Jdot_u);
+    const Eigen::VectorXd expected = dom == Domain::Velocity ? Eigen::VectorXd(J * u - fx.ctx.dt * (eddot_ctrl + Jdot_u))  // eq. 61
+                                                             : Eigen::VectorXd(-eddot_ctrl - Jdot_u);
     EXPECT_TRUE(near(d->lower, expected, 1e-6)) << "rows";
     EXPECT_TRUE(near(d->error, e, 1e-12));
   }
@@ -177,7 +175,8 @@ TEST_P(PdTasks, JointPositionAndPostureRows) {
   };
   const Eigen::MatrixXd J = jac();
   Eigen::VectorXd e = jp.target - f();
-  expectPdRows(fx, head, head.gains(), f, [&] { return J; }, e, 1e-9);
+  expectPdRows(
+      fx, head, head.gains(), f, [&] { return J; }, e, 1e-9);
 
   PostureParams pp;
   pp.posture = fx.model.description().postures.back().first;  // half_sitting, ready, bent
@@ -190,7 +189,8 @@ TEST_P(PdTasks, JointPositionAndPostureRows) {
   Eigen::MatrixXd Jp = Eigen::MatrixXd::Zero(nj, nv);
   for (int k = 0; k < nv; ++k) Jp.col(k) = centralDifference(fx, Eigen::VectorXd::Unit(nv, k), fj, 1e-3);
   e = fx.model.posture(pp.posture) - fx.q.joints;
-  expectPdRows(fx, posture, posture.gains(), fj, [&] { return Jp; }, e, 1e-9);
+  expectPdRows(
+      fx, posture, posture.gains(), fj, [&] { return Jp; }, e, 1e-9);
 }
 
 TEST_P(PdTasks, TasksWithoutTargetHoldTheFirstValue) {
@@ -234,9 +234,8 @@ TEST_P(PdTasks, TasksWithoutTargetHoldTheFirstValue) {
   // setTarget replaces a held target.
   pos.setTarget(*data[0], Eigen::Vector3d(1, 2, 3));
   pos.compute(fx.ctx, *data[0]);
-  EXPECT_TRUE(near(data[0]->error,
-                   Eigen::Vector3d(1, 2, 3) - fx.model.framePlacement(fx.data, fx.model.frameId(frame)).translation(),
-                   1e-15));
+  EXPECT_TRUE(
+      near(data[0]->error, Eigen::Vector3d(1, 2, 3) - fx.model.framePlacement(fx.data, fx.model.frameId(frame)).translation(), 1e-15));
 }
 
 TEST_P(PdTasks, ContactHoldsThePoseCapturedWhenTheContactIsMade) {

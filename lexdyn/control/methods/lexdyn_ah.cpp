@@ -48,8 +48,7 @@ class LexDynAh final : public VelocityDomainMethod {
     return params_.eps_dt2 * dt2 + params_.newton_identity_weight;
   }
 
-  int factorLevel(size_t k, NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda,
-                  Eigen::MatrixXd& R) override {
+  int factorLevel(size_t k, NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda, Eigen::MatrixXd& R) override {
     buildHessian(a, L, tick, have_lambda);
     // eq. 91: Higham's nearest PSD matrix plus (eps + alpha) I* on the occupied dofs, as rows
     // sqrt(max(lambda, 0) + eps + alpha) v^T of its eigendecomposition (R^T R is that matrix).

@@ -59,8 +59,7 @@ class LexDynBfgs final : public VelocityDomainMethod {
     }
   }
 
-  void prepareLevel(size_t k, NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda,
-                    TickRecord& rec) override {
+  void prepareLevel(size_t k, NewtonLevel& a, const SolverLevel& L, const MethodTick& tick, bool have_lambda, TickRecord& rec) override {
     const ControllerParams& p = params_;
     const double dt2 = p.dt * p.dt;
     hessian::QuasiNewtonMatrix& B = *qn_[k];
@@ -142,10 +141,10 @@ class LexDynBfgs final : public VelocityDomainMethod {
   }
 
   std::vector<std::unique_ptr<hessian::QuasiNewtonMatrix>> qn_;  // per level with reserved rows
-  std::vector<char> initialized_;                                 // per level: eq. 89 done
-  std::vector<Eigen::VectorXd> lambda_prev_;                      // per level (full_difference)
+  std::vector<char> initialized_;                                // per level: eq. 89 done
+  std::vector<Eigen::VectorXd> lambda_prev_;                     // per level (full_difference)
   std::vector<char> lambda_prev_valid_;
-  std::vector<Eigen::MatrixXd> J_prev_;                           // per task (geometric tasks only)
+  std::vector<Eigen::MatrixXd> J_prev_;  // per task (geometric tasks only)
   model::Configuration q_prev_;
   Eigen::VectorXd u_prev_, s_, y_, rhs_, acc_;
   hessian::SignChangeGuard guard_;

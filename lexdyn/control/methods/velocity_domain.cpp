@@ -130,9 +130,12 @@ bool VelocityDomainMethod::engaged(const GeomTerm& g, const tasks::TaskData& d) 
 Eigen::VectorXd::SegmentReturnType VelocityDomainMethod::multipliers(const GeomTerm& g, const SolverLevel& sl, const MethodTick& tick,
                                                                      bool have_lambda) {
   auto wv = w_.head(g.rows);
-  if (!have_lambda) wv.setZero();
-  else if (params_.multiplier_scale == MultiplierScale::Dt) wv = params_.dt * tick.last.lambda.col(sl.problem_level).segment(g.lambda_row, g.rows);
-  else wv = tick.last.lambda.col(sl.problem_level).segment(g.lambda_row, g.rows);
+  if (!have_lambda)
+    wv.setZero();
+  else if (params_.multiplier_scale == MultiplierScale::Dt)
+    wv = params_.dt * tick.last.lambda.col(sl.problem_level).segment(g.lambda_row, g.rows);
+  else
+    wv = tick.last.lambda.col(sl.problem_level).segment(g.lambda_row, g.rows);
   return wv;
 }
 

@@ -85,8 +85,8 @@ class Wls final : public ControlMethod {
   ControllerParams params_;
   const model::RobotModel* model_ = nullptr;
   int nv_ = 0, ng_ = 0;
-  int hard_level_ = -1;             // problem level of the hard constraints (configured level 0)
-  std::vector<int> damped_;         // solver levels with reserved rows
+  int hard_level_ = -1;      // problem level of the hard constraints (configured level 0)
+  std::vector<int> damped_;  // solver levels with reserved rows
   Eigen::VectorXd q_step_;
 };
 

@@ -41,17 +41,17 @@ struct RobotModelImpl {
   // joints the tree joints are the model joints, in the same order.
   struct TreeJoint {
     JointType type = JointType::Revolute;
-    int parent = -1;                  // parent body
+    int parent = -1;  // parent body
     Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
     Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit, joint frame
-    int model_joint = -1;             // the model joint it is, or its master's for a coupled one
-    double multiplier = 1.0, offset = 0.0;  // q = multiplier * q_model_joint + offset
+    int model_joint = -1;                             // the model joint it is, or its master's for a coupled one
+    double multiplier = 1.0, offset = 0.0;            // q = multiplier * q_model_joint + offset
   };
   std::vector<TreeJoint> tree_joints;
-  int nt = 0;             // tree joints
-  int ntv = 0;            // tree dofs: (6) + nt
-  bool coupled = false;   // some tree joint is coupled: the model's quantities are reduced
-  std::vector<int> tree_dof_model;        // per tree dof: the model dof it moves with
+  int nt = 0;                       // tree joints
+  int ntv = 0;                      // tree dofs: (6) + nt
+  bool coupled = false;             // some tree joint is coupled: the model's quantities are reduced
+  std::vector<int> tree_dof_model;  // per tree dof: the model dof it moves with
   std::vector<double> tree_dof_multiplier;
   double total_mass = 0.0;
 
@@ -60,9 +60,9 @@ struct RobotModelImpl {
   std::vector<SimTK::MobilizedBodyIndex> mobod;  // per body
   SimTK::State default_state;                    // Euler angles on, realized to Model
   int simbody_nq = 0, simbody_nu = 0;
-  int base_q_index = 0;               // first q of the free-flyer (3 angles then 3 positions)
-  std::vector<int> joint_q_index;     // per tree joint
-  std::vector<int> dof_u_index;       // Simbody u index of each tree dof
+  int base_q_index = 0;            // first q of the free-flyer (3 angles then 3 positions)
+  std::vector<int> joint_q_index;  // per tree joint
+  std::vector<int> dof_u_index;    // Simbody u index of each tree dof
 
   KinematicTree tree;
   std::vector<std::string> joint_names;
@@ -76,26 +76,26 @@ struct ModelDataImpl {
   // The Simbody state of q and u, written and realized on demand (realizedState) by the const
   // reference operators: they write it, so one ModelData is not for concurrent use.
   mutable SimTK::State state;
-  Configuration q;                   // of the last update
+  Configuration q;  // of the last update
   Eigen::VectorXd u;
   mutable bool state_current = false;  // `state` holds q and u
   bool updated = false;
   // Per body (world frame).
-  std::vector<Eigen::Matrix3d> R;     // R_world_body
-  Eigen::Matrix3Xd p;                 // body origin
-  Eigen::Matrix3Xd com;               // body CoM
-  Eigen::Matrix3Xd omega;             // angular velocity
-  Eigen::Matrix3Xd v;                 // velocity of the body origin
-  Eigen::Matrix3Xd alpha_bias;        // Jdot*u angular part (Simbody's total Coriolis acceleration)
-  Eigen::Matrix3Xd a_bias;            // Jdot*u linear part at the body origin
-  Eigen::Matrix3Xd subtree_com;       // CoM of the subtree rooted at each body
+  std::vector<Eigen::Matrix3d> R;  // R_world_body
+  Eigen::Matrix3Xd p;              // body origin
+  Eigen::Matrix3Xd com;            // body CoM
+  Eigen::Matrix3Xd omega;          // angular velocity
+  Eigen::Matrix3Xd v;              // velocity of the body origin
+  Eigen::Matrix3Xd alpha_bias;     // Jdot*u angular part (Simbody's total Coriolis acceleration)
+  Eigen::Matrix3Xd a_bias;         // Jdot*u linear part at the body origin
+  Eigen::Matrix3Xd subtree_com;    // CoM of the subtree rooted at each body
   // Per dof: motion subspace at the world origin [angular; linear] and its axis / point.
   Eigen::Matrix<double, 6, Eigen::Dynamic> S;
   Eigen::Matrix3Xd axis;
   Eigen::Matrix3Xd point;
   // Workspaces.
-  std::vector<Matrix6d> composite;                 // composite spatial inertia (world origin)
-  Eigen::Matrix<double, 6, Eigen::Dynamic> wrench; // subtree wrench (world origin)
+  std::vector<Matrix6d> composite;                  // composite spatial inertia (world origin)
+  Eigen::Matrix<double, 6, Eigen::Dynamic> wrench;  // subtree wrench (world origin)
   // With coupled joints: the tree's coordinates and speeds, and the tree-size results reduced
   // to the model's (G^T M G, G^T N, J G).
   Eigen::VectorXd q_tree, u_tree;
@@ -106,8 +106,8 @@ struct ModelDataImpl {
 
 /// Fills the kinematic caches of `d` for the base of q, the tree joints' coordinates q_tree and
 /// the tree speeds u_tree (our own recursion; Simbody is not realized).
-void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configuration& q,
-                       const Eigen::Ref<const Eigen::VectorXd>& q_tree, const Eigen::Ref<const Eigen::VectorXd>& u_tree);
+void computeKinematics(const RobotModelImpl& m, ModelDataImpl& d, const Configuration& q, const Eigen::Ref<const Eigen::VectorXd>& q_tree,
+                       const Eigen::Ref<const Eigen::VectorXd>& u_tree);
 
 /// d.state realized to Velocity (for the Simbody reference operators).
 const SimTK::State& realizedState(const RobotModelImpl& m, const ModelDataImpl& d);

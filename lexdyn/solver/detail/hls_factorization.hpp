@@ -163,8 +163,7 @@ class HlsFactorization {
   void swapColumns(int a, int b, int rows);
   /// The column-pivoted QRs' norm downdates after a reflector (orig and ratio may be null: no
   /// pivot ratios).
-  static void downdateNorms(int cnt, const double* w, double* nrm, const double* ref, const double* orig, double* ratio,
-                            char* recompute);
+  static void downdateNorms(int cnt, const double* w, double* nrm, const double* ref, const double* orig, double* ratio, char* recompute);
   void factorLevel(int k, double rankTol);
   /// Stage k (rows c0 .. c0 + d of its m >= d columns) as a spanning stage: the column-pivoted QR
   /// of its rows B^T (m x d) into left_[k]; false (the stage's columns unchanged) when a pivot is
@@ -179,8 +178,8 @@ class HlsFactorization {
   void decideDeferral();
 
   int n_ = 0;
-  int nf_ = 0;   // free variables
-  int nr_ = 0;   // reduced variables (rows of W_ in use): nf_ - m0 when level 0 is eliminated
+  int nf_ = 0;  // free variables
+  int nr_ = 0;  // reduced variables (rows of W_ in use): nf_ - m0 when level 0 is eliminated
   int mTot_ = 0;
   std::vector<int> m_, rowOff_, levelOf_;
   std::vector<const Eigen::MatrixXd*> A_;
@@ -211,8 +210,8 @@ class HlsFactorization {
   Eigen::MatrixXd DTs_;
   bool elimDataValid_ = false;
   int nrElim_ = 0;
-  std::vector<int> transp_;   // LU row transpositions
-  Eigen::MatrixXd WB_;        // basic-variable part of each active row (per physical column)
+  std::vector<int> transp_;  // LU row transpositions
+  Eigen::MatrixXd WB_;       // basic-variable part of each active row (per physical column)
   Eigen::VectorXd d_, gB_;
 
   // Layout of the last factorisation: active columns of levels >= firstStage_, contiguous.
@@ -226,8 +225,8 @@ class HlsFactorization {
   std::vector<char> span_;
   std::vector<int> refl_;
   std::vector<std::vector<int>> spanPerm_;
-  std::vector<char> unitRow_;  // per gid: the row's original entries have a single nonzero
-  Eigen::VectorXd spanNorm_, spanRef_;  // factorSpanning: column norms (current, at the last recomputation)
+  std::vector<char> unitRow_;                        // per gid: the row's original entries have a single nonzero
+  Eigen::VectorXd spanNorm_, spanRef_;               // factorSpanning: column norms (current, at the last recomputation)
   std::vector<int> spanOrder_, spanWhere_, spanAt_;  // factorSpanning: the stage's column order
   // Stage k of that layout: m active columns from physical column s, its rows from c0, rank r.
   struct Stage {
@@ -254,8 +253,8 @@ class HlsFactorization {
   Eigen::VectorXd work_, work2_, g_, t_, u_;
   Eigen::VectorXd ratio_, pivotRow_;  // factorLevel: pivot ratios, the reflector row's entries
   std::vector<char> recompute_;       // factorLevel: norms to compute again
-  std::vector<int> tmpGid_;   // relayout: gid of each scratch column
-  std::vector<int> sparseB_;  // per loaded column: -2 dense basic part, -1 zero, else its one index
+  std::vector<int> tmpGid_;           // relayout: gid of each scratch column
+  std::vector<int> sparseB_;          // per loaded column: -2 dense basic part, -1 zero, else its one index
 
   // Projected levels, deferFrom_ .. L-1 (deferred_ = the last level's index when it is
   // projected, deferFrom_ = the first projected level; -1: none): raw reduced rows by row from the
@@ -268,7 +267,7 @@ class HlsFactorization {
   int deferFrom_ = -1;
   bool unitSuffix_ = false;  // Options::project_unit_suffix
   bool projected(int k) const { return deferFrom_ >= 0 && k >= deferFrom_; }
-  bool projectionPays(int k) const;     // decideDeferral's row-count test for level k
+  bool projectionPays(int k) const;  // decideDeferral's row-count test for level k
   // Every active row of level k has at most one nonzero (over its declared columns), and not on
   // a basic variable: a unit row in reduced coordinates, or a zero row (its variable fixed by a
   // bound). A row with a second nonzero on a fixed variable is refused (conservative).
@@ -277,10 +276,10 @@ class HlsFactorization {
   std::vector<char> rawHave_;
   Eigen::VectorXd zvec_;
 
-  bool fullLayout_ = false;  // the next relayout follows a full reset
-  bool lazy_ = false;          // Options::lazy_snapshots
-  bool snapshotsOn_ = true;    // the next full factorisation saves restart snapshots
-  bool haveSnapshots_ = false; // the current layout's stages saved theirs
+  bool fullLayout_ = false;     // the next relayout follows a full reset
+  bool lazy_ = false;           // Options::lazy_snapshots
+  bool snapshotsOn_ = true;     // the next full factorisation saves restart snapshots
+  bool haveSnapshots_ = false;  // the current layout's stages saved theirs
   int dirtyFrom_ = 0;
   int lastRestart_ = 0;
   long stages_ = 0;

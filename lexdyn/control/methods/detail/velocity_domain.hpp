@@ -114,8 +114,7 @@ class VelocityDomainMethod : public ControlMethod {
   /// Multipliers of level `sl`'s term `g` at the previous solve in optimisation units (eq. 37:
   /// lambda_optim = dt lambda_ctrl; lambda_ctrl itself with multiplier_scale: one); zero
   /// without them.
-  Eigen::VectorXd::SegmentReturnType multipliers(const GeomTerm& g, const SolverLevel& sl, const MethodTick& tick,
-                                                 bool have_lambda);
+  Eigen::VectorXd::SegmentReturnType multipliers(const GeomTerm& g, const SolverLevel& sl, const MethodTick& tick, bool have_lambda);
 
   ControllerParams params_;
   const model::RobotModel* model_ = nullptr;
