@@ -22,6 +22,8 @@ PACKAGES=(
   python3-yaml python3-pil libjs-three chromium
   # Instruction profiles of a run (harness/scripts/profile-tick.sh, docs/performance.md).
   valgrind
+  # The C++ style check (.clang-format; ctest test format_check).
+  clang-format-14
 )
 
 missing=()
