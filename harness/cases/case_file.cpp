@@ -24,6 +24,32 @@ namespace lexdyn::cases {
 
 namespace fs = std::filesystem;
 
+namespace {
+constexpr EventAction kEventActions[] = {EventAction::GraspOn,    EventAction::GraspOff,      EventAction::SetTarget,
+                                         EventAction::AddContact, EventAction::RemoveContact, EventAction::TargetTrajectory,
+                                         EventAction::Swing};
+}  // namespace
+
+const char* toString(EventAction a) {
+  switch (a) {
+    case EventAction::GraspOn:
+      return "grasp_on";
+    case EventAction::GraspOff:
+      return "grasp_off";
+    case EventAction::SetTarget:
+      return "set_target";
+    case EventAction::AddContact:
+      return "add_contact";
+    case EventAction::RemoveContact:
+      return "remove_contact";
+    case EventAction::TargetTrajectory:
+      return "target_trajectory";
+    case EventAction::Swing:
+      return "swing";
+  }
+  return "unknown";
+}
+
 const char* toString(sim::SetpointProfile p) {
   switch (p) {
     case sim::SetpointProfile::Step:
@@ -352,9 +378,16 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
   e.at_s = at.asNonNegativeDouble();
   if (e.at_s > c.duration_s) at.fail("event after the end of the run (duration_s " + std::to_string(c.duration_s) + ")");
   const yaml::Node action = em.required("action");
-  e.action = action.asEnum({"grasp_on", "grasp_off", "set_target", "add_contact", "remove_contact", "target_trajectory", "swing"});
+  {
+    std::vector<std::string> names;
+    for (EventAction a : kEventActions) names.push_back(toString(a));
+    const std::string name = action.asEnum(names);
+    for (EventAction a : kEventActions) {
+      if (name == toString(a)) e.action = a;
+    }
+  }
   const LexdynSpec& lx = c.controller.lexdyn;
-  if (e.action == "grasp_on" || e.action == "grasp_off") {
+  if (e.action == EventAction::GraspOn || e.action == EventAction::GraspOff) {
     const yaml::Node g = em.required("grasp");
     e.grasp = g.asString();
     bool known = false;
@@ -369,17 +402,17 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
     em.finish();
     return e;
   }
-  if (!isLexdyn(c)) action.fail("action " + e.action + " needs controller type lexdyn");
+  if (!isLexdyn(c)) action.fail(std::string("action ") + toString(e.action) + " needs controller type lexdyn");
   auto taskRef = [&]() {
     const yaml::Node tn = em.required("task");
     e.task = tn.asString();
     if (lx.findTask(e.task) < 0) tn.fail("unknown task '" + e.task + "'");
   };
-  if (e.action == "add_contact" || e.action == "remove_contact") {
+  if (e.action == EventAction::AddContact || e.action == EventAction::RemoveContact) {
     const yaml::Node cn = em.required("contact");
     e.contact = cn.asString();
     if (lx.findContact(e.contact) < 0) cn.fail("unknown controller contact '" + e.contact + "'");
-  } else if (e.action == "set_target") {
+  } else if (e.action == EventAction::SetTarget) {
     taskRef();
     auto value = em.optional("value");
     auto rpy = em.optional("rpy_rad");
@@ -408,7 +441,7 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
       // not for an orientation target (a rotation matrix).
       if (e.ramp_s > 0.0 && (rpy || e.value.size() == 9)) r->fail("ramp_s is not available for orientation targets");
     }
-  } else if (e.action == "target_trajectory") {
+  } else if (e.action == EventAction::TargetTrajectory) {
     taskRef();
     const yaml::Node f = em.required("file");
     e.file = resolvePath(f, c);
@@ -421,7 +454,7 @@ EventSpec readEvent(const yaml::Node& en, CaseSpec& c) {
     } catch (const InputError& err) {
       f.fail(err.what());
     }
-  } else if (e.action == "swing") {
+  } else if (e.action == EventAction::Swing) {
     taskRef();
     e.swing.from = em.required("from").asVector3In(-R::kMaxPosition_m, R::kMaxPosition_m, "m");
     e.swing.to = em.required("to").asVector3In(-R::kMaxPosition_m, R::kMaxPosition_m, "m");
@@ -483,7 +516,7 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
     const int n = t.targetSize();
     if (n == 0)
       throw InputError(e.where, "task '" + e.task + "' (" + lx.tasks[static_cast<size_t>(lx.findTask(e.task))].type + ") has no target");
-    if (e.action == "set_target") {
+    if (e.action == EventAction::SetTarget) {
       if (e.value.size() != n) {
         throw InputError(
             e.where, "task '" + e.task + "' takes a target of " + std::to_string(n) + " values, found " + std::to_string(e.value.size()));
@@ -514,8 +547,8 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
         }
       }
     } else if (n != 3) {
-      throw InputError(e.where,
-                       e.action + " drives 3-D targets (position, com); task '" + e.task + "' takes " + std::to_string(n) + " values");
+      throw InputError(e.where, std::string(toString(e.action)) + " drives 3-D targets (position, com); task '" + e.task + "' takes " +
+                                    std::to_string(n) + " values");
     }
   }
 }

@@ -77,12 +77,16 @@ struct GainGroup {
   double kp = 0.0, kd = 0.0;
 };
 
+/// What an event does: grasp_on, grasp_off (the simulator's grasps); set_target, add_contact,
+/// remove_contact, target_trajectory, swing (a lexdyn controller's).
+enum class EventAction { GraspOn, GraspOff, SetTarget, AddContact, RemoveContact, TargetTrajectory, Swing };
+/// The case file's spelling ("grasp_on", ...).
+const char* toString(EventAction a);
+
 /// A timeline event, applied at the first tick at or after at_s (docs/cases.md, "Events").
 struct EventSpec {
   double at_s = 0.0;
-  /// grasp_on | grasp_off (simulator), set_target | add_contact | remove_contact |
-  /// target_trajectory | swing (lexdyn controller)
-  std::string action;
+  EventAction action = EventAction::SetTarget;
   std::string grasp;  ///< grasp_on, grasp_off
   std::string where;
   std::string task;       ///< set_target, target_trajectory, swing

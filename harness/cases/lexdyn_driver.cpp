@@ -228,7 +228,7 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
     cs += (cs.empty() ? "" : "; ") + c.name + " (frame " + c.frame + ", " + std::to_string(c.points.size()) + " points, " +
           (c.fixed ? "fixed"
                    : "friction " + num(c.friction) + ", margins " + num(c.margins.friction) + " / " + num(c.margins.cop_m) + " m / " +
-                         num(c.margins.min_normal_N) + " N per point" + (I.lx.contact_margins_default ? " (default)" : "")) +
+                         num(c.margins.min_normal_N) + " N per point" + (c.margins_default ? " (default)" : "")) +
           (c.grasp.empty() ? "" : ", grasp " + c.grasp) + (c.sensor.empty() ? "" : ", sensor " + c.sensor) + ")";
   }
   md.emplace_back("contacts", cs.empty() ? "none" : cs);
@@ -257,8 +257,8 @@ void LexdynDriver::reset(const sim::Simulator& simu) {
 
 void LexdynDriver::applyEvent(const EventSpec& e, double t, sim::Simulator& simu) {
   Impl& I = *impl_;
-  if (e.action == "add_contact" || e.action == "remove_contact") {
-    const bool on = e.action == "add_contact";
+  if (e.action == EventAction::AddContact || e.action == EventAction::RemoveContact) {
+    const bool on = e.action == EventAction::AddContact;
     for (const auto& c : I.contacts) {
       if (c.name != e.contact) continue;
       I.ctl->setContactActive(c.index, on);
@@ -270,7 +270,7 @@ void LexdynDriver::applyEvent(const EventSpec& e, double t, sim::Simulator& simu
   // A new target for a task stops the trajectory or swing that drove it.
   I.generators.erase(std::remove_if(I.generators.begin(), I.generators.end(), [&](const Impl::Generator& g) { return g.task == task; }),
                      I.generators.end());
-  if (e.action == "set_target" && e.ramp_s > 0.0) {
+  if (e.action == EventAction::SetTarget && e.ramp_s > 0.0) {
     Impl::Generator g;
     g.kind = Impl::Generator::Kind::Ramp;
     g.task = task;
@@ -280,11 +280,11 @@ void LexdynDriver::applyEvent(const EventSpec& e, double t, sim::Simulator& simu
     g.from = d.target_set && d.target.size() == e.value.size() ? d.target : e.value;
     g.to = e.value;
     I.generators.push_back(std::move(g));
-  } else if (e.action == "set_target") {
+  } else if (e.action == EventAction::SetTarget) {
     I.ctl->setTaskTarget(task, e.value);
-  } else if (e.action == "target_trajectory" || e.action == "swing") {
+  } else if (e.action == EventAction::TargetTrajectory || e.action == EventAction::Swing) {
     Impl::Generator g;
-    g.kind = e.action == "swing" ? Impl::Generator::Kind::Swing : Impl::Generator::Kind::Trajectory;
+    g.kind = e.action == EventAction::Swing ? Impl::Generator::Kind::Swing : Impl::Generator::Kind::Trajectory;
     g.task = task;
     g.start = t;
     g.trajectory = e.trajectory;

@@ -208,8 +208,20 @@ ContactEntry readContact(const yaml::Node& node, const model::RobotDescription& 
     m.node().fail("the robot data file has no friction_coefficient; give friction here");
   }
   c.margins = default_margins && !c.fixed ? defaultContactMargins(c.points, c.dims == 3, weight_N) : margins;
+  c.margins_default = default_margins && !c.fixed;
+  if (c.margins_default) {
+    // The default CoP margin is sized from the points' bounding box: a narrow or slanted polygon
+    // may give less room; halve it until the polygon gives it (none below 0.1 mm).
+    tasks::ContactSpec planned;
+    while (c.margins.cop_m > 0.0 && !plannedContact(c, planned).empty()) {
+      c.margins.cop_m = c.margins.cop_m * 0.5 < 1e-4 ? 0.0 : c.margins.cop_m * 0.5;
+    }
+  }
   std::optional<yaml::Node> own = m.optional("margins");
-  if (own) c.margins = readMargins(*own, c.margins);
+  if (own) {
+    c.margins = readMargins(*own, c.margins);
+    c.margins_default = false;
+  }
   {
     // The margins must fit the contact (a CoP margin smaller than its support polygon).
     tasks::ContactSpec planned;
@@ -372,8 +384,9 @@ LexdynSpec readLexdynSpec(yaml::StrictMap& m, const model::RobotDescription& d, 
     }
   }
   const std::optional<yaml::Node> margins_node = m.optional("contact_margins");
-  if (margins_node && margins_node->isScalar()) {
-    if (margins_node->asString() != "none") margins_node->fail("expected `none` (no margin) or a map {friction, cop_m, min_normal_N}");
+  if (margins_node && (margins_node->isScalar() || margins_node->isNull())) {
+    if (margins_node->isNull() || margins_node->asString() != "none")
+      margins_node->fail("expected `none` (no margin) or a map {friction, cop_m, min_normal_N}");
     s.contact_margins = kNoContactMargins;
   } else if (margins_node) {
     s.contact_margins = readMargins(*margins_node, kNoContactMargins);

@@ -60,6 +60,7 @@ struct ContactEntry {
   /// The plan's contact margins (controller.contact_margins, then the contact's `margins`);
   /// points and friction above are the real contact's (the checks judge against them).
   tasks::ContactMargins margins;
+  bool margins_default = false;  ///< the margins are defaultContactMargins (the case gives none)
 };
 
 struct LevelEntry {

@@ -310,8 +310,6 @@ records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& r, const ch
   return o;
 }
 
-namespace {}  // namespace
-
 RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   std::error_code ec;
   // One job per output folder: a second one exits at once naming this one (docs/architecture.md,
@@ -418,8 +416,8 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   auto applyEvents = [&](double t) {
     while (next_event < spec.events.size() && spec.events[next_event].at_s <= t + 1e-9) {
       const EventSpec& e = spec.events[next_event++];
-      if (e.action == "grasp_on" || e.action == "grasp_off") {
-        simu.setGraspActive(simu.graspIndex(e.grasp), e.action == "grasp_on");
+      if (e.action == EventAction::GraspOn || e.action == EventAction::GraspOff) {
+        simu.setGraspActive(simu.graspIndex(e.grasp), e.action == EventAction::GraspOn);
       } else if (driver) {
         driver->applyEvent(e, t, simu);
       }

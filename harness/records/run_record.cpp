@@ -92,7 +92,7 @@ class FieldReader {
 
 RunStatus readStatus(FieldReader& r, const char* key) {
   const std::string text = r.string(key);
-  if (text.empty()) return RunStatus::Completed;  // missing: reported
+  if (text.empty() && !r.has(key)) return RunStatus::Completed;  // missing: reported
   const std::optional<RunStatus> s = parseRunStatus(text);
   if (!s || !isRunsOwn(*s)) {
     std::vector<RunStatus> own;

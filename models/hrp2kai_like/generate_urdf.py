@@ -214,8 +214,8 @@ def main():
             UPPER_SCALE = float(args[1]) if len(args) == 2 else 1.0
         except ValueError:
             sys.exit(usage)
-        if not UPPER_SCALE > 0:
-            sys.exit("generate_urdf.py: the upper body's effort scale must be > 0")
+        if not (UPPER_SCALE > 0 and UPPER_SCALE < float("inf")) or num(min(UPPER_BODY_EFFORT.values()) * UPPER_SCALE) == "0":
+            sys.exit("generate_urdf.py: the upper body's effort scale must be > 0 and finite (every limit at least 1e-6 N m)")
         SCALE = HEAVY_SCALE
         name = "hrp2kai_weak"
         comment = ("     hrp2kai_heavy (90 kg) with the chest, head and arm effort limits of TALOS's public description\n"

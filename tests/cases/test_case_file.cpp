@@ -171,7 +171,7 @@ TEST(CaseFile, EventsAndGrasps) {
   s["e_controller"] += "events:\n  - {at_s: 0.3, action: grasp_off, grasp: left}\n  - {at_s: 0.1, action: grasp_on, grasp: left}\n";
   const CaseSpec c = loadCase(writeCase(outputDir("case_file_events"), s));
   ASSERT_EQ(c.events.size(), 2u);
-  EXPECT_EQ(c.events[0].action, "grasp_on");  // sorted by time
+  EXPECT_EQ(c.events[0].action, EventAction::GraspOn);  // sorted by time
   EXPECT_DOUBLE_EQ(c.events[1].at_s, 0.3);
 
   auto bad = s;

@@ -84,7 +84,7 @@ TEST(ControllerCase, RepositoryCasesLoadWithEveryMethod) {
   const CaseSpec exp3 = loadCase(src("cases/exp3.yaml"));
   bool trajectory = false;
   for (const auto& e : exp3.events) {
-    if (e.action != "target_trajectory") continue;
+    if (e.action != EventAction::TargetTrajectory) continue;
     trajectory = true;
     EXPECT_EQ(e.trajectory.movingAverage(), 3.0);
     EXPECT_GT(e.trajectory.samples(), 100);
@@ -314,6 +314,16 @@ TEST(ControllerCase, ContactMarginsDefaultToExp1sScaledToTheRobot) {
   EXPECT_EQ(right.margins.cop_m, 0.002);
   EXPECT_EQ(right.margins.friction, 0.1);  // the default's, kept
   EXPECT_EQ(right.margins.min_normal_N, defaultContactMargins(right.points, false, mass * 9.81).min_normal_N);
+  // A slanted strip: its bounding box would ask for 7 mm, the polygon gives less than 3.54 mm; the
+  // default halves its CoP margin until the polygon gives it.
+  auto slanted = base;
+  const size_t sf = slanted["e_controller"].find("surface: RIGHT_FOOT, sensor");
+  slanted["e_controller"].replace(sf, 27, "frame: RSOLE, points: [[0, 0, 0], [0.1, 0.1, 0], [0.1, 0.11, 0], [0, 0.01, 0]], sensor");
+  const CaseSpec sl = loadCase(writeCase(outputDir("controller_case_margins_slanted"), slanted));
+  const ContactEntry& strip = sl.controller.lexdyn.contacts[static_cast<size_t>(sl.controller.lexdyn.findContact("RIGHT_FOOT"))];
+  EXPECT_TRUE(strip.margins_default);
+  EXPECT_NEAR(strip.margins.cop_m, 0.007 / 2, 1e-15);  // 7 mm does not fit, 3.5 mm does (the strip allows 3.54 mm)
+  EXPECT_FALSE(right.margins_default);                 // its own margins
 }
 
 TEST(ControllerCase, EventAndCheckErrors) {

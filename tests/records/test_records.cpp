@@ -2,10 +2,13 @@
 // reader and the sweep's classification accept only the statuses they can hold.
 #include "harness/checks/trace.hpp"
 #include "harness/records/run_status.hpp"
+#include "harness/records/sweep_record.hpp"
 #include "lexdyn/common/error.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -50,7 +53,7 @@ TEST(RunStatus, TheRunsOwnAndTheSweepsRecordedStatuses) {
 // A trace the writer wrote with each of the run's own statuses reads back with it; an end mark
 // that names no run status is refused with the file and line.
 TEST(RunStatus, TraceEndMarksRoundTripAndAnUnknownOneIsRefused) {
-  const std::string dir = (fs::temp_directory_path() / "lexdyn_test_records").string();
+  const std::string dir = (fs::path(LEXDYN_BINARY_DIR) / "test_output" / "records_trace_end_marks").string();
   fs::remove_all(dir);
   fs::create_directories(dir);
   lexdyn::checks::TraceSchema schema;
@@ -86,10 +89,50 @@ TEST(RunStatus, TraceEndMarksRoundTripAndAnUnknownOneIsRefused) {
     ADD_FAILURE() << "an end mark of no run status was read";
   } catch (const lexdyn::InputError& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find("renamed.csv"), std::string::npos) << what;
+    EXPECT_NE(what.find("renamed.csv:"), std::string::npos) << what;
+    EXPECT_EQ(e.where().rfind(dir + "/renamed.csv:", 0), 0u) << e.where();
     EXPECT_NE(what.find("end mark 'fell_over' is no run status (completed | integrator_failure"), std::string::npos) << what;
   }
   fs::remove_all(dir);
+}
+
+// A sweep's run record reads back as written; one of another format or none (an older build's),
+// or of a status a sweep never records (a run killed or stopped from outside), is refused.
+TEST(SweepRunRecord, RoundTripsAndRefusesOtherFormatsAndUnrecordedStatuses) {
+  lexdyn::records::SweepRunRecord r;
+  r.status = RunStatus::Diverged;
+  r.message = "the guard";
+  r.exit_code = 3;
+  r.simulated_s = 12.5;
+  r.checks.push_back({"upright", false, 0.2, 0.3, -0.1, "m", "lowest"});
+  r.statistics["final_error"] = 0.25;
+  r.final_errors["right_hand"] = 0.125;
+  r.peak_iterations = 7;
+  const nlohmann::json j = lexdyn::records::toJson(r);
+  EXPECT_EQ(j["format"], lexdyn::records::kSweepRunFormat);
+  std::string why;
+  const auto back = lexdyn::records::sweepRunFromJson(j, why);
+  ASSERT_TRUE(back.has_value()) << why;
+  EXPECT_EQ(lexdyn::records::toJson(*back), j);
+  EXPECT_EQ(back->failures(), (std::vector<std::string>{lexdyn::records::kRunCompletedCheck, "upright"}));
+  nlohmann::json old = j;
+  old.erase("format");
+  EXPECT_FALSE(lexdyn::records::sweepRunFromJson(old, why).has_value());
+  EXPECT_NE(why.find("no format (written by an older build)"), std::string::npos) << why;
+  old["format"] = "lexdyn-sweep-run/0";
+  EXPECT_FALSE(lexdyn::records::sweepRunFromJson(old, why).has_value());
+  EXPECT_NE(why.find("format 'lexdyn-sweep-run/0', this build reads 'lexdyn-sweep-run/1'"), std::string::npos) << why;
+  for (const char* status : {"interrupted", "output_error", "no_summary", "", "fell"}) {
+    nlohmann::json k = j;
+    k["status"] = status;
+    EXPECT_FALSE(lexdyn::records::sweepRunFromJson(k, why).has_value()) << status;
+    EXPECT_NE(why.find("is not the end of a run"), std::string::npos) << why;
+  }
+  nlohmann::json nan = j;
+  nan["checks"][0]["value"] = nullptr;  // NaN is written as null and reads back as NaN
+  const auto n = lexdyn::records::sweepRunFromJson(nan, why);
+  ASSERT_TRUE(n.has_value()) << why;
+  EXPECT_TRUE(std::isnan(n->checks[0].value));
 }
 
 }  // namespace

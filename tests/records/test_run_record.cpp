@@ -117,6 +117,17 @@ TEST(RunRecord, EveryBadFieldIsNamedAtOnce) {
   }
 }
 
+TEST(RunRecord, AnEmptyStatusIsNoStatus) {
+  nlohmann::json j = nlohmann::json::parse(slurp(exp1WlsSummary()));
+  j["status"] = "";
+  try {
+    (void)lexdyn::records::runRecordFromJson(j, "s.json");
+    ADD_FAILURE() << "an empty status was read";
+  } catch (const lexdyn::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("status: '' is no run status"), std::string::npos) << e.what();
+  }
+}
+
 TEST(RunRecord, ASummaryOfAnotherFormatIsRefusedByItsFormat) {
   nlohmann::json j = nlohmann::json::parse(slurp(exp1WlsSummary()));
   j["format"] = "lexdyn-run-summary/2";

@@ -24,7 +24,7 @@ if ! /usr/bin/python3 "$gen" --weak-upper-body 2 | grep -A6 'joint name="RARM_JO
   echo "FAIL: --weak-upper-body 2 does not write RARM_JOINT1's effort as 44.64"
   fail=1
 fi
-for bad in 0 -1 x; do
+for bad in 0 -1 x inf 1e-9; do
   if out=$(/usr/bin/python3 "$gen" --weak-upper-body "$bad" 2>&1); then
     echo "FAIL: --weak-upper-body $bad was accepted"
     fail=1
