@@ -211,11 +211,7 @@ TraceTable parseTrace(std::istream& in, const std::string& name, bool partial) {
         if (status.empty()) throw InputError(where, "empty end mark");
         t.end_status = records::parseRunStatus(status);
         if (!t.end_status || !records::isRunsOwn(*t.end_status)) {
-          std::vector<records::RunStatus> own;
-          for (records::RunStatus s : records::allRunStatuses()) {
-            if (records::isRunsOwn(s)) own.push_back(s);
-          }
-          throw InputError(where, "end mark '" + status + "' is no run status (" + records::spellings(own) + ")");
+          throw InputError(where, "end mark '" + status + "' is no run status (" + records::spellings(records::runsOwnStatuses()) + ")");
         }
         ended = true;
         continue;

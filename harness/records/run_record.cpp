@@ -95,11 +95,7 @@ RunStatus readStatus(FieldReader& r, const char* key) {
   if (text.empty() && !r.has(key)) return RunStatus::Completed;  // missing: reported
   const std::optional<RunStatus> s = parseRunStatus(text);
   if (!s || !isRunsOwn(*s)) {
-    std::vector<RunStatus> own;
-    for (RunStatus x : allRunStatuses()) {
-      if (isRunsOwn(x)) own.push_back(x);
-    }
-    r.problem(key, "'" + text + "' is no run status (" + spellings(own) + ")");
+    r.problem(key, "'" + text + "' is no run status (" + spellings(runsOwnStatuses()) + ")");
     return RunStatus::Completed;
   }
   return *s;

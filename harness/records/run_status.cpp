@@ -60,6 +60,17 @@ bool isRunsOwn(RunStatus s) {
   }
 }
 
+const std::vector<RunStatus>& runsOwnStatuses() {
+  static const std::vector<RunStatus> own = [] {
+    std::vector<RunStatus> v;
+    for (RunStatus s : allRunStatuses()) {
+      if (isRunsOwn(s)) v.push_back(s);
+    }
+    return v;
+  }();
+  return own;
+}
+
 bool isRecordedBySweeps(RunStatus s) {
   switch (s) {
     case RunStatus::Interrupted:

@@ -37,6 +37,8 @@ std::optional<RunStatus> parseRunStatus(std::string_view text);
 const std::vector<RunStatus>& allRunStatuses();
 /// A status `lexdyn-harness run` itself writes (the first eight).
 bool isRunsOwn(RunStatus s);
+/// Those statuses, in declaration order (the choices a reader names when it refuses another).
+const std::vector<RunStatus>& runsOwnStatuses();
 /// A verdict about the configuration that a sweep records (the run ended on its own or by the
 /// sweep's timeout); the rest (interrupted, output_error, no_summary) say something about the
 /// machine, not the configuration.
