@@ -283,6 +283,7 @@ records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& r, const ch
   for (const auto& sk : r.skipped_checks) o.skipped_checks.emplace_back(sk.name, sk.reason);
   if (spec.duration_s < spec.scenario_duration_s - 1e-9) o.scenario_duration_s = spec.scenario_duration_s;
   o.robot_warnings = spec.robot_warnings;
+  o.start_warnings = r.start_warnings;
   o.all_checks_passed = r.all_checks_passed;
   if (r.expected_failure) {
     const ExpectedFailure& x = *r.expected_failure;
@@ -309,6 +310,36 @@ records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& r, const ch
   o.trace_header.assign(trace_header.begin(), trace_header.end());
   return o;
 }
+
+// A contact the plan holds from the start that carries less at rest (the settled state) than its
+// minimum normal force: the plan has to move the weight onto it at once, which a posture with
+// the centre of mass over the other contacts cannot do without tipping the robot (docs/controller.md,
+// "Contact margins").
+namespace {
+std::vector<std::string> startWarnings(const CaseSpec& spec, const sim::Simulator& simu) {
+  std::vector<std::string> out;
+  if (spec.controller.type != "lexdyn") return out;
+  const auto& lx = spec.controller.lexdyn;
+  const auto& surfaces = simu.model().description().contact_surfaces;
+  for (const auto& c : lx.contacts) {
+    if (c.fixed || c.surface.empty() || !(c.margins.min_normal_N > 0.0)) continue;
+    if (std::find(lx.initial_contacts.begin(), lx.initial_contacts.end(), c.name) == lx.initial_contacts.end()) continue;
+    for (size_t k = 0; k < surfaces.size(); ++k) {
+      if (surfaces[k].name != c.surface) continue;
+      const double need = c.margins.min_normal_N * static_cast<double>(c.points.size());
+      const double at_rest = simu.surfaceNormalForce(static_cast<int>(k));
+      if (at_rest < need) {
+        out.push_back("contact " + c.name + " carries " + formatNumber(at_rest, 3) +
+                      " N at rest, less than the plan's minimum normal force " + formatNumber(need, 3) + " N (" +
+                      formatNumber(c.margins.min_normal_N, 3) + " N per point" + (c.margins_default ? ", the default margins" : "") +
+                      "): the plan moves the weight onto it at the start; a posture with the centre of mass nearer the middle of "
+                      "the support, or a lower min_normal_N (contact_margins), avoids that");
+      }
+    }
+  }
+  return out;
+}
+}  // namespace
 
 RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   std::error_code ec;
@@ -369,6 +400,8 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
   const checks::TraceMetadata md = metadata(spec, simu, rest, driver.get());
   RunSummary r;
   r.method = methodName(spec);
+  r.start_warnings = startWarnings(spec, simu);
+  for (const std::string& w : r.start_warnings) std::fprintf(stderr, "[%s] warning: %s\n", spec.name.c_str(), w.c_str());
   std::vector<std::unique_ptr<checks::Check>> check_list;
   std::vector<std::string> partial;  // per check of check_list: what of its window a short run covers
   for (const auto& cs : spec.checks) {

@@ -72,6 +72,9 @@ struct RunSummary {
   /// False when a run stopped early (stop_at_s) ended before the expected failure showed: the
   /// expected status not reached and none of the listed checks failing. True otherwise.
   bool expected_failure_reached = true;
+  /// What the start found questionable: a contact that carries less at rest than the plan's
+  /// minimum normal force (startWarnings).
+  std::vector<std::string> start_warnings;
 };
 
 /// How a finished run departs from an expected failure: a status other than the expected one,

@@ -175,6 +175,7 @@ json toJson(const RunRecord& r) {
   j["skipped_checks"] = skipped;
   if (r.scenario_duration_s) j["scenario_duration_s"] = *r.scenario_duration_s;
   j["robot_warnings"] = r.robot_warnings;
+  j["start_warnings"] = r.start_warnings;
   j["all_checks_passed"] = r.all_checks_passed;
   if (r.expected_failure) {
     const ExpectedFailureRecord& x = *r.expected_failure;
@@ -276,6 +277,7 @@ RunRecord runRecordFromJson(const json& j, const std::string& where) {
   }
   if (f.has("scenario_duration_s")) r.scenario_duration_s = f.number("scenario_duration_s");
   r.robot_warnings = f.strings("robot_warnings");
+  if (f.has("start_warnings")) r.start_warnings = f.strings("start_warnings");
   r.all_checks_passed = f.boolean("all_checks_passed");
   if (const json* x = f.object("expected_failure", false)) {
     FieldReader e(*x, "expected_failure", problems);

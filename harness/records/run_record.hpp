@@ -83,6 +83,7 @@ struct RunRecord {
   std::vector<std::pair<std::string, std::string>> skipped_checks;  ///< name, reason
   std::optional<double> scenario_duration_s;                        ///< written when the run was cut short (--duration)
   std::vector<std::string> robot_warnings;
+  std::vector<std::string> start_warnings;  ///< what the start found questionable (read as none when absent)
   bool all_checks_passed = false;
   std::optional<ExpectedFailureRecord> expected_failure;
   int exit_code = 0;

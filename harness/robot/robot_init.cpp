@@ -971,6 +971,158 @@ std::vector<std::string> armSingularities(const model::RobotDescription& d, cons
   return out;
 }
 
+// The legs of a drafted zero posture brought under their hips and, for point feet, bent. A leg
+// whose foot stands ahead of or behind its first pitch joint (the hip's) by more than a tenth of
+// the hip's height and 1 cm (a quadruped's knee clamped inside its range with the thigh at 0 puts
+// every foot forward) moves its pitch joints so that the foot is under that joint, the sole's
+// pitch kept (a leg with a third pitch joint). Otherwise the centre of mass stands over one pair
+// of feet: the others carry almost nothing, and a plan that keeps a minimum normal force on every
+// foot has to shift the weight at the start. Point feet on legs stretched beyond 85 % of their
+// reach (straight knees: the base can hardly move along the legs) go up to that, every point foot
+// to the same height. Returns what moved ("joint: note"); a leg it cannot place within its
+// joints' ranges is left as it was (docs/model.md, "The drafted posture").
+std::vector<std::string> feetUnderHips(const model::RobotDescription& d, const RobotLayout& L, Eigen::VectorXd& posture) {
+  std::vector<std::string> moved;
+  if (d.base != model::BaseType::FreeFlyer || !L.legged) return moved;
+  const model::RobotModel m(d);
+  model::ModelData data = m.createData();
+  model::Configuration q = m.neutralConfiguration();
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ(), fwd = L.forward, lateral = up.cross(fwd);
+  constexpr double kStretch = 0.85;
+  struct Leg {
+    const FootLayout* foot = nullptr;
+    std::vector<int> pitch;                          // hip first
+    std::vector<double> sign;                        // of each axis along the lateral direction
+    Eigen::Vector3d sole = Eigen::Vector3d::Zero();  // in the foot's body
+    Eigen::Vector3d hip = Eigen::Vector3d::Zero(), foot_world = Eigen::Vector3d::Zero();
+    double reach = 0.0;  // the pitch chain's length in the sagittal plane, stretched
+  };
+  std::vector<Leg> legs;
+  for (const auto& f : L.feet) {
+    Leg g;
+    g.foot = &f;
+    for (int b = f.body; b > 0; b = d.parentBody(b)) {
+      const int j = d.links[static_cast<size_t>(b)].parent_joint;
+      if (j < 0) continue;
+      const auto& Jd = d.joints[static_cast<size_t>(j)];
+      if (Jd.type != model::JointType::Revolute) continue;
+      const double a = (L.body_pose[static_cast<size_t>(Jd.child_link)].linear() * Jd.axis).dot(lateral);
+      if (std::abs(a) < 0.9) continue;
+      g.pitch.insert(g.pitch.begin(), j);
+      g.sign.insert(g.sign.begin(), a > 0.0 ? 1.0 : -1.0);
+    }
+    if (g.pitch.size() < 2) continue;
+    for (const auto& p : f.points) g.sole += p;
+    g.sole = f.sole_in_body * (g.sole / static_cast<double>(f.points.size()));
+    g.foot_world = L.body_pose[static_cast<size_t>(f.body)] * g.sole;
+    auto origin = [&](int j) { return L.body_pose[static_cast<size_t>(d.joints[static_cast<size_t>(j)].child_link)].translation(); };
+    g.hip = origin(g.pitch[0]);
+    auto planar = [&](const Eigen::Vector3d& v) { return (v - v.dot(lateral) * lateral).norm(); };
+    for (size_t k = 0; k + 1 < g.pitch.size(); ++k) g.reach += planar(origin(g.pitch[k + 1]) - origin(g.pitch[k]));
+    g.reach += planar(g.foot_world - origin(g.pitch.back()));
+    if (!((g.hip - g.foot_world).dot(up) > 0.0)) continue;
+    legs.push_back(g);
+  }
+  // The point feet's common height: each stretched leg bent to kStretch of its reach.
+  std::optional<double> point_z;
+  for (const Leg& g : legs) {
+    if (!g.foot->point_foot) continue;
+    const double h = (g.hip - g.foot_world).dot(up);
+    const double z = g.hip.dot(up) - std::min(h, kStretch * g.reach);
+    if (h > kStretch * g.reach + 1e-3 && (!point_z || z > *point_z)) point_z = z;
+  }
+  for (const Leg& g : legs) {
+    const FootLayout& f = *g.foot;
+    const double height = (g.hip - g.foot_world).dot(up);
+    const double offset = (g.foot_world - g.hip).dot(fwd);
+    const double foot_z = f.point_foot && point_z ? *point_z : g.foot_world.dot(up);
+    const bool bend = std::abs(foot_z - g.foot_world.dot(up)) > 1e-3;
+    if (std::abs(offset) <= std::max(0.01, 0.1 * height) && !bend) continue;  // nothing to move
+    const int frame = m.frameId(f.link);
+    const bool keep_pitch = !f.point_foot && g.pitch.size() >= 3;
+    const int rows = keep_pitch ? 3 : 2, n = static_cast<int>(g.pitch.size());
+    auto limits = [&](int j) {
+      const auto& Jd = d.joints[static_cast<size_t>(j)];
+      const double range = Jd.upper - Jd.lower;
+      return std::isfinite(range) ? std::pair{Jd.lower + 0.05 * range, Jd.upper - 0.05 * range} : std::pair{-M_PI, M_PI};
+    };
+    Eigen::VectorXd x;
+    Eigen::VectorXd r(rows);
+    auto residual = [&] {
+      q.joints = x;
+      m.update(data, q, Eigen::VectorXd::Zero(m.nv()));
+      const Eigen::Vector3d foot = m.bodyPlacement(data, f.body) * g.sole;
+      r[0] = (foot - g.hip).dot(fwd);
+      r[1] = foot.dot(up) - foot_z;
+      if (keep_pitch) {
+        r[2] = 0.0;
+        for (int k = 0; k < n; ++k) {
+          const int j = g.pitch[static_cast<size_t>(k)];
+          r[2] += g.sign[static_cast<size_t>(k)] * (x[j] - posture[j]);
+        }
+      }
+    };
+    // Gauss-Newton on the pitch joints (the hip's origin does not move with them), steps of at
+    // most 0.3 rad, inside 5 % of each joint's range.
+    Eigen::MatrixXd J(3, m.nv());
+    auto solve = [&]() {
+      residual();
+      for (int it = 0; it < 100; ++it) {
+        if (r.norm() < 1e-5) return true;
+        m.pointJacobian(data, frame, g.sole, J);
+        Eigen::MatrixXd A(rows, n);
+        for (int k = 0; k < n; ++k) {
+          const Eigen::Vector3d c = J.col(m.jointVelocityOffset() + g.pitch[static_cast<size_t>(k)]);
+          A(0, k) = c.dot(fwd);
+          A(1, k) = c.dot(up);
+          if (keep_pitch) A(2, k) = g.sign[static_cast<size_t>(k)];
+        }
+        Eigen::VectorXd step = A.transpose() * (A * A.transpose() + 1e-6 * Eigen::MatrixXd::Identity(rows, rows)).ldlt().solve(r);
+        if (step.cwiseAbs().maxCoeff() > 0.3) step *= 0.3 / step.cwiseAbs().maxCoeff();
+        for (int k = 0; k < n; ++k) {
+          const int j = g.pitch[static_cast<size_t>(k)];
+          const auto [lo, hi] = limits(j);
+          x[j] = std::clamp(x[j] - step[k], lo, hi);
+        }
+        residual();
+      }
+      return r.norm() < 1e-5;
+    };
+    // A straight leg bends its knee (the second pitch joint) either way: both are tried, and the
+    // knee nearer the centre of mass (fore and aft) is kept, as quadrupeds stand.
+    std::vector<Eigen::VectorXd> found;
+    const bool straight = height > 0.97 * g.reach;
+    for (const double kick : straight ? std::vector<double>{0.3, -0.3} : std::vector<double>{0.0}) {
+      x = posture;
+      const auto [lo, hi] = limits(g.pitch[1]);
+      x[g.pitch[1]] = std::clamp(x[g.pitch[1]] + kick, lo, hi);
+      if (solve()) found.push_back(x);
+    }
+    if (found.empty()) continue;
+    auto inward = [&](const Eigen::VectorXd& v) {
+      q.joints = v;
+      m.update(data, q, Eigen::VectorXd::Zero(m.nv()));
+      return std::abs((m.bodyPlacement(data, d.joints[static_cast<size_t>(g.pitch[1])].child_link).translation() - L.com).dot(fwd));
+    };
+    x = found[0];
+    if (found.size() > 1 && inward(found[1]) < inward(found[0]) - 1e-6) x = found[1];
+    const bool off = std::abs(offset) > std::max(0.01, 0.1 * height);
+    const std::string stretch = num(100.0 * height / g.reach, 3) + " % of its reach";
+    const std::string why = off ? f.surface + " " + num(std::abs(offset), 3) + " m " + (offset > 0.0 ? "ahead of" : "behind") + " its hip" +
+                                      (bend ? ", its leg at " + stretch : "")
+                                : f.surface + "'s leg at " + stretch;
+    for (int k = 0; k < n; ++k) {
+      const int j = g.pitch[static_cast<size_t>(k)];
+      if (std::abs(x[j] - posture[j]) < 1e-9) continue;
+      moved.push_back(d.joints[static_cast<size_t>(j)].name + ": " + num(posture[j]) + " put " + why + "; taken as " + num(x[j], 6) +
+                      " (the foot under the hip" +
+                      (bend ? ", the leg at " + num(100.0 * (g.hip.dot(up) - foot_z) / g.reach, 3) + " % of its reach)" : ")"));
+    }
+    for (int k = 0; k < n; ++k) posture[g.pitch[static_cast<size_t>(k)]] = x[g.pitch[static_cast<size_t>(k)]];
+  }
+  return moved;
+}
+
 }  // namespace
 
 InitResult initRobot(const InitOptions& o) {
@@ -1056,6 +1208,24 @@ InitResult initRobot(const InitOptions& o) {
     }
     if (!moved.empty()) {
       for (const auto& m : moved) result.warnings.push_back("posture '" + chosen.name + "': " + m);
+      ProblemList again(o.urdf);
+      L = analyseLayout(d, chosen.q, again, &meshes);
+      again.throwIfErrors();
+    }
+  }
+  // A drafted zero posture's legs under their hips (not a posture the SRDF gives).
+  if (posture.given < 0) {
+    Posture& chosen = postures[static_cast<size_t>(&posture - postures.data())];
+    const std::vector<std::string> moved = feetUnderHips(d, L, chosen.q);
+    if (!moved.empty()) {
+      for (const auto& m : moved) {
+        result.warnings.push_back("posture '" + chosen.name + "': " + m);
+        const std::string joint = m.substr(0, m.find(':') + 1);
+        chosen.clamped.erase(std::remove_if(chosen.clamped.begin(), chosen.clamped.end(),
+                                            [&](const std::string& c) { return c.compare(0, joint.size(), joint) == 0; }),
+                             chosen.clamped.end());
+        chosen.clamped.push_back(m);
+      }
       ProblemList again(o.urdf);
       L = analyseLayout(d, chosen.q, again, &meshes);
       again.throwIfErrors();

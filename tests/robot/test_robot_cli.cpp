@@ -494,6 +494,69 @@ TEST(RobotInit, AQuadrupedOnPointFeetMovesItsBase) {
              2, {"a point contact (dims 3) takes the ground's normal"});
 }
 
+// A quadruped's drafted zero posture (no SRDF): straight legs (the model's knees at 0) bend to
+// 85 % of their reach with the feet under the hips and the knees towards the centre; knees whose
+// range excludes 0 (clamped inside it, every foot forward of its hip: the centre of mass over
+// one pair of feet) are brought back under the hips. Either way the drafted cases pass with the
+// controller's default contact margins (a minimum normal force on every foot).
+TEST(RobotInit, AQuadrupedsZeroPostureStandsOnFeetUnderItsHips) {
+  const std::string dir = scratch("quadruped_zero");
+  const std::string urdf = kSrc + "/models/quadruped_like/urdf/quadruped_like.urdf";
+  CliResult init = harness("robot init " + urdf + " --out " + dir + "/straight", dir);
+  expectExit(init, 0,
+             {"fl_knee: 0 put FRONT_LEFT_FOOT's leg at 100 % of its reach; taken as",
+              "(the foot under the hip, the leg at 85 % of its reach)", "hr_knee: 0 put HIND_RIGHT_FOOT's leg at 100 % of its reach"});
+  // The knees towards the centre: the front ones bend one way, the hind ones the other.
+  auto value = [](const std::string& data, const std::string& joint) {
+    const size_t at = data.find("    " + joint + ": ");
+    EXPECT_NE(at, std::string::npos) << joint;
+    return at == std::string::npos ? 0.0 : std::stod(data.substr(at + joint.size() + 6));
+  };
+  std::string data = slurp(dir + "/straight/quadruped_like.yaml");
+  EXPECT_LT(value(data, "fl_knee") * value(data, "hl_knee"), -0.5) << data;
+  EXPECT_NEAR(value(data, "fl_knee"), value(data, "fr_knee"), 1e-9);
+  EXPECT_EQ(harness("run " + dir + "/straight/base.yaml --out " + dir + "/straight_base --quiet", dir).code, 0);
+  EXPECT_EQ(harness("run " + dir + "/straight/lift_foot.yaml --out " + dir + "/straight_lift --quiet", dir).code, 0);
+  EXPECT_TRUE(nlohmann::json::parse(slurp(dir + "/straight_base/summary.json"))["start_warnings"].empty());
+  // A minimum normal force above what a foot carries at rest (a quarter of the weight) is
+  // warned at the start, on the console and in summary.json.
+  const CliResult heavy =
+      harness("run " + dir + "/straight/base.yaml --duration 0.05 --set 'controller.contact_margins={min_normal_N: 30}' --out " + dir +
+                  "/min_normal --quiet",
+              dir);
+  EXPECT_TRUE(
+      containsAll(heavy.err, {"warning: contact FRONT_LEFT_FOOT carries", "N at rest, less than the plan's minimum normal force 30 N"}))
+      << heavy.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir + "/min_normal/summary.json"))["start_warnings"].size(), 4u);
+
+  // Knees from 0.5 rad: clamped at 0.71, every foot behind its hip.
+  fs::create_directories(dir + "/bent");
+  std::string u = slurp(urdf);
+  for (size_t at = u.find("<joint name=\""); at != std::string::npos; at = u.find("<joint name=\"", at + 1)) {
+    const size_t end = u.find("</joint>", at);
+    if (u.substr(at, 24).find("_knee") == std::string::npos) continue;
+    const size_t lim = u.find("lower=\"-2.6\"", at);
+    ASSERT_LT(lim, end);
+    u.replace(lim, 12, "lower=\"0.5\"");
+  }
+  std::ofstream(dir + "/bent/q.urdf") << u;
+  init = harness("robot init " + dir + "/bent/q.urdf --out " + dir + "/bent/draft", dir);
+  expectExit(init, 0,
+             {"fl_knee: 0 is outside [0.5, 2.6], taken as 0.71", "fl_hip: 0 put FRONT_LEFT_FOOT 0.127 m behind its hip",
+              "fl_knee: 0.71 put FRONT_LEFT_FOOT 0.127 m behind its hip", "(the foot under the hip"});
+  // The centre of mass in the middle of the support (6.6 cm inside the hind feet's edge in the
+  // clamped posture).
+  const std::string said = init.out + init.err;
+  const size_t com = said.find("centre of mass ");
+  ASSERT_NE(com, std::string::npos) << said;
+  EXPECT_GT(std::stod(said.substr(com + 15)), 8.0) << said.substr(com, 80);
+  data = slurp(dir + "/bent/draft/quadruped_like.yaml");
+  EXPECT_GT(value(data, "fl_knee"), 0.71) << data;
+  const CliResult check = harness("robot check " + dir + "/bent/draft/quadruped_like.yaml --png -", dir);
+  EXPECT_EQ(check.code, 0) << check.err;
+  EXPECT_EQ(harness("run " + dir + "/bent/draft/base.yaml --out " + dir + "/bent_base --quiet", dir).code, 0);
+}
+
 // robot check on a case file and on a URDF alone; a fixed-base robot whose posture its servos
 // cannot hold is told so.
 TEST(RobotCheck, ReadsCasesAndUrdfs) {

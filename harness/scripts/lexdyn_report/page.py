@@ -451,16 +451,19 @@ class ReportBuilder:
             if info.description:
                 out.append(f"<p>{esc(info.description)}</p>")
             out.append(self._method_table(case, runs))
-            robot_warnings = []
-            for run in runs:
-                for w in (run.summary or {}).get("robot_warnings", []) or []:
-                    if w not in robot_warnings:
-                        robot_warnings.append(w)
-            if robot_warnings:
-                # What the robot loader assumed about the robot files (docs/model.md).
-                out.append(f"<details class='robot-warnings' id='robot-warnings-{esc(case)}'><summary>the robot files were read with "
-                           f"{len(robot_warnings)} warning(s)</summary><ul>"
-                           + "".join(f"<li>{esc(w)}</li>" for w in robot_warnings) + "</ul></details>")
+            for key, css, title in (("robot_warnings", "robot-warnings", "the robot files were read with"),
+                                    ("start_warnings", "start-warnings", "the start was questionable:")):
+                # What the robot loader assumed about the robot files (docs/model.md); what the
+                # start found questionable (docs/controller.md, "Contact margins").
+                warnings = []
+                for run in runs:
+                    for w in (run.summary or {}).get(key, []) or []:
+                        if w not in warnings:
+                            warnings.append(w)
+                if warnings:
+                    out.append(f"<details class='{css}' id='{css}-{esc(case)}'><summary>{title} "
+                               f"{len(warnings)} warning(s)</summary><ul>"
+                               + "".join(f"<li>{esc(w)}</li>" for w in warnings) + "</ul></details>")
             comps = self.results.comparisons.get(case)
             if comps:
                 out.append(f"<table class='comparison-table' id='comparisons-{esc(case)}'><tr><th>comparison</th><th>result</th>"
