@@ -112,8 +112,8 @@ std::string postureByName(const model::RobotDescription& d, const yaml::Node& n)
 void readController(CaseSpec& c, const yaml::Node& node, const model::RobotDescription& d) {
   yaml::StrictMap m(node);
   const yaml::Node type = m.required("type");
-  c.controller.type = type.asEnum({"posture_servo", "lexdyn"});
-  if (c.controller.type == "lexdyn") {
+  c.controller.type = *records::parseControllerType(type.asEnum(records::controllerTypeNames()));
+  if (c.controller.type == records::ControllerType::Lexdyn) {
     c.controller.lexdyn = readLexdynSpec(m, d, c.control_period_s);
     m.finish();
     return;
@@ -332,8 +332,6 @@ void readSim(CaseSpec& c, const yaml::Node& node, const model::RobotDescription&
   }
   m.finish();
 }
-
-bool isLexdyn(const CaseSpec& c) { return c.controller.type == "lexdyn"; }
 
 /// What the check parsers may ask about the robot (harness/checks/check_registry.hpp).
 checks::CheckContext robotContext(const model::RobotDescription& d) {
@@ -555,10 +553,10 @@ void validateLexdyn(CaseSpec& c, const yaml::Node& controller_node) {
 
 }  // namespace
 
-std::string methodName(const CaseSpec& spec) { return spec.controller.type == "lexdyn" ? spec.controller.lexdyn.method : ""; }
+std::string methodName(const CaseSpec& spec) { return isLexdyn(spec) ? spec.controller.lexdyn.method : ""; }
 
 void overrideMethod(CaseSpec& spec, const std::string& method, const std::string& where) {
-  if (spec.controller.type != "lexdyn") throw InputError(where, "--method needs a case with controller type lexdyn");
+  if (!isLexdyn(spec)) throw InputError(where, "--method needs a case with controller type lexdyn");
   setMethod(spec.controller.lexdyn, control::findMethod(method, where).name, where);
   // The effective case holds it too.
   if (!spec.document.empty()) {
@@ -580,7 +578,7 @@ void readExpectedFailures(CaseSpec& c, const yaml::Node& list, const checks::Che
     if (isLexdyn(c)) {
       x.method = context.method(m.required("method"));
     } else if (auto mn = m.optional("method")) {
-      mn->fail("a case without methods (controller type " + c.controller.type + ") names no method");
+      mn->fail(std::string("a case without methods (controller type ") + records::toString(c.controller.type) + ") names no method");
     }
     if (auto st = m.optional("status")) {
       using records::RunStatus;

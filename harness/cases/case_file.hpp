@@ -11,6 +11,7 @@
 // events and checks are added without changing existing files.
 #pragma once
 
+#include "harness/records/controller_type.hpp"
 #include "harness/cases/case_overrides.hpp"
 #include "harness/cases/lexdyn_spec.hpp"
 #include "harness/cases/target_path.hpp"
@@ -44,7 +45,7 @@ struct MotionSpec {
 };
 
 struct ControllerSpec {
-  std::string type;                 ///< "posture_servo" | "lexdyn"
+  records::ControllerType type = records::ControllerType::PostureServo;
   std::string posture;              ///< posture_servo: data-file posture
   std::vector<MotionSpec> motions;  ///< posture_servo: added to the posture
   LexdynSpec lexdyn;                ///< lexdyn: method, parameters, contacts, tasks, levels
@@ -190,6 +191,9 @@ model::RobotDescription simulatedRobot(const CaseSpec& spec);
 /// The initial joint positions: the posture, the case's joint values, the perturbation (within
 /// the joints' limits of `robot`).
 Eigen::VectorXd initialJointPositions(const CaseSpec& spec, const model::RobotDescription& robot);
+
+/// The case runs the lexdyn controller (else the posture servo).
+inline bool isLexdyn(const CaseSpec& c) { return c.controller.type == records::ControllerType::Lexdyn; }
 
 /// The method of a lexdyn case as a string ("" for other controllers).
 std::string methodName(const CaseSpec& spec);

@@ -229,7 +229,7 @@ checks::TraceMetadata metadata(const CaseSpec& spec, const sim::Simulator& simu,
     md.emplace_back("controller", "lexdyn (docs/controller.md)");
     driver->addMetadata(md);
   } else {
-    md.emplace_back("controller", spec.controller.type + " (posture " + spec.controller.posture + ", " +
+    md.emplace_back("controller", std::string(records::toString(spec.controller.type)) + " (posture " + spec.controller.posture + ", " +
                                       std::to_string(spec.controller.motions.size()) + " motions)");
   }
   for (const auto& kv : sim::buildInfo()) md.push_back(kv);
@@ -318,7 +318,7 @@ records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& r, const ch
 namespace {
 std::vector<std::string> startWarnings(const CaseSpec& spec, const sim::Simulator& simu) {
   std::vector<std::string> out;
-  if (spec.controller.type != "lexdyn") return out;
+  if (!isLexdyn(spec)) return out;
   const auto& lx = spec.controller.lexdyn;
   const auto& surfaces = simu.model().description().contact_surfaces;
   for (const auto& c : lx.contacts) {
@@ -364,7 +364,7 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
     throw InputError(is.settle_where, rest.message + " (posture '" + is.posture + "'; settle: none starts without it)");
   }
   const int nj = m.numJoints();
-  const bool lexdyn = spec.controller.type == "lexdyn";
+  const bool lexdyn = isLexdyn(spec);
   sim::JointCommand hold{q_init, Eigen::VectorXd::Zero(nj), Eigen::VectorXd::Zero(nj)};
   if (lexdyn && spec.controller.lexdyn.feedforward_torque) {
     // The controller commands the measured (deflected) joints plus feed-forward torques: the
@@ -656,7 +656,7 @@ int exitCode(const RunSummary& s) {
 std::vector<std::string> traceChannels(const CaseSpec& spec) {
   sim::Simulator simu(spec.urdf_path, spec.data_path, spec.sim);
   std::unique_ptr<LexdynDriver> driver;
-  if (spec.controller.type == "lexdyn") driver = std::make_unique<LexdynDriver>(spec, simu);
+  if (isLexdyn(spec)) driver = std::make_unique<LexdynDriver>(spec, simu);
   const Recorder recorder(spec, simu, driver.get());
   return recorder.channels().names();
 }

@@ -94,7 +94,8 @@ CheckSpec readCheck(const yaml::Node& node, const CheckContext& context, const C
   }
   if (type.readsController()) {
     if (!context.lexdyn()) {
-      typeNode.fail("check type " + c.type + " reads the lexdyn controller's channels; the controller is " + context.controller);
+      typeNode.fail("check type " + c.type + " reads the lexdyn controller's channels; the controller is " +
+                    records::toString(context.controller));
     }
     if (auto t = m.optional("to_s")) {
       c.to_s = t->asNonNegativeDouble();

@@ -9,6 +9,7 @@
 #pragma once
 
 #include "harness/checks/checks.hpp"
+#include "harness/records/controller_type.hpp"
 #include "lexdyn/common/yaml_strict.hpp"
 
 #include <Eigen/Core>
@@ -22,7 +23,7 @@ namespace lexdyn::checks {
 
 /// What a check's parser may ask about the case.
 struct CheckContext {
-  std::string controller;  ///< the case's controller type (posture_servo, lexdyn)
+  records::ControllerType controller = records::ControllerType::PostureServo;
   double control_period_s = 0.0;
   // The robot.
   std::vector<std::string> frames;
@@ -57,7 +58,7 @@ struct CheckContext {
   };
   std::vector<Method> methods;  ///< every method of the controller, in order
 
-  bool lexdyn() const { return controller == "lexdyn"; }
+  bool lexdyn() const { return controller == records::ControllerType::Lexdyn; }
   std::vector<std::string> methodNames() const;
   /// The methods the case has a hierarchy for.
   std::vector<std::string> caseMethods() const;

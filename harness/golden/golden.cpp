@@ -117,7 +117,8 @@ Manifest loadManifest(const std::string& path) {
     cases::CaseSpec spec = cases::loadCase(e.case_path);
     e.case_name = spec.name;
     if (auto methods = em.optional("methods")) {
-      if (spec.controller.type != "lexdyn") methods->fail("the case's controller (" + spec.controller.type + ") has no methods");
+      if (!cases::isLexdyn(spec))
+        methods->fail(std::string("the case's controller (") + records::toString(spec.controller.type) + ") has no methods");
       for (const yaml::Node& mn : methods->elements()) {
         const std::string method = mn.asEnum(control::methodNames());
         if (std::find(e.methods.begin(), e.methods.end(), method) != e.methods.end()) mn.fail("method " + method + " listed twice");
@@ -130,7 +131,7 @@ Manifest loadManifest(const std::string& path) {
       }
       if (e.methods.empty()) methods->fail("expected at least one method");
     } else {
-      if (spec.controller.type == "lexdyn") en.fail("missing required key 'methods' (the case has a lexdyn controller)");
+      if (cases::isLexdyn(spec)) en.fail("missing required key 'methods' (the case has a lexdyn controller)");
       e.methods.push_back("");
     }
     const yaml::Node d = em.required("duration_s");

@@ -343,8 +343,8 @@ SweepSpec loadSweep(const std::string& path, bool validate) {
   } catch (const InputError& e) {
     base.fail(std::string("the base case does not load: ") + e.what());
   }
-  if (s.base.controller.type != "lexdyn")
-    base.fail("sweeps run lexdyn cases (the base case's controller is " + s.base.controller.type + ")");
+  if (!cases::isLexdyn(s.base))
+    base.fail(std::string("sweeps run lexdyn cases (the base case's controller is ") + records::toString(s.base.controller.type) + ")");
   const yaml::Node methods = top.required("methods");
   if (methods.size() < 1) methods.fail("expected at least one method");
   for (const yaml::Node& mn : methods.elements()) {

@@ -59,7 +59,7 @@ TEST(ControllerCase, RepositoryCasesLoadWithEveryMethod) {
         Expect{"cases/pointmass-damping.yaml", "gn", {"bfgs", "ah", "gn", "wls"}},
         Expect{"cases/hrp2kai_heavy/exp1.yaml", "bfgs", {"bfgs", "ah", "gn", "wls"}}}) {
     CaseSpec c = loadCase(src(e.file));
-    EXPECT_EQ(c.controller.type, "lexdyn") << e.file;
+    EXPECT_EQ(c.controller.type, records::ControllerType::Lexdyn) << e.file;
     EXPECT_EQ(methodName(c), e.method) << e.file;
     for (const auto& m : e.methods) {
       overrideMethod(c, m, "--method");

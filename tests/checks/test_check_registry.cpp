@@ -26,7 +26,7 @@ namespace {
 /// hierarchy.
 CheckContext lexdynContext() {
   CheckContext x;
-  x.controller = "lexdyn";
+  x.controller = records::ControllerType::Lexdyn;
   x.control_period_s = 0.005;
   x.frames = {"F"};
   x.surfaces = {"S"};
@@ -140,7 +140,7 @@ TEST(CheckRegistry, ParsersReadTheirParamsFromTheContext) {
       << errorOf([&] { readCheck(firstCheck("{type: frame_drift, frame: F, limit_m: 1, to_s: 2}"), x); });
   // A controller check in a case without the lexdyn controller.
   CheckContext servo;
-  servo.controller = "posture_servo";
+  servo.controller = records::ControllerType::PostureServo;
   EXPECT_NE(errorOf([&] {
               readCheck(firstCheck(entries().at("task_error")), servo);
             }).find("checks[0].type: check type task_error reads the lexdyn controller's channels; the controller is posture_servo"),
@@ -193,7 +193,7 @@ TEST(CheckRegistry, AToyTypeIsParsedFromYamlAndEvaluatedOnATrace) {
   EXPECT_EQ(builtinChecks().find("channel_max"), nullptr);  // the built-in registry is untouched
 
   CheckContext servo;
-  servo.controller = "posture_servo";
+  servo.controller = records::ControllerType::PostureServo;
   const CheckSpec s = readCheck(firstCheck("{type: channel_max, name: peak, channel: x, limit: 2.5, from_s: 0.1}"), servo, registry);
   EXPECT_EQ(s.name, "peak");
   EXPECT_EQ(s.paramsAs<ChannelMaxParams>().channel, "x");
