@@ -506,7 +506,9 @@ int LexdynDriver::fill(const sim::Simulator& simu, double* out) const {
   return i;
 }
 
-void LexdynDriver::writeProblem(const std::string& path) const { solver::writeProblemJson(impl_->ctl->problem(), path); }
+void LexdynDriver::writeProblem(const std::string& path) const {
+  solver::writeProblemJson(impl_->ctl->problem(), path, &impl_->ctl->solverOptions());
+}
 
 ControllerStats LexdynDriver::stats() const {
   const Impl& I = *impl_;

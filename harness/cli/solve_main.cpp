@@ -9,6 +9,12 @@
 //                                     repeats (tick_best_*: a shared machine's false tails)
 //     --warm-only                     skips the cold solves (profiles of the warm path)
 //
+// Solver options: a problem file a controller dumped (lexdyn-harness run --dump-problems) carries
+// the options the controller solved it with (`solver_options`), and lexdyn-solve runs those by
+// default (the first file's, with --bench); a file without them runs the solver's defaults;
+// --default-options ignores the file's. The flags below change single options on top of either.
+// The output names what ran: "solver_options" and "solver_options_from".
+//
 // Exit codes (docs/architecture.md, "Errors and exit codes"):
 //   0    a solution was produced: status solved (relaxed levels included), or stopped_early by the
 //        paper's rules when --paper-rules asked for them;
@@ -26,6 +32,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -145,16 +152,31 @@ nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iter
   return j;
 }
 
-int runBench(const std::vector<std::string>& files, const Options& options, bool detectBounds, int repeats, bool warmOnly) {
+// The options a run uses: the first file's (unless --default-options) or the solver's defaults,
+// then the command line's single options. `from` says which, for the output.
+struct OptionFlags {
+  bool use_file = true;
+  std::function<void(Options&)> apply;
+};
+
+int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bool detectBounds, int repeats, bool warmOnly) {
   std::vector<Problem> ticks;
   ticks.reserve(files.size());
+  Options options;
+  std::string from = "the solver's defaults";
   for (size_t i = 0; i < files.size(); ++i) {
     if (g_signal.load()) return interrupted();
-    ticks.push_back(lexdyn::solver::readProblemJson(files[i]));
+    lexdyn::solver::ProblemFile f = lexdyn::solver::readProblemFile(files[i]);
+    if (i == 0 && f.options && flags.use_file) {
+      options = *f.options;
+      from = "the first problem file";
+    }
+    ticks.push_back(std::move(f.problem));
     if (detectBounds) ticks.back().detectBoundsLevel();
     if (files.size() >= 200 && (i + 1) % 200 == 0) std::fprintf(stderr, "lexdyn-solve: loaded %zu/%zu\n", i + 1, files.size());
   }
   if (ticks.empty()) return 0;
+  flags.apply(options);
   Solver cold, warm;
   cold.setup(ticks[0], options);
   warm.setup(ticks[0], options);
@@ -202,6 +224,8 @@ int runBench(const std::vector<std::string>& files, const Options& options, bool
   if (!warmOnly) out["cold"] = stats(coldUs, coldIt, coldCap, unit, coldMedians, ticks.size());
   out["warm"] = stats(warmUs, warmIt, warmCap, unit, warmMedians, ticks.size() - 1);
   out["max_abs_x"] = maxAbsX;
+  out["solver_options"] = nlohmann::json::parse(lexdyn::solver::solverOptionsToJson(options));
+  out["solver_options_from"] = from;
   std::cout << out.dump(2) << std::endl;
   // A benchmark measures time; a tick that hit the cap is counted in iteration_limit_hits.
   return kExitPass;
@@ -213,6 +237,7 @@ int main(int argc, char** argv) {
   CLI::App app{"lexdyn-solve: hierarchical least-squares solver (docs/solver.md)"};
   std::vector<std::string> files;
   bool bench = false, details = false, noBounds = false, warmOnly = false, spanning = false, lazy = false, suffix = false;
+  bool defaultOptions = false;
   int maxIterations = 1000, repeats = 1, options_split = -1;
   double paperDt = 0.0;
   app.add_flag("--bench", bench, "treat the files as consecutive ticks and print timing statistics");
@@ -226,6 +251,8 @@ int main(int argc, char** argv) {
   app.add_flag("--details", details, "also print the active set, ranks and per-row violations");
   app.add_flag("--no-bounds-level", noBounds, "do not treat a first level of single-variable rows as bounds");
   app.add_option("--max-iterations", maxIterations, "hard cap on active-set iterations")->check(CLI::Range(1, 1000000));
+  app.add_flag("--default-options", defaultOptions,
+               "run the solver's default options, not the ones a dumped problem file carries (solver_options)");
   app.add_option("--paper-rules", paperDt, "enable the paper's termination rules for this control period (s, in [1e-6, 10])");
   app.add_option("files", files, "problem files (JSON)")->required();
   try {
@@ -240,31 +267,46 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
-  Options options = paperDt > 0.0 ? Options::paper(paperDt) : Options{};
-  options.max_iterations = maxIterations;
-  options.split_from_variable = options_split;
-  options.spanning_stages = spanning;
-  options.lazy_snapshots = lazy;
-  options.project_unit_suffix = suffix;
+  OptionFlags flags;
+  flags.use_file = !defaultOptions;
+  flags.apply = [&](Options& o) {
+    if (paperDt > 0.0) {
+      const Options paper = Options::paper(paperDt);
+      o.stop_slack_norm = paper.stop_slack_norm;
+      o.stop_optimality_iterations = paper.stop_optimality_iterations;
+      o.stop_total_iterations = paper.stop_total_iterations;
+    }
+    if (app.count("--max-iterations")) o.max_iterations = maxIterations;
+    if (app.count("--split-from")) o.split_from_variable = options_split;
+    if (spanning) o.spanning_stages = true;
+    if (lazy) o.lazy_snapshots = true;
+    if (suffix) o.project_unit_suffix = true;
+  };
   try {
     if (!bench && (app.count("--repeats") || warmOnly)) {
       std::fprintf(stderr, "lexdyn-solve: error: --repeats and --warm-only need --bench\n");
       return kExitBadInput;
     }
-    if (bench) return runBench(files, options, !noBounds, repeats, warmOnly);
+    if (bench) return runBench(files, flags, !noBounds, repeats, warmOnly);
     if (files.size() != 1) {
       std::fprintf(stderr, "lexdyn-solve: error: expected one problem file, found %zu (use --bench for several)\n", files.size());
       return kExitBadInput;
     }
-    Problem problem = lexdyn::solver::readProblemJson(files[0]);
+    lexdyn::solver::ProblemFile file = lexdyn::solver::readProblemFile(files[0]);
+    Problem& problem = file.problem;
     if (!noBounds) problem.detectBoundsLevel();
+    Options options = file.options && flags.use_file ? *file.options : Options{};
+    flags.apply(options);
     Solver solver;
     solver.setup(problem, options);
     const auto& r = solver.solve(problem);
     if (g_signal.load()) return interrupted();
-    std::cout << lexdyn::solver::resultToJson(problem, r, details) << std::endl;
-    // Only a solution is a pass: the hard cap leaves an iterate, a non-finite result nothing.
-    const bool requested_stop = r.status == Status::StoppedEarly && paperDt > 0.0;
+    const std::string from = file.options && flags.use_file ? "the problem file" : "the solver's defaults";
+    std::cout << lexdyn::solver::resultToJson(problem, r, details, &options, from) << std::endl;
+    // Only a solution is a pass: the hard cap leaves an iterate, a non-finite result nothing. An
+    // early stop is one when the options asked for the paper's rules.
+    const bool stop_rules = options.stop_slack_norm > 0.0 || options.stop_optimality_iterations > 0 || options.stop_total_iterations > 0;
+    const bool requested_stop = r.status == Status::StoppedEarly && stop_rules;
     if (r.status == Status::Solved || requested_stop) return kExitPass;
     std::fprintf(stderr, "lexdyn-solve: solver failure on %s: status %s (%s) after %d iterations\n", files[0].c_str(),
                  lexdyn::solver::toString(r.status), lexdyn::solver::toString(r.reason), r.iterations);

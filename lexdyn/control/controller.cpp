@@ -454,6 +454,7 @@ const TickRecord& Controller::record() const { return impl_->rec; }
 const Command& Controller::command() const { return impl_->cmd; }
 const solver::Result& Controller::solverResult() const { return impl_->solver.result(); }
 const solver::Problem& Controller::problem() const { return impl_->problem; }
+const solver::Options& Controller::solverOptions() const { return impl_->solver.options(); }
 const ControllerConfig& Controller::config() const { return impl_->cfg; }
 const tasks::ContactLayout& Controller::contacts() const { return impl_->layout; }
 const model::RobotModel& Controller::model() const { return *impl_->model; }

@@ -98,6 +98,9 @@ class Controller {
   const Command& command() const;
   const solver::Result& solverResult() const;
   const solver::Problem& problem() const;
+  /// The solver's options as the controller set them up (split coordinates and the early stop's
+  /// level resolved).
+  const solver::Options& solverOptions() const;
 
   // Runtime events (timeline).
   int taskIndex(const std::string& name) const;  ///< throws InputError listing the task names

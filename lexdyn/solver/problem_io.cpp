@@ -125,7 +125,108 @@ double readNumber(const json& j, const std::string& where, bool allowNull, doubl
 
 }  // namespace
 
-Problem parseProblemJson(const std::string& text, const std::string& source) {
+namespace {
+
+// Options as the file writes them: every field but `trace` (a debugging switch).
+json optionsValue(const Options& o) {
+  json j;
+  j["rank_tolerance"] = o.rank_tolerance;
+  j["feasibility_tolerance"] = o.feasibility_tolerance;
+  j["zero_tolerance"] = o.zero_tolerance;
+  j["dual_tolerance"] = o.dual_tolerance;
+  j["eliminate_first_level"] = o.eliminate_first_level;
+  j["elimination_tolerance"] = o.elimination_tolerance;
+  j["split_from_variable"] = o.split_from_variable;
+  j["last_level_projection"] = o.last_level_projection == Options::LastLevel::Auto
+                                   ? "auto"
+                                   : (o.last_level_projection == Options::LastLevel::Never ? "never" : "always");
+  j["spanning_stages"] = o.spanning_stages;
+  j["lazy_snapshots"] = o.lazy_snapshots;
+  j["project_unit_suffix"] = o.project_unit_suffix;
+  j["max_iterations"] = o.max_iterations;
+  j["bland_after_degenerate_steps"] = o.bland_after_degenerate_steps;
+  j["cycle_tolerance_factor"] = o.cycle_tolerance_factor;
+  j["stop_slack_norm"] = o.stop_slack_norm;
+  j["stop_optimality_iterations"] = o.stop_optimality_iterations;
+  j["stop_total_iterations"] = o.stop_total_iterations;
+  j["stop_after_level"] = o.stop_after_level;
+  j["compute_multipliers"] = o.compute_multipliers;
+  return j;
+}
+
+// The file's solver_options: every key optional (the solver's default), none unknown, each of
+// its type, then Options::validate's ranges; errors name the file and the key.
+Options readOptions(const json& j, const std::string& where) {
+  if (!j.is_object()) throw InputError(where, "expected an object, found " + typeName(j));
+  Options o;
+  const json known = optionsValue(o);
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    if (!known.contains(it.key())) {
+      std::string names;
+      for (auto k = known.begin(); k != known.end(); ++k) names += (names.empty() ? "" : ", ") + k.key();
+      throw InputError(where + "." + it.key(), "unknown key (expected " + names + ")");
+    }
+  }
+  auto number = [&](const char* key, double& v) {
+    if (j.contains(key)) v = readNumber(j[key], where + "." + key, false, 0.0);
+  };
+  auto integer = [&](const char* key, int& v) {
+    if (!j.contains(key)) return;
+    const json& x = j[key];
+    if (!x.is_number_integer() || x.get<long long>() < -1000000000LL || x.get<long long>() > 1000000000LL)
+      throw InputError(where + "." + key, "expected an integer, found " + x.dump());
+    v = static_cast<int>(x.get<long long>());
+  };
+  auto boolean = [&](const char* key, bool& v) {
+    if (!j.contains(key)) return;
+    if (!j[key].is_boolean()) throw InputError(where + "." + key, "expected true or false, found " + j[key].dump());
+    v = j[key].get<bool>();
+  };
+  number("rank_tolerance", o.rank_tolerance);
+  number("feasibility_tolerance", o.feasibility_tolerance);
+  number("zero_tolerance", o.zero_tolerance);
+  number("dual_tolerance", o.dual_tolerance);
+  boolean("eliminate_first_level", o.eliminate_first_level);
+  number("elimination_tolerance", o.elimination_tolerance);
+  integer("split_from_variable", o.split_from_variable);
+  if (j.contains("last_level_projection")) {
+    const json& x = j["last_level_projection"];
+    const std::string v = x.is_string() ? x.get<std::string>() : "";
+    if (v == "auto")
+      o.last_level_projection = Options::LastLevel::Auto;
+    else if (v == "never")
+      o.last_level_projection = Options::LastLevel::Never;
+    else if (v == "always")
+      o.last_level_projection = Options::LastLevel::Always;
+    else
+      throw InputError(where + ".last_level_projection", "expected \"auto\", \"never\" or \"always\", found " + x.dump());
+  }
+  boolean("spanning_stages", o.spanning_stages);
+  boolean("lazy_snapshots", o.lazy_snapshots);
+  boolean("project_unit_suffix", o.project_unit_suffix);
+  integer("max_iterations", o.max_iterations);
+  integer("bland_after_degenerate_steps", o.bland_after_degenerate_steps);
+  number("cycle_tolerance_factor", o.cycle_tolerance_factor);
+  number("stop_slack_norm", o.stop_slack_norm);
+  integer("stop_optimality_iterations", o.stop_optimality_iterations);
+  integer("stop_total_iterations", o.stop_total_iterations);
+  integer("stop_after_level", o.stop_after_level);
+  boolean("compute_multipliers", o.compute_multipliers);
+  try {
+    o.validate();
+  } catch (const InputError& e) {
+    throw InputError(where, e.detail());
+  }
+  return o;
+}
+
+}  // namespace
+
+std::string solverOptionsToJson(const Options& options) { return optionsValue(options).dump(); }
+
+Problem parseProblemJson(const std::string& text, const std::string& source) { return parseProblemFile(text, source).problem; }
+
+ProblemFile parseProblemFile(const std::string& text, const std::string& source) {
   json doc;
   PathTrackingSax sax(doc);
   if (!json::sax_parse(text, &sax)) {
@@ -134,8 +235,8 @@ Problem parseProblemJson(const std::string& text, const std::string& source) {
   }
   if (!doc.is_object()) throw InputError(source, "expected a JSON object at the top level, found " + typeName(doc));
   for (auto it = doc.begin(); it != doc.end(); ++it) {
-    if (it.key() != "variables" && it.key() != "levels") {
-      throw InputError(source + ": " + it.key(), "unknown key (expected \"variables\" and \"levels\")");
+    if (it.key() != "variables" && it.key() != "levels" && it.key() != "solver_options") {
+      throw InputError(source + ": " + it.key(), "unknown key (expected \"variables\", \"levels\" and optionally \"solver_options\")");
     }
   }
   if (!doc.contains("variables")) throw InputError(source, "missing key \"variables\"");
@@ -222,10 +323,14 @@ Problem parseProblemJson(const std::string& text, const std::string& source) {
     problem.addLevel(name, std::move(A), std::move(lo), std::move(up));
   }
   problem.validate(source);
-  return problem;
+  ProblemFile file{std::move(problem), std::nullopt};
+  if (doc.contains("solver_options")) file.options = readOptions(doc["solver_options"], source + ": solver_options");
+  return file;
 }
 
-Problem readProblemJson(const std::string& path) { return parseProblemJson(readTextFile(path, "problem"), path); }
+Problem readProblemJson(const std::string& path) { return readProblemFile(path).problem; }
+
+ProblemFile readProblemFile(const std::string& path) { return parseProblemFile(readTextFile(path, "problem"), path); }
 
 namespace {
 
@@ -236,8 +341,9 @@ json boundValue(double v) {
 
 }  // namespace
 
-std::string problemToJson(const Problem& problem) {
+std::string problemToJson(const Problem& problem, const Options* options) {
   json doc;
+  if (options) doc["solver_options"] = optionsValue(*options);
   doc["variables"] = problem.variables();
   json levels = json::array();
   const int n = problem.variables();
@@ -289,9 +395,12 @@ void writeFileAtomic(const std::string& path, const std::string& text) {
   }
 }
 
-void writeProblemJson(const Problem& problem, const std::string& path) { writeFileAtomic(path, problemToJson(problem)); }
+void writeProblemJson(const Problem& problem, const std::string& path, const Options* options) {
+  writeFileAtomic(path, problemToJson(problem, options));
+}
 
-std::string resultToJson(const Problem& problem, const Result& result, bool withDetails) {
+std::string resultToJson(const Problem& problem, const Result& result, bool withDetails, const Options* options,
+                         const std::string& options_from) {
   json doc;
   doc["status"] = toString(result.status);
   doc["reason"] = toString(result.reason);
@@ -322,6 +431,10 @@ std::string resultToJson(const Problem& problem, const Result& result, bool with
       viol.push_back(std::move(a));
     }
     doc["violation"] = std::move(viol);
+  }
+  if (options) {
+    doc["solver_options"] = optionsValue(*options);
+    doc["solver_options_from"] = options_from;
   }
   return doc.dump();
 }

@@ -6,6 +6,7 @@
 // the guards below are errors (lexdyn::InputError) naming the file, the level and the row.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "lexdyn/solver/problem.hpp"
@@ -27,17 +28,34 @@ inline constexpr long kMaxProblemEntries = 1000000;  ///< rows x variables (8 MB
 /// well inside the double range (beyond, the arithmetic overflows to inf).
 inline constexpr double kMaxProblemMagnitude = 1e100;
 
-/// Parses problem JSON text; `source` names it in error messages.
+/// A problem file's content: the problem and, when the file carries them (`solver_options`: a
+/// controller's dump does), the solver options it was solved with.
+struct ProblemFile {
+  Problem problem;
+  std::optional<Options> options;
+};
+
+/// Parses problem JSON text; `source` names it in error messages. The file's solver_options
+/// are checked (unknown keys, types, Options::validate's ranges) and dropped.
 Problem parseProblemJson(const std::string& text, const std::string& source);
+/// ... keeping the solver options (a key the file does not give has the solver's default).
+ProblemFile parseProblemFile(const std::string& text, const std::string& source);
 /// Reads and parses a problem file.
 Problem readProblemJson(const std::string& path);
-/// Problem as JSON text (bounds levels are written as rows with one nonzero).
-std::string problemToJson(const Problem& problem);
+ProblemFile readProblemFile(const std::string& path);
+/// Problem as JSON text (bounds levels are written as rows with one nonzero), with the solver
+/// options when given.
+std::string problemToJson(const Problem& problem, const Options* options = nullptr);
 /// Writes a problem file atomically (temporary name, then rename).
-void writeProblemJson(const Problem& problem, const std::string& path);
+void writeProblemJson(const Problem& problem, const std::string& path, const Options* options = nullptr);
+/// The options as a problem file's solver_options object (JSON text).
+std::string solverOptionsToJson(const Options& options);
 
 /// {"status", "reason", "x", "level_violation", "iterations", ...} as JSON text.
-std::string resultToJson(const Problem& problem, const Result& result, bool withDetails);
+/// With `options`, also "solver_options" (the options solved with) and "solver_options_from"
+/// (`options_from`: where they came from), as lexdyn-solve prints them.
+std::string resultToJson(const Problem& problem, const Result& result, bool withDetails, const Options* options = nullptr,
+                         const std::string& options_from = "");
 
 /// Writes `text` to `path` through a temporary file and a rename.
 void writeFileAtomic(const std::string& path, const std::string& text);

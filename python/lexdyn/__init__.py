@@ -45,9 +45,9 @@ __all__ = [
 ]
 
 if BINDINGS:
-    from ._core import InputError, Options, OutputError, Problem, Result, RobotModel, Solver, load_problem, parse_problem, \
-        result_to_json, solve
+    from ._core import InputError, Options, OutputError, Problem, Result, RobotModel, Solver, load_problem, \
+        load_solver_options, parse_problem, result_to_json, solve
     from .runs import CaseRun, run_case
 
-    __all__ += ["InputError", "OutputError", "Problem", "Options", "Solver", "Result", "solve", "load_problem", "parse_problem",
-                "result_to_json", "RobotModel", "run_case", "CaseRun"]
+    __all__ += ["InputError", "OutputError", "Problem", "Options", "Solver", "Result", "solve", "load_problem",
+                "load_solver_options", "parse_problem", "result_to_json", "RobotModel", "run_case", "CaseRun"]

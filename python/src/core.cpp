@@ -473,7 +473,8 @@ PYBIND11_MODULE(_core, m) {
                                for (int i = 0; i < p.levelCount(); ++i) out.append(levelDict(p.level(i)));
                                return out;
                              })
-      .def("to_json", &ls::problemToJson, "The problem file's text (docs/file-formats.md).")
+      .def(
+          "to_json", [](const ls::Problem& p) { return ls::problemToJson(p); }, "The problem file's text (docs/file-formats.md).")
       .def(
           "save", [](const ls::Problem& p, const std::string& path) { ls::writeProblemJson(p, path); }, "path"_a,
           "Writes the problem file (atomically), for lexdyn-solve.")
@@ -579,8 +580,23 @@ PYBIND11_MODULE(_core, m) {
       "lexdyn-solve reads it: a first level of single-variable rows becomes a bounds level unless "
       "detect_bounds_level=False (its --no-bounds-level).");
   m.def("parse_problem", &ls::parseProblemJson, "text"_a, "source"_a = "problem", "A problem from problem-file text.");
-  m.def("result_to_json", &ls::resultToJson, "problem"_a, "result"_a, "details"_a = false,
-        "The JSON text lexdyn-solve [--details] prints for this result.");
+  m.def(
+      "result_to_json",
+      [](const ls::Problem& p, const ls::Result& r, bool details, std::optional<ls::Options> options, const std::string& from) {
+        return ls::resultToJson(p, r, details, options ? &*options : nullptr, from);
+      },
+      "problem"_a, "result"_a, "details"_a = false, "options"_a = py::none(), "options_from"_a = "",
+      "The JSON text lexdyn-solve [--details] prints for this result; with options, also the options it ran and where "
+      "they came from (options_from: \"the problem file\" or \"the solver's defaults\"), as lexdyn-solve prints them.");
+  m.def(
+      "load_solver_options",
+      [](const std::string& path) -> std::optional<ls::Options> {
+        py::gil_scoped_release nogil;
+        return ls::readProblemFile(path).options;
+      },
+      "path"_a,
+      "The solver options a problem file carries (a controller's dump: the options it solved the tick with), or None; "
+      "lexdyn-solve runs them by default.");
 
   // ---------------------------------------------------------------- model
   py::class_<PyModel>(m, "RobotModel",

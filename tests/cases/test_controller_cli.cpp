@@ -332,6 +332,10 @@ TEST(ControllerCli, DumpProblemsWritesEachTicksProblemWithoutChangingTheRun) {
   const CliResult solved = runCli(binPath("lexdyn-solve") + " " + dir + "/problems/" + files[5], dir);
   EXPECT_EQ(solved.code, 0) << solved.err;
   EXPECT_NE(solved.out.find("\"status\":\"solved\""), std::string::npos) << solved.out;
+  // It ran the controller's solver options, which the file carries (split coordinates from the
+  // first force variable: the robot's velocity count, 1; the solver's default is off, -1).
+  EXPECT_NE(solved.out.find("\"solver_options_from\":\"the problem file\""), std::string::npos) << solved.out;
+  EXPECT_NE(solved.out.find("\"split_from_variable\":1,"), std::string::npos) << solved.out;
   // The run is the same with and without the dump (every channel but the wall times).
   const checks::TraceTable a = checks::readTrace(dir + "/plain/trace.csv");
   const checks::TraceTable b = checks::readTrace(dir + "/dumped/trace.csv");

@@ -79,11 +79,21 @@ def test_a_dumped_problem_solves_as_lexdyn_solve_does(problems):
     for path in problems:
         problem = lexdyn.load_problem(path)
         assert problem.level_count > 5 and problem.levels[0]["kind"] == "bounds"
-        result = lexdyn.solve(problem)
+        # The controller's solver options, which the dump carries and lexdyn-solve runs.
+        options = lexdyn.load_solver_options(path)
+        assert options is not None and options.split_from_variable > 0
+        result = lexdyn.solve(problem, options=options)
         assert result.status == "solved"
         # The same text as lexdyn-solve prints (shortest round-trip numbers), and the same bits.
-        assert lexdyn.result_to_json(problem, result) == lexdyn_solve(path)
-        assert lexdyn.result_to_json(problem, result, details=True) == lexdyn_solve(path, "--details")
+        text = lexdyn.result_to_json(problem, result, options=options, options_from="the problem file")
+        assert text == lexdyn_solve(path)
+        assert lexdyn.result_to_json(problem, result, details=True, options=options,
+                                     options_from="the problem file") == lexdyn_solve(path, "--details")
+        # The solver's defaults (split coordinates off) reach the same optimum, by other rounding.
+        default = lexdyn.solve(problem)
+        assert default.status == "solved"
+        assert lexdyn.result_to_json(problem, default, options=lexdyn.Options(),
+                                     options_from="the solver's defaults") == lexdyn_solve(path, "--default-options")
         cli = json.loads(lexdyn_solve(path))
         assert_same_bits(result.x, cli["x"], "x")
         assert_same_bits(result.level_violation, cli["level_violation"], "level_violation")
@@ -99,7 +109,7 @@ def test_a_problem_built_from_numpy_equals_the_file(problems):
     built = lexdyn.Problem(read.variables, levels)
     assert built.to_json() == read.to_json()
     assert built.detect_bounds_level()
-    assert_same_bits(lexdyn.solve(built).x, json.loads(lexdyn_solve(path))["x"], "x")
+    assert_same_bits(lexdyn.solve(built, options=lexdyn.load_solver_options(path)).x, json.loads(lexdyn_solve(path))["x"], "x")
 
 
 def test_a_problem_saved_from_python_solves_as_lexdyn_solve_does(tmp_path):
@@ -117,7 +127,9 @@ def test_a_problem_saved_from_python_solves_as_lexdyn_solve_does(tmp_path):
     q = lexdyn.load_problem(path)
     r = lexdyn.solve(q)
     assert r.status == "solved" and q.levels[0]["kind"] == "bounds"
-    assert lexdyn.result_to_json(q, r, details=True) == lexdyn_solve(path, "--details")
+    assert lexdyn.load_solver_options(path) is None  # Problem.save writes none: lexdyn-solve runs the defaults
+    assert lexdyn.result_to_json(q, r, details=True, options=lexdyn.Options(),
+                                 options_from="the solver's defaults") == lexdyn_solve(path, "--details")
     assert np.all(np.abs(r.x[:6]) <= 0.5)
     # Constructed but not converted, the first level stays general: the same optimum.
     assert np.allclose(lexdyn.solve(p).x, r.x, atol=1e-9)
