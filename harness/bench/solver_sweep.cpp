@@ -56,6 +56,7 @@ int main(int argc, char** argv) {
   bool spanning = false, lazy = false, suffix = false;
   double unitLevels = 0.0;
   bool brute = false;
+  double exactTimeLimit = 10.0;
   std::string writeDir;
   app.add_option("--seed", seed, "seed of the first problem; problem i has seed + i");
   app.add_option("--cases", cases, "number of random problems")->check(CLI::Range(1L, 1000000000L));
@@ -64,6 +65,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-rows", maxRows, "largest number of rows per level, in [1, 100]")->check(CLI::Range(1, 100));
   app.add_option("--exact-every", exactEvery, "also verify every K-th problem with the exact reference (0: only flagged ones)")
       ->check(CLI::Range(0L, 1000000000L));
+  app.add_option("--exact-time-limit", exactTimeLimit,
+                 "seconds one exact check may take; beyond, its verdict is undecided (0: no limit; default 10)")
+      ->check(CLI::Range(0.0, 1.0e6));
   app.add_option("--max-iterations", maxIterations, "the solver's hard iteration cap (default 1000)")->check(CLI::Range(1, 1000000));
   app.add_option("--write-failures", writeDir, "write each failing problem to DIR/problem-SEED.json");
   app.add_flag("--spanning-stages", spanning, "solve with Options::spanning_stages (docs/solver.md)");
@@ -103,7 +107,8 @@ int main(int argc, char** argv) {
   solverOptions.lazy_snapshots = lazy;
   solverOptions.project_unit_suffix = suffix;
   long done = 0, solved = 0, failures = 0, capHits = 0, nonFinite = 0, kktFlagged = 0, exactChecked = 0, exactCleared = 0,
-       exactConfirmed = 0, exactUndecided = 0, disagreements = 0, bruteChecked = 0, held = 0, cycles = 0, iters = 0, maxIt = 0;
+       exactConfirmed = 0, exactUndecided = 0, exactOutOfTime = 0, disagreements = 0, bruteChecked = 0, held = 0, cycles = 0, iters = 0,
+       maxIt = 0;
   const auto t0 = std::chrono::steady_clock::now();
   try {
     for (long c = 0; c < cases; ++c) {
@@ -138,7 +143,14 @@ int main(int argc, char** argv) {
         if (!kkt.empty()) ++kktFlagged;
         if (!kkt.empty() || sample) {
           ++exactChecked;
-          const test::ExactVerdict v = test::exactCheck(p, r);
+          const test::ExactVerdict v = test::exactCheck(p, r, 4, exactTimeLimit, &g_signal);
+          if (v.interrupted) {  // neither a pass nor a failure: the problem is not counted
+            --exactChecked;
+            --done;
+            --solved;
+            break;
+          }
+          exactOutOfTime += v.out_of_time ? 1 : 0;
           if (!kkt.empty()) {
             if (v.kind == test::ExactVerdict::Optimal) {
               ++exactCleared;
@@ -187,11 +199,11 @@ int main(int argc, char** argv) {
   std::printf(
       "{\"problems\": %ld, \"solved\": %ld, \"failures\": %ld, \"cap_hits\": %ld, \"non_finite\": %ld, "
       "\"certificate_failures\": %ld, \"exact_checked\": %ld, \"exact_cleared\": %ld, \"exact_confirmed\": %ld, "
-      "\"exact_undecided\": %ld, \"certificate_exact_disagreements\": %ld, \"brute_force_checked\": %ld, "
+      "\"exact_undecided\": %ld, \"exact_out_of_time\": %ld, \"certificate_exact_disagreements\": %ld, \"brute_force_checked\": %ld, "
       "\"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld, "
       "\"seconds\": %.1f, \"interrupted\": %s}\n",
-      done, solved, failures, capHits, nonFinite, kktFlagged, exactChecked, exactCleared, exactConfirmed, exactUndecided, disagreements,
-      bruteChecked, held, cycles, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0, maxIt, secs,
+      done, solved, failures, capHits, nonFinite, kktFlagged, exactChecked, exactCleared, exactConfirmed, exactUndecided, exactOutOfTime,
+      disagreements, bruteChecked, held, cycles, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0, maxIt, secs,
       g_signal.load() ? "true" : "false");
   if (g_signal.load()) return kExitInterrupted + g_signal.load();
   if (solved == 0) {

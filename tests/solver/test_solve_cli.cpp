@@ -302,6 +302,24 @@ TEST(SolveCliExitCodes, InterruptedBenchIs130Or143) {
   EXPECT_NE(slurp(tempDir() + "/sig.err").find("interrupted by SIGTERM"), std::string::npos) << slurp(tempDir() + "/sig.err");
 }
 
+// The exact reference on a problem of 100 variables (a check ran past 15 minutes without a
+// limit): the time limit leaves it undecided, not passed, and counted apart; without a limit,
+// SIGINT stops it within the check and the sweep prints what it had (the unfinished problem not
+// counted) and exits 130.
+TEST(SolverSweepExitCodes, TheExactReferenceHasATimeLimitAndStopsOnASignal) {
+  const std::string big = " --cases 1 --seed 5 --max-variables 100 --max-levels 50 --max-rows 100 --exact-every 1";
+  const std::string out = tempDir() + "/sweep_big.out";
+  EXPECT_EQ(lexdyn::testing::exitCode(std::system((kSweep + big + " --exact-time-limit 1 > " + out).c_str())), 0);
+  EXPECT_TRUE(lexdyn::testing::containsAll(
+      slurp(out), {"\"exact_checked\": 1", "\"exact_undecided\": 1", "\"exact_out_of_time\": 1", "\"failures\": 0"}))
+      << slurp(out);
+  EXPECT_EQ(runAndSignal(kSweep + big + " --exact-time-limit 0", "sleep 1", "INT"), 130);
+  EXPECT_TRUE(
+      lexdyn::testing::containsAll(slurp(tempDir() + "/sig.out"), {"\"problems\": 0", "\"exact_checked\": 0", "\"interrupted\": true"}))
+      << slurp(tempDir() + "/sig.out");
+  EXPECT_EQ(lexdyn::testing::exitCode(std::system((kSweep + " --exact-time-limit -1 > " + out + " 2>&1").c_str())), 2);
+}
+
 TEST(SolverSweepExitCodes, ZeroOneTwoAndInterruption) {
   const std::string out = tempDir() + "/sweep.out", err = tempDir() + "/sweep.err";
   auto sweep = [&](const std::string& args) {

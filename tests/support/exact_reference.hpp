@@ -24,11 +24,17 @@
 // ones to 1e-9 relative; NotOptimal when a proven level differs; Undecided when a level could not
 // be proven from the solver's active set within the repair budget or the dual program is
 // infeasible (the exact method does not search other active sets).
+//
+// Rational arithmetic grows: on problems of 100 variables one check can run for many minutes.
+// exactCheck takes a time limit and a stop flag, checked at every pivot; a check that reaches
+// either is Undecided (`out_of_time`, `interrupted`), never a pass.
 #pragma once
 
 #include <gmpxx.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -45,6 +51,8 @@ struct ExactVerdict {
   std::string detail;
   std::vector<double> violation_norm;  ///< exact optimum per proven level (rounded to double)
   std::vector<double> x;               ///< the exact point of the last proven level (rounded)
+  bool out_of_time = false;            ///< Undecided: the time limit was reached
+  bool interrupted = false;            ///< Undecided: the stop flag was raised
 };
 
 inline const char* toString(ExactVerdict::Kind k) {
@@ -56,9 +64,27 @@ namespace exact {
 using Q = mpq_class;
 using Mat = std::vector<std::vector<Q>>;
 
+/// The running check's limits (one check at a time per thread), checked at every pivot.
+struct Budget {
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  const std::atomic<int>* stop = nullptr;
+};
+inline Budget& budget() {
+  static thread_local Budget b;
+  return b;
+}
+struct OutOfTime {};
+struct Interrupted {};
+inline void checkBudget() {
+  const Budget& b = budget();
+  if (b.stop && b.stop->load() != 0) throw Interrupted{};
+  if (std::chrono::steady_clock::now() > b.deadline) throw OutOfTime{};
+}
+
 /// Gauss-Jordan pivot on m[row][col]: that row scaled to a 1 there, the column cleared in every
 /// other row.
 inline void pivot(Mat& m, int row, int col) {
+  checkBudget();
   auto& pr = m[static_cast<size_t>(row)];
   const Q inv = 1 / pr[static_cast<size_t>(col)];
   for (auto& v : pr) v *= inv;
@@ -172,9 +198,8 @@ inline bool lpFeasible(const Mat& A, const std::vector<Q>& b, int k) {
 
 }  // namespace exact
 
-/// The exact verdict on `r` for `p` (see the header comment). `repairs_per_row` bounds the
-/// primal repairs per level (times the number of rows).
-inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_per_row = 4) {
+/// The exact verdict on `r` for `p` without limits (see exactCheck).
+inline ExactVerdict exactCheckUnlimited(const Problem& p, const Result& r, int repairs_per_row) {
   using exact::Q;
   ExactVerdict out;
   const int n = p.variables();
@@ -437,6 +462,36 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
     }
   }
   out.kind = ExactVerdict::Optimal;
+  return out;
+}
+
+/// The exact verdict on `r` for `p` (see the header comment). `repairs_per_row` bounds the
+/// primal repairs per level (times the number of rows). `time_limit_s` > 0 bounds the check's
+/// time, `stop` (when non-null and nonzero) ends it early: either leaves it Undecided, saying so.
+inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_per_row = 4, double time_limit_s = 0.0,
+                               const std::atomic<int>* stop = nullptr) {
+  exact::Budget& b = exact::budget();
+  const exact::Budget saved = b;
+  b.stop = stop;
+  b.deadline = time_limit_s > 0.0
+                   ? std::chrono::steady_clock::now() +
+                         std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(time_limit_s))
+                   : std::chrono::steady_clock::time_point::max();
+  ExactVerdict out;
+  try {
+    out = exactCheckUnlimited(p, r, repairs_per_row);
+  } catch (const exact::OutOfTime&) {
+    out = ExactVerdict{};
+    out.out_of_time = true;
+    std::ostringstream os;
+    os << "the exact check took longer than its time limit of " << time_limit_s << " s";
+    out.detail = os.str();
+  } catch (const exact::Interrupted&) {
+    out = ExactVerdict{};
+    out.interrupted = true;
+    out.detail = "the exact check was interrupted";
+  }
+  b = saved;
   return out;
 }
 
