@@ -1218,6 +1218,7 @@ InitResult initRobot(const InitOptions& o) {
     Posture& chosen = postures[static_cast<size_t>(&posture - postures.data())];
     const std::vector<std::string> moved = feetUnderHips(d, L, chosen.q);
     if (!moved.empty()) {
+      chosen.source += "; then the legs brought under their hips (each moved joint says why)";
       for (const auto& m : moved) {
         result.warnings.push_back("posture '" + chosen.name + "': " + m);
         const std::string joint = m.substr(0, m.find(':') + 1);

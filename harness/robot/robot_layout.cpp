@@ -92,6 +92,13 @@ int sideOfName(const std::string& name) {
     if (t == "left" || t == "l" || t.rfind("left", 0) == 0) return 1;
     if (t == "right" || t == "r" || t.rfind("right", 0) == 0) return -1;
   }
+  // Legged robots' two-letter leg names: FL_, RR_ (Unitree: front / rear), LF_, RH_ (ANYmal:
+  // front / hind), lm_ (hexapods: middle), fl_, hr_: a side letter with a position letter, or two
+  // side letters (RL_: rear left, lr_: left rear, rr_: right); an l makes it left.
+  for (const auto& t : tokens) {
+    if (t.size() != 2 || t.find_first_not_of("fhbmlr") != std::string::npos || t.find_first_of("lr") == std::string::npos) continue;
+    return t.find('l') != std::string::npos ? 1 : -1;
+  }
   // LLEG_JOINT0, LHipPitch, RArm: a capital L or R followed by another capital letter.
   if (name.size() >= 2 && std::isupper(static_cast<unsigned char>(name[1]))) {
     if (name[0] == 'L') return 1;
@@ -353,8 +360,15 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
   }
 
   // Soles: the foot's points within a band of its lowest point; a point foot when they span less
-  // than 2 cm; else the extreme points along the foot's diagonals.
+  // than 2 cm, or when the robot stands on three or more feet whose legs have fewer than 6 joints
+  // (a leg of 3 cannot hold a foot's orientation: held as a pose, such feet lock the base); else
+  // the extreme points along the foot's diagonals.
   for (auto& f : L.feet) {
+    int leg_joints = 0;
+    for (int b = f.body; b > 0 && !trunk[static_cast<size_t>(b)]; b = d.parentBody(b)) {
+      if (d.links[static_cast<size_t>(b)].parent_joint >= 0) ++leg_joints;
+    }
+    const bool few_joints = L.feet.size() >= 3 && leg_joints < 6;
     const Eigen::Isometry3d& X = L.body_pose[static_cast<size_t>(f.body)];
     const double zmin = low[static_cast<size_t>(f.body)];
     Eigen::Vector2d heading = X.linear().col(0).head<2>();
@@ -409,7 +423,8 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
       span_y = by - ay;
     }
     std::vector<Eigen::Vector3d> chosen;
-    if (std::max(span_x, span_y) < kPointFootSpan_m) {
+    const bool narrow = std::max(span_x, span_y) < kPointFootSpan_m;
+    if (narrow || few_joints) {
       f.point_foot = true;
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
       for (const auto& p : sole) c += p;
@@ -459,10 +474,13 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
       local.z() = 0.0;
       f.points.push_back(local);
     }
-    f.source = (f.point_foot ? "the lowest point of "
-                             : "the extreme points, along the foot's diagonals, of the lowest " +
-                                   formatNumber(std::round(band * 1000.0), 2) + " mm of ") +
-               shapes[static_cast<size_t>(f.body)] + " in the posture";
+    f.source =
+        (f.point_foot
+             ? (narrow ? "the lowest point of "
+                       : "the centre of the lowest " + formatNumber(std::round(band * 1000.0), 2) + " mm (a point foot: its leg has " +
+                             std::to_string(leg_joints) + " joints, too few to hold the foot's orientation) of ")
+             : "the extreme points, along the foot's diagonals, of the lowest " + formatNumber(std::round(band * 1000.0), 2) + " mm of ") +
+        shapes[static_cast<size_t>(f.body)] + " in the posture";
   }
   // A foot above the others' level: the robot does not stand on it in this posture.
   for (const auto& f : L.feet) {
@@ -487,11 +505,18 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
   };
   std::vector<int> foot_side;
   for (size_t k = 0; k < L.feet.size(); ++k) foot_side.push_back(sideOfLimb(limbs[static_cast<size_t>(foot_limb[k])].all));
-  if (L.feet.size() == 2 && foot_side[0] * foot_side[1] < 0) {
-    const double y_left = (foot_side[0] > 0 ? L.feet[0] : L.feet[1]).points_world[0].y();
-    const double y_right = (foot_side[0] > 0 ? L.feet[1] : L.feet[0]).points_world[0].y();
-    L.forward = Eigen::Vector3d(y_left >= y_right ? 1.0 : -1.0, 0.0, 0.0);
-    L.sides_from = "names";
+  {
+    // The named left feet's mean y against the named right feet's (any number of feet).
+    double y_left = 0.0, y_right = 0.0;
+    int n_left = 0, n_right = 0;
+    for (size_t k = 0; k < L.feet.size(); ++k) {
+      if (foot_side[k] > 0) y_left += L.feet[k].points_world[0].y(), ++n_left;
+      if (foot_side[k] < 0) y_right += L.feet[k].points_world[0].y(), ++n_right;
+    }
+    if (n_left > 0 && n_right > 0) {
+      L.forward = Eigen::Vector3d(y_left / n_left >= y_right / n_right ? 1.0 : -1.0, 0.0, 0.0);
+      L.sides_from = "names";
+    }
   }
   const Eigen::Vector3d left_dir = Eigen::Vector3d::UnitZ().cross(L.forward);
   // Feet: two LEFT/RIGHT; four FRONT/HIND x LEFT/RIGHT; else FOOT_k.
@@ -500,8 +525,13 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
     L.feet[first_left ? 0 : 1].surface = "LEFT_FOOT";
     L.feet[first_left ? 1 : 0].surface = "RIGHT_FOOT";
   } else if (L.feet.size() == 4) {
+    // About the feet's centroid (the centre of mass may stand off it: a zero posture with every
+    // foot forward of its hip).
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const auto& f : L.feet) centroid += L.body_pose[static_cast<size_t>(f.body)] * f.sole_in_body.translation();
+    centroid /= 4.0;
     for (auto& f : L.feet) {
-      const Eigen::Vector3d w = L.body_pose[static_cast<size_t>(f.body)] * f.sole_in_body.translation() - L.com;
+      const Eigen::Vector3d w = L.body_pose[static_cast<size_t>(f.body)] * f.sole_in_body.translation() - centroid;
       f.surface = std::string(w.dot(L.forward) >= 0.0 ? "FRONT_" : "HIND_") + (w.dot(left_dir) >= 0.0 ? "LEFT_FOOT" : "RIGHT_FOOT");
     }
   } else {

@@ -557,6 +557,32 @@ TEST(RobotInit, AQuadrupedsZeroPostureStandsOnFeetUnderItsHips) {
   EXPECT_EQ(harness("run " + dir + "/bent/draft/base.yaml --out " + dir + "/bent_base --quiet", dir).code, 0);
 }
 
+// Two conventions of other quadruped packages, on models/quadruped_like: box feet (4 cm) on legs of
+// 3 joints are point contacts (a leg of 3 cannot hold a foot's orientation: held as poses, the
+// four feet locked the base, which never moved), and a body turned half a turn in its root frame
+// faces -x: the legs' names (fl_, hr_: two-letter leg names) tell left from right for four feet,
+// so the foot of fl_shank is the front left one. Its drafted base case moves the base.
+TEST(RobotInit, BoxFeetOnThreeJointLegsArePointsAndAQuadrupedFacingMinusXIsTurned) {
+  const std::string dir = scratch("quadruped_box_turned");
+  std::string u = slurp(kSrc + "/models/quadruped_like/urdf/quadruped_like.urdf");
+  for (size_t at = u.find("<sphere radius=\"0.02\"/>"); at != std::string::npos; at = u.find("<sphere radius=\"0.02\"/>", at)) {
+    u.replace(at, 23, "<box size=\"0.04 0.04 0.04\"/>");
+  }
+  const std::string turn = "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>";
+  const size_t root = u.find(turn, u.find("<joint name=\"base_to_trunk\""));
+  ASSERT_NE(root, std::string::npos);
+  u.replace(root, turn.size(), "<origin xyz=\"0 0 0\" rpy=\"0 0 3.141592653589793\"/>");
+  std::ofstream(dir + "/q.urdf") << u;
+  const CliResult init = harness("robot init " + dir + "/q.urdf --out " + dir + "/draft", dir);
+  expectExit(init, 0,
+             {"foot FRONT_LEFT_FOOT on link 'fl_shank': 1 contact point(s) from the centre of the lowest",
+              "(a point foot: its leg has 3 joints, too few to hold the foot's orientation)", "foot HIND_RIGHT_FOOT on link 'hr_shank'"});
+  const CliResult check = harness("robot check " + dir + "/draft/quadruped_like.yaml --png -", dir);
+  EXPECT_TRUE(containsAll(check.out, {"forward: -x"})) << check.out;
+  const CliResult run = harness("run " + dir + "/draft/base.yaml --out " + dir + "/base --quiet", dir);
+  EXPECT_EQ(run.code, 0) << run.err;
+}
+
 // robot check on a case file and on a URDF alone; a fixed-base robot whose posture its servos
 // cannot hold is told so.
 TEST(RobotCheck, ReadsCasesAndUrdfs) {
