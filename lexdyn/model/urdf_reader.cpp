@@ -396,11 +396,21 @@ void checkGeometryNumbers(const XmlLink& l, const std::string& file, ProblemList
 // What a fixed joint carries that URDF ignores (an axis, limits, a mimic, dynamics), removed before
 // urdfdom reads the document (urdfdom refuses the limits of a fixed joint when incomplete).
 // Returns the names of the elements removed.
-std::vector<std::string> stripFixedJointExtras(TiXmlElement* e) {
+// Removes what URDF ignores on a fixed joint; returns what was there, but for an `<axis xyz="0 0
+// 0"/>`, which exporters write on every fixed joint (nothing is lost by ignoring it), unless
+// `strict` (whose older rules refuse it too).
+std::vector<std::string> stripFixedJointExtras(TiXmlElement* e, bool strict) {
   std::vector<std::string> removed;
   for (const char* name : {"axis", "limit", "mimic", "dynamics", "safety_controller", "calibration"}) {
     while (TiXmlElement* c = e->FirstChildElement(name)) {
-      removed.push_back(name);
+      bool zero_axis = false;
+      if (!strict && std::string(name) == "axis" && c->Attribute("xyz")) {
+        std::istringstream in(c->Attribute("xyz"));
+        double x = 1.0, y = 1.0, z = 1.0;
+        std::string rest;
+        zero_axis = static_cast<bool>(in >> x >> y >> z) && !(in >> rest) && x == 0.0 && y == 0.0 && z == 0.0;
+      }
+      if (!zero_axis) removed.push_back(name);
       e->RemoveChild(c);
     }
   }
@@ -1149,7 +1159,7 @@ void readUrdf(const std::string& text, const std::string& file, BaseType base, c
   for (auto& j : idx.joints) {
     checkJointNumbers(j, file, problems);
     if (j.type == "fixed") {
-      const std::vector<std::string> removed = stripFixedJointExtras(j.e);
+      const std::vector<std::string> removed = stripFixedJointExtras(j.e, problems.strict());
       if (!removed.empty()) {
         fixed_with_extras.push_back(j.name);
         if (problems.strict()) {
