@@ -2,6 +2,8 @@
 
 #include "lexdyn/common/error.hpp"
 
+#include "harness/records/json_numbers.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -14,8 +16,6 @@ namespace lexdyn::records {
 using nlohmann::json;
 
 namespace {
-
-json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 // Reads fields of one JSON object, collecting every problem ("field: what") instead of stopping at
 // the first, so that one error names all of them.
@@ -123,9 +123,9 @@ json toJson(const std::vector<CheckRecord>& records) {
     checks.push_back({{"name", c.name},
                       {"type", c.type},
                       {"passed", c.passed},
-                      {"value", number(c.value)},
-                      {"limit", number(c.limit)},
-                      {"margin", number(c.margin)},
+                      {"value", finiteOrNull(c.value)},
+                      {"limit", finiteOrNull(c.limit)},
+                      {"margin", finiteOrNull(c.margin)},
                       {"unit", c.unit},
                       {"detail", c.detail}});
     // Wall-clock checks: reported, and a verdict only when asked for (docs/cases.md, "Checks").
@@ -149,7 +149,7 @@ json toJson(const RunRecord& r) {
   j["duration_s"] = r.duration_s;
   j["simulated_s"] = r.simulated_s;
   j["wall_s"] = r.wall_s;
-  j["realtime_factor"] = number(r.realtime_factor);
+  j["realtime_factor"] = finiteOrNull(r.realtime_factor);
   j["ticks"] = r.ticks;
   const IntegratorRecord& in = r.integrator;
   j["integrator"] = {{"steps", in.steps},
@@ -163,7 +163,7 @@ json toJson(const RunRecord& r) {
   j["checks"] = toJson(r.checks);
   if (!r.statistics.empty()) {
     json st = json::object();
-    for (const auto& [name, s] : r.statistics) st[name] = {{"value", number(s.value)}, {"detail", s.detail}};
+    for (const auto& [name, s] : r.statistics) st[name] = {{"value", finiteOrNull(s.value)}, {"detail", s.detail}};
     j["statistics"] = st;
   }
   json overrides = json::array();
@@ -186,7 +186,8 @@ json toJson(const RunRecord& r) {
   if (r.controller) {
     const ControllerRecord& cs = *r.controller;
     json tasks = json::object();
-    for (const auto& [name, t] : cs.tasks) tasks[name] = {{"final_error", number(t.final_error)}, {"mean_error", number(t.mean_error)}};
+    for (const auto& [name, t] : cs.tasks)
+      tasks[name] = {{"final_error", finiteOrNull(t.final_error)}, {"mean_error", finiteOrNull(t.mean_error)}};
     j["tasks"] = tasks;
     j["controller"] = {{"ticks", cs.ticks}, {"status_counts", cs.status_counts}, {"augmented_ticks", cs.augmented_ticks}};
     j["solver"] = {{"peak_iterations", cs.peak_iterations},
@@ -196,7 +197,7 @@ json toJson(const RunRecord& r) {
                    {"status_counts", cs.solver_status_counts}};
     json timing = json::object();
     for (const auto& [name, t] : cs.timing_us)
-      timing[name] = {{"median", number(t.median)}, {"p99", number(t.p99)}, {"max", number(t.max)}};
+      timing[name] = {{"median", finiteOrNull(t.median)}, {"p99", finiteOrNull(t.p99)}, {"max", finiteOrNull(t.max)}};
     j["timing_us"] = timing;
   }
   j["trace"] = r.trace;

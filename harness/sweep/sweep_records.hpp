@@ -2,6 +2,7 @@
 // summary, robustness maps), shrinking and the failure database (docs/sweeps.md).
 #pragma once
 
+#include "harness/records/sweep_summary.hpp"
 #include "harness/sweep/sweep_run.hpp"
 
 #include <nlohmann/json.hpp>
@@ -29,17 +30,19 @@ std::string textDigest(const std::string& text);
 
 /// A run's result read back from OUT (result.json, a shrink-cache line): records::sweepRunFromJson.
 inline std::optional<RunResult> recordedResult(const nlohmann::json& j, std::string& why) { return records::sweepRunFromJson(j, why); }
-/// A run's result from a record already checked (a point record that pointRecordProblem accepted);
-/// std::logic_error otherwise.
-RunResult fromJson(const nlohmann::json& j);
 /// The file parsed as JSON, or nullopt with `why` (missing, unreadable, damaged).
 std::optional<nlohmann::json> readJsonFile(const std::string& path, std::string& why);
-/// "" when `j` is the whole record of point `index` (every method's run); otherwise why not.
-std::string pointRecordProblem(const SweepSpec& s, long index, const nlohmann::json& j);
+
+using PointRecord = records::SweepPointRecord;
+using FailureRecord = records::SweepFailureRecord;
+
+/// The record of point `index` stored in `path`: nullopt, with `why`, when it does not read back
+/// whole as a record of this format, or is not that point's, or lacks a method's run.
+std::optional<PointRecord> readPointRecord(const SweepSpec& s, long index, const std::string& path, std::string& why);
 
 /// One point's record: index, parameter values, overrides, per method the run's result and its
 /// reproducer command, the comparisons, the failures ("method:check").
-nlohmann::json pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string, RunResult>& runs);
+PointRecord pointRecord(const SweepSpec& s, const Point& p, const std::map<std::string, RunResult>& runs);
 
 /// What became of one configuration run in its own process.
 struct Trial {
@@ -60,14 +63,14 @@ using RunOne = std::function<Trial(const RunConfig&, const std::string& dir)>;
 /// of failures for summary.json.
 /// A trial lost twice is not cached and leaves its failure unshrunk; its reason is added to `lost`
 /// (the caller writes no summary then: the sweep is not finished).
-std::vector<nlohmann::json> shrinkFailures(const SweepSpec& s, const std::vector<nlohmann::json>& records, const DriverOptions& o,
-                                           const RunOne& run, std::vector<std::string>& lost);
+std::vector<FailureRecord> shrinkFailures(const SweepSpec& s, const std::vector<PointRecord>& records, const DriverOptions& o,
+                                          const RunOne& run, std::vector<std::string>& lost);
 /// The same list without shrinking (each failure at its simplest failing point).
-std::vector<nlohmann::json> minimalFailures(const SweepSpec& s, const std::vector<nlohmann::json>& records, const DriverOptions& o);
+std::vector<FailureRecord> minimalFailures(const SweepSpec& s, const std::vector<PointRecord>& records);
 
 /// Appends the failures to the database (one JSON line each, without duplicates), under its lock.
 /// False when `interrupt` became nonzero while waiting for the lock (nothing written).
-bool recordFailures(const SweepSpec& s, const std::vector<nlohmann::json>& failures, const std::string& db_path,
+bool recordFailures(const SweepSpec& s, const std::vector<FailureRecord>& failures, const std::string& db_path,
                     const std::atomic<int>* interrupt = nullptr);
 /// Runs the database's failures of this sweep first; writes OUT/replays.jsonl. False when a
 /// replay was interrupted or lost (`lost` says why): replayed again next time.
@@ -75,12 +78,12 @@ bool replayFailures(const SweepSpec& s, const DriverOptions& o, const RunOne& ru
 
 /// summary.json: pass rates and worst margins per check and method, win rates of the
 /// comparisons, maps, failures.
-nlohmann::json summarize(const SweepSpec& s, const std::vector<nlohmann::json>& records, long points,
-                         const std::vector<nlohmann::json>& failures, const std::vector<nlohmann::json>& maps);
+records::SweepSummary summarize(const SweepSpec& s, const std::vector<PointRecord>& records, long points,
+                                std::vector<FailureRecord> failures, std::vector<records::SweepMapRecord> maps);
 /// OUT/maps/*.csv for a grid over two parameters, and their pictures through
 /// `plot_command` (harness/scripts/sweep_plots.py; "" for none). Returns summary.json's maps.
-std::vector<nlohmann::json> writeMaps(const SweepSpec& s, const std::vector<nlohmann::json>& records, const std::string& out_dir,
-                                      const std::string& plot_command);
-void printSummary(const SweepSpec& s, const nlohmann::json& summary, std::FILE* out);
+std::vector<records::SweepMapRecord> writeMaps(const SweepSpec& s, const std::vector<PointRecord>& records, const std::string& out_dir,
+                                               const std::string& plot_command);
+void printSummary(const records::SweepSummary& summary, std::FILE* out);
 
 }  // namespace lexdyn::sweep

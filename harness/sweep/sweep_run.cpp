@@ -371,15 +371,13 @@ void dropDamaged(const std::string& path, const std::string& why, const DriverOp
 }
 
 // The stored record of point i when it reads back whole (a damaged one is removed).
-bool validPointFile(const SweepSpec& s, const DriverOptions& o, long i) {
+std::optional<PointRecord> storedPoint(const SweepSpec& s, const DriverOptions& o, long i) {
   const std::string f = pointFile(o.out_dir, i);
-  if (!fs::is_regular_file(f)) return false;
+  if (!fs::is_regular_file(f)) return std::nullopt;
   std::string why;
-  const std::optional<json> j = readJsonFile(f, why);
-  if (j) why = pointRecordProblem(s, i, *j);
-  if (why.empty()) return true;
-  dropDamaged(f, why, o, s, "made again");
-  return false;
+  std::optional<PointRecord> r = readPointRecord(s, i, f, why);
+  if (!r) dropDamaged(f, why, o, s, "made again");
+  return r;
 }
 
 // Runs what is missing of `points`; writes the point records. Returns false when interrupted;
@@ -390,7 +388,7 @@ bool runMissing(const SweepSpec& s, const std::vector<long>& points, const Drive
   std::map<long, std::map<std::string, RunResult>> have;
   long done_runs = 0;
   for (long i : points) {
-    if (validPointFile(s, o, i)) {
+    if (storedPoint(s, o, i)) {
       done_runs += static_cast<long>(s.methods.size());
       continue;
     }
@@ -413,7 +411,7 @@ bool runMissing(const SweepSpec& s, const std::vector<long>& points, const Drive
       ++left[i];
     }
   }
-  auto writePoint = [&](long i) { writeAtomically(pointFile(o.out_dir, i), pointRecord(s, pointAt(s, i), have[i]).dump() + "\n"); };
+  auto writePoint = [&](long i) { writeAtomically(pointFile(o.out_dir, i), toJson(pointRecord(s, pointAt(s, i), have[i])).dump() + "\n"); };
   // Points whose runs are all done but whose record is not (killed in between).
   for (long i : points) {
     if (left.find(i) == left.end() && have.count(i)) writePoint(i);
@@ -475,7 +473,7 @@ std::vector<long> missingPoints(const SweepSpec& s, const std::string& out_dir, 
   DriverOptions o;
   o.out_dir = out_dir;
   for (long i = 0; i < n; ++i) {
-    if (!validPointFile(s, o, i)) out.push_back(i);
+    if (!storedPoint(s, o, i)) out.push_back(i);
   }
   return out;
 }
@@ -496,36 +494,35 @@ int mergeSweep(const SweepSpec& s, const DriverOptions& o) {
   fs::remove(summary_path, ec);
   if (ec) throw OutputError(summary_path, "cannot remove the earlier summary: " + ec.message());
   const long n = totalPoints(s, o.points);
-  std::vector<json> records;
+  std::vector<PointRecord> records;
   long missing = 0;
   for (long i = 0; i < n; ++i) {
-    if (!validPointFile(s, o, i)) {
+    std::optional<PointRecord> r = storedPoint(s, o, i);
+    if (r)
+      records.push_back(std::move(*r));
+    else
       ++missing;
-      continue;
-    }
-    std::string why;
-    records.push_back(*readJsonFile(pointFile(o.out_dir, i), why));
   }
   std::string lines;
-  for (const auto& r : records) lines += r.dump() + "\n";
+  for (const auto& r : records) lines += toJson(r).dump() + "\n";
   writeAtomically((fs::path(o.out_dir) / "results.jsonl").string(), lines);
   // Shrinking, the failure database, the summary and the maps.
   Pool pool(s, o);
   std::vector<std::string> lost;
-  std::vector<json> failures =
-      o.shrink && s.shrink.enabled ? shrinkFailures(s, records, o, runnerOf(pool), lost) : minimalFailures(s, records, o);
+  std::vector<FailureRecord> failures =
+      o.shrink && s.shrink.enabled ? shrinkFailures(s, records, o, runnerOf(pool), lost) : minimalFailures(s, records);
   if (o.interrupt && o.interrupt->load() != 0) return interruptedCode(o);
   if (!lost.empty()) return reportLost(s, lost);
   if (!o.db_path.empty() && !recordFailures(s, failures, o.db_path, o.interrupt)) return interruptedCode(o);
-  const std::vector<json> maps = writeMaps(s, records, o.out_dir, o.plot_command);
-  const json summary = summarize(s, records, n, failures, maps);
-  writeAtomically(summary_path, summary.dump(2) + "\n");
-  printSummary(s, summary, stderr);
+  std::vector<records::SweepMapRecord> maps = writeMaps(s, records, o.out_dir, o.plot_command);
+  const records::SweepSummary summary = summarize(s, records, n, std::move(failures), std::move(maps));
+  writeAtomically(summary_path, toJson(summary).dump(2) + "\n");
+  printSummary(summary, stderr);
   if (missing > 0) {
     std::fprintf(stderr, "[sweep %s] %ld of %ld points have no result yet (run the same command again)\n", s.name.c_str(), missing, n);
     return cases::kExitRunFailure;  // incomplete: neither a pass nor a failed property
   }
-  return summary.value("failed_points", 0) == 0 ? 0 : 1;
+  return summary.failed_points == 0 ? 0 : 1;
 }
 
 int runSweep(const SweepSpec& s, const DriverOptions& o) {

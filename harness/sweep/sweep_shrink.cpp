@@ -28,8 +28,6 @@ using nlohmann::json;
 
 namespace {
 
-json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
 bool parseNumber(const std::string& t, double& v) {
   char* end = nullptr;
   v = std::strtod(t.c_str(), &end);
@@ -115,27 +113,33 @@ class TrialCache {
 struct Failure {
   std::string method, check;
   std::vector<long> points;
-  json first;  // the record of the point shrinking starts from
+  const PointRecord* first = nullptr;  // the record of the point shrinking starts from
+  const RunResult& firstRun() const { return first->run(method); }
+  /// The configuration of the first point (a parameter it has no value of: its simplest).
+  RunConfig firstConfig(const SweepSpec& s, double duration_s) const {
+    RunConfig c{method, {}, duration_s};
+    for (const auto& p : s.parameters) c.values.push_back(first->value(p.name, p.simplest));
+    return c;
+  }
 };
 
-int movedFromSimplest(const SweepSpec& s, const json& record) {
+int movedFromSimplest(const SweepSpec& s, const PointRecord& record) {
   int n = 0;
-  for (const auto& p : s.parameters) n += record["values"].value(p.name, "") != p.simplest ? 1 : 0;
+  for (const auto& p : s.parameters) n += record.value(p.name) != p.simplest ? 1 : 0;
   return n;
 }
 
-std::vector<Failure> collect(const SweepSpec& s, const std::vector<json>& records) {
+std::vector<Failure> collect(const SweepSpec& s, const std::vector<PointRecord>& records) {
   std::map<std::pair<std::string, std::string>, Failure> by;
   for (const auto& r : records) {
-    for (const auto& f : r["failures"]) {
-      const std::string text = f.get<std::string>();
+    for (const auto& text : r.failures) {
       const size_t colon = text.find(':');
       Failure& x = by[{text.substr(0, colon), text.substr(colon + 1)}];
       x.method = text.substr(0, colon);
       x.check = text.substr(colon + 1);
-      x.points.push_back(r.value("point", -1L));
+      x.points.push_back(r.point);
       // Start from the failing point nearest the simplest configuration (then the lowest index).
-      if (x.first.is_null() || movedFromSimplest(s, r) < movedFromSimplest(s, x.first)) x.first = r;
+      if (!x.first || movedFromSimplest(s, r) < movedFromSimplest(s, *x.first)) x.first = &r;
     }
   }
   std::vector<Failure> out;
@@ -146,28 +150,20 @@ std::vector<Failure> collect(const SweepSpec& s, const std::vector<json>& record
 double fullDuration(const SweepSpec& s) { return s.duration_s ? *s.duration_s : s.base.duration_s; }
 
 // summary.json's entry of a failure at configuration `c` (which gave `r`).
-json failureRecord(const SweepSpec& s, const Failure& f, const RunConfig& c, const RunResult& r) {
-  json values = json::object();  // the parameters away from their simplest values
-  for (size_t k = 0; k < s.parameters.size(); ++k) {
-    if (c.values[k] != s.parameters[k].simplest) values[s.parameters[k].name] = c.values[k];
+FailureRecord failureRecord(const SweepSpec& s, const Failure& f, const RunConfig& c, const RunResult& r) {
+  FailureRecord j;
+  j.check = f.check;
+  j.method = f.method;
+  j.point = f.first->point;
+  j.points_failing = static_cast<long>(f.points.size());
+  for (size_t k = 0; k < s.parameters.size(); ++k) {  // the parameters away from their simplest values
+    if (c.values[k] != s.parameters[k].simplest) j.values[s.parameters[k].name] = c.values[k];
   }
-  json overrides = json::array();
-  for (const auto& o : overridesOf(s, c.values)) overrides.push_back({{"path", o.path}, {"value", o.value}});
-  json j = {{"check", f.check},
-            {"method", f.method},
-            {"point", f.first.value("point", -1L)},
-            {"points_failing", f.points.size()},
-            {"values", values},
-            {"overrides", overrides},
-            {"duration_s", c.duration_s},
-            {"command", reproduceCommand(s, c)},
-            {"status", records::toString(r.status)}};
-  if (const CheckOutcome* co = r.check(f.check)) {
-    j["value"] = number(co->value);
-    j["limit"] = number(co->limit);
-    j["margin"] = number(co->margin);
-    j["unit"] = co->unit;
-  }
+  for (const auto& o : overridesOf(s, c.values)) j.overrides.emplace_back(o.path, o.value);
+  j.duration_s = c.duration_s;
+  j.command = reproduceCommand(s, c);
+  j.status = r.status;
+  if (const CheckOutcome* co = r.check(f.check)) j.outcome = *co;
   return j;
 }
 
@@ -175,7 +171,7 @@ class Shrinker {
  public:
   /// `cap`: the trials this shrink may count (cached or run now).
   Shrinker(const SweepSpec& s, const Failure& f, TrialCache& cache, int cap) : s_(s), f_(f), cache_(cache), cap_(cap) {
-    const RunResult orig = fromJson(f.first["runs"][f.method]);
+    const RunResult& orig = f.firstRun();
     status_ = orig.status;
     if (const CheckOutcome* c = orig.check(f.check)) value_was_nan_ = std::isnan(c->value);
     full_duration_ = fullDuration(s);
@@ -183,10 +179,8 @@ class Shrinker {
 
   /// False when interrupted.
   bool run() {
-    RunConfig cur{f_.method, {}, full_duration_};
-    for (const auto& p : s_.parameters) cur.values.push_back(f_.first["values"].value(p.name, p.simplest));
-    best_ = cur;
-    best_result_ = fromJson(f_.first["runs"][f_.method]);
+    best_ = f_.firstConfig(s_, full_duration_);
+    best_result_ = f_.firstRun();
     // 1. All parameters at their simplest values at once, then one at a time (at the full
     // duration: a shorter run first would hold the parameters where the failure comes sooner).
     RunConfig all = best_;
@@ -210,13 +204,13 @@ class Shrinker {
     return shrinkDuration();
   }
 
-  json result(const std::string& out_dir) const {
+  FailureRecord result(const std::string& out_dir) const {
     const std::string file = f_.method + "." + f_.check + ".yaml";
-    json j = failureRecord(s_, f_, best_, best_result_);
-    j["case_file"] = "failures/" + file;
-    j["shrunk"] = true;
-    j["runs"] = runs_;
-    j["budget_exhausted"] = exhausted_;
+    FailureRecord j = failureRecord(s_, f_, best_, best_result_);
+    j.case_file = "failures/" + file;
+    j.shrunk = true;
+    j.runs = runs_;
+    j.budget_exhausted = exhausted_;
     writeCaseFile(out_dir, file);
     return j;
   }
@@ -344,23 +338,16 @@ class Shrinker {
 
 }  // namespace
 
-std::vector<json> minimalFailures(const SweepSpec& s, const std::vector<json>& records, const DriverOptions& o) {
-  (void)o;
-  std::vector<json> out;
-  for (const Failure& f : collect(s, records)) {
-    RunConfig c{f.method, {}, fullDuration(s)};
-    for (const auto& p : s.parameters) c.values.push_back(f.first["values"].value(p.name, p.simplest));
-    json j = failureRecord(s, f, c, fromJson(f.first["runs"][f.method]));
-    j["shrunk"] = false;
-    out.push_back(j);
-  }
+std::vector<FailureRecord> minimalFailures(const SweepSpec& s, const std::vector<PointRecord>& records) {
+  std::vector<FailureRecord> out;
+  for (const Failure& f : collect(s, records)) out.push_back(failureRecord(s, f, f.firstConfig(s, fullDuration(s)), f.firstRun()));
   return out;
 }
 
-std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& records, const DriverOptions& o, const RunOne& run,
-                                 std::vector<std::string>& lost) {
+std::vector<FailureRecord> shrinkFailures(const SweepSpec& s, const std::vector<PointRecord>& records, const DriverOptions& o,
+                                          const RunOne& run, std::vector<std::string>& lost) {
   std::vector<Failure> failures = collect(s, records);
-  std::vector<json> out(failures.size());
+  std::vector<FailureRecord> out(failures.size());
   if (failures.empty()) return out;
   TrialCache cache(o.out_dir, run, std::max(1, o.jobs));
   // The sweep's total budget, shared evenly by the failures that shrink (at most max_runs each):
@@ -368,7 +355,7 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
   // budget leaves less shrunk depends neither on the shrinks' timing nor on what an earlier,
   // interrupted driver ran.
   auto shrinks = [&](const Failure& f) {
-    const records::RunStatus status = fromJson(f.first["runs"][f.method]).status;
+    const records::RunStatus status = f.firstRun().status;
     return !(f.check == kRunCompleted && (status == records::RunStatus::Timeout || status == records::RunStatus::Crashed));
   };
   long shrinking = 0;
@@ -401,7 +388,7 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
           ok[i] = 1;
           if (o.progress) {
             std::fprintf(stderr, "[sweep %s] shrunk %s %s: %s\n", s.name.c_str(), f.method.c_str(), f.check.c_str(),
-                         out[i].value("command", "").c_str());
+                         out[i].command.c_str());
           }
         } catch (...) {
           std::lock_guard<std::mutex> lock(error_m);
@@ -419,7 +406,7 @@ std::vector<json> shrinkFailures(const SweepSpec& s, const std::vector<json>& re
     if (!lost_by[i].empty()) lost.push_back("shrinking " + failures[i].method + " " + failures[i].check + ": " + lost_by[i]);
   }
   // Failures that were not shrunk (interrupted, lost, or not shrinkable) keep their point.
-  const std::vector<json> plain = minimalFailures(s, records, o);
+  const std::vector<FailureRecord> plain = minimalFailures(s, records);
   for (size_t i = 0; i < out.size(); ++i) {
     if (!ok[i]) out[i] = plain[i];
   }

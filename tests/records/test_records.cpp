@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 
 namespace {
 
@@ -133,6 +134,94 @@ TEST(SweepRunRecord, RoundTripsAndRefusesOtherFormatsAndUnrecordedStatuses) {
   const auto n = lexdyn::records::sweepRunFromJson(nan, why);
   ASSERT_TRUE(n.has_value()) << why;
   EXPECT_TRUE(std::isnan(n->checks[0].value));
+}
+
+// A point record reads back as written (NaN comparisons as null); a damaged one is refused with
+// the field it lacks, and one of another format or none with both formats named.
+TEST(SweepPointRecord, RoundTripsAndNamesWhatIsWrong) {
+  namespace rec = lexdyn::records;
+  rec::SweepPointRecord p;
+  p.point = 4;
+  p.values = {{"kp", "2.5"}, {"servo", "stiff"}};
+  p.overrides = {{"controller.tasks[position].gains.kp", "2.5"}};
+  rec::SweepRunRecord run;
+  run.checks.push_back({"upright", true, 0.1, 0.3, 0.2, "m", ""});
+  p.runs["bfgs"] = {run, "lexdyn-harness run case.yaml", "lexdyn-harness sweep point s.yaml --index 4"};
+  run.status = RunStatus::Diverged;
+  p.runs["wls"] = {run, "a", "b"};
+  rec::SweepComparisonRecord c;
+  c.name = "final";
+  c.better = "bfgs";
+  c.worse = "wls";
+  c.limit = 0.001;
+  c.stopped_early = {"wls"};
+  p.comparisons.push_back(c);
+  p.failures = {"wls:run_completed"};
+  const nlohmann::json j = rec::toJson(p);
+  EXPECT_EQ(j["format"], rec::kSweepPointFormat);
+  EXPECT_TRUE(j["comparisons"][0]["value"].is_null());
+  std::string why;
+  const auto back = rec::sweepPointFromJson(j, why);
+  ASSERT_TRUE(back.has_value()) << why;
+  EXPECT_EQ(rec::toJson(*back), j);
+  EXPECT_EQ(back->run("wls").status, RunStatus::Diverged);
+  EXPECT_EQ(back->value("servo"), "stiff");
+  EXPECT_EQ(back->value("mu", "0"), "0");
+  EXPECT_TRUE(std::isnan(back->comparisons[0].value));
+  // (where, what is put there: null erases it, the message)
+  const std::tuple<const char*, nlohmann::json, const char*> damages[] = {
+      {"/failures", nlohmann::json::array({1}), "failures: not a list of strings"},
+      {"/comparisons/0/better_wins", "yes", "comparisons: better_wins: not true or false"},
+      {"/overrides/0/value", 2.5, "overrides: an entry without its path and value"},
+      {"/runs/wls/format", nullptr, "the run of wls: a run record of no format"},
+      {"/values", nullptr, "no values"},
+      {"/point", 4.5, "point: not an integer"},
+  };
+  for (const auto& [where, what, expected] : damages) {
+    nlohmann::json d = j;
+    const nlohmann::json::json_pointer ptr(where);
+    if (what.is_null())
+      d[ptr.parent_pointer()].erase(ptr.back());
+    else
+      d[ptr] = what;
+    EXPECT_FALSE(rec::sweepPointFromJson(d, why).has_value()) << where;
+    EXPECT_EQ(why.rfind(expected, 0), 0u) << where << ": " << why;
+  }
+  nlohmann::json old = j;
+  old.erase("format");
+  EXPECT_FALSE(rec::sweepPointFromJson(old, why).has_value());
+  EXPECT_NE(why.find("a point record of no format (written by an older build), this build reads 'lexdyn-sweep-point/1'"), std::string::npos)
+      << why;
+}
+
+// A failure database line reads back; a line without a format (written before the key existed)
+// reads as version 1; another format, or a line without its check, is refused naming it.
+TEST(SweepFailureEntry, ReadsLinesOfNoFormatAsVersionOneAndRefusesOthers) {
+  namespace rec = lexdyn::records;
+  const rec::SweepFailureEntry e{"pointmass-damping", "wls", "no_overshoot", {{"mu", "0.47"}}, 7.785};
+  const nlohmann::json j = rec::toJson(e);
+  EXPECT_EQ(j["format"], rec::kSweepFailureFormat);
+  std::string why;
+  auto back = rec::sweepFailureFromJson(j, why);
+  ASSERT_TRUE(back.has_value()) << why;
+  EXPECT_EQ(rec::toJson(*back), j);
+  nlohmann::json old = j;
+  old.erase("format");
+  back = rec::sweepFailureFromJson(old, why);
+  ASSERT_TRUE(back.has_value()) << why;
+  EXPECT_EQ(rec::toJson(*back), j);
+  nlohmann::json other = j;
+  other["format"] = "lexdyn-sweep-failure/2";
+  EXPECT_FALSE(rec::sweepFailureFromJson(other, why).has_value());
+  EXPECT_NE(why.find("format 'lexdyn-sweep-failure/2', this build reads 'lexdyn-sweep-failure/1'"), std::string::npos) << why;
+  nlohmann::json no_check = j;
+  no_check.erase("check");
+  EXPECT_FALSE(rec::sweepFailureFromJson(no_check, why).has_value());
+  EXPECT_EQ(why, "no check");
+  nlohmann::json bad_values = j;
+  bad_values["values"]["mu"] = 0.47;
+  EXPECT_FALSE(rec::sweepFailureFromJson(bad_values, why).has_value());
+  EXPECT_EQ(why, "values: not an object of strings");
 }
 
 }  // namespace

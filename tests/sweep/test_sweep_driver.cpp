@@ -3,6 +3,9 @@
 // giving the same records as an uninterrupted run, a hang recorded as that run's failure (its
 // timeout; a process killed from outside is run again, tests/faults), and the shrinker finding the failure boundary known in closed form
 // (eq. 51: the acceleration-domain PD overshoots by exp(-pi/mu) for every kp).
+#include "harness/records/sweep_record.hpp"
+#include "harness/records/sweep_summary.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <gtest/gtest.h>
@@ -11,11 +14,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -58,6 +64,43 @@ std::string withoutWallTimes(const std::string& path) {
   return out;
 }
 
+// The keys of the table that follows `title` in docs/file-formats.md (the first cell's `names`).
+std::set<std::string> documentedKeys(const std::string& title) {
+  const std::string doc = readText(std::string(LEXDYN_SOURCE_DIR) + "/docs/file-formats.md");
+  const size_t from = doc.find(title);
+  EXPECT_NE(from, std::string::npos) << title;
+  std::set<std::string> keys;
+  std::istringstream lines(doc.substr(from == std::string::npos ? doc.size() : from));
+  bool in_table = false;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("|", 0) != 0) {
+      if (in_table) break;
+      continue;
+    }
+    in_table = true;
+    if (line.rfind("| `", 0) != 0) continue;
+    const std::string first = line.substr(2, line.find(" |", 2) - 2);  // "`a`, `b`"
+    for (size_t p = first.find('`'); p != std::string::npos; p = first.find('`', first.find('`', p + 1) + 1))
+      keys.insert(first.substr(p + 1, first.find('`', p + 1) - p - 1));
+  }
+  return keys;
+}
+
+// `j`'s keys are the table's: `absent` are documented but not in this file; with `extra`, they
+// are keys the file holds beyond the table.
+void expectDocumentedKeys(const std::string& title, const json& j, const std::set<std::string>& absent, bool extra = false) {
+  std::set<std::string> documented = documentedKeys(title);
+  std::set<std::string> written;
+  for (auto it = j.begin(); it != j.end(); ++it) written.insert(it.key());
+  if (extra) documented.insert(absent.begin(), absent.end());
+  for (const auto& k : written)
+    EXPECT_TRUE(documented.count(k)) << title << ": the file's key '" << k << "' is not in docs/file-formats.md";
+  for (const auto& k : documented) {
+    if (!extra && absent.count(k)) continue;
+    EXPECT_TRUE(written.count(k)) << title << ": docs/file-formats.md documents '" << k << "', which the file does not hold";
+  }
+}
+
 // The first time the closed-form response of eq. 51 (x0 = 1, kp, mu) goes past the target by more
 // than `limit`.
 double firstOvershootTime(double mu, double kp, double limit) {
@@ -80,6 +123,11 @@ TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
   long n = 0;
   while (std::getline(in, line)) {
     const json r = json::parse(line);
+    // The records layer reads the line the driver wrote and writes it again byte for byte.
+    std::string why;
+    const auto typed = lexdyn::records::sweepPointFromJson(r, why);
+    ASSERT_TRUE(typed.has_value()) << why;
+    EXPECT_EQ(lexdyn::records::toJson(*typed).dump(), line);
     EXPECT_EQ(r["point"].get<long>(), n);
     for (const char* m : {"wls", "bfgs"}) {
       const json& run = r["runs"][m];
@@ -98,6 +146,7 @@ TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
   }
   EXPECT_EQ(n, 12);
   const json sa = json::parse(readText(a + "/summary.json"));
+  EXPECT_EQ(sa["format"], lexdyn::records::kSweepSummaryFormat);
   EXPECT_EQ(sa["points"], 12);
   EXPECT_EQ(sa["completed"], 12);
   EXPECT_GT(sa["failed_points"].get<int>(), 0);
@@ -161,9 +210,32 @@ TEST(SweepDriver, RecordsResumptionAfterAKillAndTheShrunkBoundary) {
   ASSERT_EQ(run("sweep run " + kSweep + " --out " + dir + "/c --points 2 --no-shrink --db " + dir + "/db.jsonl", dir + "/c.log"), 1)
       << readText(dir + "/c.log");
   const json replay = json::parse(readText(dir + "/c/replays.jsonl"));
+  EXPECT_EQ(replay["format"], lexdyn::records::kSweepReplayFormat);
   EXPECT_EQ(replay["check"], "no_overshoot");
+  // The database holds A's shrunk failure, then C's own (unshrunk), each once, as entries of this
+  // format (B ran without the database).
+  const std::string db = readText(dir + "/db.jsonl");
+  const json sc = json::parse(readText(dir + "/c/summary.json"));
+  ASSERT_EQ(std::count(db.begin(), db.end(), '\n'), 1 + static_cast<long>(sc["failures"].size())) << db;
+  std::string why;
+  const auto entry = lexdyn::records::sweepFailureFromJson(json::parse(db.substr(0, db.find('\n'))), why);
+  ASSERT_TRUE(entry.has_value()) << why;
+  EXPECT_EQ(entry->sweep, "pointmass-damping");
+  EXPECT_EQ(entry->check, "no_overshoot");
+  EXPECT_EQ(entry->values, (std::map<std::string, std::string>{{"controller.params.damping", f["values"]["controller.params.damping"]}}));
   EXPECT_TRUE(replay["still_fails"].get<bool>());
   EXPECT_NE(readText(dir + "/c.log").find("replayed 1 earlier failure(s)"), std::string::npos);
+
+  // docs/file-formats.md's tables are the keys these files hold, no more and no fewer.
+  const json point = json::parse(readText(a + "/points/000000.json"));
+  expectDocumentedKeys("**Sweep point**", point, {});
+  expectDocumentedKeys("**Sweep run**", point["runs"]["wls"], {});
+  expectDocumentedKeys("**Sweep run**", json::parse(readText(a + "/runs/000000/wls/result.json")), {"reproduce", "rerun"});
+  expectDocumentedKeys("**Sweep summary**", sa, {});
+  expectDocumentedKeys("**Failure database entry**", json::parse(db.substr(0, db.find('\n'))), {});
+  std::set<std::string> entry_keys = documentedKeys("**Failure database entry**");
+  entry_keys.erase("format");
+  expectDocumentedKeys("**Replay**", replay, entry_keys, true);
 }
 
 // The total shrink budget is shared evenly by the failures: with two failures of WLS and
