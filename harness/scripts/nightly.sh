@@ -180,33 +180,19 @@ fi
 # ------------------------------------------------------------------ the night's identity
 COMMIT="$(git -C "$ROOT" rev-parse HEAD 2>/dev/null || echo unknown)"
 [ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no 2>/dev/null)" ] && COMMIT="$COMMIT (with uncommitted changes)"
+# The night's record (nightly.json) is lexdyn.history's: written and read through it.
 if [ -f "$OUT/nightly.json" ]; then
-  was="$("$PY" -c 'import json,sys; print(json.load(open(sys.argv[1])).get("commit",""))' "$OUT/nightly.json")"
+  was="$("$PY" -c '
+import sys, lexdyn.history as h
+try:
+    print(h.read_night(sys.argv[1])["commit"])
+except h.FormatError as e:
+    sys.exit(f"nightly: error: {e}")' "$OUT/nightly.json")" || die "$OUT/nightly.json is not a night this job can resume: give another --out"
   [ "$was" = "$COMMIT" ] || die "$OUT holds a night of commit $was, the checkout is at $COMMIT: give another --out"
   say "resuming the night in $OUT"
 else
-  "$PY" - "$OUT/nightly.json" "$COMMIT" "$JOBS" "$DURATION" <<'EOF' || exit 3
-import json, os, platform, socket, sys, datetime
-path, commit, jobs, duration = sys.argv[1:5]
-cpu = ""
-try:
-    for line in open("/proc/cpuinfo"):
-        if line.startswith("model name"):
-            cpu = line.split(":", 1)[1].strip()
-            break
-except OSError:
-    pass
-now = datetime.datetime.now(datetime.timezone.utc)
-rec = {"format": "lexdyn-nightly/1", "night": now.strftime("%Y-%m-%dT%H:%M:%SZ") + " " + commit[:12],
-       "commit": commit,
-       "date": now.strftime("%Y-%m-%dT%H:%M:%SZ"),
-       "machine": {"host": socket.gethostname(), "cpu": cpu, "cores": os.cpu_count(), "os": platform.platform()},
-       "jobs": int(jobs), "duration_s": float(duration) if duration else None}
-tmp = path + ".partial"
-with open(tmp, "w") as f:
-    json.dump(rec, f, indent=1)
-os.replace(tmp, path)
-EOF
+  "$PY" -c 'import sys, lexdyn.history as h; h.write_night(sys.argv[1], h.night_info(*sys.argv[2:]))' \
+    "$OUT/nightly.json" "$COMMIT" "$JOBS" "$DURATION" || exit 3
 fi
 
 # ------------------------------------------------------------------ 2. ctest (goldens included)

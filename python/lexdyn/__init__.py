@@ -7,6 +7,7 @@
     read_sweep_summary(path)  a sweep's summary.json
     read_sweep_results(path)  a sweep's results.jsonl -> point records
     read_history(path)        the nightly job's history (JSON Lines) -> History
+    read_night(path)          a night's nightly.json -> dict (night_info / write_night make one)
 
 Every reader raises FormatError (a ValueError) naming the file, the line and the field of the
 first thing that is not what the format says.
@@ -25,7 +26,7 @@ False.
 import importlib.util
 
 from .errors import FormatError
-from .history import HISTORY_FORMAT, History, read_history
+from .history import HISTORY_FORMAT, NIGHT_FORMAT, History, night_info, read_history, read_night, write_night
 from .summary import SUMMARY_FORMAT, Check, RunSummary, read_summary
 from .sweeps import SWEEP_SUMMARY_FORMAT, Sweep, read_sweep, read_sweep_results, read_sweep_summary, sweep_dataframe
 from .trace import TRACE_VERSION, Trace, read_trace, read_trace_header, trace_array, trace_dataframe
@@ -41,7 +42,8 @@ BINDINGS = _core is not None
 __all__ = [
     "FormatError", "Trace", "read_trace", "read_trace_header", "trace_array", "trace_dataframe", "TRACE_VERSION",
     "RunSummary", "Check", "read_summary", "SUMMARY_FORMAT", "Sweep", "read_sweep", "read_sweep_summary", "read_sweep_results",
-    "sweep_dataframe", "SWEEP_SUMMARY_FORMAT", "History", "read_history", "HISTORY_FORMAT",
+    "sweep_dataframe", "SWEEP_SUMMARY_FORMAT", "History", "read_history", "HISTORY_FORMAT", "NIGHT_FORMAT", "night_info",
+    "read_night", "write_night",
 ]
 
 if BINDINGS:

@@ -1,5 +1,13 @@
-"""The history of nights (the nightly job's JSON Lines file; docs/report.md, "History and
-trend"), one record per night:
+"""The nightly job's records (docs/report.md, docs/file-formats.md "Nightly records"), defined
+here once for the job (nightly.sh), the report and the user.
+
+The night (OUT/nightly.json, written by nightly.sh through write_night, read by the report
+through read_night):
+
+  {"format": "lexdyn-night/1", "night": "DATE COMMIT12", "commit": SHA, "date": ISO-8601 UTC,
+   "machine": {"host", "cpu", "cores", "os"}, "jobs": N, "duration_s": S or null}
+
+The history of nights (a JSON Lines file; "History and trend"), one record per night:
 
   {"format": "lexdyn-nightly-history/1", "night": ID, "commit": SHA, "date": ISO-8601 UTC,
    "machine": {...}, "runs": {RUN_ID: {"case", "method", "status", "error_tasks",
@@ -21,11 +29,16 @@ import datetime
 import json
 import math
 import os
+import platform
+import socket
 
 from . import _json
 from .errors import FormatError
 
 HISTORY_FORMAT = "lexdyn-nightly-history/1"
+NIGHT_FORMAT = "lexdyn-night/1"
+# nightly.json's format before it had a name of its own (the same keys).
+_NIGHT_FORMAT_BEFORE = "lexdyn-nightly/1"
 # The figures of a run's record: null or a finite number.
 RUN_FIGURES = ["final_error", "mean_error", "peak_iterations", "tick_p50_us", "tick_p99_us", "realtime_factor", "checks"]
 DATE_EXAMPLE = "2026-11-24T20:24:35Z"
@@ -204,3 +217,68 @@ class History:
 def read_history(path, strict=True, constant=None):
     """The History of PATH (see History); strict by default."""
     return History(os.fspath(path) if path else path, strict=strict, constant=constant)
+
+
+# ------------------------------------------------------------------ the night (nightly.json)
+def _cpu_model():
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return ""
+
+
+def night_info(commit, jobs=None, duration_s=None, now=None):
+    """A night's record (nightly.json) for COMMIT on this machine, dated NOW (default: now, UTC)."""
+    now = now or datetime.datetime.now(datetime.timezone.utc)
+    date = now.astimezone(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return {"format": NIGHT_FORMAT, "night": date + " " + str(commit)[:12], "commit": str(commit), "date": date,
+            "machine": {"host": socket.gethostname(), "cpu": _cpu_model(), "cores": os.cpu_count(), "os": platform.platform()},
+            "jobs": None if jobs is None else int(jobs), "duration_s": None if duration_s in (None, "") else float(duration_s)}
+
+
+def write_night(path, info):
+    """Writes the night's record INFO (night_info) into PATH whole or not at all."""
+    problem = _night_problem(info)
+    if problem:
+        raise ValueError(f"{path}: not a night's record: {problem[0]}: {problem[1]}")
+    tmp = str(path) + ".partial"
+    with open(tmp, "w") as f:
+        json.dump(info, f, indent=1)
+        f.write("\n")
+    os.replace(tmp, path)
+
+
+def _night_problem(doc):
+    """(field, what) of the first thing that makes DOC no night's record, or None."""
+    kind = _json.kind
+    if not isinstance(doc, dict):
+        return "", f"expected a night's record (a JSON object), found {kind(doc)}"
+    fmt = doc.get("format")
+    if fmt not in (NIGHT_FORMAT, _NIGHT_FORMAT_BEFORE):
+        return "format", f"expected '{NIGHT_FORMAT}', found " + (repr(fmt) if fmt is not None else "none")
+    for key in ("night", "commit"):
+        if not isinstance(doc.get(key), str) or not doc[key]:
+            return key, f"expected a string, found {kind(doc[key]) if key in doc else 'none'}"
+    if "date" in doc and parse_date(doc["date"]) is None:
+        return "date", f"expected an ISO-8601 time ({DATE_EXAMPLE}), found {doc['date']!r}"
+    if "machine" in doc and not isinstance(doc["machine"], dict):
+        return "machine", f"expected an object, found {kind(doc['machine'])}"
+    for key in ("jobs", "duration_s"):
+        v = doc.get(key)
+        if v is not None and not _finite(v):
+            return key, f"expected a number or null, found {_damaged_text(v)}"
+    return None
+
+
+def read_night(path):
+    """The night's record of PATH (nightly.json); FormatError naming the file and the field when
+    it is not one (another format, a missing commit, a date that is no ISO-8601 time)."""
+    doc = _json.load(path, "a night's record (nightly.json)")
+    problem = _night_problem(doc)
+    if problem:
+        raise FormatError(path, problem[1], field=problem[0] or None)
+    return doc

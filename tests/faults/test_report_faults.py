@@ -26,6 +26,7 @@ summary is a real one with a figure replaced by NaN.
     (damaged)", never as nan, never a point of a trend, and written as null.
 Usage: test_report_faults.py --harness PATH --work DIR
 """
+import datetime
 import hashlib
 import json
 import os
@@ -38,6 +39,7 @@ import sys
 import time
 import unittest
 
+import lexdyn.history
 import suite_options  # tests/report (PYTHONPATH: tests/faults/CMakeLists.txt)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -144,9 +146,9 @@ class ReportFaults(unittest.TestCase):
         d = os.path.join(self.dir, name)
         for rid in runs or [r for r, _ in RUNS]:
             shutil.copytree(os.path.join(self.runs, rid), os.path.join(d, rid))
-        with open(os.path.join(d, "nightly.json"), "w") as f:
-            json.dump({"format": "lexdyn-nightly/1", "night": name, "commit": "fixture", "date": date,
-                       "machine": {"host": "test"}, "jobs": 1, "duration_s": 1.0}, f, indent=1)
+        info = lexdyn.history.night_info("fixture", jobs=1, duration_s=1.0, now=datetime.datetime.fromisoformat(date.replace("Z", "+00:00")))
+        info.update(night=name, machine={"host": "test"})
+        lexdyn.history.write_night(os.path.join(d, "nightly.json"), info)
         return d
 
     def mount_tmpfs(self, path, size_kb, readonly=False):

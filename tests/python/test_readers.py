@@ -299,3 +299,23 @@ def test_a_damaged_history(copy_of):
     assert math.isnan(h.records[1]["runs"]["pointmass-damping.bfgs"]["final_error"])
     assert len(h.warnings) == 2 and f"{path}:3: expected one JSON record per line" in h.warnings[1]
     assert h.skipped == [b"{not json"]
+
+
+# ------------------------------------------------------------------ the night (nightly.json)
+def test_a_night_reads_back_and_a_damaged_one_is_refused_by_name(tmp_path):
+    path = str(tmp_path / "nightly.json")
+    info = lexdyn.night_info("a" * 40, jobs=2, duration_s="")
+    lexdyn.write_night(path, info)
+    back = lexdyn.read_night(path)
+    assert back == info and back["format"] == lexdyn.NIGHT_FORMAT and back["duration_s"] is None
+    assert back["night"].endswith(" " + "a" * 12) and back["machine"]["cores"] >= 1
+    for field, value, what in (("format", "lexdyn-night/2", "expected 'lexdyn-night/1', found 'lexdyn-night/2'"),
+                               ("commit", None, "expected a string, found null"),
+                               ("date", "yesterday", "expected an ISO-8601 time"),
+                               ("jobs", float("nan"), "expected a finite number or null, found NaN")):
+        bad = dict(info, **{field: value})
+        with open(path, "w") as f:
+            json.dump(bad, f)
+        with pytest.raises(FormatError) as e:
+            lexdyn.read_night(path)
+        assert e.value.field == field and what in e.value.what, str(e.value)

@@ -21,6 +21,7 @@ import sys
 import time
 import unittest
 
+import lexdyn.history
 import suite_options
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -131,11 +132,16 @@ class Nightly(unittest.TestCase):
 
     def test_another_commit_and_bad_configuration_are_refused(self):
         os.makedirs(self.out)
-        with open(os.path.join(self.out, "nightly.json"), "w") as f:
-            json.dump({"format": "lexdyn-nightly/1", "night": "x", "commit": "0" * 40}, f)
+        lexdyn.history.write_night(os.path.join(self.out, "nightly.json"), lexdyn.history.night_info("0" * 40))
         r = subprocess.run(self.cmd(), capture_output=True, text=True, timeout=120)
         self.assertEqual(r.returncode, 2, r.stderr)
         self.assertIn("holds a night of commit " + "0" * 40, r.stderr)
+        # A nightly.json that is no night's record is refused by name, not resumed.
+        with open(os.path.join(self.out, "nightly.json"), "w") as f:
+            json.dump({"format": "lexdyn-night/7", "night": "x", "commit": "0" * 40}, f)
+        r = subprocess.run(self.cmd(), capture_output=True, text=True, timeout=120)
+        self.assertEqual(r.returncode, 2, r.stderr)
+        self.assertIn("nightly.json: format: expected 'lexdyn-night/1', found 'lexdyn-night/7'", r.stderr)
         cfg = os.path.join(self.work, "nightly.yaml")
         with open(cfg, "w") as f:
             f.write("format: lexdyn-nightly/1\nsweeps:\n  - {file: cases/sweeps/a.yaml, points: many}\n")

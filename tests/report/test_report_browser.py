@@ -36,6 +36,7 @@ from PIL import Image
 
 import suite_options
 from chromium_cdp import Browser
+import lexdyn.history
 from lexdyn import read_trace
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -189,10 +190,9 @@ class ReportInBrowser(unittest.TestCase):
     @classmethod
     def night(cls, runs_dir, night):
         commit = sh(["git", "-C", ROOT, "rev-parse", "HEAD"]).stdout.strip() or "unknown"
-        with open(os.path.join(runs_dir, "nightly.json"), "w") as f:
-            json.dump({"format": "lexdyn-nightly/1", "night": night, "commit": commit,
-                       "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-                       "machine": {"host": "test"}}, f)
+        info = lexdyn.history.night_info(commit)
+        info.update(night=night, machine={"host": "test"})
+        lexdyn.history.write_night(os.path.join(runs_dir, "nightly.json"), info)
 
     @classmethod
     def ctest_goldens(cls, manifest, junit):

@@ -5,7 +5,7 @@ RUNS/                      a nightly output (harness/scripts/nightly.sh) or full
   <id>/trace.csv           trace.csv (or trace.csv.partial) and log.txt
   <id>/log.txt
   runs.txt                 optional: ID CASE_FILE METHOD lines of the runs that were planned
-  nightly.json             optional: commit, date, machine of the night
+  nightly.json             optional: the night (lexdyn.history.read_night): commit, date, machine
   compare/<case>.json      optional: `lexdyn-harness compare --json` of the case's comparisons
   ctest/junit.xml          optional: ctest's JUnit output (the golden checks among it)
 """
@@ -15,7 +15,7 @@ import re
 import xml.etree.ElementTree as ET
 
 from lexdyn import _json as lexdyn_json
-from lexdyn import read_summary
+from lexdyn import read_night, read_summary
 
 from .common import ReportInputError, finite, json_constant, method_sort_key, non_finite_fields, read_yaml
 
@@ -205,7 +205,7 @@ class Results:
             raise ReportInputError(runs_dir, "expected a directory of runs (--runs), found none")
         self.dir = os.path.abspath(runs_dir)
         meta = os.path.join(self.dir, "nightly.json")
-        self.meta = load_json(meta) if os.path.isfile(meta) else {}
+        self.meta = read_night(meta) if os.path.isfile(meta) else {}
         planned = self._planned()
         ids = list(planned)
         for name in sorted(os.listdir(self.dir)):
