@@ -114,7 +114,8 @@ struct Solver::Impl {
   std::vector<LevelKind> kinds;
 
   HlsFactorization fact;
-  int M = 0;  // general rows
+  int M = 0;        // general rows
+  int allRows = 0;  // every row of the problem, bounds included (the multipliers' rows)
   // Per general row (gid).
   Eigen::VectorXd lo, up, Ax, Adx, v, dv, res, mu, b, rowNorm;
   std::vector<RowState> state;
@@ -237,6 +238,7 @@ void Solver::Impl::setup(const Problem& problem, const Options& o) {
   out.violation.resize(static_cast<size_t>(p));
   for (int l = 0; l < p; ++l) out.violation[static_cast<size_t>(l)].setZero(rowsOf[static_cast<size_t>(l)]);
   out.violation_norm.setZero(p);
+  allRows = off;
   out.lambda.setZero(off, p);
   out.active.level.resize(static_cast<size_t>(p));
   for (int l = 0; l < p; ++l)
@@ -960,6 +962,8 @@ const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm,
     out.reason = StopReason::NonFiniteInput;
     return out;
   }
+  // The multipliers taken by takeMultipliers() are allocated again (finish() zeroes them).
+  if (out.lambda.rows() != allRows || out.lambda.cols() != p) out.lambda.resize(allRows, p);
   if (warm != nullptr) {
     initWarm(*warm, *xw);
   } else {
@@ -973,6 +977,12 @@ const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm,
 }
 
 const Result& Solver::solve(const Problem& problem) { return impl_->solve(problem, nullptr, nullptr); }
+
+Eigen::MatrixXd Solver::takeMultipliers() {
+  Eigen::MatrixXd m;
+  m.swap(impl_->out.lambda);
+  return m;
+}
 
 const Result& Solver::solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm) {
   return impl_->solve(problem, &warm, &xWarm);

@@ -212,6 +212,10 @@ class Solver {
   /// solver's own result() is allowed).
   const Result& solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm);
   const Result& result() const;
+  /// Moves the last result's multipliers (Result::lambda) out without copying them; result()
+  /// then has none until the next solve, which allocates them again. For a caller that keeps
+  /// every result (the Python bindings); the controller's loop never calls it.
+  Eigen::MatrixXd takeMultipliers();
 
  private:
   struct Impl;

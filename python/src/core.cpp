@@ -156,9 +156,18 @@ ls::Result solveWith(PySolver& s, const ls::Problem& problem, const py::object& 
     s.solver.setup(problem, s.options);
     s.is_setup = true;
   }
-  if (from) return s.solver.solve(problem, from->active, from->x);
-  if (w) return s.solver.solve(problem, w->active, w->x);
-  return s.solver.solve(problem);
+  if (from)
+    s.solver.solve(problem, from->active, from->x);
+  else if (w)
+    s.solver.solve(problem, w->active, w->x);
+  else
+    s.solver.solve(problem);
+  // The Result Python keeps: the multipliers (all rows x levels, the bulk of it) are moved out of
+  // the solver rather than copied; the next solve allocates its own again.
+  Eigen::MatrixXd lambda = s.solver.takeMultipliers();
+  ls::Result out = s.solver.result();
+  out.lambda = std::move(lambda);
+  return out;
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -140,8 +140,12 @@ def test_warm_start_from_the_previous_tick(problems):
     solver = lexdyn.Solver()
     r1 = solver.solve(first)
     cold = lexdyn.solve(second)
+    m1 = r1.multipliers.copy()
     warm = solver.solve(second, warm=r1)
     assert warm.status == cold.status == "solved"
+    # Each Result keeps its own multipliers: the solver's next solve does not touch them.
+    assert_same_bits(r1.multipliers, m1, "multipliers")
+    assert_same_bits(warm.multipliers, lexdyn.Solver().solve(second, warm=r1).multipliers, "multipliers")
     assert np.allclose(warm.level_violation, cold.level_violation, rtol=1e-6, atol=1e-9)
     assert np.allclose(warm.x, cold.x, rtol=1e-6, atol=1e-8)
     assert warm.iterations <= cold.iterations

@@ -46,6 +46,41 @@ const Result& solveOnce(Solver& s, const Problem& p, const Options& o = Options{
   return s.solve(p);
 }
 
+// takeMultipliers() moves the result's multipliers out: they are the ones the solve computed,
+// result() has none left, and the next solve computes them again (the same bits as a solver
+// whose multipliers were never taken), also after a solve that refuses its input.
+TEST(Solver, TakenMultipliersAreTheResultsAndTheNextSolveMakesThemAgain) {
+  test::GenOptions g;
+  g.n = 15;
+  g.levels = 6;
+  g.maxRows = 8;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    Problem prob = test::randomProblem(seed, g);
+    Solver a, b;
+    a.setup(prob);
+    b.setup(prob);
+    const Eigen::MatrixXd expected = a.solve(prob).lambda;
+    ASSERT_GT(expected.size(), 0);
+    const Eigen::MatrixXd taken = a.takeMultipliers();
+    EXPECT_EQ(taken.rows(), expected.rows());
+    EXPECT_EQ(std::memcmp(taken.data(), expected.data(), sizeof(double) * static_cast<size_t>(expected.size())), 0) << seed;
+    EXPECT_EQ(a.result().lambda.size(), 0);
+    b.solve(prob);
+    const Result& again = a.solve(prob, b.result().active, b.result().x);
+    const Result& reference = b.solve(prob, b.result().active, b.result().x);
+    ASSERT_EQ(again.lambda.rows(), reference.lambda.rows());
+    ASSERT_EQ(again.lambda.cols(), reference.lambda.cols());
+    EXPECT_EQ(std::memcmp(again.lambda.data(), reference.lambda.data(), sizeof(double) * static_cast<size_t>(again.lambda.size())), 0)
+        << seed;
+    (void)a.takeMultipliers();
+    Problem bad = prob;
+    bad.level(bad.levelCount() - 1).upper(0) = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_EQ(a.solve(bad).status, Status::NonFiniteInput);
+    EXPECT_EQ(a.solve(prob).status, Status::Solved);
+    EXPECT_EQ(a.result().lambda.rows(), expected.rows());
+  }
+}
+
 TEST(Solver, SingleEqualityLevelIsLeastSquares) {
   Problem p(2);
   p.addLevel("ls", mat(3, 2, {1, 0, 0, 1, 1, 1}), vec({1, 1, 3}), vec({1, 1, 3}));
