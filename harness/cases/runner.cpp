@@ -615,7 +615,8 @@ RunSummary runCase(const CaseSpec& spec, const RunOptions& options) {
 std::string checkResultsJson(const std::vector<checks::CheckResult>& results) {
   std::vector<records::CheckRecord> list;
   for (const auto& c : results) list.push_back(checkRecord(c));
-  const nlohmann::json j = {{"checks", records::toJson(list)}, {"all_checks_passed", checks::allPassed(results)}};
+  const nlohmann::json j = {
+      {"format", records::kCheckResultsFormat}, {"checks", records::toJson(list)}, {"all_checks_passed", checks::allPassed(results)}};
   return j.dump(2);
 }
 

@@ -17,6 +17,9 @@ namespace lexdyn::records {
 
 /// summary.json's "format": readers refuse other versions and say so.
 inline constexpr const char* kRunSummaryFormat = "lexdyn-run-summary/1";
+/// The "format" of `lexdyn-harness check --json` and `compare --json` ({format, checks,
+/// all_checks_passed}).
+inline constexpr const char* kCheckResultsFormat = "lexdyn-check-results/1";
 
 /// One check's outcome (NaN value/limit/margin: not computed; written as null).
 struct CheckRecord {

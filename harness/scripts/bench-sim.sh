@@ -64,15 +64,16 @@ for c in "${CASES[@]}"; do
       fi
     done
   done
-  python3 - "$OUT" "$name" "$RUNS" "${LABELS[@]}" <<'PY'
-import csv, json, statistics, sys
+  /usr/bin/python3 - "$OUT" "$name" "$RUNS" "${LABELS[@]}" <<'PY'
+import csv, statistics, sys
+import lexdyn
 out, name, runs, labels = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4:]
 PARTS = ("tick", "solver", "model", "tasks", "hessian")
 
 
 def report(label):
     """Prints one build's figures; returns (minimum wall, {part: minimum per-run median}, completed)."""
-    s = [json.load(open(f"{out}/{name}.{label}.{i}/summary.json")) for i in range(1, runs + 1)]
+    s = [lexdyn.read_summary(f"{out}/{name}.{label}.{i}/summary.json") for i in range(1, runs + 1)]
     prefix = f"[{label}] " if len(labels) > 1 else ""
     wall = [x["wall_s"] for x in s]
     sim = s[0]["simulated_s"]

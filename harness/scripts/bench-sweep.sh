@@ -23,13 +23,14 @@ sweep_once() {  # FILE JOBS POINTS
   t0=$(now)
   "$HARNESS" sweep run "$1" --out "$out" -j "$2" --points "$3" --no-db --no-shrink --quiet > /dev/null 2>&1 || true
   t1=$(now)
-  python3 - "$out" "$t0" "$t1" << 'EOF'
-import json, sys
+  /usr/bin/python3 - "$out" "$t0" "$t1" << 'EOF'
+import sys
+import lexdyn
 out, t0, t1 = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
 runs = 0
 inner = 0.0
-for line in open(out + "/results.jsonl"):
-    for r in json.loads(line)["runs"].values():
+for point in lexdyn.read_sweep_results(out + "/results.jsonl"):
+    for r in point["runs"].values():
         runs += 1
         inner += r["wall_s"]
 print(t1 - t0, inner, runs)

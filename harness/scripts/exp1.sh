@@ -51,7 +51,7 @@ code=0
 "$HARNESS" compare --case "$CASE" "$OUT/bfgs/trace.csv" "$OUT/ah/trace.csv" "$OUT/wls/trace.csv" > "$OUT/compare.txt" 2>&1 || code=$?
 status=$(lexdyn_worse "$status" "$code")
 
-python3 "$ROOT/harness/scripts/summary_table.py" bfgs="$OUT/bfgs" ah="$OUT/ah" wls="$OUT/wls" > "$OUT/table.txt"
+/usr/bin/python3 "$ROOT/harness/scripts/summary_table.py" bfgs="$OUT/bfgs" ah="$OUT/ah" wls="$OUT/wls" > "$OUT/table.txt"
 echo
 echo "exp1: comparison (paper, HRP-2Kai: final sums 1.86 LexDynBFGS, 1.87 LexDynAH, 1.90 m WLS)"
 cat "$OUT/table.txt"

@@ -55,7 +55,7 @@ lexdyn_each_comparison "$OUT/runs.txt" "$OUT" compare_case
 
 # The table (harness/scripts/summary_table.py), then the comparisons.
 set +e
-python3 "$ROOT/harness/scripts/summary_table.py" --errors right_hand,left_hand \
+/usr/bin/python3 "$ROOT/harness/scripts/summary_table.py" --errors right_hand,left_hand \
   $(cut -d' ' -f1 "$OUT/runs.txt" | sed "s#.*#&=$OUT/&#") > "$OUT/table.txt"
 table=$?
 set -e

@@ -54,8 +54,9 @@ fi
 # Each function's inclusive instructions (its "*" line) and, under it, those of its callees
 # from it (">" lines).
 callgrind_annotate --tree=calling --inclusive=yes --threshold=100 "$OUT/callgrind.out" > "$OUT/calling.txt" 2> /dev/null
-python3 - "$OUT/calling.txt" "$OUT/run/summary.json" "$CASE" <<'PY' || exit 3
-import json, re, sys
+/usr/bin/python3 - "$OUT/calling.txt" "$OUT/run/summary.json" "$CASE" <<'PY' || exit 3
+import re, sys
+import lexdyn
 
 calling, summary, case = sys.argv[1:4]
 cost, callees, current = {}, {}, None
@@ -94,7 +95,7 @@ def called(caller, callee, optional=False):
         sys.exit(f"profile-tick.sh: '{caller}' -> '{callee}' is not in the profile (renamed?)")
     return total
 
-s = json.load(open(summary))
+s = lexdyn.read_summary(summary)
 ticks = int(s.get("ticks") or s.get("controller", {}).get("ticks") or 0)
 run = part("PROGRAM TOTALS")
 ctrl = part("lexdyn::control::Controller::tick(", optional=True)  # none in posture-only cases

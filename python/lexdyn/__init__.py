@@ -3,6 +3,7 @@
     read_trace(path)          trace.csv / trace.csv.partial / golden traces -> Trace
                               (.array: numpy structured array, .dataframe(): pandas DataFrame)
     read_summary(path)        a run's summary.json -> RunSummary (a dict with the run's verdict)
+    read_check_results(path)  saved `lexdyn-harness check --json` / `compare --json` -> CheckResults
     read_sweep(dir)           a sweep's output directory -> Sweep (summary, records, dataframe())
     read_sweep_summary(path)  a sweep's summary.json
     read_sweep_results(path)  a sweep's results.jsonl -> point records
@@ -27,7 +28,7 @@ import importlib.util
 
 from .errors import FormatError
 from .history import HISTORY_FORMAT, NIGHT_FORMAT, History, night_info, read_history, read_night, write_night
-from .summary import SUMMARY_FORMAT, Check, RunSummary, read_summary
+from .summary import CHECK_RESULTS_FORMAT, SUMMARY_FORMAT, Check, CheckResults, RunSummary, read_check_results, read_summary
 from .sweeps import SWEEP_SUMMARY_FORMAT, Sweep, read_sweep, read_sweep_results, read_sweep_summary, sweep_dataframe
 from .trace import TRACE_VERSION, Trace, read_trace, read_trace_header, trace_array, trace_dataframe
 
@@ -41,7 +42,7 @@ BINDINGS = _core is not None
 
 __all__ = [
     "FormatError", "Trace", "read_trace", "read_trace_header", "trace_array", "trace_dataframe", "TRACE_VERSION",
-    "RunSummary", "Check", "read_summary", "SUMMARY_FORMAT", "Sweep", "read_sweep", "read_sweep_summary", "read_sweep_results",
+    "RunSummary", "Check", "read_summary", "SUMMARY_FORMAT", "CheckResults", "read_check_results", "CHECK_RESULTS_FORMAT", "Sweep", "read_sweep", "read_sweep_summary", "read_sweep_results",
     "sweep_dataframe", "SWEEP_SUMMARY_FORMAT", "History", "read_history", "HISTORY_FORMAT", "NIGHT_FORMAT", "night_info",
     "read_night", "write_night",
 ]

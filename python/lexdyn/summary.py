@@ -18,6 +18,8 @@ from .errors import FormatError
 # have none: they are read with a warning saying so.
 SUMMARY_FORMAT = "lexdyn-run-summary/1"
 SUMMARY_FORMATS = (SUMMARY_FORMAT,)
+# The format key of `lexdyn-harness check --json` / `compare --json` (C++: kCheckResultsFormat).
+CHECK_RESULTS_FORMAT = "lexdyn-check-results/1"
 
 
 class Check(dict):
@@ -84,6 +86,22 @@ class RunSummary(dict):
         return self.status == "completed" and not self.failed_checks
 
 
+def _check_checks(doc, path):
+    checks = doc.get("checks", [])
+    if not isinstance(checks, list):
+        raise FormatError(path, f"expected a list of checks, found {_json.kind(checks)}", field="checks")
+    for i, c in enumerate(checks):
+        if not isinstance(c, dict):
+            raise FormatError(path, f"expected a check (an object), found {_json.kind(c)}", field=f"checks[{i}]")
+        if not isinstance(c.get("name"), str):
+            raise FormatError(path, f"expected the check's name (a string), found {_json.kind(c.get('name')) if 'name' in c else 'none'}",
+                              field=f"checks[{i}].name")
+        for key in ("passed", "decides", "machine_dependent"):
+            if (key == "passed" or key in c) and not isinstance(c.get(key), bool):
+                raise FormatError(path, f"expected true or false, found {_json.kind(c.get(key)) if key in c else 'none'}",
+                                  field=f"checks[{i}].{key}")
+
+
 def check_summary(doc, path):
     """Raises FormatError (naming the field) unless DOC is a run summary this reader knows."""
     if not isinstance(doc, dict):
@@ -99,19 +117,7 @@ def check_summary(doc, path):
                           field="status")
     if "exit_code" in doc and (not isinstance(doc["exit_code"], int) or isinstance(doc["exit_code"], bool)):
         raise FormatError(path, f"expected an integer, found {_json.kind(doc['exit_code'])}", field="exit_code")
-    checks = doc.get("checks", [])
-    if not isinstance(checks, list):
-        raise FormatError(path, f"expected a list of checks, found {_json.kind(checks)}", field="checks")
-    for i, c in enumerate(checks):
-        if not isinstance(c, dict):
-            raise FormatError(path, f"expected a check (an object), found {_json.kind(c)}", field=f"checks[{i}]")
-        if not isinstance(c.get("name"), str):
-            raise FormatError(path, f"expected the check's name (a string), found {_json.kind(c.get('name')) if 'name' in c else 'none'}",
-                              field=f"checks[{i}].name")
-        for key in ("passed", "decides", "machine_dependent"):
-            if (key == "passed" or key in c) and not isinstance(c.get(key), bool):
-                raise FormatError(path, f"expected true or false, found {_json.kind(c.get(key)) if key in c else 'none'}",
-                                  field=f"checks[{i}].{key}")
+    _check_checks(doc, path)
     for key in ("tasks", "solver", "controller", "timing_us", "integrator", "trace_header", "statistics"):
         if key in doc and not isinstance(doc[key], dict):
             raise FormatError(path, f"expected an object, found {_json.kind(doc[key])}", field=key)
@@ -137,3 +143,44 @@ def read_summary(path, constant=None):
     doc = _json.load(path, "a run summary (JSON)", constant=constant)
     check_summary(doc, path)
     return as_summary(doc, path)
+
+
+class CheckResults(dict):
+    """`lexdyn-harness check --json` / `compare --json` as read: `checks` (Checks) and
+    `all_checks_passed`."""
+
+    path = None
+
+    @property
+    def checks(self):
+        return self.get("checks", [])
+
+    @property
+    def failed_checks(self):
+        return [c for c in self.checks if c.decides and not c.passed]
+
+
+def read_check_results(path, constant=None):
+    """The output of `lexdyn-harness check --json` or `compare --json` saved in PATH. Another
+    format is refused (FormatError naming it); a file without the key (written before it existed)
+    is read with a warning."""
+    import os
+    path = os.fspath(path)
+    doc = _json.load(path, "check results (JSON)", constant=constant)
+    if not isinstance(doc, dict):
+        raise FormatError(path, f"expected check results (a JSON object), found {_json.kind(doc)}")
+    if "format" not in doc:
+        warnings.warn(f"{path}: check results without a format key (written by a build before {CHECK_RESULTS_FORMAT}): read as that "
+                      "format", stacklevel=2)
+    elif doc["format"] != CHECK_RESULTS_FORMAT:
+        raise FormatError(path, f"expected format {CHECK_RESULTS_FORMAT!r}, found {doc['format']!r}", field="format")
+    if not isinstance(doc.get("checks"), list):
+        raise FormatError(path, f"expected a list of checks, found {_json.kind(doc.get('checks')) if 'checks' in doc else 'none'}",
+                          field="checks")
+    _check_checks(doc, path)
+    if not isinstance(doc.get("all_checks_passed"), bool):
+        raise FormatError(path, "expected true or false", field="all_checks_passed")
+    r = CheckResults(doc)
+    r.path = path
+    r["checks"] = [Check(c) for c in doc["checks"]]
+    return r

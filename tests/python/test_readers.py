@@ -319,3 +319,21 @@ def test_a_night_reads_back_and_a_damaged_one_is_refused_by_name(tmp_path):
         with pytest.raises(FormatError) as e:
             lexdyn.read_night(path)
         assert e.value.field == field and what in e.value.what, str(e.value)
+
+
+# ------------------------------------------------------------------ check --json
+def test_check_results_the_harness_printed(outputs, tmp_path):
+    r = lexdyn.read_check_results(os.path.join(outputs, "check.json"))
+    assert r["format"] == lexdyn.CHECK_RESULTS_FORMAT and r["all_checks_passed"] is True
+    s = lexdyn.read_summary(os.path.join(outputs, BFGS))
+    assert [(c.name, c.passed) for c in r.checks] == [(c.name, c.passed) for c in s.checks]
+    doc = json.loads(open(os.path.join(outputs, "check.json")).read())
+    path = str(tmp_path / "check.json")
+    for change, field, what in ((dict(format="lexdyn-check-results/2"), "format", "found 'lexdyn-check-results/2'"),
+                                (dict(checks={}), "checks", "expected a list of checks"),
+                                (dict(all_checks_passed="yes"), "all_checks_passed", "expected true or false")):
+        with open(path, "w") as f:
+            json.dump(dict(doc, **change), f)
+        with pytest.raises(FormatError) as e:
+            lexdyn.read_check_results(path)
+        assert e.value.field == field and what in str(e.value)

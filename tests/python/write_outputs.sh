@@ -6,6 +6,7 @@
 #                                            trace.csv, case.yaml)
 #   OUT/runs/pointmass-damping.gn/           a run whose wall-clock check (decides: false) fails
 #                                            by an impossible limit: exit code 0 all the same
+#   OUT/check.json                           `check --json` of the bfgs run's trace
 #   OUT/sweep/                               a 2 x 2 grid sweep of the point mass, wls and bfgs
 #   OUT/report/, OUT/history.jsonl           report.py over those runs and the sweep, with the
 #                                            night's record appended to the history
@@ -40,6 +41,11 @@ run pointmass-damping.gn 0 --method gn --duration 2 --set 'expected_failures=[]'
                  {name: tick_time_p99, type: tick_time, timer: tick, percentile: 99, limit_us: 0.001}]'
 printf '%s %s %s\n' pointmass-damping.bfgs "$CASE" bfgs pointmass-damping.wls "$CASE" wls \
   pointmass-damping.gn "$CASE" gn > "$OUT/runs/runs.txt"
+
+# The checks of a trace evaluated again (lexdyn.read_check_results).
+rc=0
+"$HARNESS" check "$OUT/runs/pointmass-damping.bfgs/trace.csv" --case "$CASE" --json > "$OUT/check.json" 2> "$OUT/check.log" || rc=$?
+[ "$rc" = 0 ] || { echo "write_outputs: check --json: exit code $rc" >&2; cat "$OUT/check.log" >&2; exit 1; }
 
 # Solver problems of a humanoid's controller: two consecutive ticks (outside OUT/runs: the
 # report reads every run there).

@@ -15,7 +15,7 @@ import re
 import xml.etree.ElementTree as ET
 
 from lexdyn import _json as lexdyn_json
-from lexdyn import read_night, read_summary
+from lexdyn import read_check_results, read_night, read_summary
 
 from .common import ReportInputError, finite, json_constant, method_sort_key, non_finite_fields, read_yaml
 
@@ -258,8 +258,7 @@ class Results:
             return out
         for name in sorted(os.listdir(d)):
             if name.endswith(".json"):
-                j = load_json(os.path.join(d, name))
-                out[name[:-5]] = j.get("checks", [])
+                out[name[:-5]] = read_check_results(os.path.join(d, name), constant=json_constant).checks
         return out
 
     def run(self, run_id):
