@@ -347,10 +347,11 @@ RunRecord readRunRecord(const std::string& path) {
   std::stringstream ss;
   ss << in.rdbuf();
   json j;
+  const std::string text = ss.str();
   try {
-    j = json::parse(ss.str());
+    j = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw InputError(path, std::string("not JSON: ") + e.what());
+    throw InputError(path, "not a run summary: " + jsonSyntaxProblem(text, e.byte, e.what()));
   }
   return runRecordFromJson(j, path);
 }

@@ -61,8 +61,8 @@ std::optional<json> readJsonFile(const std::string& path, std::string& why) {
   }
   try {
     return json::parse(*text);
-  } catch (const std::exception& e) {
-    why = std::string("damaged: ") + e.what();
+  } catch (const json::parse_error& e) {
+    why = "damaged: " + records::jsonSyntaxProblem(*text, e.byte, e.what());
     return std::nullopt;
   }
 }

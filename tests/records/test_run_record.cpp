@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -113,6 +114,33 @@ TEST(RunRecord, EveryBadFieldIsNamedAtOnce) {
     for (const char* part : {"simulated_s: missing", "checks[1].passed: not true or false",
                              "status: 'fell_over' is no run status (completed |", "controller.status_counts.ok: not an integer"}) {
       EXPECT_NE(what.find(part), std::string::npos) << part << " in " << what;
+    }
+  }
+}
+
+// A summary holding NaN (another writer's; the harness writes null) or cut short is refused with
+// the file, the line and the key, as lexdyn.read_summary does.
+TEST(RunRecord, ANaNOrACutSummaryIsNamedByLineAndKey) {
+  const std::string text = slurp(exp1WlsSummary());
+  const fs::path dir = fs::path(LEXDYN_BINARY_DIR) / "test_output" / "records_bad";
+  fs::create_directories(dir);
+  const size_t at = text.find("\"simulated_s\": ");
+  ASSERT_NE(at, std::string::npos);
+  const size_t end = text.find_first_of(",\n", at);
+  const std::string nan = text.substr(0, at) + "\"simulated_s\": NaN" + text.substr(end);
+  const long line = 1 + std::count(text.begin(), text.begin() + static_cast<long>(at), '\n');
+  const std::pair<std::string, std::string> cases[] = {
+      {nan, "nan.json: not a run summary: line " + std::to_string(line) + ": simulated_s: expected a finite number or null, found NaN"},
+      {text.substr(0, text.size() / 2), "cut.json: not a run summary: line "},
+  };
+  for (const auto& [content, expected] : cases) {
+    const std::string name = expected.substr(0, expected.find(':'));
+    std::ofstream((dir / name).string()) << content;
+    try {
+      (void)lexdyn::records::readRunRecord((dir / name).string());
+      ADD_FAILURE() << name << " was read";
+    } catch (const lexdyn::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
   }
 }
