@@ -4,4 +4,4 @@ add_executable(lexdyn-harness ${CMAKE_CURRENT_LIST_DIR}/harness_main.cpp ${CMAKE
   ${CMAKE_CURRENT_LIST_DIR}/robot_cmd.cpp)
 target_link_libraries(lexdyn-harness PRIVATE lexdyn::cases lexdyn::golden lexdyn::sweep lexdyn::robot CLI11::CLI11)
 target_compile_definitions(lexdyn-harness PRIVATE LEXDYN_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
-install(TARGETS lexdyn-harness RUNTIME DESTINATION bin)
+install(TARGETS lexdyn-harness RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
