@@ -987,6 +987,19 @@ std::vector<std::string> feetUnderHips(const model::RobotDescription& d, const R
   const model::RobotModel m(d);
   model::ModelData data = m.createData();
   model::Configuration q = m.neutralConfiguration();
+  // The model in the posture, its base turned as the layout turned it (soles flat): the frame of
+  // the layout's poses, so that the hips and the feet below are where the layout saw them.
+  q.base_rotation = L.base_rotation;
+  q.joints = posture;
+  m.update(data, q, Eigen::VectorXd::Zero(m.nv()));
+  std::vector<Eigen::Isometry3d> pose;
+  for (int b = 0; b < m.numBodies(); ++b) pose.push_back(m.bodyPlacement(data, b));
+  // The bodies each foot's chain passes through: a joint above a body that carries two feet (a
+  // spine, a waist) is the trunk's, never a leg's.
+  std::vector<int> feet_below(d.links.size(), 0);
+  for (const auto& f : L.feet) {
+    for (int b = f.body; b >= 0; b = d.parentBody(b)) ++feet_below[static_cast<size_t>(b)];
+  }
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ(), fwd = L.forward, lateral = up.cross(fwd);
   constexpr double kStretch = 0.85;
   struct Leg {
@@ -1001,12 +1014,12 @@ std::vector<std::string> feetUnderHips(const model::RobotDescription& d, const R
   for (const auto& f : L.feet) {
     Leg g;
     g.foot = &f;
-    for (int b = f.body; b > 0; b = d.parentBody(b)) {
+    for (int b = f.body; b > 0 && feet_below[static_cast<size_t>(b)] == 1; b = d.parentBody(b)) {
       const int j = d.links[static_cast<size_t>(b)].parent_joint;
       if (j < 0) continue;
       const auto& Jd = d.joints[static_cast<size_t>(j)];
       if (Jd.type != model::JointType::Revolute) continue;
-      const double a = (L.body_pose[static_cast<size_t>(Jd.child_link)].linear() * Jd.axis).dot(lateral);
+      const double a = (pose[static_cast<size_t>(Jd.child_link)].linear() * Jd.axis).dot(lateral);
       if (std::abs(a) < 0.9) continue;
       g.pitch.insert(g.pitch.begin(), j);
       g.sign.insert(g.sign.begin(), a > 0.0 ? 1.0 : -1.0);
@@ -1014,8 +1027,8 @@ std::vector<std::string> feetUnderHips(const model::RobotDescription& d, const R
     if (g.pitch.size() < 2) continue;
     for (const auto& p : f.points) g.sole += p;
     g.sole = f.sole_in_body * (g.sole / static_cast<double>(f.points.size()));
-    g.foot_world = L.body_pose[static_cast<size_t>(f.body)] * g.sole;
-    auto origin = [&](int j) { return L.body_pose[static_cast<size_t>(d.joints[static_cast<size_t>(j)].child_link)].translation(); };
+    g.foot_world = pose[static_cast<size_t>(f.body)] * g.sole;
+    auto origin = [&](int j) { return pose[static_cast<size_t>(d.joints[static_cast<size_t>(j)].child_link)].translation(); };
     g.hip = origin(g.pitch[0]);
     auto planar = [&](const Eigen::Vector3d& v) { return (v - v.dot(lateral) * lateral).norm(); };
     for (size_t k = 0; k + 1 < g.pitch.size(); ++k) g.reach += planar(origin(g.pitch[k + 1]) - origin(g.pitch[k]));
@@ -1024,102 +1037,137 @@ std::vector<std::string> feetUnderHips(const model::RobotDescription& d, const R
     legs.push_back(g);
   }
   // The point feet's common height: each stretched leg bent to kStretch of its reach.
-  std::optional<double> point_z;
+  std::optional<double> common_z;
   for (const Leg& g : legs) {
     if (!g.foot->point_foot) continue;
     const double h = (g.hip - g.foot_world).dot(up);
     const double z = g.hip.dot(up) - std::min(h, kStretch * g.reach);
-    if (h > kStretch * g.reach + 1e-3 && (!point_z || z > *point_z)) point_z = z;
+    if (h > kStretch * g.reach + 1e-3 && (!common_z || z > *common_z)) common_z = z;
   }
-  for (const Leg& g : legs) {
-    const FootLayout& f = *g.foot;
-    const double height = (g.hip - g.foot_world).dot(up);
-    const double offset = (g.foot_world - g.hip).dot(fwd);
-    const double foot_z = f.point_foot && point_z ? *point_z : g.foot_world.dot(up);
-    const bool bend = std::abs(foot_z - g.foot_world.dot(up)) > 1e-3;
-    if (std::abs(offset) <= std::max(0.01, 0.1 * height) && !bend) continue;  // nothing to move
-    const int frame = m.frameId(f.link);
-    const bool keep_pitch = !f.point_foot && g.pitch.size() >= 3;
-    const int rows = keep_pitch ? 3 : 2, n = static_cast<int>(g.pitch.size());
-    auto limits = [&](int j) {
-      const auto& Jd = d.joints[static_cast<size_t>(j)];
-      const double range = Jd.upper - Jd.lower;
-      return std::isfinite(range) ? std::pair{Jd.lower + 0.05 * range, Jd.upper - 0.05 * range} : std::pair{-M_PI, M_PI};
-    };
-    Eigen::VectorXd x;
-    Eigen::VectorXd r(rows);
-    auto residual = [&] {
-      q.joints = x;
-      m.update(data, q, Eigen::VectorXd::Zero(m.nv()));
-      const Eigen::Vector3d foot = m.bodyPlacement(data, f.body) * g.sole;
-      r[0] = (foot - g.hip).dot(fwd);
-      r[1] = foot.dot(up) - foot_z;
-      if (keep_pitch) {
-        r[2] = 0.0;
-        for (int k = 0; k < n; ++k) {
-          const int j = g.pitch[static_cast<size_t>(k)];
-          r[2] += g.sign[static_cast<size_t>(k)] * (x[j] - posture[j]);
+  // Every leg placed (into `out`): the point feet (every foot with `all_feet`) at `point_z`, the
+  // others at their height. False when a leg that had to move could not: feet at different
+  // heights would stand on some only.
+  auto place = [&](const std::optional<double>& point_z, bool all_feet, std::vector<std::string>& moved, Eigen::VectorXd& out) {
+    bool all_bent = true;
+    for (const Leg& g : legs) {
+      const FootLayout& f = *g.foot;
+      const double height = (g.hip - g.foot_world).dot(up);
+      const double offset = (g.foot_world - g.hip).dot(fwd);
+      const double foot_z = (f.point_foot || all_feet) && point_z ? *point_z : g.foot_world.dot(up);
+      const bool bend = std::abs(foot_z - g.foot_world.dot(up)) > 1e-3;
+      if (std::abs(offset) <= std::max(0.01, 0.1 * height) && !bend) continue;  // nothing to move
+      const int frame = m.frameId(f.link);
+      const bool keep_pitch = !f.point_foot && g.pitch.size() >= 3;
+      const int rows = keep_pitch ? 3 : 2, n = static_cast<int>(g.pitch.size());
+      auto limits = [&](int j) {
+        const auto& Jd = d.joints[static_cast<size_t>(j)];
+        const double range = Jd.upper - Jd.lower;
+        return std::isfinite(range) ? std::pair{Jd.lower + 0.05 * range, Jd.upper - 0.05 * range} : std::pair{-M_PI, M_PI};
+      };
+      Eigen::VectorXd x;
+      Eigen::VectorXd r(rows);
+      auto residual = [&] {
+        q.joints = x;
+        m.update(data, q, Eigen::VectorXd::Zero(m.nv()));
+        const Eigen::Vector3d foot = m.bodyPlacement(data, f.body) * g.sole;
+        r[0] = (foot - g.hip).dot(fwd);
+        r[1] = foot.dot(up) - foot_z;
+        if (keep_pitch) {
+          r[2] = 0.0;
+          for (int k = 0; k < n; ++k) {
+            const int j = g.pitch[static_cast<size_t>(k)];
+            r[2] += g.sign[static_cast<size_t>(k)] * (x[j] - out[j]);
+          }
         }
-      }
-    };
-    // Gauss-Newton on the pitch joints (the hip's origin does not move with them), steps of at
-    // most 0.3 rad, inside 5 % of each joint's range.
-    Eigen::MatrixXd J(3, m.nv());
-    auto solve = [&]() {
-      residual();
-      for (int it = 0; it < 100; ++it) {
-        if (r.norm() < 1e-5) return true;
-        m.pointJacobian(data, frame, g.sole, J);
-        Eigen::MatrixXd A(rows, n);
-        for (int k = 0; k < n; ++k) {
-          const Eigen::Vector3d c = J.col(m.jointVelocityOffset() + g.pitch[static_cast<size_t>(k)]);
-          A(0, k) = c.dot(fwd);
-          A(1, k) = c.dot(up);
-          if (keep_pitch) A(2, k) = g.sign[static_cast<size_t>(k)];
-        }
-        Eigen::VectorXd step = A.transpose() * (A * A.transpose() + 1e-6 * Eigen::MatrixXd::Identity(rows, rows)).ldlt().solve(r);
-        if (step.cwiseAbs().maxCoeff() > 0.3) step *= 0.3 / step.cwiseAbs().maxCoeff();
-        for (int k = 0; k < n; ++k) {
-          const int j = g.pitch[static_cast<size_t>(k)];
-          const auto [lo, hi] = limits(j);
-          x[j] = std::clamp(x[j] - step[k], lo, hi);
-        }
+      };
+      // Gauss-Newton on the pitch joints (the hip's origin does not move with them), steps of at
+      // most 0.3 rad, inside 5 % of each joint's range.
+      Eigen::MatrixXd J(3, m.nv());
+      auto solve = [&]() {
         residual();
+        for (int it = 0; it < 100; ++it) {
+          if (r.norm() < 1e-5) return true;
+          m.pointJacobian(data, frame, g.sole, J);
+          Eigen::MatrixXd A(rows, n);
+          for (int k = 0; k < n; ++k) {
+            const Eigen::Vector3d c = J.col(m.jointVelocityOffset() + g.pitch[static_cast<size_t>(k)]);
+            A(0, k) = c.dot(fwd);
+            A(1, k) = c.dot(up);
+            if (keep_pitch) A(2, k) = g.sign[static_cast<size_t>(k)];
+          }
+          Eigen::VectorXd step = A.transpose() * (A * A.transpose() + 1e-6 * Eigen::MatrixXd::Identity(rows, rows)).ldlt().solve(r);
+          if (step.cwiseAbs().maxCoeff() > 0.3) step *= 0.3 / step.cwiseAbs().maxCoeff();
+          for (int k = 0; k < n; ++k) {
+            const int j = g.pitch[static_cast<size_t>(k)];
+            const auto [lo, hi] = limits(j);
+            x[j] = std::clamp(x[j] - step[k], lo, hi);
+          }
+          residual();
+        }
+        return r.norm() < 1e-5;
+      };
+      // A straight leg bends its knee (the second pitch joint) either way: both are tried, and the
+      // knee nearer the centre of mass (fore and aft) is kept, as quadrupeds stand.
+      std::vector<Eigen::VectorXd> found;
+      const bool straight = height > 0.97 * g.reach;
+      for (const double kick : straight ? std::vector<double>{0.3, -0.3} : std::vector<double>{0.0}) {
+        x = out;
+        const auto [lo, hi] = limits(g.pitch[1]);
+        x[g.pitch[1]] = std::clamp(x[g.pitch[1]] + kick, lo, hi);
+        if (solve()) found.push_back(x);
       }
-      return r.norm() < 1e-5;
-    };
-    // A straight leg bends its knee (the second pitch joint) either way: both are tried, and the
-    // knee nearer the centre of mass (fore and aft) is kept, as quadrupeds stand.
-    std::vector<Eigen::VectorXd> found;
-    const bool straight = height > 0.97 * g.reach;
-    for (const double kick : straight ? std::vector<double>{0.3, -0.3} : std::vector<double>{0.0}) {
-      x = posture;
-      const auto [lo, hi] = limits(g.pitch[1]);
-      x[g.pitch[1]] = std::clamp(x[g.pitch[1]] + kick, lo, hi);
-      if (solve()) found.push_back(x);
+      // A bent leg whose descent ends on a joint's limit (a knee whose range stops short of
+      // straight) starts again from the knee bent further, then less: the first that reaches wins.
+      for (const double kick : {0.3, 0.6, -0.3, -0.6}) {
+        if (straight || !found.empty()) break;
+        x = out;
+        const auto [lo, hi] = limits(g.pitch[1]);
+        x[g.pitch[1]] = std::clamp(x[g.pitch[1]] + kick, lo, hi);
+        if (solve()) found.push_back(x);
+      }
+      if (found.empty()) {
+        all_bent = false;
+        continue;
+      }
+      auto inward = [&](const Eigen::VectorXd& v) {
+        q.joints = v;
+        m.update(data, q, Eigen::VectorXd::Zero(m.nv()));
+        return std::abs((m.bodyPlacement(data, d.joints[static_cast<size_t>(g.pitch[1])].child_link).translation() - L.com).dot(fwd));
+      };
+      x = found[0];
+      if (found.size() > 1 && inward(found[1]) < inward(found[0]) - 1e-6) x = found[1];
+      const bool off = std::abs(offset) > std::max(0.01, 0.1 * height);
+      const std::string stretch = num(100.0 * height / g.reach, 3) + " % of its reach";
+      const std::string why = off ? f.surface + " " + num(std::abs(offset), 3) + " m " + (offset > 0.0 ? "ahead of" : "behind") +
+                                        " its hip" + (bend ? ", its leg at " + stretch : "")
+                                  : f.surface + "'s leg at " + stretch;
+      for (int k = 0; k < n; ++k) {
+        const int j = g.pitch[static_cast<size_t>(k)];
+        if (std::abs(x[j] - out[j]) < 1e-9) continue;
+        moved.push_back(d.joints[static_cast<size_t>(j)].name + ": " + num(out[j]) + " put " + why + "; taken as " + num(x[j], 6) +
+                        " (the foot under the hip" +
+                        (bend ? ", the leg at " + num(100.0 * (g.hip.dot(up) - foot_z) / g.reach, 3) + " % of its reach)" : ")"));
+      }
+      for (int k = 0; k < n; ++k) out[g.pitch[static_cast<size_t>(k)]] = x[g.pitch[static_cast<size_t>(k)]];
     }
-    if (found.empty()) continue;
-    auto inward = [&](const Eigen::VectorXd& v) {
-      q.joints = v;
-      m.update(data, q, Eigen::VectorXd::Zero(m.nv()));
-      return std::abs((m.bodyPlacement(data, d.joints[static_cast<size_t>(g.pitch[1])].child_link).translation() - L.com).dot(fwd));
-    };
-    x = found[0];
-    if (found.size() > 1 && inward(found[1]) < inward(found[0]) - 1e-6) x = found[1];
-    const bool off = std::abs(offset) > std::max(0.01, 0.1 * height);
-    const std::string stretch = num(100.0 * height / g.reach, 3) + " % of its reach";
-    const std::string why = off ? f.surface + " " + num(std::abs(offset), 3) + " m " + (offset > 0.0 ? "ahead of" : "behind") + " its hip" +
-                                      (bend ? ", its leg at " + stretch : "")
-                                : f.surface + "'s leg at " + stretch;
-    for (int k = 0; k < n; ++k) {
-      const int j = g.pitch[static_cast<size_t>(k)];
-      if (std::abs(x[j] - posture[j]) < 1e-9) continue;
-      moved.push_back(d.joints[static_cast<size_t>(j)].name + ": " + num(posture[j]) + " put " + why + "; taken as " + num(x[j], 6) +
-                      " (the foot under the hip" +
-                      (bend ? ", the leg at " + num(100.0 * (g.hip.dot(up) - foot_z) / g.reach, 3) + " % of its reach)" : ")"));
-    }
-    for (int k = 0; k < n; ++k) posture[g.pitch[static_cast<size_t>(k)]] = x[g.pitch[static_cast<size_t>(k)]];
+    return all_bent;
+  };
+  // A leg that cannot bring its foot under the hip at its height (a knee whose range stops short
+  // of straight) needs the hips lower: then every foot goes to the common height of legs at
+  // kStretch of their reach. If that fails too, only the point feet are bent, or none.
+  std::optional<double> all_z;
+  for (const Leg& g : legs) {
+    const double z = g.hip.dot(up) - std::min((g.hip - g.foot_world).dot(up), kStretch * g.reach);
+    if (!all_z || z > *all_z) all_z = z;
   }
+  Eigen::VectorXd out = posture;
+  bool placed = place(common_z, false, moved, out);
+  for (int attempt = 0; !placed && attempt < 2; ++attempt) {
+    moved.clear();
+    out = posture;
+    placed = attempt == 0 ? place(all_z, true, moved, out) : place(std::nullopt, false, moved, out);
+  }
+  posture = out;
   return moved;
 }
 
@@ -1216,8 +1264,28 @@ InitResult initRobot(const InitOptions& o) {
   // A drafted zero posture's legs under their hips (not a posture the SRDF gives).
   if (posture.given < 0) {
     Posture& chosen = postures[static_cast<size_t>(&posture - postures.data())];
+    const Eigen::VectorXd before = chosen.q;
     const std::vector<std::string> moved = feetUnderHips(d, L, chosen.q);
+    // The moved legs must stand as before: the same feet on the ground (a foot lifted, or a leg
+    // taken for an arm, would change the robot the draft describes); otherwise the posture stays.
+    std::optional<RobotLayout> moved_layout;
     if (!moved.empty()) {
+      ProblemList again(o.urdf);
+      moved_layout = analyseLayout(d, chosen.q, again, &meshes);
+      std::vector<int> was, now;
+      for (const auto& f : L.feet) was.push_back(f.body);
+      for (const auto& f : moved_layout->feet) now.push_back(f.body);
+      std::sort(was.begin(), was.end());
+      std::sort(now.begin(), now.end());
+      if (was != now || again.hasErrors()) {
+        chosen.q = before;
+        moved_layout.reset();
+        result.warnings.push_back("posture '" + chosen.name + "': the legs were left as drafted: bringing them under their hips put " +
+                                  std::to_string(now.size()) + " feet on the ground instead of " + std::to_string(was.size()) +
+                                  " (give a standing posture: --posture, an SRDF)");
+      }
+    }
+    if (moved_layout) {
       chosen.source += "; then the legs brought under their hips (each moved joint says why)";
       for (const auto& m : moved) {
         result.warnings.push_back("posture '" + chosen.name + "': " + m);
@@ -1227,9 +1295,7 @@ InitResult initRobot(const InitOptions& o) {
                              chosen.clamped.end());
         chosen.clamped.push_back(m);
       }
-      ProblemList again(o.urdf);
-      L = analyseLayout(d, chosen.q, again, &meshes);
-      again.throwIfErrors();
+      L = std::move(*moved_layout);
     }
   }
   for (const auto& w : mesh_problems.warnings()) result.warnings.push_back(w.text());

@@ -75,7 +75,9 @@ void geometryPoints(const model::GeometryDescription& g, const Eigen::Isometry3d
 }
 
 // +1 when a name says left (left_..., l_..., ..._l_..., LLEG, LHip), -1 right, 0 neither.
-int sideOfName(const std::string& name) {
+// `leg_letters`: a robot on three or more feet, whose two-letter leg names (FL_, RL_) are read
+// before the capital-letter rule (on a humanoid RL_ is the right leg).
+int sideOfName(const std::string& name, bool leg_letters) {
   std::vector<std::string> tokens;
   std::string cur;
   for (size_t i = 0; i < name.size(); ++i) {
@@ -96,6 +98,7 @@ int sideOfName(const std::string& name) {
   // front / hind), lm_ (hexapods: middle), fl_, hr_: a side letter with a position letter, or two
   // side letters (RL_: rear left, lr_: left rear, rr_: right); an l makes it left.
   for (const auto& t : tokens) {
+    if (!leg_letters) break;
     if (t.size() != 2 || t.find_first_not_of("fhbmlr") != std::string::npos || t.find_first_of("lr") == std::string::npos) continue;
     return t.find('l') != std::string::npos ? 1 : -1;
   }
@@ -493,13 +496,15 @@ RobotLayout analyseLayout(const model::RobotDescription& d, const Eigen::VectorX
   }
   // Sides. Names tell left from right where they can (left_, l_, LLEG, LHip...); where the named
   // left is at -y the robot faces -x in its base frame, and forward is -x.
+  const bool leg_letters = L.feet.size() >= 3;
   auto sideOfLimb = [&](const std::vector<int>& bodies) {
     int vote = 0;
     for (int b : bodies) {
-      vote += sideOfName(d.links[static_cast<size_t>(b)].name);
+      vote += sideOfName(d.links[static_cast<size_t>(b)].name, leg_letters);
       const model::LinkDescription& l = d.links[static_cast<size_t>(b)];
       vote += sideOfName(l.parent_joint >= 0 ? d.joints[static_cast<size_t>(l.parent_joint)].name
-                                             : d.coupled_joints[static_cast<size_t>(l.parent_coupled)].name);
+                                             : d.coupled_joints[static_cast<size_t>(l.parent_coupled)].name,
+                         leg_letters);
     }
     return vote > 0 ? 1 : (vote < 0 ? -1 : 0);
   };

@@ -583,6 +583,73 @@ TEST(RobotInit, BoxFeetOnThreeJointLegsArePointsAndAQuadrupedFacingMinusXIsTurne
   EXPECT_EQ(run.code, 0) << run.err;
 }
 
+// What the feet-under-hips rule must leave alone, on variants of models/quadruped_like and
+// models/g1_like: a pitch joint in the trunk (a spine between the front and the hind legs) is no
+// leg's hip: it stays at 0 and the legs below it are bent as the others; hind knees that cannot
+// bend leave every foot at its height (bending only the front legs would lift the front feet:
+// the robot would stand on two); a humanoid's RL_/LL_ legs (right leg, left leg) turned half a
+// turn keep their sides (RL_ is not a quadruped's rear left).
+TEST(RobotInit, TheFeetUnderHipsRuleLeavesTrunksStiffLegsAndHumanoidsLegNamesAlone) {
+  const std::string dir = scratch("feet_under_hips_limits");
+  const std::string quad = slurp(kSrc + "/models/quadruped_like/urdf/quadruped_like.urdf");
+  // A spine: the hind legs hang from a rear body behind a pitch joint at the trunk's origin.
+  std::string spine = quad;
+  const std::string rear =
+      "  <joint name=\"spine\" type=\"revolute\"><parent link=\"trunk\"/><child link=\"rear\"/><origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>"
+      "<axis xyz=\"0 1 0\"/><limit lower=\"-0.5\" upper=\"0.5\" effort=\"40\" velocity=\"10\"/></joint>\n"
+      "  <link name=\"rear\"><inertial><origin xyz=\"-0.1 0 0\"/><mass value=\"0.5\"/>"
+      "<inertia ixx=\"1e-3\" ixy=\"0\" ixz=\"0\" iyy=\"1e-3\" iyz=\"0\" izz=\"1e-3\"/></inertial></link>\n";
+  spine.insert(spine.find("  <joint name=\"hl_abad\""), rear);
+  for (const char* leg : {"<joint name=\"hl_abad\"", "<joint name=\"hr_abad\""}) {
+    const size_t at = spine.find("<parent link=\"trunk\"/>", spine.find(leg));
+    ASSERT_NE(at, std::string::npos);
+    spine.replace(at, 22, "<parent link=\"rear\"/>");
+  }
+  std::ofstream(dir + "/spine.urdf") << spine;
+  const CliResult s = harness("robot init " + dir + "/spine.urdf --out " + dir + "/spine", dir);
+  expectExit(s, 0, {"hl_knee: 0 put HIND_LEFT_FOOT's leg at 100 % of its reach", "fl_knee: 0 put FRONT_LEFT_FOOT's leg"});
+  EXPECT_EQ((s.out + s.err).find("spine: 0 put"), std::string::npos) << s.out + s.err;
+  const std::string spine_data = slurp(dir + "/spine/quadruped_like.yaml");
+  EXPECT_NE(spine_data.find("    spine: 0\n"), std::string::npos) << spine_data;
+  EXPECT_EQ(harness("run " + dir + "/spine/base.yaml --duration 10 --out " + dir + "/spine_base --quiet", dir).code, 0);
+
+  // Hind knees that cannot bend: no leg is bent, the four feet stay on the ground.
+  std::string stiff = quad;
+  for (const char* knee : {"<joint name=\"hl_knee\"", "<joint name=\"hr_knee\""}) {
+    const size_t at = stiff.find("lower=\"-2.6\" upper=\"2.6\"", stiff.find(knee));
+    ASSERT_NE(at, std::string::npos);
+    stiff.replace(at, 25, "lower=\"-0.05\" upper=\"0.05\"");
+  }
+  std::ofstream(dir + "/stiff.urdf") << stiff;
+  const CliResult k = harness("robot init " + dir + "/stiff.urdf --out " + dir + "/stiff", dir);
+  expectExit(k, 0, {"foot FRONT_LEFT_FOOT on link 'fl_shank'", "foot HIND_RIGHT_FOOT on link 'hr_shank'"});
+  EXPECT_EQ((k.out + k.err).find("fl_knee: 0 put"), std::string::npos) << k.out + k.err;
+
+  // A humanoid's legs named LL_ and RL_, its body turned half a turn in the root frame.
+  std::string hum = slurp(kSrc + "/models/g1_like/urdf/g1_like.urdf");
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"left_", "LL_"}, {"right_", "RL_"}}) {
+    for (size_t at = hum.find(from); at != std::string::npos; at = hum.find(from, at + to.size())) hum.replace(at, from.size(), to);
+  }
+  const size_t turn = hum.find("<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>", hum.find("<joint name=\"base_joint\""));
+  ASSERT_NE(turn, std::string::npos);
+  hum.replace(turn, 34, "<origin xyz=\"0 0 0\" rpy=\"0 0 3.141592653589793\"/>");
+  fs::create_directories(dir + "/hum/urdf");
+  std::ofstream(dir + "/hum/urdf/g1_like.urdf") << hum;
+  fs::copy(kSrc + "/models/g1_like/package.xml", dir + "/hum/package.xml");
+  fs::create_directories(dir + "/hum/meshes");
+  for (const auto& e : fs::directory_iterator(kSrc + "/models/g1_like/meshes")) {  // renamed as the URDF names them
+    std::string name = e.path().filename().string();
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{"left_", "LL_"}, {"right_", "RL_"}}) {
+      if (name.rfind(from, 0) == 0) name = to + name.substr(from.size());
+    }
+    fs::copy(e.path(), dir + "/hum/meshes/" + name);
+  }
+  const CliResult h = harness("robot init " + dir + "/hum/urdf/g1_like.urdf --out " + dir + "/hum/draft", dir);
+  expectExit(h, 0, {"foot LEFT_FOOT on link 'LL_ankle_roll_link'", "foot RIGHT_FOOT on link 'RL_ankle_roll_link'"});
+  const CliResult hc = harness("robot check " + dir + "/hum/draft/g1_like.yaml --png -", dir);
+  EXPECT_TRUE(containsAll(hc.out, {"forward: -x"})) << hc.out;
+}
+
 // robot check on a case file and on a URDF alone; a fixed-base robot whose posture its servos
 // cannot hold is told so.
 TEST(RobotCheck, ReadsCasesAndUrdfs) {
