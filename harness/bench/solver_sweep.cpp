@@ -40,6 +40,8 @@ namespace {
 using namespace lexdyn::solver;
 
 constexpr int kExitPass = 0, kExitFailed = 1, kExitBadInput = 2, kExitInternal = 3, kExitInterrupted = 128;
+// The exact reference's default work budget per check (docs/solver.md, "The solver sweep").
+constexpr long kDefaultWorkLimit = 100000000;
 
 std::atomic<int> g_signal{0};
 extern "C" void onSignal(int s) { g_signal.store(s); }
@@ -56,7 +58,8 @@ int main(int argc, char** argv) {
   bool spanning = false, lazy = false, suffix = false;
   double unitLevels = 0.0;
   bool brute = false;
-  double exactTimeLimit = 10.0;
+  double exactTimeLimit = 0.0;
+  long exactWorkLimit = kDefaultWorkLimit;
   std::string writeDir;
   app.add_option("--seed", seed, "seed of the first problem; problem i has seed + i");
   app.add_option("--cases", cases, "number of random problems")->check(CLI::Range(1L, 1000000000L));
@@ -65,8 +68,13 @@ int main(int argc, char** argv) {
   app.add_option("--max-rows", maxRows, "largest number of rows per level, in [1, 100]")->check(CLI::Range(1, 100));
   app.add_option("--exact-every", exactEvery, "also verify every K-th problem with the exact reference (0: only flagged ones)")
       ->check(CLI::Range(0L, 1000000000L));
+  app.add_option("--exact-work-limit", exactWorkLimit,
+                 "work one exact check may take (limbs of a pivot's row x the rows it clears, summed over its pivots); beyond, its "
+                 "verdict is undecided, the same on any machine (0: no limit; default " +
+                     std::to_string(kDefaultWorkLimit) + ")")
+      ->check(CLI::Range(0L, 1000000000000L));
   app.add_option("--exact-time-limit", exactTimeLimit,
-                 "seconds one exact check may take; beyond, its verdict is undecided (0: no limit; default 10)")
+                 "seconds one exact check may take; beyond, its verdict is undecided (machine-dependent; 0: no limit, the default)")
       ->check(CLI::Range(0.0, 1.0e6));
   app.add_option("--max-iterations", maxIterations, "the solver's hard iteration cap (default 1000)")->check(CLI::Range(1, 1000000));
   app.add_option("--write-failures", writeDir, "write each failing problem to DIR/problem-SEED.json");
@@ -106,13 +114,23 @@ int main(int argc, char** argv) {
   solverOptions.spanning_stages = spanning;
   solverOptions.lazy_snapshots = lazy;
   solverOptions.project_unit_suffix = suffix;
-  long done = 0, solved = 0, failures = 0, capHits = 0, nonFinite = 0, kktFlagged = 0, exactChecked = 0, exactCleared = 0,
-       exactConfirmed = 0, exactUndecided = 0, exactOutOfTime = 0, disagreements = 0, bruteChecked = 0, held = 0, cycles = 0, iters = 0,
-       maxIt = 0;
+  // The counts of the problems finished; one interrupted in its exact check is not counted (its
+  // counts are taken back whole).
+  struct Counts {
+    long done = 0, solved = 0, failures = 0, capHits = 0, nonFinite = 0, kktFlagged = 0, exactChecked = 0, exactCleared = 0,
+         exactConfirmed = 0, exactUndecided = 0, exactOutOfTime = 0, exactOutOfWork = 0, exactMaxWork = 0, disagreements = 0,
+         bruteChecked = 0, held = 0, cycles = 0, iters = 0, maxIt = 0;
+  } n;
+  long &done = n.done, &solved = n.solved, &failures = n.failures, &capHits = n.capHits, &nonFinite = n.nonFinite,
+       &kktFlagged = n.kktFlagged, &exactChecked = n.exactChecked, &exactCleared = n.exactCleared, &exactConfirmed = n.exactConfirmed,
+       &exactUndecided = n.exactUndecided, &exactOutOfTime = n.exactOutOfTime, &exactOutOfWork = n.exactOutOfWork,
+       &exactMaxWork = n.exactMaxWork, &disagreements = n.disagreements, &bruteChecked = n.bruteChecked, &held = n.held, &cycles = n.cycles,
+       &iters = n.iters, &maxIt = n.maxIt;
   const auto t0 = std::chrono::steady_clock::now();
   try {
     for (long c = 0; c < cases; ++c) {
       if (g_signal.load()) break;
+      const Counts before = n;
       const std::uint64_t s = seed + static_cast<std::uint64_t>(c);
       test::GenOptions g = test::sweepOptions(s, maxN, maxLevels, maxRows);
       g.pUnitLevel = unitLevels;
@@ -143,14 +161,14 @@ int main(int argc, char** argv) {
         if (!kkt.empty()) ++kktFlagged;
         if (!kkt.empty() || sample) {
           ++exactChecked;
-          const test::ExactVerdict v = test::exactCheck(p, r, 4, exactTimeLimit, &g_signal);
+          const test::ExactVerdict v = test::exactCheck(p, r, 4, exactTimeLimit, &g_signal, exactWorkLimit);
           if (v.interrupted) {  // neither a pass nor a failure: the problem is not counted
-            --exactChecked;
-            --done;
-            --solved;
+            n = before;
             break;
           }
           exactOutOfTime += v.out_of_time ? 1 : 0;
+          exactOutOfWork += v.out_of_work ? 1 : 0;
+          exactMaxWork = std::max(exactMaxWork, v.work);
           if (!kkt.empty()) {
             if (v.kind == test::ExactVerdict::Optimal) {
               ++exactCleared;
@@ -199,12 +217,13 @@ int main(int argc, char** argv) {
   std::printf(
       "{\"problems\": %ld, \"solved\": %ld, \"failures\": %ld, \"cap_hits\": %ld, \"non_finite\": %ld, "
       "\"certificate_failures\": %ld, \"exact_checked\": %ld, \"exact_cleared\": %ld, \"exact_confirmed\": %ld, "
-      "\"exact_undecided\": %ld, \"exact_out_of_time\": %ld, \"certificate_exact_disagreements\": %ld, \"brute_force_checked\": %ld, "
+      "\"exact_undecided\": %ld, \"exact_out_of_work\": %ld, \"exact_out_of_time\": %ld, \"exact_max_work\": %ld, "
+      "\"certificate_exact_disagreements\": %ld, \"brute_force_checked\": %ld, "
       "\"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld, "
       "\"seconds\": %.1f, \"interrupted\": %s}\n",
-      done, solved, failures, capHits, nonFinite, kktFlagged, exactChecked, exactCleared, exactConfirmed, exactUndecided, exactOutOfTime,
-      disagreements, bruteChecked, held, cycles, solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0, maxIt, secs,
-      g_signal.load() ? "true" : "false");
+      done, solved, failures, capHits, nonFinite, kktFlagged, exactChecked, exactCleared, exactConfirmed, exactUndecided, exactOutOfWork,
+      exactOutOfTime, exactMaxWork, disagreements, bruteChecked, held, cycles,
+      solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0, maxIt, secs, g_signal.load() ? "true" : "false");
   if (g_signal.load()) return kExitInterrupted + g_signal.load();
   if (solved == 0) {
     // Nothing was verified (e.g. --brute-force with sizes that never give 9 rows or fewer).

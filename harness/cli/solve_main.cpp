@@ -17,7 +17,7 @@
 //
 // Exit codes (docs/architecture.md, "Errors and exit codes"):
 //   0    a solution was produced: status solved (relaxed levels included), or stopped_early by the
-//        paper's rules when --paper-rules asked for them;
+//        paper's rules when the file's options or --paper-rules asked for them;
 //   2    bad input: the problem file (file and key path named; size guards of docs/file-formats.md)
 //        or the command line;
 //   3    solver failure: the hard iteration cap (iteration_limit), a non-finite result, an
@@ -164,12 +164,20 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
   ticks.reserve(files.size());
   Options options;
   std::string from = "the solver's defaults";
+  std::string first_options;    // the first file's, as written ("" for none)
+  bool differing_said = false;  // one warning for the files whose options differ
   for (size_t i = 0; i < files.size(); ++i) {
     if (g_signal.load()) return interrupted();
     lexdyn::solver::ProblemFile f = lexdyn::solver::readProblemFile(files[i]);
     if (i == 0 && f.options && flags.use_file) {
       options = *f.options;
       from = "the first problem file";
+      first_options = lexdyn::solver::solverOptionsToJson(*f.options);
+    } else if (i > 0 && flags.use_file && !differing_said &&
+               (f.options ? lexdyn::solver::solverOptionsToJson(*f.options) : std::string()) != first_options) {
+      std::fprintf(stderr, "lexdyn-solve: warning: %s: its solver options differ from the first file's; --bench runs the first's\n",
+                   files[i].c_str());
+      differing_said = true;
     }
     ticks.push_back(std::move(f.problem));
     if (detectBounds) ticks.back().detectBoundsLevel();

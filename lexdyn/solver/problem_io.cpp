@@ -215,7 +215,11 @@ Options readOptions(const json& j, const std::string& where) {
   try {
     o.validate();
   } catch (const InputError& e) {
-    throw InputError(where, e.detail());
+    // "FIELD: what" names the key as a type error does: WHERE.FIELD: what.
+    const std::string& d = e.detail();
+    const size_t colon = d.find(": ");
+    if (colon == std::string::npos) throw InputError(where, d);
+    throw InputError(where + "." + d.substr(0, colon), d.substr(colon + 2));
   }
   return o;
 }

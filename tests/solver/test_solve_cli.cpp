@@ -146,10 +146,18 @@ TEST(SolveCli, RunsTheSolverOptionsTheFileCarries) {
   r = run("--bench " + f + " " + f);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["solver_options_from"], "the first problem file");
+  EXPECT_EQ(r.err.find("differ from the first file's"), std::string::npos) << r.err;
+  // A file whose options differ from the first's: --bench says it runs the first's.
+  const std::string without = writeFile("bench_without_options.json", kValid);
+  r = run("--bench " + f + " " + without);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("bench_without_options.json: its solver options differ from the first file's; --bench runs the first's"),
+            std::string::npos)
+      << r.err;
   for (const auto& [options, expected] : std::vector<std::pair<std::string, std::string>>{
            {R"({"rank_tol": 1})", "solver_options.rank_tol: unknown key (expected bland_after_degenerate_steps"},
            {R"({"rank_tolerance": "small"})", "solver_options.rank_tolerance: expected a number"},
-           {R"({"rank_tolerance": 1})", "rank_tolerance: expected a number in (0, 0.01]"},
+           {R"({"rank_tolerance": 1})", "bad_options.json: solver_options.rank_tolerance: expected a number in (0, 0.01], found 1\n"},
            {R"({"spanning_stages": 1})", "solver_options.spanning_stages: expected true or false"},
            {R"({"last_level_projection": "sometimes"})", "expected \"auto\", \"never\" or \"always\""}}) {
     const std::string bad = std::string(kValid).substr(0, std::string(kValid).size() - 1) + R"(, "solver_options": )" + options + "}";
@@ -303,7 +311,8 @@ TEST(SolveCliExitCodes, InterruptedBenchIs130Or143) {
 }
 
 // The exact reference on a problem of 100 variables (a check ran past 15 minutes without a
-// limit): the time limit leaves it undecided, not passed, and counted apart; without a limit,
+// limit): the time limit and the work budget leave it undecided, not passed, and counted apart;
+// without a limit,
 // SIGINT stops it within the check and the sweep prints what it had (the unfinished problem not
 // counted) and exits 130.
 TEST(SolverSweepExitCodes, TheExactReferenceHasATimeLimitAndStopsOnASignal) {
@@ -313,9 +322,22 @@ TEST(SolverSweepExitCodes, TheExactReferenceHasATimeLimitAndStopsOnASignal) {
   EXPECT_TRUE(lexdyn::testing::containsAll(
       slurp(out), {"\"exact_checked\": 1", "\"exact_undecided\": 1", "\"exact_out_of_time\": 1", "\"failures\": 0"}))
       << slurp(out);
-  EXPECT_EQ(runAndSignal(kSweep + big + " --exact-time-limit 0", "sleep 1", "INT"), 130);
-  EXPECT_TRUE(
-      lexdyn::testing::containsAll(slurp(tempDir() + "/sig.out"), {"\"problems\": 0", "\"exact_checked\": 0", "\"interrupted\": true"}))
+  // The work budget: the same verdict and figures on any machine (two runs: the same output but
+  // for the seconds).
+  std::string first;
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_EQ(lexdyn::testing::exitCode(std::system((kSweep + big + " --exact-work-limit 1000000 > " + out).c_str())), 0);
+    std::string text = slurp(out);
+    EXPECT_TRUE(lexdyn::testing::containsAll(text, {"\"exact_checked\": 1", "\"exact_undecided\": 1", "\"exact_out_of_work\": 1",
+                                                    "\"exact_out_of_time\": 0", "\"failures\": 0"}))
+        << text;
+    text.erase(text.find("\"seconds\""), text.find(", \"interrupted\"") - text.find("\"seconds\""));
+    if (k == 0) first = text;
+    EXPECT_EQ(text, first);
+  }
+  EXPECT_EQ(runAndSignal(kSweep + big + " --exact-time-limit 0 --exact-work-limit 0", "sleep 1", "INT"), 130);
+  EXPECT_TRUE(lexdyn::testing::containsAll(slurp(tempDir() + "/sig.out"), {"\"problems\": 0", "\"solved\": 0", "\"exact_checked\": 0",
+                                                                           "\"certificate_failures\": 0", "\"interrupted\": true"}))
       << slurp(tempDir() + "/sig.out");
   EXPECT_EQ(lexdyn::testing::exitCode(std::system((kSweep + " --exact-time-limit -1 > " + out + " 2>&1").c_str())), 2);
 }

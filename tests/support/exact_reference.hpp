@@ -26,8 +26,10 @@
 // infeasible (the exact method does not search other active sets).
 //
 // Rational arithmetic grows: on problems of 100 variables one check can run for many minutes.
-// exactCheck takes a time limit and a stop flag, checked at every pivot; a check that reaches
-// either is Undecided (`out_of_time`, `interrupted`), never a pass.
+// exactCheck takes a work budget (deterministic: the same verdict on any machine; a pivot's
+// work is the limbs of its row times the rows it clears, which tracks its time as the numbers
+// grow), a time limit (machine-dependent) and a stop flag, checked at every pivot; a check that
+// reaches one is Undecided (`out_of_work`, `out_of_time`, `interrupted`), never a pass.
 #pragma once
 
 #include <gmpxx.h>
@@ -52,7 +54,10 @@ struct ExactVerdict {
   std::vector<double> violation_norm;  ///< exact optimum per proven level (rounded to double)
   std::vector<double> x;               ///< the exact point of the last proven level (rounded)
   bool out_of_time = false;            ///< Undecided: the time limit was reached
+  bool out_of_work = false;            ///< Undecided: the work budget was spent
   bool interrupted = false;            ///< Undecided: the stop flag was raised
+  long pivots = 0;                     ///< Gauss-Jordan pivots the check took
+  long work = 0;                       ///< their work (limbs of the pivot row x rows cleared)
 };
 
 inline const char* toString(ExactVerdict::Kind k) {
@@ -68,17 +73,23 @@ using Mat = std::vector<std::vector<Q>>;
 struct Budget {
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
   const std::atomic<int>* stop = nullptr;
+  long pivots = 0;      ///< taken so far
+  long work = 0;        ///< their work so far
+  long work_limit = 0;  ///< > 0: at most that much
 };
 inline Budget& budget() {
   static thread_local Budget b;
   return b;
 }
 struct OutOfTime {};
+struct OutOfWork {};
 struct Interrupted {};
 inline void checkBudget() {
-  const Budget& b = budget();
+  Budget& b = budget();
   if (b.stop && b.stop->load() != 0) throw Interrupted{};
-  if (std::chrono::steady_clock::now() > b.deadline) throw OutOfTime{};
+  if (b.work_limit > 0 && b.work >= b.work_limit) throw OutOfWork{};
+  ++b.pivots;
+  if (b.deadline != std::chrono::steady_clock::time_point::max() && std::chrono::steady_clock::now() > b.deadline) throw OutOfTime{};
 }
 
 /// Gauss-Jordan pivot on m[row][col]: that row scaled to a 1 there, the column cleared in every
@@ -87,14 +98,21 @@ inline void pivot(Mat& m, int row, int col) {
   checkBudget();
   auto& pr = m[static_cast<size_t>(row)];
   const Q inv = 1 / pr[static_cast<size_t>(col)];
-  for (auto& v : pr) v *= inv;
+  long limbs = 0;
+  for (auto& v : pr) {
+    v *= inv;
+    limbs += 1 + static_cast<long>(mpz_size(v.get_num_mpz_t()) + mpz_size(v.get_den_mpz_t()));
+  }
+  long cleared = 0;
   for (size_t r = 0; r < m.size(); ++r) {
     if (r == static_cast<size_t>(row)) continue;
     auto& rr = m[r];
     const Q f = rr[static_cast<size_t>(col)];
     if (sgn(f) == 0) continue;
+    ++cleared;
     for (size_t k = 0; k < rr.size(); ++k) rr[k] -= f * pr[k];
   }
+  budget().work += limbs * (1 + cleared);
 }
 
 /// Reduced row echelon form in place; returns the pivot column of each pivot row.
@@ -466,13 +484,22 @@ inline ExactVerdict exactCheckUnlimited(const Problem& p, const Result& r, int r
 }
 
 /// The exact verdict on `r` for `p` (see the header comment). `repairs_per_row` bounds the
-/// primal repairs per level (times the number of rows). `time_limit_s` > 0 bounds the check's
-/// time, `stop` (when non-null and nonzero) ends it early: either leaves it Undecided, saying so.
+/// primal repairs per level (times the number of rows). `work_limit` > 0 bounds the check's
+/// work (the same verdict on any machine), `time_limit_s` > 0 its time, and `stop` (when
+/// non-null and nonzero) ends it early: each leaves it Undecided, saying so.
 inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_per_row = 4, double time_limit_s = 0.0,
-                               const std::atomic<int>* stop = nullptr) {
+                               const std::atomic<int>* stop = nullptr, long work_limit = 0) {
   exact::Budget& b = exact::budget();
-  const exact::Budget saved = b;
+  // The caller's budget comes back however the check ends (an exception too).
+  struct Restore {
+    exact::Budget& b;
+    exact::Budget saved;
+    ~Restore() { b = saved; }
+  } restore{b, b};
   b.stop = stop;
+  b.pivots = 0;
+  b.work = 0;
+  b.work_limit = work_limit;
   b.deadline = time_limit_s > 0.0
                    ? std::chrono::steady_clock::now() +
                          std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(time_limit_s))
@@ -480,6 +507,10 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
   ExactVerdict out;
   try {
     out = exactCheckUnlimited(p, r, repairs_per_row);
+  } catch (const exact::OutOfWork&) {
+    out = ExactVerdict{};
+    out.out_of_work = true;
+    out.detail = "the exact check reached its work budget of " + std::to_string(work_limit);
   } catch (const exact::OutOfTime&) {
     out = ExactVerdict{};
     out.out_of_time = true;
@@ -491,7 +522,8 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
     out.interrupted = true;
     out.detail = "the exact check was interrupted";
   }
-  b = saved;
+  out.pivots = b.pivots;
+  out.work = b.work;
   return out;
 }
 
