@@ -148,11 +148,39 @@ int runCheck(const std::vector<std::string>& positional, const std::string& case
     throw lexdyn::InputError("check", "expected TRACE --case CASE (or CASE TRACE)");
   }
   const lexdyn::checks::TraceTable table = lexdyn::checks::readTrace(trace_path);
+  // The run's overrides (--set, --duration, a sweep's point) are in its effective case, DIR/case.yaml
+  // beside the trace: without --case the checks are those of the case as it ran.
+  const std::string* overrides = lexdyn::checks::findMetadata(table.metadata, "overrides");
+  // Overrides other than the run's length and method (which leave the checks as they are).
+  bool overridden = false;
+  if (overrides) {
+    for (size_t at = 0; at < overrides->size();) {
+      const size_t end = std::min(overrides->find("; ", at), overrides->size());
+      const std::string item = overrides->substr(at, end - at);
+      const std::string path = item.substr(0, item.find('='));
+      if (!item.empty() && item != "none" && path != "stop_at_s" && path != "controller.method") overridden = true;
+      at = end + 2;
+    }
+  }
+  const fs::path effective = fs::path(trace_path).parent_path() / "case.yaml";
   if (case_path.empty()) {
-    const std::string* cf = lexdyn::checks::findMetadata(table.metadata, "case_file");
-    if (!cf || !fs::is_regular_file(*cf))
-      throw lexdyn::InputError(trace_path, "the trace does not name a readable case file; give --case CASE");
-    case_path = *cf;
+    if (fs::is_regular_file(effective)) {
+      case_path = effective.string();
+    } else {
+      const std::string* cf = lexdyn::checks::findMetadata(table.metadata, "case_file");
+      if (!cf || !fs::is_regular_file(*cf))
+        throw lexdyn::InputError(trace_path, "the trace does not name a readable case file; give --case CASE");
+      case_path = *cf;
+      if (overridden)
+        std::fprintf(stderr,
+                     "lexdyn-harness: warning: %s ran with overrides (%s) and its folder has no case.yaml: the checks are those of %s "
+                     "without them\n",
+                     trace_path.c_str(), overrides->c_str(), case_path.c_str());
+    }
+  } else if (overridden && fs::path(case_path).lexically_normal() != effective.lexically_normal()) {
+    std::fprintf(stderr, "lexdyn-harness: warning: %s ran with overrides (%s); the checks are those of %s without them%s\n",
+                 trace_path.c_str(), overrides->c_str(), case_path.c_str(),
+                 fs::is_regular_file(effective) ? (" (the run's own: --case " + effective.string() + ")").c_str() : "");
   }
   const lexdyn::cases::CaseSpec spec = lexdyn::cases::loadCase(case_path);
   const std::string* traced_case = lexdyn::checks::findMetadata(table.metadata, "case");

@@ -176,6 +176,27 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
 // whose window held no row in what was run (a contact made later), is skipped with the reason; a
 // check whose window the end cuts covers what was run and says so; an expected failure that
 // lies beyond the end is no departure, a failure that is not expected still fails the run.
+// A run with --set overrides: `check TRACE` evaluates the case as it ran (its effective case.yaml
+// beside the trace), the same checks as summary.json; with the bare case file given instead, it
+// says the run's overrides are not in it.
+TEST(ControllerCli, CheckOfAnOverriddenRunUsesItsEffectiveCase) {
+  const std::string dir = outputDir("ctl_cli_check_overrides");
+  const std::string c = std::string(LEXDYN_SOURCE_DIR) + "/cases/pointmass-damping.yaml";
+  const std::string out = dir + "/gn";
+  const CliResult run = harness("run " + c + " --out " + out + " --method gn --duration 2 --set controller.params.damping=0.1" +
+                                    " --set 'controller.tasks[position].gains.kp=2' --quiet",
+                                dir);
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json summary = nlohmann::json::parse(slurp(out + "/summary.json"));
+  const CliResult check = harness("check " + out + "/trace.csv --json", dir);
+  EXPECT_EQ(check.code, 0) << check.err;
+  EXPECT_EQ(nlohmann::json::parse(check.out)["checks"], summary["checks"]) << check.out;
+  const CliResult bare = harness("check " + out + "/trace.csv --case " + c + " --json", dir);
+  EXPECT_TRUE(containsAll(bare.err, {"ran with overrides (", "controller.params.damping=0.1",
+                                     "the checks are those of " + c + " without them (the run's own: --case " + out + "/case.yaml)"}))
+      << bare.err;
+}
+
 TEST(ControllerCli, ShortRunsSkipLateChecksAndCoverWhatWasRun) {
   const std::string dir = outputDir("ctl_cli_short");
   const std::string src = LEXDYN_SOURCE_DIR;
