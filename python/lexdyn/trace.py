@@ -31,6 +31,28 @@ MAX_CHANNELS = 200000
 _NUMBER = re.compile(r"-?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|-?inf|-?nan")
 _OTHER_CHARACTERS = re.compile(r"[^0-9.eE+\-,\ninfa]")
 _BAD_NAME = re.compile(r"[\s\"]")
+_TINY = (re.compile(r"e-\d{3,}"), re.compile(r"E-\d{3,}"))  # a literal prefix: a fast scan
+
+
+def _token_at(body, at):
+    """The value of BODY (comma and newline separated) that holds position AT."""
+    start = max(body.rfind(",", 0, at), body.rfind("\n", 0, at)) + 1
+    ends = [e for e in (body.find(",", at), body.find("\n", at)) if e >= 0]
+    return body[start:min(ends) if ends else len(body)]
+
+
+def _value_problem(v):
+    """None when V is a value as the harness writes it (a decimal number in the double range, inf,
+    -inf or nan: what the C++ reader takes), else what is wrong with it."""
+    if not _NUMBER.fullmatch(v):
+        return f"expected a number, found '{v}'"
+    if v.lstrip("-") in ("inf", "nan"):
+        return None
+    f = float(v)
+    mantissa = re.split(r"[eE]", v)[0]
+    if math.isinf(f) or (f == 0.0 and re.search(r"[1-9]", mantissa)):
+        return f"expected a number in the double range, found '{v}'"
+    return None
 
 
 class Trace:
@@ -270,14 +292,20 @@ def _parse_rows(path, rows, row_lines, names):
             values = np.fromstring(body.replace("\n", ","), sep=",")
         if values.size != len(rows) * width:
             values = None
+        # What strtod takes and the harness never writes: a leading +, a number beyond the double
+        # range (read as inf, or as 0 below the smallest subnormal): the row-by-row check names it.
+        elif (body.startswith("+") or ",+" in body or "\n+" in body or np.count_nonzero(np.isinf(values)) != body.count("inf")
+              or any(_value_problem(_token_at(body, m.start())) for tiny in _TINY for m in tiny.finditer(body))):
+            values = None
     if values is None:
         for r, lineno in zip(rows, row_lines):
             fields = r.split(",")
             if len(fields) != width:
                 raise FormatError(path, f"expected {width} values, found {len(fields)}", line=lineno)
             for name, v in zip(names, fields):
-                if not _NUMBER.fullmatch(v):
-                    raise FormatError(path, f"expected a number, found '{v}'", line=lineno, field=name)
+                problem = _value_problem(v)
+                if problem:
+                    raise FormatError(path, problem, line=lineno, field=name)
         raise FormatError(path, "expected one number per channel and row, found a malformed row")
     return values.reshape(len(rows), width)
 

@@ -337,3 +337,26 @@ def test_check_results_the_harness_printed(outputs, tmp_path):
         with pytest.raises(FormatError) as e:
             lexdyn.read_check_results(path)
         assert e.value.field == field and what in str(e.value)
+
+
+@pytest.mark.parametrize("value, what", [
+    ("+1", "expected a number, found '+1'"),
+    ("1e999", "expected a number in the double range, found '1e999'"),
+    ("1e-400", "expected a number in the double range, found '1e-400'"),
+    ("1e-310", None),  # a subnormal: in range, as the C++ reader takes it
+])
+def test_a_value_the_cpp_reader_refuses_is_refused(copy_of, value, what):
+    path = copy_of(os.path.join(BFGS, "trace.csv"))
+    lines = lines_of(path)
+    r = first_row(lines)
+    names = lines[r - 1].split(",")
+    fields = lines[r + 2].split(",")
+    fields[names.index("q.x")] = value
+    lines[r + 2] = ",".join(fields)
+    write_lines(path, lines)
+    if what is None:
+        assert lexdyn.read_trace(path)["q.x"][2] == float(value)
+        return
+    with pytest.raises(FormatError) as e:
+        lexdyn.read_trace(path)
+    assert (e.value.line, e.value.field) == (r + 3, "q.x") and what in str(e.value)
