@@ -50,14 +50,22 @@ def first_non_finite(x, where=""):
     return None
 
 
-def parse(text, path, what, line=None, constant=None):
+def syntax_error(e):
+    """json's message of E with its column ("Unterminated string starting at column 12")."""
+    msg = e.msg[:-3] if e.msg.endswith(" at") else e.msg
+    return f"{msg} at column {e.colno}"
+
+
+def parse(text, path, what, line=None, constant=None, cut=False):
     """The JSON value of TEXT (one document, or one line of a JSON Lines file: LINE). CONSTANT:
-    json's parse_constant for NaN and Infinity (kept as the values it makes); None refuses them."""
+    json's parse_constant for NaN and Infinity (kept as the values it makes); None refuses them.
+    CUT: TEXT is a file's last line without its end (a syntax error there says the file was cut)."""
     try:
         doc = json.loads(text, parse_constant=constant or NonFiniteNumber)
     except json.JSONDecodeError as e:
         at = line if line is not None else e.lineno
-        raise FormatError(path, f"expected {what}, found a syntax error ({e.msg} at column {e.colno})", line=at) from None
+        more = "; the file's last line has no end: it was cut short" if cut else ""
+        raise FormatError(path, f"expected {what}, found a syntax error ({syntax_error(e)}){more}", line=at) from None
     if constant is None:
         bad = first_non_finite(doc)
         if bad:
@@ -91,9 +99,10 @@ def load(path, what, constant=None):
 def load_lines(path, what, constant=None):
     """[(line number, value)] of a JSON Lines file (blank lines skipped)."""
     out = []
-    for lineno, line in enumerate(read_text(path, what).split("\n"), 1):
+    lines = read_text(path, what).split("\n")
+    for lineno, line in enumerate(lines, 1):
         if line.strip():
-            out.append((lineno, parse(line, path, what, line=lineno, constant=constant)))
+            out.append((lineno, parse(line, path, what, line=lineno, constant=constant, cut=lineno == len(lines))))
     return out
 
 

@@ -204,7 +204,7 @@ class History:
         try:
             doc = json.loads(text, parse_constant=self.constant)
         except json.JSONDecodeError as e:
-            what = f"expected one JSON record per line, found a syntax error ({e.msg} at column {e.colno})"
+            what = f"expected one JSON record per line, found a syntax error ({_json.syntax_error(e)})"
             if last_and_cut:
                 what += "; the file's last line has no end: cut"
             return ("", what), []
@@ -215,8 +215,12 @@ class History:
 
 
 def read_history(path, strict=True, constant=None):
-    """The History of PATH (see History); strict by default."""
-    return History(os.fspath(path) if path else path, strict=strict, constant=constant)
+    """The History of PATH (see History); strict by default, and then a missing file is an error
+    (History itself reads a missing file as no night yet: the nightly job's first)."""
+    path = os.fspath(path) if path else path
+    if strict and path and not os.path.lexists(path):
+        raise FormatError(path, "expected a history file (JSON Lines), found no such file")
+    return History(path, strict=strict, constant=constant)
 
 
 # ------------------------------------------------------------------ the night (nightly.json)

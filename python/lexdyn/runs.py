@@ -6,6 +6,7 @@
     run.summary.status, run.summary.passed, run.trace["q.x"]
 """
 import math
+import numbers
 import os
 import shutil
 import tempfile
@@ -57,17 +58,20 @@ def _yaml_value(value):
         return value
     if value is None:
         return "null"
-    if isinstance(value, bool):
+    if isinstance(value, bool) or type(value).__name__ == "bool_":  # numpy's too
         return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
+    if isinstance(value, numbers.Integral):  # numpy's integers too
+        return str(int(value))
+    if isinstance(value, numbers.Real):  # numpy's floats too
+        value = float(value)
         if math.isnan(value):
             return ".nan"
         if math.isinf(value):
             return ".inf" if value > 0 else "-.inf"
         text = repr(value)
         return text[:-2] if text.endswith(".0") else text
+    if hasattr(value, "tolist") and not isinstance(value, (list, tuple, dict)):  # a numpy array
+        return _yaml_value(value.tolist())
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_yaml_value(v) for v in value) + "]"
     if isinstance(value, dict):

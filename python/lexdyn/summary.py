@@ -157,7 +157,19 @@ class CheckResults(dict):
 
     @property
     def failed_checks(self):
+        """The checks that decide and failed."""
         return [c for c in self.checks if c.decides and not c.passed]
+
+    @property
+    def info_checks(self):
+        """The checks that are reported only (decides: false)."""
+        return [c for c in self.checks if not c.decides]
+
+    @property
+    def passed(self):
+        """Every check that decides passed (`all_checks_passed`; an expected failure the case
+        declares is judged by `lexdyn-harness check`'s exit code, not here)."""
+        return bool(self.get("all_checks_passed"))
 
 
 def read_check_results(path, constant=None):

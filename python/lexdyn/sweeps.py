@@ -151,9 +151,16 @@ class Sweep:
         """One dict per point x method: point, method, each parameter's value (a number where
         every value of the parameter reads as one), status, exit_code, wall_s, simulated_s,
         peak_iterations, message, failed (the property checks that failed), check.NAME.passed /
-        .value / .margin, statistic.NAME, final_error.TASK."""
+        .value / .margin (a run that stopped early fails each of the sweep's property checks, value
+        and margin NaN, as summary.json counts it), statistic.NAME, final_error.TASK."""
         numeric = {p: all(_number(r["values"].get(p)) is not None for r in self.records if p in r["values"])
                    for p in self.parameters}
+        # The sweep's property checks of each method (summary.json's, as it counts them): a run
+        # that stopped early has none of them, and fails each, as the summary's pass rates say.
+        properties = {}
+        for c in self.summary.get("checks", []):
+            if isinstance(c, dict) and c.get("check") != "run_completed":
+                properties.setdefault(c.get("method"), []).append(c.get("check"))
         out = []
         for r in self.records:
             for m in self.methods + sorted(set(r["runs"]) - set(self.methods)):
@@ -167,6 +174,9 @@ class Sweep:
                 for key in ("status", "exit_code", "wall_s", "simulated_s", "peak_iterations", "message"):
                     row[key] = run.get(key)
                 row["failed"] = [f.split(":", 1)[1] for f in r.get("failures", []) if f.startswith(m + ":")]
+                for n in properties.get(m, []):
+                    row[f"check.{n}.passed"] = False
+                    row[f"check.{n}.value"] = row[f"check.{n}.margin"] = math.nan
                 for c in run.get("checks", []):
                     n = c["name"]
                     row[f"check.{n}.passed"] = c["passed"]

@@ -164,6 +164,10 @@ def read_trace_header(path):
     """(metadata dict, channel names) of a trace, without reading its rows."""
     path = os.fspath(path)
     metadata = {}
+    if os.path.isdir(path):
+        raise FormatError(path, "expected a trace file, found a folder")
+    if not os.path.exists(path):
+        raise FormatError(path, "expected a trace file, found no such file")
     with open(path, encoding="utf-8", errors="replace", newline="\n") as f:
         for lineno, line in enumerate(f, 1):
             line = line.rstrip("\n")

@@ -150,6 +150,20 @@ ls::Result solveWith(PySolver& s, const ls::Problem& problem, const py::object& 
   // of its active set and x, as a C++ caller passes them.
   const ls::Result* from = !warm.is_none() && py::isinstance<ls::Result>(warm) ? &warm.cast<const ls::Result&>() : nullptr;
   const std::optional<WarmStart> w = from ? std::nullopt : warmStartFrom(warm);
+  // A warm start of another problem's shape is a mistake, not a cold start.
+  if (from || w) {
+    const ls::ActiveSet& a = from ? from->active : w->active;
+    const Eigen::VectorXd& x = from ? from->x : w->x;
+    bool same = static_cast<int>(a.level.size()) == problem.levelCount() && x.size() == problem.variables();
+    for (int l = 0; same && l < problem.levelCount(); ++l)
+      same = static_cast<int>(a.level[static_cast<size_t>(l)].size()) == problem.level(l).rows();
+    if (!same) {
+      std::string rows;
+      for (const auto& lv : a.level) rows += (rows.empty() ? "" : ", ") + std::to_string(lv.size());
+      valueError("warm: a start of " + std::to_string(x.size()) + " variables and levels of [" + rows + "] rows, but the problem has " +
+                 std::to_string(problem.variables()) + " variables and " + std::to_string(problem.levelCount()) + " levels");
+    }
+  }
   py::gil_scoped_release nogil;
   const std::lock_guard<std::mutex> lock(s.mutex);
   if (!s.is_setup) {

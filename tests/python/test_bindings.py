@@ -150,6 +150,8 @@ def test_warm_start_from_the_previous_tick(problems):
     assert np.allclose(warm.x, cold.x, rtol=1e-6, atol=1e-8)
     assert warm.iterations <= cold.iterations
     # A warm start given as (active set, x) is the same as one given as the Result.
+    with pytest.raises(ValueError, match="warm: a start of 1 variables"):
+        lexdyn.Solver().solve(second, warm=(r1.active, np.zeros(1)))
     again = lexdyn.Solver().solve(second, warm=(r1.active, r1.x))
     assert_same_bits(again.x, warm.x, "x")
     assert [a.tolist() for a in again.active] == [a.tolist() for a in warm.active]
@@ -292,6 +294,11 @@ def test_run_case_overrides_and_bad_input(tmp_path):
     assert [(o["path"], o["value"]) for o in run.summary["overrides"]] == [
         ("stop_at_s", "0.5"), ("controller.params.damping", "0.25"), ("trace.every_n_ticks", "2")]
     assert run.trace.rows == 51
+    # Values from numpy (a DataFrame's cells) are numbers like Python's.
+    run = lexdyn.run_case(POINTMASS, duration=0.5, out_dir=str(tmp_path / "np"),
+                          overrides={"controller.params.damping": np.float32(0.25), "trace.every_n_ticks": np.int64(2)})
+    assert [(o["path"], o["value"]) for o in run.summary["overrides"]] == [
+        ("stop_at_s", "0.5"), ("controller.params.damping", "0.25"), ("trace.every_n_ticks", "2")]
     with pytest.raises(lexdyn.InputError, match="nope"):
         lexdyn.run_case(POINTMASS, overrides={"controller.nope": 1}, out_dir=str(tmp_path / "bad"))
     with pytest.raises(lexdyn.InputError, match="method"):

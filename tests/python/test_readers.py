@@ -360,3 +360,32 @@ def test_a_value_the_cpp_reader_refuses_is_refused(copy_of, value, what):
     with pytest.raises(FormatError) as e:
         lexdyn.read_trace(path)
     assert (e.value.line, e.value.field) == (r + 3, "q.x") and what in str(e.value)
+
+
+def test_runs_that_stopped_early_fail_the_sweeps_checks_as_the_summary_counts_them(outputs):
+    sw = lexdyn.read_sweep(os.path.join(outputs, "sweep-timeout"))
+    df = sw.dataframe()
+    assert set(df["status"]) == {"timeout"}
+    assert df["check.no_overshoot.passed"].dtype == bool and not df["check.no_overshoot.passed"].any()
+    assert df["check.no_overshoot.value"].isna().all()
+    rates = df.groupby("method")["check.no_overshoot.passed"].mean()
+    for c in sw.summary["checks"]:
+        if c["check"] == "no_overshoot":
+            assert rates[c["method"]] == c["pass_rate"]
+
+
+def test_missing_files_and_cut_json_lines(tmp_path, copy_of):
+    with pytest.raises(FormatError, match="expected a history file \\(JSON Lines\\), found no such file"):
+        lexdyn.read_history(str(tmp_path / "typo.jsonl"))
+    assert lexdyn.read_history(str(tmp_path / "typo.jsonl"), strict=False).records == []
+    with pytest.raises(FormatError, match="expected a trace file, found no such file"):
+        lexdyn.read_trace_header(str(tmp_path / "none.csv"))
+    with pytest.raises(FormatError, match="expected a trace file, found a folder"):
+        lexdyn.read_trace_header(str(tmp_path))
+    path = copy_of(os.path.join("sweep", "results.jsonl"))
+    text = open(path).read()
+    with open(path, "w") as f:
+        f.write(text[:len(text) - 40])
+    with pytest.raises(FormatError) as e:
+        lexdyn.read_sweep_results(path)
+    assert "it was cut short" in str(e.value) and " at at " not in str(e.value), str(e.value)

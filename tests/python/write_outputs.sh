@@ -8,6 +8,7 @@
 #                                            by an impossible limit: exit code 0 all the same
 #   OUT/check.json                           `check --json` of the bfgs run's trace
 #   OUT/sweep/                               a 2 x 2 grid sweep of the point mass, wls and bfgs
+#   OUT/sweep-timeout/                       its first point with a timeout no run meets
 #   OUT/report/, OUT/history.jsonl           report.py over those runs and the sweep, with the
 #                                            night's record appended to the history
 #   OUT/problems/exp1.gn/tick_NNNNNN.json    the controller's solver problems of the humanoid
@@ -78,6 +79,16 @@ rc=0
 if [ "$rc" != 0 ] && [ "$rc" != 1 ]; then
   echo "write_outputs: sweep: exit code $rc" >&2
   cat "$OUT/sweep.log" >&2
+  exit 1
+fi
+
+# The same sweep's first point with a timeout no run meets: runs that stopped early.
+rc=0
+"$HARNESS" sweep run "$OUT/pm-grid.yaml" --out "$OUT/sweep-timeout" -j 1 --points 1 --timeout 0.05 --no-shrink --no-db --quiet \
+  > "$OUT/sweep-timeout.log" 2>&1 || rc=$?
+if [ "$rc" != 1 ]; then
+  echo "write_outputs: sweep with --timeout 0.05: exit code $rc, expected 1" >&2
+  cat "$OUT/sweep-timeout.log" >&2
   exit 1
 fi
 
