@@ -157,6 +157,12 @@ TEST(ControllerCli, MethodOverrideAndCheckOnTheStoredTraceEqualTheSummary) {
   const std::string documented_pass = withExpected("gn_not_worse_than_wls", "expected_pass.yaml");
   cmp = harness("compare --case " + documented_pass + " " + dir + "/gn/trace.csv " + dir + "/wls/trace.csv", dir);
   expectExit(cmp, 1, {"NOT as the case says: gn_not_worse_than_wls passed", "the outcome changed"});
+  // A documented failure whose methods' traces are not all given is not evaluated: no outcome, so
+  // never "as documented".
+  cmp = harness("compare --case " + documented_fail + " " + dir + "/gn/trace.csv", dir);
+  expectExit(cmp, 1, {"FAIL wls_not_worse_than_gn", "needs traces of methods wls and gn"});
+  EXPECT_EQ(cmp.err.find("expected failure of wls_not_worse_than_gn"), std::string::npos) << cmp.err;
+  EXPECT_EQ(cmp.err.find("every comparison as documented"), std::string::npos) << cmp.err;
   for (const char* method : {"gn", "wls"}) {
     const CliResult run = harness("run " + c + " --out " + dir + "/cut_" + method + " --method " + method + " --duration 1 --quiet", dir);
     ASSERT_TRUE(run.code == 0 || run.code == 1) << run.err;
