@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace lexdyn::records {
@@ -14,16 +15,33 @@ enum class ControllerType {
   Lexdyn,        ///< "lexdyn": the hierarchical whole-body controller
 };
 
+/// Every controller with its file spelling, in declaration order: the one table the functions
+/// below read.
+inline constexpr std::pair<ControllerType, const char*> kControllerTypes[] = {
+    {ControllerType::PostureServo, "posture_servo"},
+    {ControllerType::Lexdyn, "lexdyn"},
+};
+
 /// The file spelling: "posture_servo", "lexdyn".
-inline const char* toString(ControllerType t) { return t == ControllerType::Lexdyn ? "lexdyn" : "posture_servo"; }
+inline const char* toString(ControllerType t) {
+  for (const auto& [type, name] : kControllerTypes) {
+    if (type == t) return name;
+  }
+  return "?";
+}
 
 /// Every spelling, in declaration order (a reader's choices).
-inline std::vector<std::string> controllerTypeNames() { return {"posture_servo", "lexdyn"}; }
+inline std::vector<std::string> controllerTypeNames() {
+  std::vector<std::string> out;
+  for (const auto& entry : kControllerTypes) out.push_back(entry.second);
+  return out;
+}
 
 /// The controller a spelling names; nullopt for any other text.
 inline std::optional<ControllerType> parseControllerType(std::string_view text) {
-  if (text == "posture_servo") return ControllerType::PostureServo;
-  if (text == "lexdyn") return ControllerType::Lexdyn;
+  for (const auto& [type, name] : kControllerTypes) {
+    if (text == name) return type;
+  }
   return std::nullopt;
 }
 

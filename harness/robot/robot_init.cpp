@@ -1289,7 +1289,7 @@ InitResult initRobot(const InitOptions& o) {
       chosen.source += "; then the legs brought under their hips (each moved joint says why)";
       for (const auto& m : moved) {
         result.warnings.push_back("posture '" + chosen.name + "': " + m);
-        const std::string joint = m.substr(0, m.find(':') + 1);
+        const std::string joint = m.substr(0, m.find(": ") + 1);
         chosen.clamped.erase(std::remove_if(chosen.clamped.begin(), chosen.clamped.end(),
                                             [&](const std::string& c) { return c.compare(0, joint.size(), joint) == 0; }),
                              chosen.clamped.end());

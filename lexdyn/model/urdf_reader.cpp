@@ -395,10 +395,9 @@ void checkGeometryNumbers(const XmlLink& l, const std::string& file, ProblemList
 
 // What a fixed joint carries that URDF ignores (an axis, limits, a mimic, dynamics), removed before
 // urdfdom reads the document (urdfdom refuses the limits of a fixed joint when incomplete).
-// Returns the names of the elements removed.
-// Removes what URDF ignores on a fixed joint; returns what was there, but for an `<axis xyz="0 0
-// 0"/>`, which exporters write on every fixed joint (nothing is lost by ignoring it), unless
-// `strict` (whose older rules refuse it too).
+// Returns the names of the elements removed, but for an `<axis xyz="0 0 0"/>`, which exporters
+// write on every fixed joint (nothing is lost by ignoring it), unless `strict` (whose older rules
+// refuse it too).
 std::vector<std::string> stripFixedJointExtras(TiXmlElement* e, bool strict) {
   std::vector<std::string> removed;
   for (const char* name : {"axis", "limit", "mimic", "dynamics", "safety_controller", "calibration"}) {
