@@ -177,7 +177,7 @@ int runCheck(const std::vector<std::string>& positional, const std::string& case
                      "without them\n",
                      trace_path.c_str(), overrides->c_str(), case_path.c_str());
     }
-  } else if (overridden && fs::path(case_path).lexically_normal() != effective.lexically_normal()) {
+  } else if (std::error_code ec; overridden && !fs::equivalent(case_path, effective, ec)) {
     std::fprintf(stderr, "lexdyn-harness: warning: %s ran with overrides (%s); the checks are those of %s without them%s\n",
                  trace_path.c_str(), overrides->c_str(), case_path.c_str(),
                  fs::is_regular_file(effective) ? (" (the run's own: --case " + effective.string() + ")").c_str() : "");

@@ -352,6 +352,8 @@ RunRecord readRunRecord(const std::string& path) {
     j = json::parse(text);
   } catch (const json::parse_error& e) {
     throw InputError(path, "not a run summary: " + jsonSyntaxProblem(text, e.byte, e.what()));
+  } catch (const json::exception& e) {  // a number beyond the double range
+    throw InputError(path, std::string("not a run summary: ") + e.what());
   }
   return runRecordFromJson(j, path);
 }

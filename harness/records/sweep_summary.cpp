@@ -30,7 +30,8 @@ std::string jsonSyntaxProblem(const std::string& text, std::size_t byte, const s
   std::size_t to = from;
   while (to < text.size() && (std::isalpha(static_cast<unsigned char>(text[to])) || text[to] == '-')) ++to;
   const std::string literal = text.substr(from, to - from);
-  if (literal == "NaN" || literal == "Infinity" || literal == "-Infinity" || literal == "nan" || literal == "inf" || literal == "-inf") {
+  if (literal == "NaN" || literal == "Infinity" || literal == "-Infinity" || literal == "nan" || literal == "-nan" || literal == "inf" ||
+      literal == "-inf") {
     // The key: the last quoted string followed by ':' before the literal.
     std::string key;
     const std::size_t colon = text.rfind(':', from);
@@ -41,7 +42,13 @@ std::string jsonSyntaxProblem(const std::string& text, std::size_t byte, const s
     }
     return "line " + std::to_string(line) + ": " + (key.empty() ? "" : key + ": ") + "expected a finite number or null, found " + literal;
   }
-  return "line " + std::to_string(line) + ", column " + std::to_string(at - line_start + 1) + ": not JSON (" + message + ")";
+  // nlohmann's message without its own position ("[json.exception.parse_error.101] parse error at
+  // line 1, column 10: syntax error ...": the part after the position).
+  std::string what = message;
+  const size_t column = what.find("column ");
+  const size_t colon = column == std::string::npos ? std::string::npos : what.find(": ", column);
+  if (colon != std::string::npos) what = what.substr(colon + 2);
+  return "line " + std::to_string(line) + ", column " + std::to_string(at - line_start + 1) + ": not JSON (" + what + ")";
 }
 
 double SweepComparisonSummary::diffQuantile(double q) const {

@@ -32,7 +32,9 @@ struct SweepParameterRecord {
 struct SweepCheckSummary {
   std::string check, method;
   long runs = 0, passed = 0;
-  double worst_margin = std::numeric_limits<double>::quiet_NaN();  ///< NaN: none computed
+  /// The lowest margin; not finite (written as null) when none was computed (+inf: every check
+  /// passed without a value, -inf: one failed without one).
+  double worst_margin = std::numeric_limits<double>::quiet_NaN();
   long worst_point = -1;
   std::string unit;
   double passRate() const { return runs ? static_cast<double>(passed) / static_cast<double>(runs) : 0.0; }

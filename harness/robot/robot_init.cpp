@@ -1280,8 +1280,18 @@ InitResult initRobot(const InitOptions& o) {
       if (was != now || again.hasErrors()) {
         chosen.q = before;
         moved_layout.reset();
-        result.warnings.push_back("posture '" + chosen.name + "': the legs were left as drafted: bringing them under their hips put " +
-                                  std::to_string(now.size()) + " feet on the ground instead of " + std::to_string(was.size()) +
+        std::string why;
+        if (again.hasErrors()) {
+          why = "the moved posture could not be analysed (";
+          for (const auto& e : again.errors()) why += (why.back() == '(' ? "" : "; ") + e.text();
+          why += ")";
+        } else if (was.size() != now.size()) {
+          why = "bringing them under their hips put " + std::to_string(now.size()) + " feet on the ground instead of " +
+                std::to_string(was.size());
+        } else {
+          why = "bringing them under their hips put other links on the ground than the drafted feet";
+        }
+        result.warnings.push_back("posture '" + chosen.name + "': the legs were left as drafted: " + why +
                                   " (give a standing posture: --posture, an SRDF)");
       }
     }

@@ -64,6 +64,9 @@ std::optional<json> readJsonFile(const std::string& path, std::string& why) {
   } catch (const json::parse_error& e) {
     why = "damaged: " + records::jsonSyntaxProblem(*text, e.byte, e.what());
     return std::nullopt;
+  } catch (const json::exception& e) {  // a number beyond the double range (out_of_range.406)
+    why = std::string("damaged: ") + e.what();
+    return std::nullopt;
   }
 }
 
@@ -356,6 +359,8 @@ Database readDatabase(const std::string& text, const std::string& path, const st
     std::optional<records::SweepFailureEntry> e;
     try {
       e = records::sweepFailureFromJson(json::parse(line), why);
+    } catch (const json::parse_error& ex) {
+      why = "damaged: " + records::jsonSyntaxProblem(line, ex.byte, ex.what());
     } catch (const std::exception& ex) {
       why = std::string("damaged: ") + ex.what();
     }

@@ -82,9 +82,11 @@ if [ "$rc" != 0 ] && [ "$rc" != 1 ]; then
   exit 1
 fi
 
-# The same sweep's first point with a timeout no run meets: runs that stopped early.
+# The same sweep's first point, runs of 1000 s with a timeout of 0.05 s that none meets: runs that
+# stopped early.
+sed -e 's/^name: pm-grid/name: pm-grid-timeout/' -e 's/^duration_s: 5.0/duration_s: 1000.0/' "$OUT/pm-grid.yaml" > "$OUT/pm-grid-timeout.yaml"
 rc=0
-"$HARNESS" sweep run "$OUT/pm-grid.yaml" --out "$OUT/sweep-timeout" -j 1 --points 1 --timeout 0.05 --no-shrink --no-db --quiet \
+"$HARNESS" sweep run "$OUT/pm-grid-timeout.yaml" --out "$OUT/sweep-timeout" -j 1 --points 1 --timeout 0.05 --no-shrink --no-db --quiet \
   > "$OUT/sweep-timeout.log" 2>&1 || rc=$?
 if [ "$rc" != 1 ]; then
   echo "write_outputs: sweep with --timeout 0.05: exit code $rc, expected 1" >&2

@@ -280,6 +280,16 @@ TEST(SweepDriver, AHangIsThatRunsRecordedFailure) {
   EXPECT_EQ(s["failed_points"], 1);
   EXPECT_EQ(s["checks"][0]["check"], "run_completed");
   EXPECT_EQ(s["checks"][0]["passed"], 0);
+  // A stored point record holding a number beyond the double range is damaged: removed with a
+  // warning and made again, the sweep goes on.
+  std::string point = readText(dir + "/out/points/000000.json");
+  const size_t wall = point.find("\"wall_s\":");
+  ASSERT_NE(wall, std::string::npos);
+  point.replace(wall, point.find(',', wall) - wall, "\"wall_s\":1e999");
+  std::ofstream(dir + "/out/points/000000.json") << point;
+  ASSERT_EQ(run("sweep run " + kSweep + " --out " + dir + "/out --points 1 --timeout 0.05 --no-db --no-shrink", dir + "/log3"), 1)
+      << readText(dir + "/log3");
+  EXPECT_NE(readText(dir + "/log3").find("000000.json: damaged: "), std::string::npos) << readText(dir + "/log3");
   // Another sweep in the same folder is refused (its results would mix).
   std::string other = readText(kSweep);
   other.replace(other.find("base: ../pointmass-damping.yaml"), 31,
