@@ -1,5 +1,5 @@
 // How the records write a figure that may not be computed: a finite number as itself, anything
-// else (NaN, infinity) as null; and back.
+// else (NaN, infinity) as null; and back. And what is wrong with a record file that is no JSON.
 #pragma once
 
 #include <nlohmann/json_fwd.hpp>

@@ -40,19 +40,9 @@ class Check(dict):
         return self.get("decides", True) is not False
 
 
-class RunSummary(dict):
-    """summary.json as read (a dict), with `path` and the run's verdict."""
-
-    path = None
-
-    @property
-    def status(self):
-        return self["status"]
-
-    @property
-    def exit_code(self):
-        """The run's exit code as the harness gave it (None in a summary without one)."""
-        return self.get("exit_code")
+class _Checks:
+    """The checks of a record holding a "checks" list of Checks: those that decide, failed or are
+    reported only."""
 
     @property
     def checks(self):
@@ -71,6 +61,21 @@ class RunSummary(dict):
     def info_checks(self):
         """The checks that are reported only (decides: false)."""
         return [c for c in self.checks if not c.decides]
+
+
+class RunSummary(_Checks, dict):
+    """summary.json as read (a dict), with `path` and the run's verdict."""
+
+    path = None
+
+    @property
+    def status(self):
+        return self["status"]
+
+    @property
+    def exit_code(self):
+        """The run's exit code as the harness gave it (None in a summary without one)."""
+        return self.get("exit_code")
 
     @property
     def expected_failure(self):
@@ -145,25 +150,11 @@ def read_summary(path, constant=None):
     return as_summary(doc, path)
 
 
-class CheckResults(dict):
+class CheckResults(_Checks, dict):
     """`lexdyn-harness check --json` / `compare --json` as read: `checks` (Checks) and
     `all_checks_passed`."""
 
     path = None
-
-    @property
-    def checks(self):
-        return self.get("checks", [])
-
-    @property
-    def failed_checks(self):
-        """The checks that decide and failed."""
-        return [c for c in self.checks if c.decides and not c.passed]
-
-    @property
-    def info_checks(self):
-        """The checks that are reported only (decides: false)."""
-        return [c for c in self.checks if not c.decides]
 
     @property
     def passed(self):

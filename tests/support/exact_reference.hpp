@@ -56,7 +56,6 @@ struct ExactVerdict {
   bool out_of_time = false;            ///< Undecided: the time limit was reached
   bool out_of_work = false;            ///< Undecided: the work budget was spent
   bool interrupted = false;            ///< Undecided: the stop flag was raised
-  long pivots = 0;                     ///< Gauss-Jordan pivots the check took
   long work = 0;                       ///< their work (limbs of the pivot row x rows cleared)
 };
 
@@ -73,8 +72,7 @@ using Mat = std::vector<std::vector<Q>>;
 struct Budget {
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
   const std::atomic<int>* stop = nullptr;
-  long pivots = 0;      ///< taken so far
-  long work = 0;        ///< their work so far
+  long work = 0;        ///< the pivots' work so far
   long work_limit = 0;  ///< > 0: at most that much
 };
 inline Budget& budget() {
@@ -88,7 +86,6 @@ inline void checkBudget() {
   Budget& b = budget();
   if (b.stop && b.stop->load() != 0) throw Interrupted{};
   if (b.work_limit > 0 && b.work >= b.work_limit) throw OutOfWork{};
-  ++b.pivots;
   if (b.deadline != std::chrono::steady_clock::time_point::max() && std::chrono::steady_clock::now() > b.deadline) throw OutOfTime{};
 }
 
@@ -497,7 +494,6 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
     ~Restore() { b = saved; }
   } restore{b, b};
   b.stop = stop;
-  b.pivots = 0;
   b.work = 0;
   b.work_limit = work_limit;
   b.deadline = time_limit_s > 0.0
@@ -522,7 +518,6 @@ inline ExactVerdict exactCheck(const Problem& p, const Result& r, int repairs_pe
     out.interrupted = true;
     out.detail = "the exact check was interrupted";
   }
-  out.pivots = b.pivots;
   out.work = b.work;
   return out;
 }
