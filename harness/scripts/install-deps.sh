@@ -14,8 +14,9 @@ PACKAGES=(
   # Meshes of robot descriptions (robot init, robot check; docs/model.md).
   libassimp-dev
   python3-numpy python3-matplotlib
-  # The Python package's compiled module lexdyn._core (docs/python.md, "Bindings").
-  pybind11-dev python3-pybind11 python3-dev
+  # The Python package's compiled module lexdyn._core (docs/python.md, "Bindings"), its
+  # DataFrames and its tests (ctest python.*).
+  pybind11-dev python3-pybind11 python3-dev python3-pandas python3-pytest
   # Sweeps on Slurm (docs/sweeps.md) and their test's own single-node cluster.
   slurm-wlm munge
   # The nightly report (docs/report.md): its scripts, its 3D replay and its browser test.
