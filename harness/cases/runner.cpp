@@ -264,16 +264,9 @@ records::CheckRecord checkRecord(const checks::CheckResult& c) {
 
 records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& r, const checks::TraceMetadata& trace_header) {
   records::RunRecord o;
+  static_cast<records::RunOutcome&>(o) = r;
   o.case_name = spec.name;
   o.case_file = spec.path;
-  o.status = r.status;
-  o.message = r.message;
-  o.method = r.method;
-  o.duration_s = r.duration_s;
-  o.simulated_s = r.simulated_s;
-  o.wall_s = r.wall_s;
-  o.realtime_factor = r.realtime_factor;
-  o.ticks = r.ticks;
   o.integrator = {r.integrator.steps,        r.integrator.rhs_evals,         r.integrator.jac_evals,      r.integrator.jac_rhs_evals,
                   r.integrator.nonlin_iters, r.integrator.nonlin_conv_fails, r.integrator.err_test_fails, r.integrator_restarts};
   for (const auto& c : r.checks) o.checks.push_back(checkRecord(c));
@@ -283,8 +276,6 @@ records::RunRecord runRecord(const CaseSpec& spec, const RunSummary& r, const ch
   for (const auto& sk : r.skipped_checks) o.skipped_checks.emplace_back(sk.name, sk.reason);
   if (spec.duration_s < spec.scenario_duration_s - 1e-9) o.scenario_duration_s = spec.scenario_duration_s;
   o.robot_warnings = spec.robot_warnings;
-  o.start_warnings = r.start_warnings;
-  o.all_checks_passed = r.all_checks_passed;
   if (r.expected_failure) {
     const ExpectedFailure& x = *r.expected_failure;
     o.expected_failure = records::ExpectedFailureRecord{

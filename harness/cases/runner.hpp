@@ -38,17 +38,10 @@ struct RunOptions {
   double dump_to_s = 1e300;  // the end of any run
 };
 
-struct RunSummary {
-  /// A run's own status: completed, integrator_failure, controller_failure, diverged,
-  /// internal_error, interrupted, input_error or output_error.
-  records::RunStatus status = records::RunStatus::Completed;
-  std::string message;  ///< what stopped the run early
-  std::string method;   ///< lexdyn: bfgs | ah | gn | wls ("" for other controllers)
-  double duration_s = 0.0;
-  double simulated_s = 0.0;
-  double wall_s = 0.0;
-  double realtime_factor = 0.0;
-  long ticks = 0;
+/// A run's result in memory: its outcome (status: completed, integrator_failure,
+/// controller_failure, diverged, internal_error, interrupted, input_error or output_error; times;
+/// start warnings), shared with its record, and the rich check results the record is made from.
+struct RunSummary : records::RunOutcome {
   int signal = 0;  ///< interrupted: the signal (SIGINT, SIGTERM), 0 when unknown
   sim::CvodeStats integrator;
   long integrator_restarts = 0;
@@ -60,7 +53,6 @@ struct RunSummary {
     std::string name, reason;
   };
   std::vector<Skipped> skipped_checks;
-  bool all_checks_passed = false;
   bool has_controller_stats = false;
   ControllerStats controller;  ///< lexdyn: per task errors, iterations, timings
   std::string trace_path, summary_path;
@@ -72,9 +64,6 @@ struct RunSummary {
   /// False when a run stopped early (stop_at_s) ended before the expected failure showed: the
   /// expected status not reached and none of the listed checks failing. True otherwise.
   bool expected_failure_reached = true;
-  /// What the start found questionable: a contact that carries less at rest than the plan's
-  /// minimum normal force (startWarnings).
-  std::vector<std::string> start_warnings;
 };
 
 /// How a finished run departs from an expected failure: a status other than the expected one,

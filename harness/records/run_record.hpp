@@ -66,14 +66,22 @@ struct ControllerRecord {
   std::map<std::string, Timing> timing_us;
 };
 
-struct RunRecord {
-  std::string format = kRunSummaryFormat;
-  std::string case_name, case_file;
+/// How a run ended and what it covered: the fields a run's in-memory result (RunSummary, with
+/// the rich check results) and its record share, defined once.
+struct RunOutcome {
   RunStatus status = RunStatus::Completed;
-  std::string message;
-  std::string method;  ///< "" for a case without methods (not written then)
+  std::string message;  ///< what stopped the run early
+  std::string method;   ///< lexdyn: bfgs | ah | gn | wls; "" for a case without methods (not written then)
   double duration_s = 0.0, simulated_s = 0.0, wall_s = 0.0, realtime_factor = 0.0;
   long ticks = 0;
+  bool all_checks_passed = false;
+  /// What the start found questionable (read as none when absent).
+  std::vector<std::string> start_warnings;
+};
+
+struct RunRecord : RunOutcome {
+  std::string format = kRunSummaryFormat;
+  std::string case_name, case_file;
   IntegratorRecord integrator;
   std::vector<CheckRecord> checks;
   struct Statistic {
@@ -86,8 +94,6 @@ struct RunRecord {
   std::vector<std::pair<std::string, std::string>> skipped_checks;  ///< name, reason
   std::optional<double> scenario_duration_s;                        ///< written when the run was cut short (--duration)
   std::vector<std::string> robot_warnings;
-  std::vector<std::string> start_warnings;  ///< what the start found questionable (read as none when absent)
-  bool all_checks_passed = false;
   std::optional<ExpectedFailureRecord> expected_failure;
   int exit_code = 0;
   std::optional<ControllerRecord> controller;
