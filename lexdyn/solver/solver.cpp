@@ -6,6 +6,7 @@
 #include <iterator>
 #include <limits>
 #include <random>
+#include <utility>
 #include <string>
 
 #include "lexdyn/common/error.hpp"
@@ -30,6 +31,10 @@ template <class Derived>
 bool allFiniteFast(const Eigen::DenseBase<Derived>& m) {
   return std::isfinite((m.derived().array() * 0.0).sum());
 }
+
+// An active-set step direction no larger than this times (1 + |x| + |v|) (max norms) is rounding:
+// about 64 units in the last place of numbers of size 1.
+constexpr double kRoundingDirection = 64.0 * std::numeric_limits<double>::epsilon();
 
 }  // namespace
 
@@ -177,6 +182,10 @@ struct Solver::Impl {
   void run();
   void finish();
   void checkFiniteResult();
+  // `out` has the problem's shape (every array sized for its levels and rows); shapeResult()
+  // gives it that shape (zeros).
+  bool resultShaped() const;
+  void shapeResult();
   // One solve, from the warm start (warm, xw) or, when warm is null, from a cold start.
   const Result& solve(const Problem& problem, const ActiveSet* warm, const Eigen::VectorXd* xw);
   double rowScale(int gid, double xnorm) const { return std::abs(target(gid)) + rowNorm(gid) * xnorm; }
@@ -233,18 +242,33 @@ void Solver::Impl::setup(const Problem& problem, const Options& o) {
   warmVar.assign(static_cast<size_t>(n), RowState::Inactive);
   warmX.setZero(n);
 
+  allRows = off;
   out = Result{};
+  shapeResult();
+  isSetup = true;
+}
+
+bool Solver::Impl::resultShaped() const {
+  if (out.x.size() != n || out.violation.size() != static_cast<size_t>(p) || out.violation_norm.size() != p ||
+      out.lambda.rows() != allRows || out.lambda.cols() != p || out.active.level.size() != static_cast<size_t>(p) ||
+      out.rank.size() != static_cast<size_t>(p))
+    return false;
+  for (size_t l = 0; l < static_cast<size_t>(p); ++l) {
+    if (out.violation[l].size() != rowsOf[l] || out.active.level[l].size() != static_cast<size_t>(rowsOf[l])) return false;
+  }
+  return true;
+}
+
+void Solver::Impl::shapeResult() {
   out.x.setZero(n);
   out.violation.resize(static_cast<size_t>(p));
   for (int l = 0; l < p; ++l) out.violation[static_cast<size_t>(l)].setZero(rowsOf[static_cast<size_t>(l)]);
   out.violation_norm.setZero(p);
-  allRows = off;
-  out.lambda.setZero(off, p);
+  out.lambda.setZero(allRows, p);
   out.active.level.resize(static_cast<size_t>(p));
   for (int l = 0; l < p; ++l)
     out.active.level[static_cast<size_t>(l)].assign(static_cast<size_t>(rowsOf[static_cast<size_t>(l)]), RowState::Inactive);
   out.rank.assign(static_cast<size_t>(p), 0);
-  isSetup = true;
 }
 
 void Solver::Impl::checkCompatible(const Problem& problem) const {
@@ -668,6 +692,18 @@ void Solver::Impl::run() {
     const double dxNorm = dx.norm();
     for (int g = 0; g < M; ++g) dv(g) = (state[static_cast<size_t>(g)] == RowState::Inactive) ? -v(g) : res(g) - v(g);
 
+    // Right after a release, a direction of rounding size blocks nothing: the equality solution
+    // is x itself (the released row is still held where it was by another active row, e.g. its
+    // duplicate on a later level). Blocking, the released row would be activated again at once
+    // and kept by the anti-cycling rule below with its wrong-sign multiplier, the release hidden;
+    // the full step moves x by rounding only, and the dual check goes on (it releases the
+    // duplicate next).
+    bool roundingDirection = false;
+    if (lastDropKind >= 0) {
+      const double scale = 1.0 + x.lpNorm<Eigen::Infinity>() + v.head(M).lpNorm<Eigen::Infinity>();
+      roundingDirection = std::max(dx.lpNorm<Eigen::Infinity>(), dv.head(M).lpNorm<Eigen::Infinity>()) <= kRoundingDirection * scale;
+    }
+
     // Ratio test over inactive bounds and rows.
     double alpha = 1.0;
     int blockKind = -1, blockIdx = -1;
@@ -685,7 +721,7 @@ void Solver::Impl::run() {
         blockState = s;
       }
     };
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < n && !roundingDirection; ++i) {
       if (vstate[static_cast<size_t>(i)] != RowState::Inactive) continue;
       const double d = dx(i);
       const double thr = opt.feasibility_tolerance * dxNorm;
@@ -694,7 +730,7 @@ void Solver::Impl::run() {
       else if (d < -thr && std::isfinite(xlo(i)))
         offer((xlo(i) - x(i)) / d, 0, i, RowState::Lower);
     }
-    for (int g = 0; g < M; ++g) {
+    for (int g = 0; g < M && !roundingDirection; ++g) {
       if (state[static_cast<size_t>(g)] != RowState::Inactive) continue;
       const double den = Adx(g) - dv(g);
       const double thr = opt.feasibility_tolerance * (rowNorm(g) * dxNorm + std::abs(dv(g)));
@@ -956,14 +992,14 @@ const Result& Solver::result() const { return impl_->out; }
 
 const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm, const Eigen::VectorXd* xw) {
   checkCompatible(problem);
+  // A result given away by swapResult() leaves buffers of any shape here.
+  if (!resultShaped()) shapeResult();
   loadData(problem);
   if (scanNonFinite(problem)) {
     out.status = Status::NonFiniteInput;
     out.reason = StopReason::NonFiniteInput;
     return out;
   }
-  // The multipliers taken by takeMultipliers() are allocated again (finish() zeroes them).
-  if (out.lambda.rows() != allRows || out.lambda.cols() != p) out.lambda.resize(allRows, p);
   if (warm != nullptr) {
     initWarm(*warm, *xw);
   } else {
@@ -978,11 +1014,7 @@ const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm,
 
 const Result& Solver::solve(const Problem& problem) { return impl_->solve(problem, nullptr, nullptr); }
 
-Eigen::MatrixXd Solver::takeMultipliers() {
-  Eigen::MatrixXd m;
-  m.swap(impl_->out.lambda);
-  return m;
-}
+void Solver::swapResult(Result& r) { std::swap(impl_->out, r); }
 
 const Result& Solver::solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm) {
   return impl_->solve(problem, &warm, &xWarm);

@@ -37,26 +37,26 @@ TEST(ExactReference, SweepFalseFailuresPassTheCorrectedCertificate) {
   }
 }
 
-// The one failure of `lexdyn-solver-sweep --seed 1 --cases 10000000` (docs/solver.md): a
-// degenerate hierarchy where a row of level 1 and its duplicate on level 2 sit at the same upper
-// bound; the solver releases the level-1 row, the duplicate keeps x where it was, the row blocks
-// again at once and the anti-cycling safety net keeps it, so the result is not optimal at level 3.
-// The certificate check flags it, the exact reference proves it, and the exact point is checked
-// here independently in double: it keeps levels 0-2 at the solver's optimal violations and
-// lowers level 3's. (Written so that it still holds once the solver is fixed: then both agree.)
-TEST(ExactReference, TheSweepsOneFailureIsARealOne) {
+// The one failure of `lexdyn-solver-sweep --seed 1 --cases 10000000` before the solver ignored
+// step directions of rounding size (docs/solver.md): a degenerate hierarchy where a row of
+// level 1 and its duplicate on level 2 sit at the same upper bound. The solver released the
+// level-1 row; the duplicate kept x where it was, so the step's direction was rounding (|dx|
+// 8.6e-15); the row blocked again at once, the anti-cycling safety net held it, and the result was
+// not optimal at level 3 (3.9467292479870517). Now the rounding direction blocks nothing, the dual
+// check releases the duplicate next, and the exact reference proves the result optimal; its exact
+// point, evaluated in double against every level independently, has the solver's violations.
+TEST(ExactReference, TheSweepsFormerFailureIsSolvedToTheExactOptimum) {
   Problem p = readProblemJson(kData + "sweep_suboptimal_seed9582150.json");
   p.detectBoundsLevel();
   Solver s;
   s.setup(p);
   const Result& r = s.solve(p);
   ASSERT_EQ(r.status, Status::Solved);
+  EXPECT_EQ(r.held_after_reblock, 0);
   const test::ExactVerdict v = test::exactCheck(p, r);
-  ASSERT_NE(v.kind, test::ExactVerdict::Undecided) << v.detail;
+  ASSERT_EQ(v.kind, test::ExactVerdict::Optimal) << v.detail;
+  EXPECT_EQ(test::checkKkt(p, r), "");
   ASSERT_EQ(static_cast<int>(v.violation_norm.size()), p.levelCount());
-  const bool solver_optimal = v.kind == test::ExactVerdict::Optimal;
-  EXPECT_EQ(test::checkKkt(p, r).empty(), solver_optimal) << test::checkKkt(p, r);
-  // The exact point of the last level, evaluated in double against every level.
   const Eigen::Map<const Eigen::VectorXd> xe(v.x.data(), static_cast<Eigen::Index>(v.x.size()));
   const test::RowSet rs = test::expandRows(p);
   std::vector<double> norm2(static_cast<size_t>(p.levelCount()), 0.0);
@@ -66,12 +66,9 @@ TEST(ExactReference, TheSweepsOneFailureIsARealOne) {
   }
   for (int l = 0; l < p.levelCount(); ++l) {
     EXPECT_NEAR(std::sqrt(norm2[static_cast<size_t>(l)]), v.violation_norm[static_cast<size_t>(l)], 1e-9) << l;
+    EXPECT_NEAR(r.violation_norm(l), v.violation_norm[static_cast<size_t>(l)], 1e-9) << l;
   }
-  for (int l = 0; l < 3; ++l) EXPECT_NEAR(v.violation_norm[static_cast<size_t>(l)], r.violation_norm(l), 1e-9) << l;
-  if (!solver_optimal) {
-    EXPECT_NEAR(v.violation_norm[3], 3.8919688036424054, 1e-9);
-    EXPECT_NEAR(r.violation_norm(3), 3.9467292479870517, 1e-9);
-  }
+  EXPECT_NEAR(r.violation_norm(3), 3.8919688036424054, 1e-9);
 }
 
 // On random hierarchies the exact reference proves the solver's results and agrees with the
