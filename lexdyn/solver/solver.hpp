@@ -212,10 +212,12 @@ class Solver {
   /// solver's own result() is allowed).
   const Result& solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm);
   const Result& result() const;
-  /// Moves the last result's multipliers (Result::lambda) out without copying them; result()
-  /// then has none until the next solve, which allocates them again. For a caller that keeps
-  /// every result (the Python bindings); the controller's loop never calls it.
-  Eigen::MatrixXd takeMultipliers();
+  /// Exchanges the last result with `r` without copying: `r` gets the result, and result() holds
+  /// r's former contents, whose buffers the next solve reuses (giving them the problem's shape
+  /// first if they lack it; any Result will do, e.g. an empty one or an earlier result of this
+  /// solver). For a caller that keeps every result and recycles their buffers (the Python
+  /// bindings); the controller's loop never calls it.
+  void swapResult(Result& r);
 
  private:
   struct Impl;

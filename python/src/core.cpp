@@ -19,6 +19,8 @@
 #include <condition_variable>
 #include <csignal>
 #include <exception>
+#include <limits>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -119,6 +121,41 @@ py::list activeSetList(const ls::ActiveSet& a) {
   return out;
 }
 
+// A Python Result: the solver's result and the wall time of the C++ solve inside the call (the
+// GIL released), as `lexdyn-solve --bench` times it: the call's own cost is the difference.
+struct SolveResult : ls::Result {
+  double solve_us = std::numeric_limits<double>::quiet_NaN();
+};
+
+// Result buffers that freed Python Results give back to the solver that made them: its next
+// solve computes into them (Solver::swapResult), so a solve allocates and copies nothing for the
+// Result it returns. Shared with the Results, which may outlive their solver.
+struct ResultPool {
+  static constexpr size_t kMaxSpare = 4;
+  std::mutex mutex;
+  std::vector<std::unique_ptr<SolveResult>> spare;
+
+  // A Result for Python: a spare one (or a new, empty one), given back here when Python frees it.
+  static std::shared_ptr<SolveResult> take(const std::shared_ptr<ResultPool>& pool) {
+    std::unique_ptr<SolveResult> r;
+    {
+      const std::lock_guard<std::mutex> lock(pool->mutex);
+      if (!pool->spare.empty()) {
+        r = std::move(pool->spare.back());
+        pool->spare.pop_back();
+      }
+    }
+    if (!r) r = std::make_unique<SolveResult>();
+    return std::shared_ptr<SolveResult>(r.release(), [home = std::weak_ptr<ResultPool>(pool)](SolveResult* freed) {
+      std::unique_ptr<SolveResult> owned(freed);
+      if (const std::shared_ptr<ResultPool> pl = home.lock()) {
+        const std::lock_guard<std::mutex> lock(pl->mutex);
+        if (pl->spare.size() < kMaxSpare) pl->spare.push_back(std::move(owned));
+      }
+    });
+  }
+};
+
 // A Python solver: the C++ solver, set up at the first solve (or by setup()). The mutex keeps
 // two Python threads (the GIL released) from solving with it at once.
 struct PySolver {
@@ -126,6 +163,7 @@ struct PySolver {
   ls::Options options;
   bool is_setup = false;
   std::mutex mutex;
+  std::shared_ptr<ResultPool> pool = std::make_shared<ResultPool>();
 };
 
 // The warm start of a solve: a Result, or (active set, x).
@@ -136,8 +174,8 @@ struct WarmStart {
 
 std::optional<WarmStart> warmStartFrom(const py::object& warm) {
   if (warm.is_none()) return std::nullopt;
-  if (py::isinstance<ls::Result>(warm)) {
-    const auto& r = warm.cast<const ls::Result&>();
+  if (py::isinstance<SolveResult>(warm)) {
+    const auto& r = warm.cast<const SolveResult&>();
     return WarmStart{r.active, r.x};
   }
   const py::tuple t = warm.cast<py::tuple>();
@@ -145,10 +183,10 @@ std::optional<WarmStart> warmStartFrom(const py::object& warm) {
   return WarmStart{activeSetFrom(t[0]), t[1].cast<Eigen::VectorXd>()};
 }
 
-ls::Result solveWith(PySolver& s, const ls::Problem& problem, const py::object& warm) {
+std::shared_ptr<SolveResult> solveWith(PySolver& s, const ls::Problem& problem, const py::object& warm) {
   // A Result warm-starts in place (`warm` keeps it alive, and Python cannot change it): no copy
   // of its active set and x, as a C++ caller passes them.
-  const ls::Result* from = !warm.is_none() && py::isinstance<ls::Result>(warm) ? &warm.cast<const ls::Result&>() : nullptr;
+  const SolveResult* from = !warm.is_none() && py::isinstance<SolveResult>(warm) ? &warm.cast<const SolveResult&>() : nullptr;
   const std::optional<WarmStart> w = from ? std::nullopt : warmStartFrom(warm);
   // A warm start of another problem's shape is a mistake, not a cold start.
   if (from || w) {
@@ -170,17 +208,19 @@ ls::Result solveWith(PySolver& s, const ls::Problem& problem, const py::object& 
     s.solver.setup(problem, s.options);
     s.is_setup = true;
   }
+  const auto start = std::chrono::steady_clock::now();
   if (from)
     s.solver.solve(problem, from->active, from->x);
   else if (w)
     s.solver.solve(problem, w->active, w->x);
   else
     s.solver.solve(problem);
-  // The Result Python keeps: the multipliers (all rows x levels, the bulk of it) are moved out of
-  // the solver rather than copied; the next solve allocates its own again.
-  Eigen::MatrixXd lambda = s.solver.takeMultipliers();
-  ls::Result out = s.solver.result();
-  out.lambda = std::move(lambda);
+  const auto end = std::chrono::steady_clock::now();
+  // The Result Python keeps is the solver's own, swapped out; the solver keeps a spare Result's
+  // buffers for its next solve.
+  std::shared_ptr<SolveResult> out = ResultPool::take(s.pool);
+  s.solver.swapResult(*out);
+  out->solve_us = std::chrono::duration<double, std::micro>(end - start).count();
   return out;
 }
 
@@ -506,25 +546,25 @@ PYBIND11_MODULE(_core, m) {
                ", rows=" + std::to_string(p.totalRows()) + ")";
       });
 
-  py::class_<ls::Result>(m, "Result", "A solve's result (lexdyn/solver/solver.hpp); arrays are copies.")
+  py::class_<SolveResult, std::shared_ptr<SolveResult>>(m, "Result", "A solve's result (lexdyn/solver/solver.hpp); arrays are copies.")
       .def_property_readonly(
-          "status", [](const ls::Result& r) { return ls::toString(r.status); },
+          "status", [](const SolveResult& r) { return ls::toString(r.status); },
           "solved | stopped_early | iteration_limit | non_finite_input | non_finite_result")
-      .def_property_readonly("reason", [](const ls::Result& r) { return ls::toString(r.reason); })
-      .def_property_readonly("x", [](const ls::Result& r) { return Eigen::VectorXd(r.x); })
+      .def_property_readonly("reason", [](const SolveResult& r) { return ls::toString(r.reason); })
+      .def_property_readonly("x", [](const SolveResult& r) { return Eigen::VectorXd(r.x); })
       .def_property_readonly(
-          "level_violation", [](const ls::Result& r) { return Eigen::VectorXd(r.violation_norm); },
+          "level_violation", [](const SolveResult& r) { return Eigen::VectorXd(r.violation_norm); },
           "per level: the Euclidean norm of its violation")
       .def_property_readonly(
-          "violation", [](const ls::Result& r) { return r.violation; }, "per level: a x - clamp(a x, lower, upper) of each row")
+          "violation", [](const SolveResult& r) { return r.violation; }, "per level: a x - clamp(a x, lower, upper) of each row")
       .def_property_readonly(
-          "multipliers", [](const ls::Result& r) { return Eigen::MatrixXd(r.lambda); },
+          "multipliers", [](const SolveResult& r) { return Eigen::MatrixXd(r.lambda); },
           "all rows x levels: column l the multipliers of the level-l problem")
       .def_property_readonly(
-          "active", [](const ls::Result& r) { return activeSetList(r.active); },
+          "active", [](const SolveResult& r) { return activeSetList(r.active); },
           "per level: int8 row states 0 inactive, 1 lower, 2 upper, 3 equality")
       .def_property_readonly("active_names",
-                             [](const ls::Result& r) {
+                             [](const SolveResult& r) {
                                std::vector<std::vector<std::string>> out;
                                for (const auto& lv : r.active.level) {
                                  out.emplace_back();
@@ -532,18 +572,20 @@ PYBIND11_MODULE(_core, m) {
                                }
                                return out;
                              })
-      .def_readonly("rank", &ls::Result::rank)
-      .def_readonly("iterations", &ls::Result::iterations)
-      .def_readonly("factorizations", &ls::Result::factorizations)
-      .def_readonly("optimality_iterations", &ls::Result::optimality_iterations)
-      .def_readonly("activations", &ls::Result::activations)
-      .def_readonly("deactivations", &ls::Result::deactivations)
-      .def_readonly("held_after_reblock", &ls::Result::held_after_reblock)
-      .def_readonly("optimal_through", &ls::Result::optimal_through)
-      .def_readonly("cycles_broken", &ls::Result::cycles_broken)
-      .def_readonly("bad_level", &ls::Result::bad_level)
-      .def_readonly("bad_row", &ls::Result::bad_row)
-      .def("__repr__", [](const ls::Result& r) {
+      .def_readonly("rank", &SolveResult::rank)
+      .def_readonly("iterations", &SolveResult::iterations)
+      .def_readonly("factorizations", &SolveResult::factorizations)
+      .def_readonly("optimality_iterations", &SolveResult::optimality_iterations)
+      .def_readonly("activations", &SolveResult::activations)
+      .def_readonly("deactivations", &SolveResult::deactivations)
+      .def_readonly("held_after_reblock", &SolveResult::held_after_reblock)
+      .def_readonly("optimal_through", &SolveResult::optimal_through)
+      .def_readonly("cycles_broken", &SolveResult::cycles_broken)
+      .def_readonly("bad_level", &SolveResult::bad_level)
+      .def_readonly("bad_row", &SolveResult::bad_row)
+      .def_readonly("solve_us", &SolveResult::solve_us,
+                    "wall time of the C++ solve inside the call, microseconds (the rest of the call is the binding's)")
+      .def("__repr__", [](const SolveResult& r) {
         return std::string("Result(status=") + ls::toString(r.status) + ", iterations=" + std::to_string(r.iterations) + ")";
       });
 
@@ -605,7 +647,7 @@ PYBIND11_MODULE(_core, m) {
   m.def("parse_problem", &ls::parseProblemJson, "text"_a, "source"_a = "problem", "A problem from problem-file text.");
   m.def(
       "result_to_json",
-      [](const ls::Problem& p, const ls::Result& r, bool details, std::optional<ls::Options> options, const std::string& from) {
+      [](const ls::Problem& p, const SolveResult& r, bool details, std::optional<ls::Options> options, const std::string& from) {
         return ls::resultToJson(p, r, details, options ? &*options : nullptr, from);
       },
       "problem"_a, "result"_a, "details"_a = false, "options"_a = py::none(), "options_from"_a = "",

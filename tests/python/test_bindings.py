@@ -157,6 +157,66 @@ def test_warm_start_from_the_previous_tick(problems):
     assert [a.tolist() for a in again.active] == [a.tolist() for a in warm.active]
 
 
+def test_freed_results_lend_their_buffers_to_the_next_solve(problems):
+    """A freed Result gives its buffers back to its solver, whose next solve computes into them (no
+    copy): every result equals a new solver's bit for bit, also when the buffers given back are of
+    another problem's shape, and a Result still held is never written by a later solve."""
+    first, second = (lexdyn.load_problem(f) for f in problems)
+    small = lexdyn.Problem(3)
+    small.add_level(np.eye(3), np.zeros(3), np.ones(3), name="box")
+
+    def fields(r):
+        return [r.status, r.x, r.level_violation, r.multipliers, [a.tolist() for a in r.active], r.rank, r.iterations]
+
+    def assert_same(a, b, what):
+        fa, fb = fields(a), fields(b)
+        assert fa[0] == fb[0] and fa[4] == fb[4] and fa[5] == fb[5] and fa[6] == fb[6], what
+        for x, y, name in zip(fa[1:4], fb[1:4], ("x", "level_violation", "multipliers")):
+            assert_same_bits(x, y, f"{what}: {name}")
+
+    solver = lexdyn.Solver()
+    held = solver.solve(first)
+    held_fields = [np.copy(f) if isinstance(f, np.ndarray) else f for f in fields(held)]
+    r = None
+    for k in range(8):
+        p = (first, second)[k % 2]
+        r = solver.solve(p)  # the previous r, freed here, lends its buffers to this solve
+        assert_same(r, lexdyn.Solver().solve(p), f"cold solve {k}")
+        warm = solver.solve(p, warm=r)
+        assert_same(warm, lexdyn.Solver().solve(p, warm=r), f"warm solve {k}")
+        assert 0.0 < r.solve_us < 1e7 and 0.0 < warm.solve_us < 1e7
+        del warm
+        if k == 3:
+            # Buffers of a 3-variable problem's results given back: the next solves reshape them.
+            solver.setup(small)
+            del r
+            r = [solver.solve(small) for _ in range(3)]
+            del r
+            r = None
+            solver.setup(first)
+    for a, b in zip(fields(held), held_fields):
+        if isinstance(b, np.ndarray):
+            assert_same_bits(a, b, "a held result")
+        else:
+            assert a == b
+
+
+def test_the_overhead_benchmark_runs(problems):
+    """harness/scripts/bench_python_solve.py (docs/performance.md, "Python") on the two dumped
+    ticks, one pair of one repeat: it runs both sides and prints its four overheads (the figures
+    themselves are the benchmark's, never checked here)."""
+    script = os.path.join(ROOT, "harness", "scripts", "bench_python_solve.py")
+    binary_dir = os.path.dirname(tool("lexdyn-solve"))
+    p = subprocess.run([sys.executable, script, "--pairs", "1", "--repeats", "1", "--bin", binary_dir, *problems],
+                       capture_output=True, text=True, env=dict(os.environ))
+    assert p.returncode == 0, p.stderr
+    lines = p.stdout.splitlines()
+    for name in ("cold", "warm", "cold in-process", "warm in-process"):
+        assert any(line.startswith(f"{name} overhead: median ") for line in lines), p.stdout
+    bad = subprocess.run([sys.executable, script, "--pairs", "0", *problems], capture_output=True, text=True)
+    assert bad.returncode == 2 and "--pairs" in bad.stderr
+
+
 def test_options_and_errors(problems, tmp_path):
     problem = lexdyn.load_problem(problems[0])
     capped = lexdyn.solve(problem, options=lexdyn.Options(max_iterations=1, compute_multipliers=False))

@@ -6,6 +6,7 @@
 #include <random>
 #include <cstdint>
 #include <cstring>
+#include <string>
 
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/solver/detail/hls_factorization.hpp"
@@ -46,38 +47,70 @@ const Result& solveOnce(Solver& s, const Problem& p, const Options& o = Options{
   return s.solve(p);
 }
 
-// takeMultipliers() moves the result's multipliers out: they are the ones the solve computed,
-// result() has none left, and the next solve computes them again (the same bits as a solver
-// whose multipliers were never taken), also after a solve that refuses its input.
-TEST(Solver, TakenMultipliersAreTheResultsAndTheNextSolveMakesThemAgain) {
+bool sameBits(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return a.rows() == b.rows() && a.cols() == b.cols() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
+}
+
+// Every field a solve computes, bit for bit.
+void expectSameResult(const Result& a, const Result& b, const std::string& what) {
+  EXPECT_EQ(a.status, b.status) << what;
+  EXPECT_TRUE(sameBits(a.x, b.x)) << what;
+  EXPECT_TRUE(sameBits(a.violation_norm, b.violation_norm)) << what;
+  ASSERT_EQ(a.violation.size(), b.violation.size()) << what;
+  for (size_t l = 0; l < a.violation.size(); ++l) EXPECT_TRUE(sameBits(a.violation[l], b.violation[l])) << what << " level " << l;
+  EXPECT_TRUE(sameBits(a.lambda, b.lambda)) << what;
+  EXPECT_EQ(a.active.level, b.active.level) << what;
+  EXPECT_EQ(a.rank, b.rank) << what;
+  EXPECT_EQ(a.iterations, b.iterations) << what;
+  EXPECT_EQ(a.factorizations, b.factorizations) << what;
+}
+
+// swapResult() hands the result over without a copy: it is the one the solve computed, and the
+// next solve into the buffers given back (empty ones, or an earlier result's) computes the same
+// bits as a solver whose result was never taken, cold and warm, also after a solve that refuses
+// its input.
+TEST(Solver, ASwappedResultIsTheSolvesAndTheNextSolveFillsTheBuffersGivenBack) {
   test::GenOptions g;
   g.n = 15;
   g.levels = 6;
   g.maxRows = 8;
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-    Problem prob = test::randomProblem(seed, g);
+    const Problem prob = test::randomProblem(seed, g);
+    const Problem other = test::randomProblem(seed + 100, g);
     Solver a, b;
     a.setup(prob);
     b.setup(prob);
-    const Eigen::MatrixXd expected = a.solve(prob).lambda;
-    ASSERT_GT(expected.size(), 0);
-    const Eigen::MatrixXd taken = a.takeMultipliers();
-    EXPECT_EQ(taken.rows(), expected.rows());
-    EXPECT_EQ(std::memcmp(taken.data(), expected.data(), sizeof(double) * static_cast<size_t>(expected.size())), 0) << seed;
+    const Result expected = a.solve(prob);
+    ASSERT_GT(expected.lambda.size(), 0);
+    Result taken;  // empty: the solver reshapes it at its next solve
+    a.swapResult(taken);
+    expectSameResult(taken, expected, "taken, seed " + std::to_string(seed));
     EXPECT_EQ(a.result().lambda.size(), 0);
-    b.solve(prob);
-    const Result& again = a.solve(prob, b.result().active, b.result().x);
-    const Result& reference = b.solve(prob, b.result().active, b.result().x);
-    ASSERT_EQ(again.lambda.rows(), reference.lambda.rows());
-    ASSERT_EQ(again.lambda.cols(), reference.lambda.cols());
-    EXPECT_EQ(std::memcmp(again.lambda.data(), reference.lambda.data(), sizeof(double) * static_cast<size_t>(again.lambda.size())), 0)
-        << seed;
-    (void)a.takeMultipliers();
+
+    // Warm, into the empty buffers.
+    const Result& again = a.solve(prob, expected.active, expected.x);
+    const Result& reference = b.solve(prob, expected.active, expected.x);
+    expectSameResult(again, reference, "warm into empty buffers, seed " + std::to_string(seed));
+
+    // Cold, into an earlier result's buffers (another problem's, of other sizes).
+    Result earlier;
+    {
+      Solver c;
+      c.setup(other);
+      c.solve(other);
+      c.swapResult(earlier);
+    }
+    a.swapResult(earlier);
+    expectSameResult(a.solve(prob), b.solve(prob), "cold into recycled buffers, seed " + std::to_string(seed));
+
     Problem bad = prob;
     bad.level(bad.levelCount() - 1).upper(0) = std::numeric_limits<double>::quiet_NaN();
+    Result empty;
+    a.swapResult(empty);
     EXPECT_EQ(a.solve(bad).status, Status::NonFiniteInput);
     EXPECT_EQ(a.solve(prob).status, Status::Solved);
-    EXPECT_EQ(a.result().lambda.rows(), expected.rows());
+    expectSameResult(a.result(), b.solve(prob), "after a refused input, seed " + std::to_string(seed));
   }
 }
 
