@@ -5,7 +5,9 @@
 #     (simulated seconds per wall second of each run): maximum, median, minimum;
 #   - for a lexdyn or WLS controller, each timed part of the tick (tick, solver, model, tasks,
 #     Hessians): the minimum over the runs of the per-run median, the median of those medians,
-#     and the largest per-run p99.
+#     and the largest per-run p99; the slowest tick of each run (minimum and median over the
+#     runs) and, next to it, the solver's deterministic work peak (active-set iterations and
+#     factorised stages in one tick, with the time of the tick).
 # A single run on a shared machine can show false tails of one scheduler slice (about 4 ms): the
 # minimum over runs is the figure to compare. Figures compare on one machine only.
 # With -B OTHER_BUILD, two builds are compared: each run of BUILD_DIR's lexdyn-harness is followed
@@ -96,6 +98,14 @@ def report(label):
         p99 = [t[part]["p99"] for t in timing]
         minima[part] = min(med)
         print(f"  {part:8s} median: min {min(med):8.1f} us, median {statistics.median(med):8.1f} us; p99: max {max(p99):8.1f} us")
+    if all("tick" in t for t in timing):
+        peak = [t["tick"]["max"] for t in timing]
+        print(f"  tick     max:    min {min(peak):8.1f} us, median {statistics.median(peak):8.1f} us (each run's slowest tick)")
+    # The deterministic measure of the worst tick's work, next to its wall time: the same in every run.
+    work = {(x["solver"]["peak_iterations"], x["solver"]["peak_iterations_at_s"], x["solver"]["peak_factorizations"],
+             x["solver"]["peak_factorizations_at_s"]) for x in s if x.get("solver")}
+    for it, it_at, fa, fa_at in sorted(work):
+        print(f"  solver work peak: {it} active-set iterations at {it_at:g} s, {fa} factorised stages at {fa_at:g} s")
     if st != {"completed"}:
         print(f"  a run did not complete: {', '.join(sorted(st))}; its figures cover less simulated time")
     return min(wall), minima, st == {"completed"}

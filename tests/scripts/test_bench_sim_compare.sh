@@ -15,6 +15,10 @@ check "same build: A's figures" grep -q '^\[A\] pointmass-damping' "$TMP/same.tx
 check "same build: B's figures" grep -q '^\[B\] pointmass-damping' "$TMP/same.txt"
 check "same build: differences of the minima" grep -q 'B - A (minima): wall' "$TMP/same.txt"
 check "same build: traces identical" grep -q 'traces: identical' "$TMP/same.txt"
+check "same build: each run's slowest tick" grep -q '^  tick     max:    min .* us, median .* us' "$TMP/same.txt"
+# The solver's work peak is deterministic: one line per build, the same for both.
+check "same build: the solver's work peak" [ "$(grep -c '^  solver work peak: [0-9]* active-set iterations at .* s, [0-9]* factorised stages at' "$TMP/same.txt")" -eq 2 ]
+check "same build: one work peak" [ "$(grep '^  solver work peak' "$TMP/same.txt" | sort -u | wc -l)" -eq 1 ]
 
 # A "build" whose harness integrates with another tolerance: the traces differ.
 mkdir -p "$TMP/other/bin"
