@@ -32,9 +32,9 @@ bool allFiniteFast(const Eigen::DenseBase<Derived>& m) {
   return std::isfinite((m.derived().array() * 0.0).sum());
 }
 
-// An active-set step direction no larger than this times (1 + |x| + |v|) (max norms) is rounding:
-// about 64 units in the last place of numbers of size 1.
-constexpr double kRoundingDirection = 64.0 * std::numeric_limits<double>::epsilon();
+// A motion no larger than this times the size of what moves is rounding: about 64 units in the
+// last place.
+constexpr double kRoundingMotion = 64.0 * std::numeric_limits<double>::epsilon();
 
 }  // namespace
 
@@ -692,16 +692,24 @@ void Solver::Impl::run() {
     const double dxNorm = dx.norm();
     for (int g = 0; g < M; ++g) dv(g) = (state[static_cast<size_t>(g)] == RowState::Inactive) ? -v(g) : res(g) - v(g);
 
-    // Right after a release, a direction of rounding size blocks nothing: the equality solution
-    // is x itself (the released row is still held where it was by another active row, e.g. its
-    // duplicate on a later level). Blocking, the released row would be activated again at once
-    // and kept by the anti-cycling rule below with its wrong-sign multiplier, the release hidden;
-    // the full step moves x by rounding only, and the dual check goes on (it releases the
-    // duplicate next).
-    bool roundingDirection = false;
+    // Right after a release, the released constraint does not block a step that moves it by
+    // rounding only (over the full step, at most kRoundingMotion times its own size: its bound
+    // plus its row norm times |x|): the equality solution keeps it where it was because another
+    // active row holds it (e.g. its duplicate on a later level). Blocking, it would be activated
+    // again at once and kept by the anti-cycling rule below with its wrong-sign multiplier, the
+    // release hidden; instead it stays released (every other constraint still blocks the step),
+    // and the dual check goes on (it releases the duplicate next).
+    bool releasedStays = false;
     if (lastDropKind >= 0) {
-      const double scale = 1.0 + x.lpNorm<Eigen::Infinity>() + v.head(M).lpNorm<Eigen::Infinity>();
-      roundingDirection = std::max(dx.lpNorm<Eigen::Infinity>(), dv.head(M).lpNorm<Eigen::Infinity>()) <= kRoundingDirection * scale;
+      const int k = lastDropIdx;
+      const double xnorm = x.lpNorm<Eigen::Infinity>();
+      if (lastDropKind == 0) {
+        const double bound = lastDropState == RowState::Lower ? xlo(k) : xup(k);
+        releasedStays = std::abs(dx(k)) <= kRoundingMotion * (std::abs(bound) + xnorm);
+      } else {
+        const double bound = lastDropState == RowState::Lower ? lo(k) : up(k);
+        releasedStays = std::abs(Adx(k) - dv(k)) <= kRoundingMotion * (std::abs(bound) + rowNorm(k) * xnorm);
+      }
     }
 
     // Ratio test over inactive bounds and rows.
@@ -721,8 +729,9 @@ void Solver::Impl::run() {
         blockState = s;
       }
     };
-    for (int i = 0; i < n && !roundingDirection; ++i) {
+    for (int i = 0; i < n; ++i) {
       if (vstate[static_cast<size_t>(i)] != RowState::Inactive) continue;
+      if (releasedStays && lastDropKind == 0 && i == lastDropIdx) continue;
       const double d = dx(i);
       const double thr = opt.feasibility_tolerance * dxNorm;
       if (d > thr && std::isfinite(xup(i)))
@@ -730,8 +739,9 @@ void Solver::Impl::run() {
       else if (d < -thr && std::isfinite(xlo(i)))
         offer((xlo(i) - x(i)) / d, 0, i, RowState::Lower);
     }
-    for (int g = 0; g < M && !roundingDirection; ++g) {
+    for (int g = 0; g < M; ++g) {
       if (state[static_cast<size_t>(g)] != RowState::Inactive) continue;
+      if (releasedStays && lastDropKind == 1 && g == lastDropIdx) continue;
       const double den = Adx(g) - dv(g);
       const double thr = opt.feasibility_tolerance * (rowNorm(g) * dxNorm + std::abs(dv(g)));
       const double s = Ax(g) - v(g);
@@ -755,7 +765,10 @@ void Solver::Impl::run() {
     }
     // Progress in the (x, v) space: a step that only moves slacks (a row switching sides) counts.
     const double moved = alpha * std::max(dx.lpNorm<Eigen::Infinity>(), dv.head(M).lpNorm<Eigen::Infinity>());
-    const bool stalled = moved <= 1e-15 * (1.0 + x.lpNorm<Eigen::Infinity>() + v.head(M).lpNorm<Eigen::Infinity>());
+    // After a release that left its constraint where it was, a step of rounding size is no
+    // progress either.
+    const double scale = 1.0 + x.lpNorm<Eigen::Infinity>() + v.head(M).lpNorm<Eigen::Infinity>();
+    const bool stalled = moved <= 1e-15 * scale || (releasedStays && moved <= kRoundingMotion * scale);
     if (stalled) {
       ++degenerateRun;
       if (degenerateRun >= opt.bland_after_degenerate_steps) bland = true;
@@ -996,6 +1009,14 @@ const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm,
   if (!resultShaped()) shapeResult();
   loadData(problem);
   if (scanNonFinite(problem)) {
+    // Nothing is solved: no figure of an earlier solve (or of the buffers swapResult() gave
+    // back) may pass for this one's. x, the violations and the multipliers are zeros, the
+    // active set is empty, the counters are 0; bad_level and bad_row say where.
+    shapeResult();
+    out.iterations = out.factorizations = out.optimality_iterations = out.activations = out.deactivations = 0;
+    out.held_after_reblock = out.cycles_broken = out.projected_levels = out.spanning_stages = 0;
+    out.optimal_through = -1;
+    out.last_level_projected = out.split_applied = false;
     out.status = Status::NonFiniteInput;
     out.reason = StopReason::NonFiniteInput;
     return out;

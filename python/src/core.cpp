@@ -122,7 +122,8 @@ py::list activeSetList(const ls::ActiveSet& a) {
 }
 
 // A Python Result: the solver's result and the wall time of the C++ solve inside the call (the
-// GIL released), as `lexdyn-solve --bench` times it: the call's own cost is the difference.
+// GIL released), as `lexdyn-solve --bench` times it (a first solve's setup left out): the call's
+// own cost is the difference.
 struct SolveResult : ls::Result {
   double solve_us = std::numeric_limits<double>::quiet_NaN();
 };
@@ -166,7 +167,7 @@ struct PySolver {
   std::shared_ptr<ResultPool> pool = std::make_shared<ResultPool>();
 };
 
-// The warm start of a solve: a Result, or (active set, x).
+// A warm start given as a pair (active set, x); a Result warm-starts in place (solveWith).
 struct WarmStart {
   ls::ActiveSet active;
   Eigen::VectorXd x;
@@ -174,10 +175,6 @@ struct WarmStart {
 
 std::optional<WarmStart> warmStartFrom(const py::object& warm) {
   if (warm.is_none()) return std::nullopt;
-  if (py::isinstance<SolveResult>(warm)) {
-    const auto& r = warm.cast<const SolveResult&>();
-    return WarmStart{r.active, r.x};
-  }
   const py::tuple t = warm.cast<py::tuple>();
   if (t.size() != 2) valueError("warm: expected a Result or a pair (active set, x)");
   return WarmStart{activeSetFrom(t[0]), t[1].cast<Eigen::VectorXd>()};
@@ -584,7 +581,8 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("bad_level", &SolveResult::bad_level)
       .def_readonly("bad_row", &SolveResult::bad_row)
       .def_readonly("solve_us", &SolveResult::solve_us,
-                    "wall time of the C++ solve inside the call, microseconds (the rest of the call is the binding's)")
+                    "wall time of the C++ solve inside the call, microseconds (a first solve's setup left out; the rest of the call is the "
+                    "binding's)")
       .def("__repr__", [](const SolveResult& r) {
         return std::string("Result(status=") + ls::toString(r.status) + ", iterations=" + std::to_string(r.iterations) + ")";
       });

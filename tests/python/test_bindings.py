@@ -199,6 +199,21 @@ def test_freed_results_lend_their_buffers_to_the_next_solve(problems):
             assert_same_bits(a, b, "a held result")
         else:
             assert a == b
+    # A refused input computes into recycled buffers too: none of an earlier result's figures
+    # shows in it.
+    read = lexdyn.load_problem(problems[0], detect_bounds_level=False)
+    levels = [(lv["name"], lv["A"], lv["lower"], lv["upper"].copy()) for lv in read.levels]
+    levels[-1][3][0] = np.nan
+    bad = lexdyn.Problem(read.variables, levels)
+    assert bad.detect_bounds_level()
+    for _ in range(3):
+        solver.solve(first)  # freed at once: its buffers go to the next solve
+        refused = solver.solve(bad)
+        assert refused.status == "non_finite_input"
+        assert refused.bad_level == bad.level_count - 1 and refused.bad_row == 0
+        assert not refused.x.any() and not refused.multipliers.any() and not refused.level_violation.any()
+        assert not any(a.any() for a in refused.active)
+        assert refused.iterations == 0 and refused.optimal_through == -1
 
 
 def test_the_overhead_benchmark_runs(problems):

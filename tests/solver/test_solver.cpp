@@ -103,14 +103,63 @@ TEST(Solver, ASwappedResultIsTheSolvesAndTheNextSolveFillsTheBuffersGivenBack) {
     }
     a.swapResult(earlier);
     expectSameResult(a.solve(prob), b.solve(prob), "cold into recycled buffers, seed " + std::to_string(seed));
+    // Into buffers of the same shape, holding an earlier result of this problem (reused as they
+    // are, not reshaped).
+    Result same = expected;
+    a.swapResult(same);
+    expectSameResult(a.solve(prob, expected.active, expected.x), b.solve(prob, expected.active, expected.x),
+                     "warm into same-shape buffers, seed " + std::to_string(seed));
 
+    // A refused input leaves no figure of an earlier solve, whatever buffers it computes into.
     Problem bad = prob;
     bad.level(bad.levelCount() - 1).upper(0) = std::numeric_limits<double>::quiet_NaN();
-    Result empty;
-    a.swapResult(empty);
-    EXPECT_EQ(a.solve(bad).status, Status::NonFiniteInput);
+    Result stale = expected;
+    a.swapResult(stale);
+    const Result& refused = a.solve(bad);
+    EXPECT_EQ(refused.status, Status::NonFiniteInput);
+    EXPECT_EQ(refused.bad_level, bad.levelCount() - 1);
+    EXPECT_EQ(refused.bad_row, 0);
+    EXPECT_TRUE(refused.x.isZero(0.0));
+    EXPECT_TRUE(refused.lambda.isZero(0.0));
+    EXPECT_TRUE(refused.violation_norm.isZero(0.0));
+    EXPECT_EQ(refused.active.activeCount(), 0);
+    EXPECT_EQ(refused.iterations, 0);
+    EXPECT_EQ(refused.factorizations, 0);
+    EXPECT_EQ(refused.optimal_through, -1);
     EXPECT_EQ(a.solve(prob).status, Status::Solved);
     expectSameResult(a.result(), b.solve(prob), "after a refused input, seed " + std::to_string(seed));
+  }
+}
+
+// Right after a release, the released constraint does not block a step that moves it by rounding
+// only (docs/solver.md, "Anti-cycling"); every other constraint still does, however large the
+// slacks elsewhere. Here level 1 (x2 = 1e8 against the bound x2 <= 1) leaves a slack of 1e8;
+// warm-started from an active set that holds x0 >= 0 and x0 = 1e-6, the solver releases a row and
+// the step towards x0 = 1e-6 must stop at the hard bound x0 <= 5e-7.
+TEST(Solver, AfterAReleaseEveryOtherConstraintStillBlocksBesideALargeSlack) {
+  for (const double big : {1e3, 1e6, 1e8}) {
+    const double d = 1e-6;
+    Problem p(3);
+    p.addBoundsLevel("bounds", {0, 2}, Eigen::Vector2d(1.0, 1.0), Eigen::Vector2d(-kInf, -kInf), Eigen::Vector2d(d / 2, 1.0));
+    p.addLevel("x2 = big", (Eigen::MatrixXd(1, 3) << 0, 0, 1).finished(), Eigen::VectorXd::Constant(1, big),
+               Eigen::VectorXd::Constant(1, big));
+    p.addLevel("x0 >= 0", (Eigen::MatrixXd(1, 3) << 1, 0, 0).finished(), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Constant(1, kInf));
+    p.addLevel("x0 = d", (Eigen::MatrixXd(1, 3) << 1, 0, 0).finished(), Eigen::VectorXd::Constant(1, d), Eigen::VectorXd::Constant(1, d));
+    p.addLevel("x1 = 0", (Eigen::MatrixXd(1, 3) << 0, 1, 0).finished(), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Zero(1));
+    ActiveSet warm;
+    warm.level = {
+        {RowState::Inactive, RowState::Upper}, {RowState::Equality}, {RowState::Lower}, {RowState::Equality}, {RowState::Equality}};
+    for (const bool cold : {false, true}) {
+      Solver s;
+      s.setup(p);
+      const Result& r = cold ? s.solve(p) : s.solve(p, warm, Eigen::Vector3d(0.0, 0.0, 1.0));
+      ASSERT_EQ(r.status, Status::Solved) << big << (cold ? " cold" : " warm");
+      EXPECT_EQ(r.violation_norm(0), 0.0) << big << (cold ? " cold" : " warm");
+      EXPECT_DOUBLE_EQ(r.x(0), d / 2) << big << (cold ? " cold" : " warm");
+      EXPECT_NEAR(r.violation_norm(1), big - 1.0, 1e-9 * big) << big;
+      EXPECT_NEAR(r.violation_norm(3), d / 2, 1e-15) << big;
+      EXPECT_EQ(test::checkKkt(p, r), "") << big << (cold ? " cold" : " warm");
+    }
   }
 }
 
