@@ -186,6 +186,8 @@ struct Solver::Impl {
   // gives it that shape (zeros).
   bool resultShaped() const;
   void shapeResult();
+  // The result's counters and flags as before any work (a solve sets them as it goes).
+  void resetCounters();
   // One solve, from the warm start (warm, xw) or, when warm is null, from a cold start.
   const Result& solve(const Problem& problem, const ActiveSet* warm, const Eigen::VectorXd* xw);
   double rowScale(int gid, double xnorm) const { return std::abs(target(gid)) + rowNorm(gid) * xnorm; }
@@ -257,6 +259,13 @@ bool Solver::Impl::resultShaped() const {
     if (out.violation[l].size() != rowsOf[l] || out.active.level[l].size() != static_cast<size_t>(rowsOf[l])) return false;
   }
   return true;
+}
+
+void Solver::Impl::resetCounters() {
+  out.iterations = out.factorizations = out.optimality_iterations = out.activations = out.deactivations = 0;
+  out.held_after_reblock = out.cycles_broken = out.projected_levels = out.spanning_stages = 0;
+  out.optimal_through = -1;
+  out.last_level_projected = out.split_applied = false;
 }
 
 void Solver::Impl::shapeResult() {
@@ -654,10 +663,8 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx, int& level) {
 }
 
 void Solver::Impl::run() {
-  out.iterations = out.optimality_iterations = out.activations = out.deactivations = 0;
+  resetCounters();
   const long stages0 = fact.stagesFactorized();
-  out.held_after_reblock = 0;
-  out.optimal_through = -1;
   bool optPhase = false;
   int degenerateRun = 0;
   bool bland = false;
@@ -665,7 +672,6 @@ void Solver::Impl::run() {
   std::fill(tabooRow.begin(), tabooRow.end(), 0);
   std::fill(tabooVar.begin(), tabooVar.end(), 0);
   lastDropKind = lastDropIdx = -1;
-  out.cycles_broken = 0;
   rankTol = opt.rank_tolerance;
   dualTol = opt.dual_tolerance;
   bool forceBland = false;
@@ -1013,10 +1019,7 @@ const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm,
     // back) may pass for this one's. x, the violations and the multipliers are zeros, the
     // active set is empty, the counters are 0; bad_level and bad_row say where.
     shapeResult();
-    out.iterations = out.factorizations = out.optimality_iterations = out.activations = out.deactivations = 0;
-    out.held_after_reblock = out.cycles_broken = out.projected_levels = out.spanning_stages = 0;
-    out.optimal_through = -1;
-    out.last_level_projected = out.split_applied = false;
+    resetCounters();
     out.status = Status::NonFiniteInput;
     out.reason = StopReason::NonFiniteInput;
     return out;

@@ -129,6 +129,16 @@ TEST(RobotInit, AHumanoidsDraftComesFromItsGeometry) {
 // A shoulder whose effort limit cannot hold the arm stretched out level (as on a public 95 kg
 // humanoid, whose drafted reach folds forward at the out-of-reach switch: docs/results.md, "A
 // heavier humanoid") is a warning naming the joint, the torque it takes and its limit.
+// Replaces the first `from` after the first `after` in `text`, as a user edits a description
+// file; false (nothing changed) when either is missing.
+bool replaceAfter(std::string& text, const std::string& after, const std::string& from, const std::string& to) {
+  const size_t mark = text.find(after);
+  const size_t at = mark == std::string::npos ? std::string::npos : text.find(from, mark);
+  if (at == std::string::npos) return false;
+  text.replace(at, from.size(), to);
+  return true;
+}
+
 // A copy of models/g1_like in DIR/g1_like whose file REL (urdf/g1_like.urdf, srdf/g1_like.srdf)
 // has `from` replaced by `to` once after `after` (a description package as a user edits it).
 // Returns the package's folder.
@@ -138,9 +148,7 @@ std::string editedG1Like(const std::string& dir, const std::string& rel, const s
   fs::remove_all(pkg);
   fs::copy(kSrc + "/models/g1_like", pkg, fs::copy_options::recursive);
   std::string text = slurp(pkg + "/" + rel);
-  const size_t at = text.find(from, text.find(after));
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
+  EXPECT_TRUE(replaceAfter(text, after, from, to)) << from;
   std::ofstream(pkg + "/" + rel) << text;
   return pkg;
 }
@@ -568,10 +576,8 @@ TEST(RobotInit, BoxFeetOnThreeJointLegsArePointsAndAQuadrupedFacingMinusXIsTurne
   for (size_t at = u.find("<sphere radius=\"0.02\"/>"); at != std::string::npos; at = u.find("<sphere radius=\"0.02\"/>", at)) {
     u.replace(at, 23, "<box size=\"0.04 0.04 0.04\"/>");
   }
-  const std::string turn = "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>";
-  const size_t root = u.find(turn, u.find("<joint name=\"base_to_trunk\""));
-  ASSERT_NE(root, std::string::npos);
-  u.replace(root, turn.size(), "<origin xyz=\"0 0 0\" rpy=\"0 0 3.141592653589793\"/>");
+  ASSERT_TRUE(replaceAfter(u, "<joint name=\"base_to_trunk\"", "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>",
+                           "<origin xyz=\"0 0 0\" rpy=\"0 0 3.141592653589793\"/>"));
   std::ofstream(dir + "/q.urdf") << u;
   const CliResult init = harness("robot init " + dir + "/q.urdf --out " + dir + "/draft", dir);
   expectExit(init, 0,
@@ -600,11 +606,8 @@ TEST(RobotInit, TheFeetUnderHipsRuleLeavesTrunksStiffLegsAndHumanoidsLegNamesAlo
       "  <link name=\"rear\"><inertial><origin xyz=\"-0.1 0 0\"/><mass value=\"0.5\"/>"
       "<inertia ixx=\"1e-3\" ixy=\"0\" ixz=\"0\" iyy=\"1e-3\" iyz=\"0\" izz=\"1e-3\"/></inertial></link>\n";
   spine.insert(spine.find("  <joint name=\"hl_abad\""), rear);
-  for (const char* leg : {"<joint name=\"hl_abad\"", "<joint name=\"hr_abad\""}) {
-    const size_t at = spine.find("<parent link=\"trunk\"/>", spine.find(leg));
-    ASSERT_NE(at, std::string::npos);
-    spine.replace(at, 22, "<parent link=\"rear\"/>");
-  }
+  for (const char* leg : {"<joint name=\"hl_abad\"", "<joint name=\"hr_abad\""})
+    ASSERT_TRUE(replaceAfter(spine, leg, "<parent link=\"trunk\"/>", "<parent link=\"rear\"/>")) << leg;
   std::ofstream(dir + "/spine.urdf") << spine;
   const CliResult s = harness("robot init " + dir + "/spine.urdf --out " + dir + "/spine", dir);
   expectExit(s, 0, {"hl_knee: 0 put HIND_LEFT_FOOT's leg at 100 % of its reach", "fl_knee: 0 put FRONT_LEFT_FOOT's leg"});
@@ -615,11 +618,8 @@ TEST(RobotInit, TheFeetUnderHipsRuleLeavesTrunksStiffLegsAndHumanoidsLegNamesAlo
 
   // Hind knees that cannot bend: no leg is bent, the four feet stay on the ground.
   std::string stiff = quad;
-  for (const char* knee : {"<joint name=\"hl_knee\"", "<joint name=\"hr_knee\""}) {
-    const size_t at = stiff.find("lower=\"-2.6\" upper=\"2.6\"", stiff.find(knee));
-    ASSERT_NE(at, std::string::npos);
-    stiff.replace(at, 25, "lower=\"-0.05\" upper=\"0.05\"");
-  }
+  for (const char* knee : {"<joint name=\"hl_knee\"", "<joint name=\"hr_knee\""})
+    ASSERT_TRUE(replaceAfter(stiff, knee, "lower=\"-2.6\" upper=\"2.6\"", "lower=\"-0.05\" upper=\"0.05\"")) << knee;
   std::ofstream(dir + "/stiff.urdf") << stiff;
   const CliResult k = harness("robot init " + dir + "/stiff.urdf --out " + dir + "/stiff", dir);
   expectExit(k, 0, {"foot FRONT_LEFT_FOOT on link 'fl_shank'", "foot HIND_RIGHT_FOOT on link 'hr_shank'"});
@@ -630,9 +630,8 @@ TEST(RobotInit, TheFeetUnderHipsRuleLeavesTrunksStiffLegsAndHumanoidsLegNamesAlo
   for (const auto& [from, to] : {std::pair<std::string, std::string>{"left_", "LL_"}, {"right_", "RL_"}}) {
     for (size_t at = hum.find(from); at != std::string::npos; at = hum.find(from, at + to.size())) hum.replace(at, from.size(), to);
   }
-  const size_t turn = hum.find("<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>", hum.find("<joint name=\"base_joint\""));
-  ASSERT_NE(turn, std::string::npos);
-  hum.replace(turn, 34, "<origin xyz=\"0 0 0\" rpy=\"0 0 3.141592653589793\"/>");
+  ASSERT_TRUE(replaceAfter(hum, "<joint name=\"base_joint\"", "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>",
+                           "<origin xyz=\"0 0 0\" rpy=\"0 0 3.141592653589793\"/>"));
   fs::create_directories(dir + "/hum/urdf");
   std::ofstream(dir + "/hum/urdf/g1_like.urdf") << hum;
   fs::copy(kSrc + "/models/g1_like/package.xml", dir + "/hum/package.xml");
