@@ -214,7 +214,7 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
                       std::to_string(o.stop_total_iterations) + ", split_force_coordinates " +
                       (o.split_from_variable != -1 ? "true" : "false") + ", spanning_stages " + (o.spanning_stages ? "true" : "false") +
                       ", lazy_snapshots " + (o.lazy_snapshots ? "true" : "false") + ", project_unit_suffix " +
-                      (o.project_unit_suffix ? "true" : "false"));
+                      (o.project_unit_suffix ? "true" : "false") + ", restart_after_fix " + (o.restart_after_fix ? "true" : "false"));
   std::string h;
   for (const auto& l : I.lx.hierarchy(I.lx.method)) {
     h += (h.empty() ? "" : " | ") + l.name + ":";

@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #ifdef __SSE2__
@@ -202,6 +203,8 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   snapGids_.assign(z(L), {});
   snapValid_.assign(z(L), 0);
   snapStore_.assign(z(L), 0);
+  storeDone_.assign(z(L), 0);
+  pendingFix_ = -1;
   for (int k = 0; k < L; ++k) snapStore_[z(k)] = k;
   for (int k = 1; k < L; ++k) {
     int later = 0;
@@ -292,18 +295,103 @@ void HlsFactorization::computeRowNorms() {
 }
 
 void HlsFactorization::setFreeVariables(const std::vector<int>& freeVar, int nFree) {
+  // The one change since a factorisation whose layout is still valid (nothing invalidated it
+  // since): a single variable fixed. factorize() may then restart after the stages it leaves
+  // unchanged (fixedWithoutFullRestart).
+  int fixed = -1;
+  if (pendingFix_ < 0 && dirtyFrom_ > 0 && nFree == nf_ - 1 && nFree >= 0) {
+    int i = 0;
+    while (i < nFree && freeVar[z(i)] == freeVar_[z(i)]) ++i;
+    fixed = freeVar_[z(i)];
+    for (int q = i; q < nFree && fixed >= 0; ++q)
+      if (freeVar[z(q)] != freeVar_[z(q + 1)]) fixed = -1;
+  }
   nf_ = nFree;
   std::fill(isFree_.begin(), isFree_.end(), 0);
   for (int i = 0; i < nFree; ++i) {
     freeVar_[z(i)] = freeVar[z(i)];
     isFree_[z(freeVar[z(i)])] = 1;
   }
+  if (fixed >= 0 && restartAfterFix_) {
+    pendingFix_ = fixed;
+    return;
+  }
   invalidateAll();
 }
 
 void HlsFactorization::invalidateAll() {
   dirtyFrom_ = 0;
+  pendingFix_ = -1;
   std::fill(snapValid_.begin(), snapValid_.end(), 0);
+}
+
+// A variable fixed by its bound (the free set's only change since the last factorisation). When
+// it is a reduced coordinate p that the stages before some level c never reach (split
+// coordinates: a force that no velocity stage's rows read), those stages are unchanged to the
+// bit: their reflectors and R factors live in rows above p, and their columns are zero from p
+// on. Then only the elimination's D^T loses the variable's row (updateElimination), every saved
+// snapshot up to c and every kept raw row of a projected level lose row p, and the factorisation
+// restarts at c, as after an activation at level c. Declined (false: the caller restarts from
+// the first level) when the variable is basic, a stage before the first general one reaches p,
+// or the projected levels would be chosen differently with one reduced coordinate fewer (a full
+// factorisation decides that anew).
+bool HlsFactorization::fixedWithoutFullRestart(int v) {
+  const int L = levelCount();
+  if (!elim_ || !haveSnapshots_ || fullLayout_ || dirtyFrom_ <= firstStage_) return false;
+  int p = -1;
+  for (int f = 0; f < nr_; ++f) {
+    if (varPerm_[z(m0_ + f)] == v) {
+      p = f;
+      break;
+    }
+  }
+  if (p < 0) return false;
+  int c = std::min(dirtyFrom_, L);
+  for (int k = firstStage_; k < c; ++k) {
+    if (projected(k) || stageEnd_[z(k)] > p || col0_[z(k)] > p) {
+      c = k;
+      break;
+    }
+  }
+  if (c <= firstStage_) return false;
+  const int nrOld = nr_;
+  const int deferredOld = deferred_, deferFromOld = deferFrom_;
+  if (!updateElimination()) return false;
+  nr_ = nf_ - m0_;
+  decideDeferral();
+  if (nr_ != nrOld - 1 || deferred_ != deferredOld || deferFrom_ != deferFromOld) return false;
+  // Row p leaves the snapshots (rows col0_[j] .. nrOld of the columns of levels >= j; shared
+  // storage once) and the projected levels' raw rows.
+  std::fill(storeDone_.begin(), storeDone_.end(), 0);
+  for (int j = 1; j < L; ++j) {  // snapshots are saved for levels > 0 (the first stage too)
+    if (!snapValid_[z(j)]) continue;
+    if (j > c) {
+      snapValid_[z(j)] = 0;  // taken again when the restart reaches stage j
+      continue;
+    }
+    const int st = snapStore_[z(j)];
+    if (storeDone_[z(st)]) continue;
+    storeDone_[z(st)] = 1;
+    const int r = p - col0_[z(j)];
+    const int move = nrOld - col0_[z(j)] - r - 1;
+    if (move <= 0) continue;
+    Eigen::MatrixXd& S = snap_[z(st)];
+    const int cnt = static_cast<int>(snapGids_[z(j)].size());
+    for (int q = 0; q < cnt; ++q) {
+      double* col = S.col(q).data();
+      std::memmove(col + r, col + r + 1, static_cast<size_t>(move) * sizeof(double));
+    }
+  }
+  if (deferFrom_ >= 0) {
+    const int move = nrOld - p - 1;
+    for (int row = 0; row < static_cast<int>(rawHave_.size()) && move > 0; ++row) {
+      if (!rawHave_[z(row)]) continue;
+      double* col = Raw_.col(row).data();
+      std::memmove(col + p, col + p + 1, static_cast<size_t>(move) * sizeof(double));
+    }
+  }
+  dirtyFrom_ = c;
+  return true;
 }
 
 void HlsFactorization::activate(int k, int row) {
@@ -1091,6 +1179,11 @@ void HlsFactorization::projectDeferredLevel(int k) {
 
 void HlsFactorization::factorize(double rankTol) {
   const int L = levelCount();
+  if (pendingFix_ >= 0) {
+    const int v = pendingFix_;
+    pendingFix_ = -1;
+    if (!fixedWithoutFullRestart(v)) invalidateAll();
+  }
   if (dirtyFrom_ >= L) {
     lastRestart_ = L;
     return;

@@ -143,6 +143,7 @@ json optionsValue(const Options& o) {
   j["spanning_stages"] = o.spanning_stages;
   j["lazy_snapshots"] = o.lazy_snapshots;
   j["project_unit_suffix"] = o.project_unit_suffix;
+  j["restart_after_fix"] = o.restart_after_fix;
   j["max_iterations"] = o.max_iterations;
   j["bland_after_degenerate_steps"] = o.bland_after_degenerate_steps;
   j["cycle_tolerance_factor"] = o.cycle_tolerance_factor;
@@ -204,6 +205,7 @@ Options readOptions(const json& j, const std::string& where) {
   boolean("spanning_stages", o.spanning_stages);
   boolean("lazy_snapshots", o.lazy_snapshots);
   boolean("project_unit_suffix", o.project_unit_suffix);
+  boolean("restart_after_fix", o.restart_after_fix);
   integer("max_iterations", o.max_iterations);
   integer("bland_after_degenerate_steps", o.bland_after_degenerate_steps);
   number("cycle_tolerance_factor", o.cycle_tolerance_factor);

@@ -103,8 +103,13 @@ class HlsFactorization {
   /// True when the last full factorisation eliminated level 0.
   bool eliminated() const { return elim_; }
 
-  /// Declares the free variables (those not fixed by an active bound); invalidates everything.
+  /// Declares the free variables (those not fixed by an active bound, in increasing order).
+  /// Invalidates everything, unless the only change since a factorisation is one variable fixed
+  /// and restarts after a fix are on: factorize() then restarts after the stages the fixed
+  /// variable leaves unchanged, when there are such stages (docs/solver.md, "Restarts").
   void setFreeVariables(const std::vector<int>& freeVar, int nFree);
+  /// Restarts after a fixed variable (Options::restart_after_fix); on by default.
+  void setRestartAfterFix(bool on) { restartAfterFix_ = on; }
 
   /// Active-row bookkeeping. Marks the level dirty; factorize() restarts from the lowest dirty level.
   void activate(int k, int row);
@@ -155,6 +160,9 @@ class HlsFactorization {
   /// col <- Q_{<stages} col.
   void applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
   void relayout(int c);
+  /// factorize() after setFreeVariables() fixed variable v alone: true when it prepared a restart
+  /// at a level after the first general one (dirtyFrom_), false when everything is to be redone.
+  bool fixedWithoutFullRestart(int v);
   /// shareWith >= 0: a snapshot taken earlier in this factorisation, with only stages without
   /// active rows since (the same columns and entries): its storage is shared, not copied.
   void saveSnapshot(int k, int shareWith);
@@ -242,7 +250,10 @@ class HlsFactorization {
   std::vector<std::vector<int>> snapCol_;   // [k][gid] -> snapshot column or -1
   std::vector<std::vector<int>> snapGids_;  // [k] gids present in snapshot k
   std::vector<char> snapValid_;
-  std::vector<int> snapStore_;  // [k] whose storage (snap_) snapshot k's columns are in
+  std::vector<int> snapStore_;   // [k] whose storage (snap_) snapshot k's columns are in
+  std::vector<char> storeDone_;  // fixedWithoutFullRestart: snapshot storage already updated
+  int pendingFix_ = -1;          // the variable setFreeVariables() fixed since the last factorize() (-1: none)
+  bool restartAfterFix_ = true;
 
   // Rank-deficient levels: L = R^T (m x r) = V [U; 0], stored Householder-style.
   std::vector<Eigen::MatrixXd> left_;
