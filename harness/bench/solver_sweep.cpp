@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
   int maxN = 12, maxLevels = 7, maxRows = 8;
   long exactEvery = 0;
   int maxIterations = Options{}.max_iterations;
-  bool spanning = false, lazy = false, suffix = false, noFixRestart = false;
+  bool spanning = false, lazy = false, suffix = false, noBoundRestarts = false;
   double unitLevels = 0.0;
   bool brute = false;
   double exactTimeLimit = 0.0;
@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
   app.add_flag("--spanning-stages", spanning, "solve with Options::spanning_stages (docs/solver.md)");
   app.add_flag("--lazy-snapshots", lazy, "solve with Options::lazy_snapshots (docs/solver.md)");
   app.add_flag("--unit-suffix", suffix, "solve with Options::project_unit_suffix (docs/solver.md)");
-  app.add_flag("--no-restart-after-fix", noFixRestart, "solve with Options::restart_after_fix off (docs/solver.md)");
+  app.add_flag("--no-restart-after-bound-change", noBoundRestarts, "solve with Options::restart_after_bound_change off (docs/solver.md)");
   app.add_option("--unit-levels", unitLevels, "probability that a level is made of single-variable rows, in [0, 1]")
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--brute-force", brute, "compare tiny problems (<= 9 rows) with active-set enumeration");
@@ -109,14 +109,14 @@ int main(int argc, char** argv) {
                               std::to_string(maxRows) + (brute ? " --brute-force" : "") +
                               (maxIterations != Options{}.max_iterations ? " --max-iterations " + std::to_string(maxIterations) : "") +
                               (spanning ? " --spanning-stages" : "") + (lazy ? " --lazy-snapshots" : "") +
-                              (suffix ? " --unit-suffix" : "") + (noFixRestart ? " --no-restart-after-fix" : "") +
+                              (suffix ? " --unit-suffix" : "") + (noBoundRestarts ? " --no-restart-after-bound-change" : "") +
                               (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "");
   Options solverOptions;
   solverOptions.max_iterations = maxIterations;
   solverOptions.spanning_stages = spanning;
   solverOptions.lazy_snapshots = lazy;
   solverOptions.project_unit_suffix = suffix;
-  solverOptions.restart_after_fix = !noFixRestart;
+  solverOptions.restart_after_bound_change = !noBoundRestarts;
   // The counts of the problems finished; one interrupted in its exact check is not counted (its
   // counts are taken back whole).
   struct Counts {

@@ -245,7 +245,7 @@ int main(int argc, char** argv) {
   CLI::App app{"lexdyn-solve: hierarchical least-squares solver (docs/solver.md)"};
   std::vector<std::string> files;
   bool bench = false, details = false, noBounds = false, warmOnly = false, spanning = false, lazy = false, suffix = false,
-       noFixRestart = false;
+       noBoundRestarts = false;
   bool defaultOptions = false;
   int maxIterations = 1000, repeats = 1, options_split = -1;
   double paperDt = 0.0;
@@ -256,7 +256,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1000000));
   app.add_flag("--spanning-stages", spanning, "solve single-variable-row levels that span their stage by one QR (docs/solver.md)");
   app.add_flag("--lazy-snapshots", lazy, "save restart snapshots only once a solve restarts (docs/solver.md)");
-  app.add_flag("--no-restart-after-fix", noFixRestart,
+  app.add_flag("--no-restart-after-bound-change", noBoundRestarts,
                "factorise every level again after a variable is fixed at its bound (docs/solver.md)");
   app.add_flag("--unit-suffix", suffix, "project the level before a projected last level too when its rows are unit rows (docs/solver.md)");
   app.add_flag("--details", details, "also print the active set, ranks and per-row violations");
@@ -291,7 +291,7 @@ int main(int argc, char** argv) {
     if (app.count("--split-from")) o.split_from_variable = options_split;
     if (spanning) o.spanning_stages = true;
     if (lazy) o.lazy_snapshots = true;
-    if (noFixRestart) o.restart_after_fix = false;
+    if (noBoundRestarts) o.restart_after_bound_change = false;
     if (suffix) o.project_unit_suffix = true;
   };
   try {

@@ -204,7 +204,8 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   snapValid_.assign(z(L), 0);
   snapStore_.assign(z(L), 0);
   storeDone_.assign(z(L), 0);
-  pendingFix_ = -1;
+  velOrder_.assign(z(std::max(n, 1)), 0);
+  pendingVar_ = -1;
   for (int k = 0; k < L; ++k) snapStore_[z(k)] = k;
   for (int k = 1; k < L; ++k) {
     int later = 0;
@@ -296,15 +297,20 @@ void HlsFactorization::computeRowNorms() {
 
 void HlsFactorization::setFreeVariables(const std::vector<int>& freeVar, int nFree) {
   // The one change since a factorisation whose layout is still valid (nothing invalidated it
-  // since): a single variable fixed. factorize() may then restart after the stages it leaves
-  // unchanged (fixedWithoutFullRestart).
-  int fixed = -1;
-  if (pendingFix_ < 0 && dirtyFrom_ > 0 && nFree == nf_ - 1 && nFree >= 0) {
+  // since): a single variable fixed or freed. factorize() may then restart after the stages it
+  // leaves unchanged (boundChangeRestart).
+  int changed = -1;
+  if (pendingVar_ < 0 && dirtyFrom_ > 0 && (nFree == nf_ - 1 || nFree == nf_ + 1) && nFree >= 0) {
+    const bool fixed = nFree < nf_;
+    const int* longer = fixed ? freeVar_.data() : freeVar.data();
+    const int* shorter = fixed ? freeVar.data() : freeVar_.data();
+    const int ns = std::min(nFree, nf_);
     int i = 0;
-    while (i < nFree && freeVar[z(i)] == freeVar_[z(i)]) ++i;
-    fixed = freeVar_[z(i)];
-    for (int q = i; q < nFree && fixed >= 0; ++q)
-      if (freeVar[z(q)] != freeVar_[z(q + 1)]) fixed = -1;
+    while (i < ns && longer[i] == shorter[i]) ++i;
+    changed = longer[i];
+    for (int q = i; q < ns && changed >= 0; ++q)
+      if (shorter[q] != longer[q + 1]) changed = -1;
+    pendingFixed_ = fixed;
   }
   nf_ = nFree;
   std::fill(isFree_.begin(), isFree_.end(), 0);
@@ -312,8 +318,8 @@ void HlsFactorization::setFreeVariables(const std::vector<int>& freeVar, int nFr
     freeVar_[z(i)] = freeVar[z(i)];
     isFree_[z(freeVar[z(i)])] = 1;
   }
-  if (fixed >= 0 && restartAfterFix_) {
-    pendingFix_ = fixed;
+  if (changed >= 0 && boundRestarts_) {
+    pendingVar_ = changed;
     return;
   }
   invalidateAll();
@@ -321,23 +327,41 @@ void HlsFactorization::setFreeVariables(const std::vector<int>& freeVar, int nFr
 
 void HlsFactorization::invalidateAll() {
   dirtyFrom_ = 0;
-  pendingFix_ = -1;
+  pendingVar_ = -1;
   std::fill(snapValid_.begin(), snapValid_.end(), 0);
 }
 
-// A variable fixed by its bound (the free set's only change since the last factorisation). When
-// it is a reduced coordinate p that the stages before some level c never reach (split
-// coordinates: a force that no velocity stage's rows read), those stages are unchanged to the
-// bit: their reflectors and R factors live in rows above p, and their columns are zero from p
-// on. Then only the elimination's D^T loses the variable's row (updateElimination), every saved
-// snapshot up to c and every kept raw row of a projected level lose row p, and the factorisation
-// restarts at c, as after an activation at level c. Declined (false: the caller restarts from
-// the first level) when the variable is basic, a stage before the first general one reaches p,
-// or the projected levels would be chosen differently with one reduced coordinate fewer (a full
-// factorisation decides that anew).
-bool HlsFactorization::fixedWithoutFullRestart(int v) {
+// The first stage (from the first general one) that a change of the reduced coordinates from row
+// `from` on can alter: one whose rows reach `from` (its reflectors or its columns' nonzeros), or a
+// projected level (its null-space basis changes with the coordinates), or a level that is to be
+// factorised again anyway.
+int HlsFactorization::firstStageReaching(int from) const {
   const int L = levelCount();
-  if (!elim_ || !haveSnapshots_ || fullLayout_ || dirtyFrom_ <= firstStage_) return false;
+  int c = std::min(dirtyFrom_, L);
+  for (int k = firstStage_; k < c; ++k)
+    if (projected(k) || stageEnd_[z(k)] > from || col0_[z(k)] > from) return k;
+  return c;
+}
+
+// After the elimination was brought to the new free set: the same projected levels as before (a
+// full factorisation decides them anew), and the new count of reduced coordinates.
+bool HlsFactorization::sameLayoutAfterElimination(int deferredOld, int deferFromOld) {
+  nr_ = nf_ - m0_;
+  nrElim_ = nr_;
+  decideDeferral();
+  return deferred_ == deferredOld && deferFrom_ == deferFromOld;
+}
+
+// A variable fixed by its bound, not a basic one of the elimination (case A). When its reduced
+// coordinate p is one that the stages before some level c never reach (split coordinates: a
+// force that no velocity stage's rows read), those stages are unchanged to the bit: their
+// reflectors and R factors lie in rows above p and their columns are zero from p on, and
+// updateElimination keeps the other rows of D^T as they are. Then every saved snapshot up to c and
+// every kept raw row of a projected level lose row p, and the factorisation restarts at c, as
+// after an activation at level c. Returns 1 when done, 0 when not applicable (nothing changed),
+// -1 when declined after the elimination was updated (the caller factorises everything).
+int HlsFactorization::fixedNonBasicRestart(int v) {
+  const int L = levelCount();
   int p = -1;
   for (int f = 0; f < nr_; ++f) {
     if (varPerm_[z(m0_ + f)] == v) {
@@ -345,25 +369,17 @@ bool HlsFactorization::fixedWithoutFullRestart(int v) {
       break;
     }
   }
-  if (p < 0) return false;
-  int c = std::min(dirtyFrom_, L);
-  for (int k = firstStage_; k < c; ++k) {
-    if (projected(k) || stageEnd_[z(k)] > p || col0_[z(k)] > p) {
-      c = k;
-      break;
-    }
-  }
-  if (c <= firstStage_) return false;
+  if (p < 0) return 0;  // a basic variable
+  const int c = firstStageReaching(p);
+  if (c <= firstStage_) return 0;
   const int nrOld = nr_;
   const int deferredOld = deferred_, deferFromOld = deferFrom_;
-  if (!updateElimination()) return false;
-  nr_ = nf_ - m0_;
-  decideDeferral();
-  if (nr_ != nrOld - 1 || deferred_ != deferredOld || deferFrom_ != deferFromOld) return false;
+  if (!updateElimination()) return 0;
+  if (!sameLayoutAfterElimination(deferredOld, deferFromOld) || nr_ != nrOld - 1) return -1;
   // Row p leaves the snapshots (rows col0_[j] .. nrOld of the columns of levels >= j; shared
-  // storage once) and the projected levels' raw rows.
+  // storage once; snapshots are saved for levels > 0) and the projected levels' raw rows.
   std::fill(storeDone_.begin(), storeDone_.end(), 0);
-  for (int j = 1; j < L; ++j) {  // snapshots are saved for levels > 0 (the first stage too)
+  for (int j = 1; j < L; ++j) {
     if (!snapValid_[z(j)]) continue;
     if (j > c) {
       snapValid_[z(j)] = 0;  // taken again when the restart reaches stage j
@@ -390,8 +406,63 @@ bool HlsFactorization::fixedWithoutFullRestart(int v) {
       std::memmove(col + p, col + p + 1, static_cast<size_t>(move) * sizeof(double));
     }
   }
+  ++stages_;  // the elimination was brought to the new free set
   dirtyFrom_ = c;
-  return true;
+  return 1;
+}
+
+// Split coordinates, a force fixed or freed, a basic one included (case B). The elimination is
+// brought to the new free set as a full factorisation does (updateElimination, else a new
+// elimination), so that D^T is the full factorisation's. When every level with active rows that
+// is not projected reads the velocities only (its declared columns end at the split), its rows
+// have no basic part and are zero on every force coordinate: their reduced rows are their entries
+// at the velocities whatever the forces' basis, and the stages they make are unchanged as long as
+// the velocities' coordinates are (the same free velocities, first, in the same order). Then the
+// snapshots' force rows become the new count of zero rows, the projected levels' raw rows are
+// loaded again, and the factorisation restarts at the first projected level. Returns as
+// fixedNonBasicRestart.
+int HlsFactorization::forceChangeRestart(int v) {
+  const int L = levelCount();
+  if (!splitApplied_ || split_ < 0 || v < split_) return 0;
+  for (int k = firstStage_; k < L; ++k) {
+    if (projected(k) || active_[z(k)].empty()) continue;
+    if (cols_[z(k)] < 0 || cols_[z(k)] > split_) return 0;
+  }
+  int nv = 0;  // reduced velocity coordinates, first in the split order
+  while (nv < nr_ && varPerm_[z(m0_ + nv)] < split_) ++nv;
+  const int c = firstStageReaching(nv);
+  if (c <= firstStage_) return 0;
+  for (int i = 0; i < nv; ++i) velOrder_[z(i)] = varPerm_[z(m0_ + i)];
+  const int nrOld = nr_;
+  const int deferredOld = deferred_, deferFromOld = deferFrom_;
+  if (!(updateElimination() || tryEliminate()) || !splitApplied_) return -1;
+  if (!sameLayoutAfterElimination(deferredOld, deferFromOld) || nr_ < nv) return -1;
+  for (int i = 0; i < nv; ++i)
+    if (varPerm_[z(m0_ + i)] != velOrder_[z(i)]) return -1;
+  if (nv < nr_ && varPerm_[z(m0_ + nv)] < split_) return -1;
+  // Rows nv.. of the snapshots up to c: zeros, as many as there are force coordinates now.
+  std::fill(storeDone_.begin(), storeDone_.end(), 0);
+  for (int j = 1; j < L; ++j) {
+    if (!snapValid_[z(j)]) continue;
+    if (j > c) {
+      snapValid_[z(j)] = 0;
+      continue;
+    }
+    const int st = snapStore_[z(j)];
+    if (storeDone_[z(st)]) continue;
+    storeDone_[z(st)] = 1;
+    const int cnt = static_cast<int>(snapGids_[z(j)].size());
+    const int r = nv - col0_[z(j)];
+    if (cnt > 0 && nr_ > nv) snap_[z(st)].block(r, 0, nr_ - nv, cnt).setZero();
+  }
+  // The earlier stages' columns are zero below their rows (read up to stageEnd_ only); rows that
+  // the coordinates gained are cleared all the same.
+  const int sc = start_[z(c - 1)] + act_[z(c - 1)];
+  if (nr_ > nrOld && sc > 0) W_.block(nrOld, 0, nr_ - nrOld, sc).setZero();
+  std::fill(rawHave_.begin(), rawHave_.end(), 0);
+  ++stages_;  // the elimination was brought to the new free set
+  dirtyFrom_ = c;
+  return 1;
 }
 
 void HlsFactorization::activate(int k, int row) {
@@ -1179,10 +1250,16 @@ void HlsFactorization::projectDeferredLevel(int k) {
 
 void HlsFactorization::factorize(double rankTol) {
   const int L = levelCount();
-  if (pendingFix_ >= 0) {
-    const int v = pendingFix_;
-    pendingFix_ = -1;
-    if (!fixedWithoutFullRestart(v)) invalidateAll();
+  if (pendingVar_ >= 0) {
+    // One variable fixed or freed since the last factorisation (setFreeVariables).
+    const int v = pendingVar_;
+    pendingVar_ = -1;
+    int done = 0;
+    if (elim_ && haveSnapshots_ && !fullLayout_ && dirtyFrom_ > firstStage_) {
+      if (pendingFixed_) done = fixedNonBasicRestart(v);
+      if (done == 0) done = forceChangeRestart(v);
+    }
+    if (done != 1) invalidateAll();
   }
   if (dirtyFrom_ >= L) {
     lastRestart_ = L;

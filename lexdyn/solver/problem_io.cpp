@@ -143,7 +143,7 @@ json optionsValue(const Options& o) {
   j["spanning_stages"] = o.spanning_stages;
   j["lazy_snapshots"] = o.lazy_snapshots;
   j["project_unit_suffix"] = o.project_unit_suffix;
-  j["restart_after_fix"] = o.restart_after_fix;
+  j["restart_after_bound_change"] = o.restart_after_bound_change;
   j["max_iterations"] = o.max_iterations;
   j["bland_after_degenerate_steps"] = o.bland_after_degenerate_steps;
   j["cycle_tolerance_factor"] = o.cycle_tolerance_factor;
@@ -205,7 +205,7 @@ Options readOptions(const json& j, const std::string& where) {
   boolean("spanning_stages", o.spanning_stages);
   boolean("lazy_snapshots", o.lazy_snapshots);
   boolean("project_unit_suffix", o.project_unit_suffix);
-  boolean("restart_after_fix", o.restart_after_fix);
+  boolean("restart_after_bound_change", o.restart_after_bound_change);
   integer("max_iterations", o.max_iterations);
   integer("bland_after_degenerate_steps", o.bland_after_degenerate_steps);
   number("cycle_tolerance_factor", o.cycle_tolerance_factor);
@@ -273,8 +273,8 @@ ProblemFile parseProblemFile(const std::string& text, const std::string& source)
     if (!lv.is_object()) throw InputError(lw, "expected an object, found " + typeName(lv));
     for (auto it = lv.begin(); it != lv.end(); ++it) {
       const std::string& k = it.key();
-      if (k != "name" && k != "A" && k != "lower" && k != "upper") {
-        throw InputError(lw + "." + k, "unknown key (expected name, A, lower, upper)");
+      if (k != "name" && k != "A" && k != "lower" && k != "upper" && k != "columns") {
+        throw InputError(lw + "." + k, "unknown key (expected name, A, lower, upper, columns)");
       }
     }
     std::string name;
@@ -327,6 +327,15 @@ ProblemFile parseProblemFile(const std::string& text, const std::string& source)
       }
     }
     problem.addLevel(name, std::move(A), std::move(lo), std::move(up));
+    if (lv.contains("columns")) {
+      // The declaration of the level's nonzero columns (Problem::setLevelColumns), checked against
+      // A by validate() below.
+      const json& jc = lv["columns"];
+      if (!jc.is_number_integer() || jc.get<long long>() < 0 || jc.get<long long>() > n)
+        throw InputError(lw + ".columns",
+                         "expected an integer in 0 .. " + std::to_string(n) + " (the number of variables), found " + jc.dump());
+      problem.setLevelColumns(static_cast<int>(l), static_cast<int>(jc.get<long long>()));
+    }
   }
   problem.validate(source);
   ProblemFile file{std::move(problem), std::nullopt};
@@ -376,6 +385,7 @@ std::string problemToJson(const Problem& problem, const Options* options) {
     jl["A"] = std::move(A);
     jl["lower"] = std::move(lo);
     jl["upper"] = std::move(up);
+    if (lv.kind == LevelKind::General && lv.columns >= 0) jl["columns"] = lv.columns;
     levels.push_back(std::move(jl));
   }
   doc["levels"] = std::move(levels);

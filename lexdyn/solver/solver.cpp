@@ -355,7 +355,7 @@ void Solver::Impl::loadData(const Problem& problem) {
   fact.setSpanning(opt.spanning_stages);
   fact.setLazySnapshots(opt.lazy_snapshots);
   fact.setProjectUnitSuffix(opt.project_unit_suffix);
-  fact.setRestartAfterFix(opt.restart_after_fix);
+  fact.setBoundChangeRestarts(opt.restart_after_bound_change);
   fact.setLastLevelMode(opt.last_level_projection == Options::LastLevel::Never    ? HlsFactorization::LastLevel::Standard
                         : opt.last_level_projection == Options::LastLevel::Always ? HlsFactorization::LastLevel::Projected
                                                                                   : HlsFactorization::LastLevel::Auto);

@@ -114,14 +114,14 @@ struct Options {
   /// zeros and the level's rows cost nothing. Decided per full factorisation. It changes the
   /// rounding of that level's multipliers, and of its rows where it keeps coordinates.
   bool project_unit_suffix = false;
-  /// Restarts after a fixed variable. When an active-set step fixes one variable at its bound and
-  /// the stages of the levels before some level c never reach its reduced coordinate (split
-  /// coordinates: a contact force that no velocity level's rows read), the factorisation keeps
-  /// those stages and restarts at c, as after an activation at level c, instead of factorising
-  /// every level again. The result is the same up to rounding (the restarted stages' rows are
-  /// restored from the restart snapshots rather than transformed again), and
-  /// Result::factorizations counts the stages redone.
-  bool restart_after_fix = true;
+  /// Restarts after a bound change. When an active-set step fixes a variable at its bound, or a
+  /// release frees one, and the stages of the levels before some level c cannot be altered by
+  /// the change (split coordinates: a force that no velocity level's rows read), the
+  /// factorisation keeps those stages and restarts at c, as after an activation at level c,
+  /// instead of factorising every level again (docs/solver.md, "Restarts after a bound change").
+  /// The result is the same up to rounding (the restarted stages' rows are restored from the
+  /// restart snapshots), and Result::factorizations counts the stages redone.
+  bool restart_after_bound_change = true;
   /// Hard cap on active-set iterations (equality sub-problems solved).
   int max_iterations = 1000;
   /// After this many consecutive zero-length steps, ties are broken by smallest index (Bland).

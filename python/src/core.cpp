@@ -442,7 +442,7 @@ PYBIND11_MODULE(_core, m) {
           "auto | never | always")
       .def_readwrite("spanning_stages", &ls::Options::spanning_stages)
       .def_readwrite("lazy_snapshots", &ls::Options::lazy_snapshots)
-      .def_readwrite("restart_after_fix", &ls::Options::restart_after_fix)
+      .def_readwrite("restart_after_bound_change", &ls::Options::restart_after_bound_change)
       .def_readwrite("project_unit_suffix", &ls::Options::project_unit_suffix)
       .def_readwrite("max_iterations", &ls::Options::max_iterations)
       .def_readwrite("bland_after_degenerate_steps", &ls::Options::bland_after_degenerate_steps)

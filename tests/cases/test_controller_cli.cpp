@@ -355,6 +355,10 @@ TEST(ControllerCli, DumpProblemsWritesEachTicksProblemWithoutChangingTheRun) {
     const solver::Problem p = solver::readProblemJson(dir + "/problems/" + f);
     EXPECT_EQ(p.variables(), solver::readProblemJson(dir + "/problems/" + files.front()).variables());
     EXPECT_GE(p.levelCount(), 2) << f;
+    // The controller's velocity-only levels keep their declaration (docs/file-formats.md).
+    int declared = 0;
+    for (int l = 0; l < p.levelCount(); ++l) declared += p.level(l).columns >= 0 ? 1 : 0;
+    EXPECT_GE(declared, 1) << f;
   }
   const CliResult solved = runCli(binPath("lexdyn-solve") + " " + dir + "/problems/" + files[5], dir);
   EXPECT_EQ(solved.code, 0) << solved.err;

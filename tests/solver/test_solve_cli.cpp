@@ -11,6 +11,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "lexdyn/solver/problem_io.hpp"
+
 namespace {
 
 using CliRun = lexdyn::testing::CliResult;
@@ -114,6 +116,36 @@ TEST(SolveCli, UnknownKeys) {
     {"A": [[1]], "lower": [0], "upper": [0], "weight": 2}]})"));
   EXPECT_EQ(lvl.code, 2);
   EXPECT_NE(lvl.err.find("levels[0].weight"), std::string::npos) << lvl.err;
+}
+
+// A level's optional `columns` (its nonzero entries lie in its first columns): read and solved
+// as declared, written back by problemToJson; a bad value and an entry past the declared columns
+// are bad input naming the place.
+TEST(SolveCli, LevelColumnsAreReadCheckedAndWritten) {
+  const std::string declared = R"({"variables": 3, "levels": [
+    {"name": "eq", "A": [[1, 1, 1]], "lower": [1], "upper": [1]},
+    {"name": "first two", "A": [[1, -1, 0], [0, 1, 0]], "lower": [0, 0.25], "upper": [0, 0.25], "columns": 2}]})";
+  const CliRun r = run(writeFile("columns.json", declared));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["x"][0].get<double>(), 0.25, 1e-14);
+  EXPECT_NEAR(j["x"][2].get<double>(), 0.5, 1e-14);
+  const lexdyn::solver::Problem p = lexdyn::solver::parseProblemFile(declared, "columns.json").problem;
+  EXPECT_EQ(p.level(0).columns, -1);
+  EXPECT_EQ(p.level(1).columns, 2);
+  const lexdyn::solver::Problem back = lexdyn::solver::parseProblemFile(lexdyn::solver::problemToJson(p, nullptr), "back.json").problem;
+  EXPECT_EQ(back.level(0).columns, -1);
+  EXPECT_EQ(back.level(1).columns, 2);
+  for (const auto& [columns, expected] : std::vector<std::pair<std::string, std::string>>{
+           {R"("two")", "levels[1].columns: expected an integer in 0 .. 3 (the number of variables), found \"two\""},
+           {"4", "levels[1].columns: expected an integer in 0 .. 3 (the number of variables), found 4"},
+           {"1", "levels[1] (\"first two\").A[0]: A[0][1] is -1, but the level declares its nonzero entries in its first 1 columns"}}) {
+    std::string bad = declared;
+    bad.replace(bad.find("\"columns\": 2"), 12, "\"columns\": " + columns);
+    const CliRun b = run(writeFile("bad_columns.json", bad));
+    EXPECT_EQ(b.code, 2) << columns;
+    EXPECT_NE(b.err.find(expected), std::string::npos) << b.err;
+  }
 }
 
 // A problem file's solver_options (a controller's dump carries them) are what lexdyn-solve runs

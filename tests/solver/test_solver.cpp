@@ -901,15 +901,18 @@ TEST(Solver, SplitCoordinatesGiveThePlainAnswer) {
   EXPECT_THROW(bad.validate(), InputError);
 }
 
-// Options::restart_after_fix: a controller-shaped problem (a first level of equalities over all
-// the variables, "forces" x_j >= f_min as a bounds level on the second half, levels over the first
-// half, a last level over the second half and a minimum norm), solved with split coordinates.
-// The active-set search fixes many forces at their bound, one at a time. With the option, a fix
-// of a force that no earlier stage reaches restarts after those stages instead of factorising
-// every level again: the answers, violations and multipliers are those of the full restarts to
-// rounding, with the same active sets, cold and warm; the multipliers are a KKT certificate; and
-// the work counted (Result::factorizations) is smaller where the restart was taken.
-TEST(Solver, RestartsAfterAFixedVariableGiveTheFullRestartsAnswer) {
+// Options::restart_after_bound_change on controller-shaped problems: a first level of equalities
+// over all the variables, "forces" x_j >= f_min as a bounds level on the second half, task levels
+// over the first half (mostly declared velocity-only, as the controller declares its geometric
+// tasks), then minimum velocity and minimum wrench levels projected as the controller's (or a
+// wrench level and a minimum norm), solved with split coordinates. The active-set search fixes
+// many forces at their bound one at a time, basic ones included, and a warm start from a
+// perturbed active set frees and fixes them again. With the option such changes restart after
+// the stages they cannot alter: the answers, violations and multipliers are those of the option
+// off to rounding, with the same active sets and iteration counts, cold and warm; the multipliers
+// are a KKT certificate; and the work counted (Result::factorizations) is smaller where a restart
+// was taken.
+TEST(Solver, RestartsAfterABoundChangeGiveTheFullRestartsAnswer) {
   int checked = 0, fewer = 0, sameActive = 0, fixes = 0;
   for (std::uint64_t seed = 8300; seed < 8500; ++seed) {
     std::mt19937_64 rng(seed);
@@ -939,18 +942,30 @@ TEST(Solver, RestartsAfterAFixedVariableGiveTheFullRestartsAnswer) {
         hi(i) = (rng() % 2) ? lo(i) : lo(i) + 0.5;
       }
       p.addLevel("task " + std::to_string(l), A, lo, hi);
+      if (seed % 3 != 0) p.setLevelColumns(p.levelCount() - 1, nv);  // velocity-only, declared as the controller does
+    }
+    // As the controller's last levels: minimum velocity (unit rows on the velocities) and minimum
+    // wrench (unit rows on the forces), both projected (project_unit_suffix); or, a quarter of the
+    // time, the wrench level and a minimum norm over everything.
+    const bool controllerLike = seed % 4 != 0;
+    if (controllerLike) {
+      Eigen::MatrixXd V = Eigen::MatrixXd::Zero(nv, n);
+      V.leftCols(nv).setIdentity();
+      p.addLevel("velocity", V, Eigen::VectorXd::Zero(nv), Eigen::VectorXd::Zero(nv));
+      p.setLevelColumns(p.levelCount() - 1, nv);
     }
     {
       Eigen::MatrixXd W = Eigen::MatrixXd::Zero(nf, n);
       W.rightCols(nf).setIdentity();
       p.addLevel("wrench", W, Eigen::VectorXd::Zero(nf), Eigen::VectorXd::Zero(nf));
     }
-    appendMinNorm(p);
+    if (!controllerLike) appendMinNorm(p);
     Options on;
     on.split_from_variable = nv;
     on.lazy_snapshots = seed % 2 == 0;
+    on.project_unit_suffix = controllerLike;
     Options off = on;
-    off.restart_after_fix = false;
+    off.restart_after_bound_change = false;
     Solver s0, s1;
     const Result r0 = solveOnce(s0, p, off);
     const Result r1 = solveOnce(s1, p, on);

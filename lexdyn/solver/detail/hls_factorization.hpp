@@ -105,11 +105,12 @@ class HlsFactorization {
 
   /// Declares the free variables (those not fixed by an active bound, in increasing order).
   /// Invalidates everything, unless the only change since a factorisation is one variable fixed
-  /// and restarts after a fix are on: factorize() then restarts after the stages the fixed
-  /// variable leaves unchanged, when there are such stages (docs/solver.md, "Restarts").
+  /// or freed and restarts after a bound change are on: factorize() then restarts after the
+  /// stages the change leaves unchanged, when there are such stages (docs/solver.md, "Restarts
+  /// after a bound change").
   void setFreeVariables(const std::vector<int>& freeVar, int nFree);
-  /// Restarts after a fixed variable (Options::restart_after_fix); on by default.
-  void setRestartAfterFix(bool on) { restartAfterFix_ = on; }
+  /// Restarts after a bound change (Options::restart_after_bound_change); on by default.
+  void setBoundChangeRestarts(bool on) { boundRestarts_ = on; }
 
   /// Active-row bookkeeping. Marks the level dirty; factorize() restarts from the lowest dirty level.
   void activate(int k, int row);
@@ -160,9 +161,13 @@ class HlsFactorization {
   /// col <- Q_{<stages} col.
   void applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
   void relayout(int c);
-  /// factorize() after setFreeVariables() fixed variable v alone: true when it prepared a restart
-  /// at a level after the first general one (dirtyFrom_), false when everything is to be redone.
-  bool fixedWithoutFullRestart(int v);
+  /// factorize() after setFreeVariables() changed variable v alone: 1 when a restart at a level
+  /// after the first general one is prepared (dirtyFrom_), 0 when not applicable (nothing
+  /// changed), -1 when declined after the elimination changed (everything is to be redone).
+  int fixedNonBasicRestart(int v);
+  int forceChangeRestart(int v);
+  int firstStageReaching(int from) const;
+  bool sameLayoutAfterElimination(int deferredOld, int deferFromOld);
   /// shareWith >= 0: a snapshot taken earlier in this factorisation, with only stages without
   /// active rows since (the same columns and entries): its storage is shared, not copied.
   void saveSnapshot(int k, int shareWith);
@@ -251,9 +256,11 @@ class HlsFactorization {
   std::vector<std::vector<int>> snapGids_;  // [k] gids present in snapshot k
   std::vector<char> snapValid_;
   std::vector<int> snapStore_;   // [k] whose storage (snap_) snapshot k's columns are in
-  std::vector<char> storeDone_;  // fixedWithoutFullRestart: snapshot storage already updated
-  int pendingFix_ = -1;          // the variable setFreeVariables() fixed since the last factorize() (-1: none)
-  bool restartAfterFix_ = true;
+  std::vector<char> storeDone_;  // bound-change restarts: snapshot storage already updated
+  std::vector<int> velOrder_;    // forceChangeRestart: the velocities' reduced order before
+  int pendingVar_ = -1;          // the variable setFreeVariables() fixed or freed since the last factorize() (-1: none)
+  bool pendingFixed_ = false;    // ... fixed (else freed)
+  bool boundRestarts_ = true;
 
   // Rank-deficient levels: L = R^T (m x r) = V [U; 0], stored Householder-style.
   std::vector<Eigen::MatrixXd> left_;
