@@ -107,6 +107,11 @@ def test_a_problem_built_from_numpy_equals_the_file(problems):
     levels = [(lv["name"], lv["A"], lv["lower"], lv["upper"]) for lv in read.levels]
     assert all(isinstance(A, np.ndarray) and A.dtype == np.float64 for _, A, _, _ in levels)
     built = lexdyn.Problem(read.variables, levels)
+    # A controller's dump declares its velocity-only levels' columns (docs/file-formats.md).
+    declared = [(i, lv["columns"]) for i, lv in enumerate(read.levels) if lv["columns"] >= 0]
+    assert declared
+    for i, columns in declared:
+        built.set_level_columns(i, columns)
     assert built.to_json() == read.to_json()
     assert built.detect_bounds_level()
     assert_same_bits(lexdyn.solve(built, options=lexdyn.load_solver_options(path)).x, json.loads(lexdyn_solve(path))["x"], "x")
