@@ -257,7 +257,7 @@ int main(int argc, char** argv) {
   app.add_flag("--spanning-stages", spanning, "solve single-variable-row levels that span their stage by one QR (docs/solver.md)");
   app.add_flag("--lazy-snapshots", lazy, "save restart snapshots only once a solve restarts (docs/solver.md)");
   app.add_flag("--no-restart-after-bound-change", noBoundRestarts,
-               "factorise every level again after a variable is fixed at its bound (docs/solver.md)");
+               "factorise every level again after a variable is fixed at its bound or freed (docs/solver.md)");
   app.add_flag("--unit-suffix", suffix, "project the level before a projected last level too when its rows are unit rows (docs/solver.md)");
   app.add_flag("--details", details, "also print the active set, ranks and per-row violations");
   app.add_flag("--no-bounds-level", noBounds, "do not treat a first level of single-variable rows as bounds");

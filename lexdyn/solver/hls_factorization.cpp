@@ -288,6 +288,7 @@ void HlsFactorization::rowNorms(const Eigen::MatrixXd& A, int columns, Eigen::Re
 
 void HlsFactorization::computeRowNorms() {
   elimDataValid_ = false;  // new data: the elimination is recomputed
+  invalidateAll();         // and nothing of an earlier factorisation is kept
   for (int k = 0; k < levelCount(); ++k) {
     const Eigen::MatrixXd& A = *A_[z(k)];
     if (A.rows() == 0) continue;
@@ -298,7 +299,7 @@ void HlsFactorization::computeRowNorms() {
 void HlsFactorization::setFreeVariables(const std::vector<int>& freeVar, int nFree) {
   // The one change since a factorisation whose layout is still valid (nothing invalidated it
   // since): a single variable fixed or freed. factorize() may then restart after the stages it
-  // leaves unchanged (boundChangeRestart).
+  // leaves unchanged (fixedNonBasicRestart, forceChangeRestart).
   int changed = -1;
   if (pendingVar_ < 0 && dirtyFrom_ > 0 && (nFree == nf_ - 1 || nFree == nf_ + 1) && nFree >= 0) {
     const bool fixed = nFree < nf_;
@@ -404,6 +405,22 @@ int HlsFactorization::fixedNonBasicRestart(int v) {
       if (!rawHave_[z(row)]) continue;
       double* col = Raw_.col(row).data();
       std::memmove(col + p, col + p + 1, static_cast<size_t>(move) * sizeof(double));
+    }
+  }
+  // Spanning stages read unitRow_, set when a row is loaded; restored and kept rows are not
+  // loaded again, so a row that read v and one other free variable becomes a unit row here, as
+  // it would when loaded.
+  if (spanAllowed_) {
+    for (int k = c; k < L; ++k) {
+      const Eigen::MatrixXd& A = *A_[z(k)];
+      const int cols = cols_[z(k)] >= 0 ? cols_[z(k)] : static_cast<int>(A.cols());
+      if (v >= cols) continue;
+      for (int r = 0; r < A.rows(); ++r) {
+        if (A(r, v) == 0.0) continue;
+        int free = 0;
+        for (int j = 0; j < cols && free < 2; ++j) free += (A(r, j) != 0.0 && isFree_[z(j)]) ? 1 : 0;
+        unitRow_[z(rowOff_[z(k)] + r)] = free <= 1 ? 1 : 0;
+      }
     }
   }
   ++stages_;  // the elimination was brought to the new free set

@@ -11,6 +11,7 @@
 #include "lexdyn/common/error.hpp"
 #include "lexdyn/solver/detail/hls_factorization.hpp"
 #include "lexdyn/solver/problem.hpp"
+#include "lexdyn/solver/problem_io.hpp"
 #include "lexdyn/solver/solver.hpp"
 #include "reference.hpp"
 #include "../common/expect_text.hpp"
@@ -944,6 +945,17 @@ TEST(Solver, RestartsAfterABoundChangeGiveTheFullRestartsAnswer) {
       p.addLevel("task " + std::to_string(l), A, lo, hi);
       if (seed % 3 != 0) p.setLevelColumns(p.levelCount() - 1, nv);  // velocity-only, declared as the controller does
     }
+    // Now and then an inequality level over pairs of forces (as friction cones read forces),
+    // before the projected levels: its restart snapshots hold rows at force coordinates.
+    if (seed % 5 == 0) {
+      const int rows = std::max(1, nf / 2);
+      Eigen::MatrixXd F = Eigen::MatrixXd::Zero(rows, n);
+      for (int i = 0; i < rows; ++i) {
+        F(i, nv + (2 * i) % nf) = 1.0;
+        F(i, nv + (2 * i + 1) % nf) = -0.5 - 0.5 * std::abs(u(rng));
+      }
+      p.addLevel("force pairs", F, Eigen::VectorXd::Constant(rows, -0.02), Eigen::VectorXd::Constant(rows, kInf));
+    }
     // As the controller's last levels: minimum velocity (unit rows on the velocities) and minimum
     // wrench (unit rows on the forces), both projected (project_unit_suffix); or, a quarter of the
     // time, the wrench level and a minimum norm over everything.
@@ -964,6 +976,7 @@ TEST(Solver, RestartsAfterABoundChangeGiveTheFullRestartsAnswer) {
     on.split_from_variable = nv;
     on.lazy_snapshots = seed % 2 == 0;
     on.project_unit_suffix = controllerLike;
+    on.spanning_stages = seed % 3 == 1;
     Options off = on;
     off.restart_after_bound_change = false;
     Solver s0, s1;
@@ -999,6 +1012,35 @@ TEST(Solver, RestartsAfterABoundChangeGiveTheFullRestartsAnswer) {
   EXPECT_GE(sameActive, 195);
   EXPECT_GE(fixes, 1000);  // forces held at their bound in the answers
   EXPECT_GE(fewer, 180);   // the restart after the stages a fix leaves unchanged was taken
+}
+
+// A restart after a fixed variable keeps rows without loading them again. A row that read the
+// fixed variable and one other free variable is a unit row from then on, and a spanning stage
+// takes it as a full factorisation does (tests/data/solver/restart_unit_row.json: 7 variables,
+// split coordinates from 3, spanning stages, a projected unit suffix; its wrench row x3 + x6 = 0
+// becomes a unit row when the search fixes x3). The same active set, iterations and bits of x as
+// without the restarts, in fewer factorised stages.
+TEST(Solver, ARestartAfterAFixKeepsAFullFactorisationsSpanningStages) {
+  const ProblemFile file = readProblemFile(std::string(LEXDYN_SOURCE_DIR) + "/tests/data/solver/restart_unit_row.json");
+  Problem p = file.problem;
+  ASSERT_TRUE(p.detectBoundsLevel());
+  ASSERT_TRUE(file.options.has_value());
+  Options on = *file.options;
+  on.restart_after_bound_change = true;
+  Options off = on;
+  off.restart_after_bound_change = false;
+  Solver a, b;
+  const Result ra = solveOnce(a, p, on);
+  const Result rb = solveOnce(b, p, off);
+  ASSERT_EQ(ra.status, Status::Solved);
+  ASSERT_EQ(rb.status, Status::Solved);
+  EXPECT_EQ(ra.active.level, rb.active.level);
+  EXPECT_EQ(ra.iterations, rb.iterations);
+  EXPECT_EQ(ra.spanning_stages, rb.spanning_stages);
+  EXPECT_GT(ra.spanning_stages, 0);
+  for (int i = 0; i < p.variables(); ++i) EXPECT_EQ(ra.x(i), rb.x(i)) << "x[" << i << "]";
+  EXPECT_LT(ra.factorizations, rb.factorizations);
+  EXPECT_EQ(checkKkt(p, ra), "");
 }
 
 TEST(Solver, ProjectedLastLevelGivesTheStandardAnswer) {
