@@ -353,6 +353,25 @@ bool HlsFactorization::sameLayoutAfterElimination(int deferredOld, int deferFrom
   return deferred_ == deferredOld && deferFrom_ == deferFromOld;
 }
 
+// The restart snapshots a restart at c keeps: fn(storage, j, columns) once per storage of the
+// valid snapshots j <= c (a shared storage once; snapshots are saved for levels > 0). Those after
+// c are dropped: the restart takes them again when it reaches their stage.
+template <class F>
+void HlsFactorization::editSnapshotsUpTo(int c, F&& fn) {
+  std::fill(storeDone_.begin(), storeDone_.end(), 0);
+  for (int j = 1; j < levelCount(); ++j) {
+    if (!snapValid_[z(j)]) continue;
+    if (j > c) {
+      snapValid_[z(j)] = 0;
+      continue;
+    }
+    const int st = snapStore_[z(j)];
+    if (storeDone_[z(st)]) continue;
+    storeDone_[z(st)] = 1;
+    fn(snap_[z(st)], j, static_cast<int>(snapGids_[z(j)].size()));
+  }
+}
+
 // A variable fixed by its bound, not a basic one of the elimination (case A). When its reduced
 // coordinate p is one that the stages before some level c never reach (split coordinates: a
 // force that no velocity stage's rows read), those stages are unchanged to the bit: their
@@ -377,28 +396,16 @@ int HlsFactorization::fixedNonBasicRestart(int v) {
   const int deferredOld = deferred_, deferFromOld = deferFrom_;
   if (!updateElimination()) return 0;
   if (!sameLayoutAfterElimination(deferredOld, deferFromOld) || nr_ != nrOld - 1) return -1;
-  // Row p leaves the snapshots (rows col0_[j] .. nrOld of the columns of levels >= j; shared
-  // storage once; snapshots are saved for levels > 0) and the projected levels' raw rows.
-  std::fill(storeDone_.begin(), storeDone_.end(), 0);
-  for (int j = 1; j < L; ++j) {
-    if (!snapValid_[z(j)]) continue;
-    if (j > c) {
-      snapValid_[z(j)] = 0;  // taken again when the restart reaches stage j
-      continue;
-    }
-    const int st = snapStore_[z(j)];
-    if (storeDone_[z(st)]) continue;
-    storeDone_[z(st)] = 1;
+  // Row p leaves the snapshots (rows col0_[j] .. nrOld of their columns) and the projected
+  // levels' raw rows.
+  editSnapshotsUpTo(c, [&](Eigen::MatrixXd& S, int j, int cnt) {
     const int r = p - col0_[z(j)];
     const int move = nrOld - col0_[z(j)] - r - 1;
-    if (move <= 0) continue;
-    Eigen::MatrixXd& S = snap_[z(st)];
-    const int cnt = static_cast<int>(snapGids_[z(j)].size());
-    for (int q = 0; q < cnt; ++q) {
+    for (int q = 0; q < cnt && move > 0; ++q) {
       double* col = S.col(q).data();
       std::memmove(col + r, col + r + 1, static_cast<size_t>(move) * sizeof(double));
     }
-  }
+  });
   if (deferFrom_ >= 0) {
     const int move = nrOld - p - 1;
     for (int row = 0; row < static_cast<int>(rawHave_.size()) && move > 0; ++row) {
@@ -458,20 +465,9 @@ int HlsFactorization::forceChangeRestart(int v) {
     if (varPerm_[z(m0_ + i)] != velOrder_[z(i)]) return -1;
   if (nv < nr_ && varPerm_[z(m0_ + nv)] < split_) return -1;
   // Rows nv.. of the snapshots up to c: zeros, as many as there are force coordinates now.
-  std::fill(storeDone_.begin(), storeDone_.end(), 0);
-  for (int j = 1; j < L; ++j) {
-    if (!snapValid_[z(j)]) continue;
-    if (j > c) {
-      snapValid_[z(j)] = 0;
-      continue;
-    }
-    const int st = snapStore_[z(j)];
-    if (storeDone_[z(st)]) continue;
-    storeDone_[z(st)] = 1;
-    const int cnt = static_cast<int>(snapGids_[z(j)].size());
-    const int r = nv - col0_[z(j)];
-    if (cnt > 0 && nr_ > nv) snap_[z(st)].block(r, 0, nr_ - nv, cnt).setZero();
-  }
+  editSnapshotsUpTo(c, [&](Eigen::MatrixXd& S, int j, int cnt) {
+    if (cnt > 0 && nr_ > nv) S.block(nv - col0_[z(j)], 0, nr_ - nv, cnt).setZero();
+  });
   // The earlier stages' columns are zero below their rows (read up to stageEnd_ only); rows that
   // the coordinates gained are cleared all the same.
   const int sc = start_[z(c - 1)] + act_[z(c - 1)];

@@ -167,6 +167,8 @@ class HlsFactorization {
   int fixedNonBasicRestart(int v);
   int forceChangeRestart(int v);
   int firstStageReaching(int from) const;
+  template <class F>
+  void editSnapshotsUpTo(int c, F&& fn);
   bool sameLayoutAfterElimination(int deferredOld, int deferFromOld);
   /// shareWith >= 0: a snapshot taken earlier in this factorisation, with only stages without
   /// active rows since (the same columns and entries): its storage is shared, not copied.
