@@ -675,8 +675,21 @@ TEST(Solver, RowNormsOverDeclaredColumnsKeepEveryBit) {
 // bounds on a few variables of both (their activation during a solve changes the free set: the
 // elimination is then updated, keeping the reduced variables' order), then a first level of 1 to
 // 3 equalities (by the seed) over all of them, whose first half pivots unless disfavoured.
-Problem twoHalvesStart(std::uint64_t seed, std::mt19937_64& rng, int n) {
+// A level of m0 random equality rows over all the variables (entries and targets uniform in
+// [-1, 1]), the entries of the first `split` variables scaled by `firstScale`: a first level that
+// the elimination takes, as a controller's equation of motion.
+void addScaledEqualities(Problem& p, std::mt19937_64& rng, int m0, int split, double firstScale, const std::string& name) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = p.variables();
+  Eigen::MatrixXd E(m0, n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < m0; ++i) E(i, j) = (j < split ? firstScale : 1.0) * u(rng);
+  Eigen::VectorXd e(m0);
+  for (int i = 0; i < m0; ++i) e(i) = u(rng);
+  p.addLevel(name, E, e, e);
+}
+
+Problem twoHalvesStart(std::uint64_t seed, std::mt19937_64& rng, int n) {
   const int half = n / 2;
   Problem p(n);
   {
@@ -684,13 +697,7 @@ Problem twoHalvesStart(std::uint64_t seed, std::mt19937_64& rng, int n) {
     Eigen::VectorXd c = Eigen::VectorXd::Ones(4), lo = Eigen::VectorXd::Constant(4, -0.05), hi = Eigen::VectorXd::Constant(4, 0.05);
     p.addBoundsLevel("box", vars, c, lo, hi);
   }
-  const int m0 = 1 + static_cast<int>(seed % 3);
-  Eigen::MatrixXd E(m0, n);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < m0; ++i) E(i, j) = (j < half ? 10.0 : 1.0) * u(rng);
-  Eigen::VectorXd e(m0);
-  for (int i = 0; i < m0; ++i) e(i) = u(rng);
-  p.addLevel("eq", E, e, e);
+  addScaledEqualities(p, rng, 1 + static_cast<int>(seed % 3), half, 10.0, "eq");
   return p;
 }
 
@@ -926,13 +933,7 @@ TEST(Solver, RestartsAfterABoundChangeGiveTheFullRestartsAnswer) {
       const Eigen::VectorXd c = Eigen::VectorXd::Ones(nf), lo = Eigen::VectorXd::Constant(nf, 0.01);
       p.addBoundsLevel("force bounds", vars, c, lo, Eigen::VectorXd::Constant(nf, kInf));
     }
-    const int m0 = 1 + static_cast<int>(seed % 3);
-    Eigen::MatrixXd E(m0, n);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < m0; ++i) E(i, j) = (j < nv ? 2.0 : 1.0) * u(rng);
-    Eigen::VectorXd e(m0);
-    for (int i = 0; i < m0; ++i) e(i) = u(rng);
-    p.addLevel("dynamics", E, e, e);
+    addScaledEqualities(p, rng, 1 + static_cast<int>(seed % 3), nv, 2.0, "dynamics");
     for (int l = 0; l < 2 + static_cast<int>(seed % 3); ++l) {
       const int rows = 1 + static_cast<int>(rng() % 3);
       Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, n);
