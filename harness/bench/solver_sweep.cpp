@@ -10,7 +10,11 @@
 //    or cannot decide is;
 //  - with --brute-force, tiny problems are also compared with an enumeration of every active set;
 //  - with --exact-every K, every K-th problem also goes to the exact reference, whatever the
-//    certificate said: a disagreement in either direction is counted and printed.
+//    certificate said: a disagreement in either direction is counted and printed;
+//  - with --controller-shaped, the problems are shaped like the controller's (velocities, then
+//    contact forces with their bounds; split coordinates, declared velocity-only levels), and each
+//    is solved again warm from its answer's active set with every second bound released: that
+//    result is checked the same way, and its levels' violations must be the cold solve's.
 // Every problem is generated from its own seed (its options too), so a failing problem reruns
 // alone with the command the sweep prints (or from the JSON file --write-failures DIR writes).
 //
@@ -55,7 +59,7 @@ int main(int argc, char** argv) {
   int maxN = 12, maxLevels = 7, maxRows = 8;
   long exactEvery = 0;
   int maxIterations = Options{}.max_iterations;
-  bool spanning = false, lazy = false, suffix = false, noBoundRestarts = false;
+  bool spanning = false, lazy = false, suffix = false, noBoundRestarts = false, controllerShaped = false;
   double unitLevels = 0.0;
   bool brute = false;
   double exactTimeLimit = 0.0;
@@ -84,12 +88,25 @@ int main(int argc, char** argv) {
   app.add_flag("--no-restart-after-bound-change", noBoundRestarts, "solve with Options::restart_after_bound_change off (docs/solver.md)");
   app.add_option("--unit-levels", unitLevels, "probability that a level is made of single-variable rows, in [0, 1]")
       ->check(CLI::Range(0.0, 1.0));
+  app.add_flag("--controller-shaped", controllerShaped,
+               "controller-shaped problems (velocities then forces, split coordinates, restarts after bound changes), each solved cold "
+               "and again warm; the options of each problem are drawn with it (docs/solver.md)");
   app.add_flag("--brute-force", brute, "compare tiny problems (<= 9 rows) with active-set enumeration");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? kExitPass : kExitBadInput;
+  }
+  if (controllerShaped && (spanning || lazy || suffix || unitLevels > 0.0 || brute)) {
+    std::fprintf(stderr,
+                 "lexdyn-solver-sweep: error: --controller-shaped draws each problem's options itself: it takes none of "
+                 "--spanning-stages, --lazy-snapshots, --unit-suffix, --unit-levels, --brute-force\n");
+    return kExitBadInput;
+  }
+  if (controllerShaped && maxN < 2) {
+    std::fprintf(stderr, "lexdyn-solver-sweep: error: --controller-shaped needs --max-variables 2 or more (a velocity and a force)\n");
+    return kExitBadInput;
   }
   if (!writeDir.empty()) {
     std::error_code ec;
@@ -110,7 +127,8 @@ int main(int argc, char** argv) {
                               (maxIterations != Options{}.max_iterations ? " --max-iterations " + std::to_string(maxIterations) : "") +
                               (spanning ? " --spanning-stages" : "") + (lazy ? " --lazy-snapshots" : "") +
                               (suffix ? " --unit-suffix" : "") + (noBoundRestarts ? " --no-restart-after-bound-change" : "") +
-                              (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "");
+                              (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "") +
+                              (controllerShaped ? " --controller-shaped" : "");
   Options solverOptions;
   solverOptions.max_iterations = maxIterations;
   solverOptions.spanning_stages = spanning;
@@ -122,72 +140,107 @@ int main(int argc, char** argv) {
   struct Counts {
     long done = 0, solved = 0, failures = 0, capHits = 0, nonFinite = 0, kktFlagged = 0, exactChecked = 0, exactCleared = 0,
          exactConfirmed = 0, exactUndecided = 0, exactOutOfTime = 0, exactOutOfWork = 0, exactMaxWork = 0, disagreements = 0,
-         bruteChecked = 0, held = 0, cycles = 0, iters = 0, maxIt = 0;
+         bruteChecked = 0, held = 0, cycles = 0, iters = 0, maxIt = 0, warmChecked = 0, splitApplied = 0, boundRestarts = 0;
   } n;
   long &done = n.done, &solved = n.solved, &failures = n.failures, &capHits = n.capHits, &nonFinite = n.nonFinite,
        &kktFlagged = n.kktFlagged, &exactChecked = n.exactChecked, &exactCleared = n.exactCleared, &exactConfirmed = n.exactConfirmed,
        &exactUndecided = n.exactUndecided, &exactOutOfTime = n.exactOutOfTime, &exactOutOfWork = n.exactOutOfWork,
        &exactMaxWork = n.exactMaxWork, &disagreements = n.disagreements, &bruteChecked = n.bruteChecked, &held = n.held, &cycles = n.cycles,
-       &iters = n.iters, &maxIt = n.maxIt;
+       &iters = n.iters, &maxIt = n.maxIt, &warmChecked = n.warmChecked, &splitApplied = n.splitApplied, &boundRestarts = n.boundRestarts;
   const auto t0 = std::chrono::steady_clock::now();
+  // Checks one result (status, certificate, exact reference): the failure's text, or "" when it
+  // passes. Sets `interrupted` when a signal stopped its exact check (then nothing is decided).
+  auto verify = [&](std::uint64_t s, const Problem& p, const Result& r, bool sample, bool& interrupted) -> std::string {
+    held += r.held_after_reblock;
+    cycles += r.cycles_broken;
+    iters += r.iterations;
+    maxIt = std::max<long>(maxIt, r.iterations);
+    boundRestarts += r.bound_change_restarts;
+    if (r.status == Status::IterationLimit) {
+      ++capHits;
+      return "hard iteration cap hit (" + std::to_string(r.iterations) + " iterations)";
+    }
+    if (r.status == Status::NonFiniteResult) {
+      ++nonFinite;
+      return "non-finite result";
+    }
+    if (r.status != Status::Solved) return std::string("status ") + toString(r.status);
+    const std::string kkt = test::checkKkt(p, r);
+    if (!kkt.empty()) ++kktFlagged;
+    if (kkt.empty() && !sample) return "";
+    ++exactChecked;
+    const test::ExactVerdict v = test::exactCheck(p, r, 4, exactTimeLimit, &g_signal, exactWorkLimit);
+    if (v.interrupted) {
+      interrupted = true;
+      return "";
+    }
+    exactOutOfTime += v.out_of_time ? 1 : 0;
+    exactOutOfWork += v.out_of_work ? 1 : 0;
+    exactMaxWork = std::max(exactMaxWork, v.work);
+    if (!kkt.empty()) {
+      if (v.kind == test::ExactVerdict::Optimal) {
+        ++exactCleared;
+        std::printf("problem seed %llu: the certificate failed (%s) but the exact reference proves the result optimal\n",
+                    static_cast<unsigned long long>(s), kkt.c_str());
+        return "";
+      }
+      (v.kind == test::ExactVerdict::NotOptimal ? exactConfirmed : exactUndecided) += 1;
+      return kkt + "; exact reference: " + test::toString(v.kind) + (v.detail.empty() ? "" : " (" + v.detail + ")");
+    }
+    if (v.kind == test::ExactVerdict::NotOptimal) {
+      ++disagreements;
+      return "the certificate holds but the exact reference proves the result wrong: " + v.detail;
+    }
+    if (v.kind == test::ExactVerdict::Undecided) ++exactUndecided;
+    return "";
+  };
   try {
     for (long c = 0; c < cases; ++c) {
       if (g_signal.load()) break;
       const Counts before = n;
       const std::uint64_t s = seed + static_cast<std::uint64_t>(c);
-      test::GenOptions g = test::sweepOptions(s, maxN, maxLevels, maxRows);
-      g.pUnitLevel = unitLevels;
-      const Problem p = test::randomProblem(s, g);
+      Options problemOptions = solverOptions;
+      Problem p(1);
+      if (controllerShaped) {
+        p = test::controllerShapedProblem(s, maxN, maxLevels, maxRows, problemOptions);
+      } else {
+        test::GenOptions g = test::sweepOptions(s, maxN, maxLevels, maxRows);
+        g.pUnitLevel = unitLevels;
+        p = test::randomProblem(s, g);
+      }
       ++done;
       if (brute && p.totalRows() > 9) continue;
       Solver solver;
-      solver.setup(p, solverOptions);
+      solver.setup(p, problemOptions);
       const Result& r = solver.solve(p);
       ++solved;
-      held += r.held_after_reblock;
-      cycles += r.cycles_broken;
-      iters += r.iterations;
-      maxIt = std::max<long>(maxIt, r.iterations);
-      std::string err;
-      if (r.status == Status::IterationLimit) {
-        ++capHits;
-        err = "hard iteration cap hit (" + std::to_string(r.iterations) + " iterations)";
-      } else if (r.status == Status::NonFiniteResult) {
-        ++nonFinite;
-        err = "non-finite result";
-      } else if (r.status != Status::Solved) {
-        err = std::string("status ") + toString(r.status);
+      splitApplied += r.split_applied ? 1 : 0;
+      const bool sample = exactEvery > 0 && c % exactEvery == 0;
+      bool interrupted = false;
+      std::string err = verify(s, p, r, sample, interrupted);
+      if (interrupted) {  // neither a pass nor a failure: the problem is not counted
+        n = before;
+        break;
       }
-      if (err.empty()) {
-        const std::string kkt = test::checkKkt(p, r);
-        const bool sample = exactEvery > 0 && c % exactEvery == 0;
-        if (!kkt.empty()) ++kktFlagged;
-        if (!kkt.empty() || sample) {
-          ++exactChecked;
-          const test::ExactVerdict v = test::exactCheck(p, r, 4, exactTimeLimit, &g_signal, exactWorkLimit);
-          if (v.interrupted) {  // neither a pass nor a failure: the problem is not counted
-            n = before;
-            break;
-          }
-          exactOutOfTime += v.out_of_time ? 1 : 0;
-          exactOutOfWork += v.out_of_work ? 1 : 0;
-          exactMaxWork = std::max(exactMaxWork, v.work);
-          if (!kkt.empty()) {
-            if (v.kind == test::ExactVerdict::Optimal) {
-              ++exactCleared;
-              std::printf("problem seed %llu: the certificate failed (%s) but the exact reference proves the result optimal\n",
-                          static_cast<unsigned long long>(s), kkt.c_str());
-            } else {
-              (v.kind == test::ExactVerdict::NotOptimal ? exactConfirmed : exactUndecided) += 1;
-              err = kkt + "; exact reference: " + test::toString(v.kind) + (v.detail.empty() ? "" : " (" + v.detail + ")");
-            }
-          } else if (v.kind == test::ExactVerdict::NotOptimal) {
-            ++disagreements;
-            err = "the certificate holds but the exact reference proves the result wrong: " + v.detail;
-          } else if (v.kind == test::ExactVerdict::Undecided) {
-            ++exactUndecided;
-          }
+      if (err.empty() && controllerShaped) {
+        // Warm from the answer's active set with every second bound released: the search frees
+        // and fixes them again (restarts after a bound change both ways).
+        ActiveSet warm = r.active;
+        for (size_t i = 0; i < warm.level[0].size(); i += 2) warm.level[0][i] = RowState::Inactive;
+        Solver again;
+        again.setup(p, problemOptions);
+        const Result& w = again.solve(p, warm, r.x);
+        ++warmChecked;
+        err = verify(s, p, w, sample, interrupted);
+        if (interrupted) {
+          n = before;
+          break;
         }
+        for (int l = 0; l < p.levelCount() && err.empty(); ++l)
+          if (std::abs(w.violation_norm(l) - r.violation_norm(l)) > 1e-7 * (1 + r.violation_norm(l)))
+            err = "level " + std::to_string(l) + " violation " + std::to_string(w.violation_norm(l)) + " differs from the cold solve's " +
+                  std::to_string(r.violation_norm(l));
+        if (!err.empty()) err = "warm: " + err;
       }
       if (err.empty() && brute) {
         ++bruteChecked;
@@ -205,7 +258,7 @@ int main(int argc, char** argv) {
                       static_cast<unsigned long long>(s), options.c_str());
           if (!writeDir.empty()) {
             const std::string file = writeDir + "/problem-" + std::to_string(s) + ".json";
-            writeProblemJson(p, file);
+            writeProblemJson(p, file, &problemOptions);
             std::printf("  problem: %s (lexdyn-solve --details %s)\n", file.c_str(), file.c_str());
           }
           std::fflush(stdout);
@@ -223,10 +276,11 @@ int main(int argc, char** argv) {
       "\"exact_undecided\": %ld, \"exact_out_of_work\": %ld, \"exact_out_of_time\": %ld, \"exact_max_work\": %ld, "
       "\"certificate_exact_disagreements\": %ld, \"brute_force_checked\": %ld, "
       "\"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld, "
-      "\"seconds\": %.1f, \"interrupted\": %s}\n",
+      "\"warm_checked\": %ld, \"split_applied\": %ld, \"bound_change_restarts\": %ld, \"seconds\": %.1f, \"interrupted\": %s}\n",
       done, solved, failures, capHits, nonFinite, kktFlagged, exactChecked, exactCleared, exactConfirmed, exactUndecided, exactOutOfWork,
       exactOutOfTime, exactMaxWork, disagreements, bruteChecked, held, cycles,
-      solved ? static_cast<double>(iters) / static_cast<double>(solved) : 0.0, maxIt, secs, g_signal.load() ? "true" : "false");
+      solved ? static_cast<double>(iters) / static_cast<double>(solved + warmChecked) : 0.0, maxIt, warmChecked, splitApplied,
+      boundRestarts, secs, g_signal.load() ? "true" : "false");
   if (g_signal.load()) return kExitInterrupted + g_signal.load();
   if (solved == 0) {
     // Nothing was verified (e.g. --brute-force with sizes that never give 9 rows or fewer).

@@ -1272,7 +1272,10 @@ void HlsFactorization::factorize(double rankTol) {
       if (pendingFixed_) done = fixedNonBasicRestart(v);
       if (done == 0) done = forceChangeRestart(v);
     }
-    if (done != 1) invalidateAll();
+    if (done == 1)
+      ++restartsTaken_;
+    else
+      invalidateAll();
   }
   if (dirtyFrom_ >= L) {
     lastRestart_ = L;

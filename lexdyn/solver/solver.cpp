@@ -178,6 +178,7 @@ struct Solver::Impl {
   void prepareLevels();
   void ensureMult(int kf);
   bool isHeld(int kind, int idx, int levelH, int kf);
+  int unitRowHolding(int i, int kf, double xnorm) const;
   double correctSign(int kind, int idx, double value) const;
   void run();
   void finish();
@@ -262,7 +263,7 @@ bool Solver::Impl::resultShaped() const {
 }
 
 void Solver::Impl::resetCounters() {
-  out.iterations = out.factorizations = out.optimality_iterations = out.activations = out.deactivations = 0;
+  out.iterations = out.factorizations = out.bound_change_restarts = out.optimality_iterations = out.activations = out.deactivations = 0;
   out.held_after_reblock = out.cycles_broken = out.projected_levels = out.spanning_stages = 0;
   out.optimal_through = -1;
   out.last_level_projected = out.split_applied = false;
@@ -594,6 +595,33 @@ bool Solver::Impl::isHeld(int kind, int idx, int levelH, int kf) {
   return false;
 }
 
+// A fixed variable i whose bound's multiplier for the level-kf problem has the wrong sign is still
+// held when an active row of an earlier level reads x_i alone and is satisfied (a regularisation
+// target equal to the bound, say): that row constrains x_i as the bound does, and the bound's
+// multiplier can pass to it (an equality's takes either sign, an inequality's must keep its
+// correct sign). The factorisation gives such a row, a zero row in reduced coordinates, a zero
+// multiplier and the bound the whole of it; releasing the bound then moves nothing, and rounding
+// makes it block again (a cycle). Returns the row's id, or -1.
+int Solver::Impl::unitRowHolding(int i, int kf, double xnorm) const {
+  const double mi = muVarAll(i, kf);
+  for (int j = 0; j < kf; ++j) {
+    const Eigen::MatrixXd& Aj = A(j);
+    const int off = fact.rowOffset(j);
+    for (int gid : fact.activeList(j)) {
+      const int r = gid - off;
+      const double a = Aj(r, i);
+      if (a == 0.0) continue;
+      if (std::abs(res(gid)) > opt.zero_tolerance * rowScale(gid, xnorm)) continue;  // frozen
+      bool alone = true;
+      for (int c = 0; c < Aj.cols() && alone; ++c) alone = c == i || Aj(r, c) == 0.0;
+      if (!alone) continue;
+      const RowState st = state[static_cast<size_t>(gid)];
+      if (st == RowState::Equality || correctSign(1, gid, muAll(gid, kf) + mi / a) >= 0.0) return gid;
+    }
+  }
+  return -1;
+}
+
 bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx, int& level) {
   // kind: 0 = variable bound, 1 = general row. Returns true when a constraint must leave.
   const double xnorm = xs.lpNorm<Eigen::Infinity>();
@@ -647,7 +675,7 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx, int& level) {
       if (s != RowState::Lower && s != RowState::Upper) continue;
       if (tabooVar[static_cast<size_t>(i)]) continue;
       const double measure = -correctSign(0, i, muVar(i)) / S;
-      if (measure > dualTol && !isHeld(0, i, -1, kf)) consider(0, i, measure);
+      if (measure > dualTol && !isHeld(0, i, -1, kf) && unitRowHolding(i, kf, xnorm) < 0) consider(0, i, measure);
     }
     if (bestKind >= 0) {
       kind = bestKind;
@@ -665,7 +693,7 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx, int& level) {
 
 void Solver::Impl::run() {
   resetCounters();
-  const long stages0 = fact.stagesFactorized();
+  const long stages0 = fact.stagesFactorized(), restarts0 = fact.boundChangeRestarts();
   bool optPhase = false;
   int degenerateRun = 0;
   bool bland = false;
@@ -887,6 +915,7 @@ void Solver::Impl::run() {
   }
   (void)pending;
   out.factorizations = static_cast<int>(fact.stagesFactorized() - stages0);
+  out.bound_change_restarts = static_cast<int>(fact.boundChangeRestarts() - restarts0);
 }
 
 // Arithmetic that left the double range (coefficients near 1e300, a near-singular level scaled
@@ -949,6 +978,7 @@ void Solver::Impl::finish() {
   out.lambda.setZero();
   if (!opt.compute_multipliers) return;
   if (!multValid) prepareLevels();
+  const double xnorm = xs.lpNorm<Eigen::Infinity>();
   const Level* bl = hasBounds ? &problem.level(0) : nullptr;
   auto rowOf = [&](int gid) {
     const int j = fact.levelOf(gid);
@@ -964,7 +994,17 @@ void Solver::Impl::finish() {
     for (int q = 0; q < nFixed; ++q) {
       const int i = fixedVar[static_cast<size_t>(q)];
       const int r = boundRow[static_cast<size_t>(i)];
-      if (r >= 0) col(stackOff[0] + r) = muVarAll(i, kf) / bl->coefficient(r);
+      if (r < 0) continue;
+      col(stackOff[0] + r) = muVarAll(i, kf) / bl->coefficient(r);
+      // A bound that the dual check kept because a row reading x_i alone holds it
+      // (unitRowHolding) passes its multiplier to that row.
+      const RowState s = vstate[static_cast<size_t>(i)];
+      if (s != RowState::Lower && s != RowState::Upper) continue;
+      if (!(-correctSign(0, i, muVarAll(i, kf)) / levelS(kf) > dualTol) || isHeld(0, i, -1, kf)) continue;
+      const int h = unitRowHolding(i, kf, xnorm);
+      if (h < 0) continue;
+      col(rowOf(h)) += muVarAll(i, kf) / A(fact.levelOf(h))(h - fact.rowOffset(fact.levelOf(h)), i);
+      col(stackOff[0] + r) = 0.0;
     }
     // Corrections.
     for (int i = kf - 1; i >= 0; --i) {

@@ -180,6 +180,10 @@ struct Result {
   /// factorises L - c stages; the elimination of the first level counts as one): a deterministic
   /// measure of the solve's work, machine-independent unlike its wall time.
   int factorizations = 0;
+  /// Bound changes (a variable fixed or freed) after which this solve restarted after the stages
+  /// the change leaves unchanged instead of factorising every level again
+  /// (Options::restart_after_bound_change).
+  int bound_change_restarts = 0;
   int optimality_iterations = 0;  ///< iterations since the first deactivation
   int activations = 0, deactivations = 0;
   /// Times a released constraint blocked again at once and was kept (anti-cycling safety net).

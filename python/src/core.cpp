@@ -573,6 +573,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("rank", &SolveResult::rank)
       .def_readonly("iterations", &SolveResult::iterations)
       .def_readonly("factorizations", &SolveResult::factorizations)
+      .def_readonly("bound_change_restarts", &SolveResult::bound_change_restarts)
       .def_readonly("optimality_iterations", &SolveResult::optimality_iterations)
       .def_readonly("activations", &SolveResult::activations)
       .def_readonly("deactivations", &SolveResult::deactivations)

@@ -101,6 +101,23 @@ def test_a_dumped_problem_solves_as_lexdyn_solve_does(problems):
         assert len(result.violation) == problem.level_count == len(result.active)
 
 
+def test_restarts_after_a_bound_change_are_counted():
+    # A 7-variable problem whose search fixes a force (tests/data/solver/restart_unit_row.json):
+    # the solver restarts after that bound change instead of factorising every level again, and
+    # reaches the same bits of x as with the option off.
+    path = os.path.join(ROOT, "tests", "data", "solver", "restart_unit_row.json")
+    problem = lexdyn.load_problem(path)
+    options = lexdyn.load_solver_options(path)
+    options.restart_after_bound_change = True
+    on = lexdyn.solve(problem, options=options)
+    options.restart_after_bound_change = False
+    off = lexdyn.solve(problem, options=options)
+    assert on.status == off.status == "solved"
+    assert on.bound_change_restarts > 0 and off.bound_change_restarts == 0
+    assert on.factorizations < off.factorizations
+    assert_same_bits(on.x, off.x, "x")
+
+
 def test_a_problem_built_from_numpy_equals_the_file(problems):
     path = problems[0]
     read = lexdyn.load_problem(path, detect_bounds_level=False)

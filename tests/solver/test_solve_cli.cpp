@@ -374,6 +374,43 @@ TEST(SolverSweepExitCodes, TheExactReferenceHasATimeLimitAndStopsOnASignal) {
   EXPECT_EQ(lexdyn::testing::exitCode(std::system((kSweep + " --exact-time-limit -1 > " + out + " 2>&1").c_str())), 2);
 }
 
+// Controller-shaped problems (velocities, then forces with their bounds; split coordinates,
+// declared velocity-only levels): each is solved cold and again warm with every second bound
+// released, and both results are checked. The restarts after a bound change are taken (counted),
+// split coordinates apply to some; a failure's rerun line and file carry the problem's own options.
+TEST(SolverSweepExitCodes, ControllerShapedProblemsAreSolvedColdAndWarm) {
+  const std::string out = tempDir() + "/sweep_cs.out", err = tempDir() + "/sweep_cs.err";
+  auto sweep = [&](const std::string& args) {
+    return lexdyn::testing::exitCode(std::system((kSweep + " " + args + " > " + out + " 2> " + err).c_str()));
+  };
+  ASSERT_EQ(sweep("--controller-shaped --cases 2000 --seed 1 --exact-every 50"), 0) << slurp(out) << slurp(err);
+  const auto j = nlohmann::json::parse(slurp(out));
+  EXPECT_EQ(j["failures"], 0);
+  EXPECT_EQ(j["warm_checked"], 2000);
+  EXPECT_EQ(j["exact_checked"], 80);  // every 50th problem, cold and warm
+  EXPECT_GT(j["bound_change_restarts"].get<long>(), 1000);
+  EXPECT_GT(j["split_applied"].get<long>(), 200);
+  // The same problems with the restarts off: the same verdicts, no restart counted.
+  ASSERT_EQ(sweep("--controller-shaped --cases 2000 --seed 1 --no-restart-after-bound-change"), 0) << slurp(out);
+  EXPECT_EQ(nlohmann::json::parse(slurp(out))["bound_change_restarts"], 0);
+  // A failure (a cap of one iteration) prints a rerun line with --controller-shaped and writes
+  // the problem with its solver options.
+  EXPECT_EQ(sweep("--controller-shaped --cases 20 --seed 1 --max-iterations 1 --write-failures " + tempDir() + "/cs_failures"), 1);
+  const std::string o = slurp(out);
+  const size_t at = o.find("rerun: lexdyn-solver-sweep --seed ");
+  ASSERT_NE(at, std::string::npos) << o;
+  const std::string rerun = o.substr(at + 7, o.find('\n', at) - at - 7);
+  EXPECT_NE(rerun.find(" --controller-shaped"), std::string::npos) << rerun;
+  const std::string seed = rerun.substr(std::string("lexdyn-solver-sweep --seed ").size(), rerun.find(" --cases") - 27);
+  const lexdyn::solver::ProblemFile f = lexdyn::solver::readProblemFile(tempDir() + "/cs_failures/problem-" + seed + ".json");
+  ASSERT_TRUE(f.options.has_value());
+  EXPECT_GT(f.options->split_from_variable, 0);
+  // It draws each problem's options itself: the option flags are refused, as is a single variable.
+  EXPECT_EQ(sweep("--controller-shaped --spanning-stages --cases 1"), 2);
+  EXPECT_NE(slurp(err).find("--controller-shaped"), std::string::npos) << slurp(err);
+  EXPECT_EQ(sweep("--controller-shaped --max-variables 1 --cases 1"), 2);
+}
+
 TEST(SolverSweepExitCodes, ZeroOneTwoAndInterruption) {
   const std::string out = tempDir() + "/sweep.out", err = tempDir() + "/sweep.err";
   auto sweep = [&](const std::string& args) {

@@ -1015,6 +1015,63 @@ TEST(Solver, RestartsAfterABoundChangeGiveTheFullRestartsAnswer) {
   EXPECT_GE(fewer, 180);   // the restart after the stages a fix leaves unchanged was taken
 }
 
+// A bound whose variable an earlier level's row also holds alone, at the same value (a force at
+// its floor of 0 and a minimum-wrench target of 0, before a minimum-norm level): the bound's
+// multiplier for the last level has the wrong sign where the factorisation gives it all, but the
+// wrench row can carry it, so the bound is not released (releasing it would move nothing), and
+// the reported multipliers pass it to that row: a valid certificate with the bound at zero.
+TEST(Solver, ABoundThatAnEarlierRowHoldsAloneIsNotReleased) {
+  Problem p(2);
+  p.addBoundsLevel("floor", {1}, Eigen::VectorXd::Ones(1), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Constant(1, kInf));
+  Eigen::MatrixXd E(1, 2);
+  E << 1.0, 1.0;
+  p.addLevel("dynamics", E, Eigen::VectorXd::Ones(1), Eigen::VectorXd::Ones(1));
+  Eigen::MatrixXd W(1, 2);
+  W << 0.0, 2.0;
+  p.addLevel("wrench", W, Eigen::VectorXd::Zero(1), Eigen::VectorXd::Zero(1));
+  appendMinNorm(p);
+  ActiveSet start;
+  start.level = {{RowState::Lower}, {RowState::Equality}, {RowState::Equality}, {RowState::Equality, RowState::Equality}};
+  Solver s;
+  s.setup(p);
+  const Result& r = s.solve(p, start, Eigen::Vector2d(1.0, 0.0));
+  ASSERT_EQ(r.status, Status::Solved);
+  EXPECT_EQ(r.x, Eigen::Vector2d(1.0, 0.0));
+  EXPECT_EQ(r.active.level[0][0], RowState::Lower);  // held, not released
+  EXPECT_EQ(r.deactivations, 0);
+  EXPECT_EQ(r.iterations, 1);
+  EXPECT_EQ(checkKkt(p, r), "");
+  // The last level's multipliers: the bound's passed to the wrench row (a_w = 2).
+  const int last = p.levelCount() - 1;
+  EXPECT_EQ(r.lambda(0, last), 0.0);
+  EXPECT_NE(r.lambda(2, last), 0.0);
+}
+
+// The same situation in controller-shaped hierarchies (tests/support/reference.hpp,
+// controllerShapedProblem) made a warm start cycle: released, the bound moved nothing, rounding
+// made it block again, and the search ran to the hard cap of 1000 iterations. These seeds did
+// (lexdyn-solver-sweep --controller-shaped found them); warm from the cold answer's active set
+// with every second bound released, each is now solved in a few iterations, with the cold
+// answer's violations and a valid certificate.
+TEST(Solver, AWarmStartDoesNotCycleOnABoundThatAnEarlierRowHolds) {
+  for (const std::uint64_t seed : {4596ULL, 6822ULL, 8073ULL, 9362ULL, 15628ULL, 16283ULL, 16513ULL, 17807ULL, 18547ULL}) {
+    Options o;
+    const Problem p = test::controllerShapedProblem(seed, 12, 7, 8, o);
+    Solver cold, warm;
+    const Result r = solveOnce(cold, p, o);
+    ASSERT_EQ(r.status, Status::Solved) << "seed " << seed;
+    ActiveSet start = r.active;
+    for (size_t i = 0; i < start.level[0].size(); i += 2) start.level[0][i] = RowState::Inactive;
+    warm.setup(p, o);
+    const Result& w = warm.solve(p, start, r.x);
+    ASSERT_EQ(w.status, Status::Solved) << "seed " << seed;
+    EXPECT_LE(w.iterations, 20) << "seed " << seed;
+    EXPECT_EQ(checkKkt(p, w), "") << "seed " << seed;
+    for (int l = 0; l < p.levelCount(); ++l)
+      EXPECT_NEAR(w.violation_norm(l), r.violation_norm(l), 1e-9 * (1 + r.violation_norm(l))) << "seed " << seed << " level " << l;
+  }
+}
+
 // A restart after a fixed variable keeps rows without loading them again. A row that read the
 // fixed variable and one other free variable is a unit row from then on, and a spanning stage
 // takes it as a full factorisation does (tests/data/solver/restart_unit_row.json: 7 variables,

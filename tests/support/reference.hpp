@@ -424,4 +424,117 @@ inline void appendMinNorm(Problem& p) {
   p.addLevel("min-norm", Eigen::MatrixXd::Identity(n, n), Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n));
 }
 
+/// A hierarchy shaped like the controller's (lexdyn-solver-sweep --controller-shaped,
+/// docs/solver.md): nv velocities, then nf contact forces (n in [2, maxN]);
+///  - a bounds level: the forces' lower bounds (0 or 2^-7), now and then upper ones, now and
+///    then bounds on a few velocities;
+///  - a first general level of equalities over every variable, the equation of motion's
+///    unactuated rows (1 to 6 of them, the velocities' coefficients twice as large; now and then
+///    more rows than forces, or a duplicated row, so that split coordinates fall back to the plain
+///    elimination or the level is not eliminated);
+///  - 1 to maxLevels task levels of 1 to maxRows rows: most over the velocities only (two thirds
+///    of them declared so, as the controller declares its geometric tasks), now and then one over
+///    every variable or an inequality level over pairs of forces (as friction cones read them);
+///    equalities, inequalities, duplicated and zero rows, conflicting targets;
+///  - the minimum-velocity and minimum-wrench levels of unit rows (x_j = 0), or a quarter of the
+///    time the wrench level and a minimum norm over everything.
+/// Every number lies on the grid of 2^-10, so the exact reference applies. `o` receives the
+/// problem's solver options (its other fields are kept): split coordinates from nv, and spanning
+/// stages, lazy snapshots and a projected unit suffix drawn per problem. The problems of a seed
+/// are their own (an independent stream), so one reruns alone.
+inline Problem controllerShapedProblem(std::uint64_t seed, int maxN, int maxLevels, int maxRows, Options& o) {
+  std::mt19937_64 meta(seed ^ 0xc2b2ae3d27d4eb4fULL), rng(seed);
+  std::uniform_real_distribution<double> u_real(-1.0, 1.0), u01_real(0.0, 1.0);
+  auto grid = [](double v) { return std::round(v * 1024.0) / 1024.0; };
+  auto u = [&]() { return grid(u_real(rng)); };
+  auto coin = [&](double pr) { return u01_real(rng) < pr; };
+  auto rnd = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  const int n = 2 + static_cast<int>(meta() % static_cast<unsigned>(std::max(1, maxN - 1)));
+  const int nv = 1 + static_cast<int>(meta() % static_cast<unsigned>(n - 1)), nf = n - nv;
+  const int m0 = 1 + static_cast<int>(meta() % static_cast<unsigned>(std::min(6, n - 1)));
+  const int tasks = 1 + static_cast<int>(meta() % static_cast<unsigned>(maxLevels));
+  const bool controllerLike = meta() % 4 != 0;
+  o.split_from_variable = nv;
+  o.lazy_snapshots = meta() % 2 == 0;
+  o.spanning_stages = meta() % 3 != 0;
+  o.project_unit_suffix = controllerLike && meta() % 4 != 0;
+  Problem p(n);
+  {
+    std::vector<int> vars;
+    std::vector<double> lo, up;
+    const bool uppers = coin(0.25), velocityBounds = coin(0.3);
+    for (int j = 0; j < nv; ++j)
+      if (velocityBounds && coin(0.4)) {
+        const double w = 0.25 + std::abs(u());
+        vars.push_back(j);
+        lo.push_back(-w);
+        up.push_back(w);
+      }
+    const double floor = coin(0.5) ? 0.0 : 1.0 / 128.0;
+    for (int j = nv; j < n; ++j) {
+      vars.push_back(j);
+      lo.push_back(floor);
+      up.push_back(uppers && coin(0.5) ? 0.5 + 2.0 * std::abs(u()) : kInf);
+    }
+    const int m = static_cast<int>(vars.size());
+    p.addBoundsLevel("bounds", vars, Eigen::VectorXd::Ones(m), Eigen::Map<const Eigen::VectorXd>(lo.data(), m),
+                     Eigen::Map<const Eigen::VectorXd>(up.data(), m));
+  }
+  {
+    Eigen::MatrixXd E(m0, n);
+    for (int i = 0; i < m0; ++i)
+      for (int j = 0; j < n; ++j) E(i, j) = (j < nv ? 2.0 : 1.0) * u();
+    if (m0 > 1 && coin(0.05)) E.row(m0 - 1) = E.row(0);
+    Eigen::VectorXd e(m0);
+    for (int i = 0; i < m0; ++i) e(i) = u();
+    p.addLevel("dynamics", E, e, e);
+  }
+  std::vector<Eigen::RowVectorXd> pool;  // earlier velocity-only rows, for duplicates and conflicts
+  for (int l = 0; l < tasks; ++l) {
+    const int rows = rnd(1, maxRows);
+    const int kind = rnd(0, 5);  // 0-3: velocities only; 4: every variable; 5: pairs of forces
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, n);
+    Eigen::VectorXd lo(rows), up(rows);
+    for (int r = 0; r < rows; ++r) {
+      if (kind == 5) {
+        A(r, nv + (2 * r) % nf) = 1.0;
+        A(r, nv + (2 * r + 1) % nf) += -0.5 - 0.5 * std::abs(u());
+        lo(r) = -1.0 / 64.0;
+        up(r) = kInf;
+        continue;
+      }
+      for (int j = 0; j < (kind == 4 ? n : nv); ++j) A(r, j) = u();
+      if (kind < 4 && !pool.empty() && coin(0.15)) A.row(r) = pool[static_cast<size_t>(rnd(0, static_cast<int>(pool.size()) - 1))];
+      if (coin(0.05)) A.row(r).setZero();
+      const double t = 2.0 * u();
+      if (coin(0.4)) {
+        lo(r) = up(r) = t;
+      } else {
+        const int side = rnd(0, 2);
+        lo(r) = side == 1 ? -kInf : t - 0.5;
+        up(r) = side == 2 ? kInf : t + 0.5;
+      }
+      if (kind < 4 && !pool.empty() && coin(0.1)) {  // an earlier row with another target
+        A.row(r) = pool[static_cast<size_t>(rnd(0, static_cast<int>(pool.size()) - 1))];
+        lo(r) = up(r) = 3.0 * u();
+      }
+    }
+    if (kind < 4)
+      for (int r = 0; r < rows; ++r) pool.push_back(A.row(r));
+    p.addLevel("task" + std::to_string(l), A, lo, up);
+    if (kind < 4 && rnd(0, 2) != 0) p.setLevelColumns(p.levelCount() - 1, nv);
+  }
+  if (controllerLike) {
+    Eigen::MatrixXd V = Eigen::MatrixXd::Zero(nv, n);
+    V.leftCols(nv).setIdentity();
+    p.addLevel("velocity", V, Eigen::VectorXd::Zero(nv), Eigen::VectorXd::Zero(nv));
+    p.setLevelColumns(p.levelCount() - 1, nv);
+  }
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(nf, n);
+  W.rightCols(nf).setIdentity();
+  p.addLevel("wrench", W, Eigen::VectorXd::Zero(nf), Eigen::VectorXd::Zero(nf));
+  if (!controllerLike) appendMinNorm(p);
+  return p;
+}
+
 }  // namespace lexdyn::solver::test

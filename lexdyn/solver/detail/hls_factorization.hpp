@@ -127,6 +127,8 @@ class HlsFactorization {
   /// Level stages factorised since setup (the elimination of the first level counts as one):
   /// a deterministic measure of the factorisation work (Result::factorizations).
   long stagesFactorized() const { return stages_; }
+  /// Restarts after a bound change taken since setup (Result::bound_change_restarts).
+  long boundChangeRestarts() const { return restartsTaken_; }
 
   /// Solves the equality hierarchy of the active rows with targets b(gid) (fixed-variable
   /// contributions already removed): writes the free variables' entries of x (variable space;
@@ -303,6 +305,7 @@ class HlsFactorization {
   int dirtyFrom_ = 0;
   int lastRestart_ = 0;
   long stages_ = 0;
+  long restartsTaken_ = 0;
 };
 
 }  // namespace lexdyn::solver
