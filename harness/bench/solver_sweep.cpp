@@ -14,7 +14,8 @@
 //  - with --controller-shaped, the problems are shaped like the controller's (velocities, then
 //    contact forces with their bounds; split coordinates, declared velocity-only levels), and each
 //    is solved again warm from its answer's active set with every second bound released: that
-//    result is checked the same way, and its levels' violations must be the cold solve's.
+//    result is checked the same way, and its levels' violations must be the cold solve's
+//    (--warm does this for the default generator's problems).
 // Every problem is generated from its own seed (its options too), so a failing problem reruns
 // alone with the command the sweep prints (or from the JSON file --write-failures DIR writes).
 //
@@ -59,7 +60,7 @@ int main(int argc, char** argv) {
   int maxN = 12, maxLevels = 7, maxRows = 8;
   long exactEvery = 0;
   int maxIterations = Options{}.max_iterations;
-  bool spanning = false, lazy = false, suffix = false, noBoundRestarts = false, controllerShaped = false;
+  bool spanning = false, lazy = false, suffix = false, noBoundRestarts = false, controllerShaped = false, warmToo = false;
   double unitLevels = 0.0;
   bool brute = false;
   double exactTimeLimit = 0.0;
@@ -91,6 +92,9 @@ int main(int argc, char** argv) {
   app.add_flag("--controller-shaped", controllerShaped,
                "controller-shaped problems (velocities then forces, split coordinates, restarts after bound changes), each solved cold "
                "and again warm; the options of each problem are drawn with it (docs/solver.md)");
+  app.add_flag("--warm", warmToo,
+               "solve each problem again warm from its answer's active set with every second bound released, and check that result "
+               "too (always on with --controller-shaped)");
   app.add_flag("--brute-force", brute, "compare tiny problems (<= 9 rows) with active-set enumeration");
   try {
     app.parse(argc, argv);
@@ -128,7 +132,7 @@ int main(int argc, char** argv) {
                               (spanning ? " --spanning-stages" : "") + (lazy ? " --lazy-snapshots" : "") +
                               (suffix ? " --unit-suffix" : "") + (noBoundRestarts ? " --no-restart-after-bound-change" : "") +
                               (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "") +
-                              (controllerShaped ? " --controller-shaped" : "");
+                              (controllerShaped ? " --controller-shaped" : "") + (warmToo && !controllerShaped ? " --warm" : "");
   Options solverOptions;
   solverOptions.max_iterations = maxIterations;
   solverOptions.spanning_stages = spanning;
@@ -222,7 +226,7 @@ int main(int argc, char** argv) {
         n = before;
         break;
       }
-      if (err.empty() && controllerShaped) {
+      if (err.empty() && (controllerShaped || warmToo)) {
         // Warm from the answer's active set with every second bound released: the search frees
         // and fixes them again (restarts after a bound change both ways).
         ActiveSet warm = r.active;

@@ -405,6 +405,9 @@ TEST(SolverSweepExitCodes, ControllerShapedProblemsAreSolvedColdAndWarm) {
   const lexdyn::solver::ProblemFile f = lexdyn::solver::readProblemFile(tempDir() + "/cs_failures/problem-" + seed + ".json");
   ASSERT_TRUE(f.options.has_value());
   EXPECT_GT(f.options->split_from_variable, 0);
+  // --warm solves the default generator's problems warm as well.
+  ASSERT_EQ(sweep("--warm --cases 500 --seed 3"), 0) << slurp(out);
+  EXPECT_EQ(nlohmann::json::parse(slurp(out))["warm_checked"], 500);
   // It draws each problem's options itself: the option flags are refused, as is a single variable.
   EXPECT_EQ(sweep("--controller-shaped --spanning-stages --cases 1"), 2);
   EXPECT_NE(slurp(err).find("--controller-shaped"), std::string::npos) << slurp(err);

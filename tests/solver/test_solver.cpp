@@ -961,18 +961,7 @@ TEST(Solver, RestartsAfterABoundChangeGiveTheFullRestartsAnswer) {
     // wrench (unit rows on the forces), both projected (project_unit_suffix); or, a quarter of the
     // time, the wrench level and a minimum norm over everything.
     const bool controllerLike = seed % 4 != 0;
-    if (controllerLike) {
-      Eigen::MatrixXd V = Eigen::MatrixXd::Zero(nv, n);
-      V.leftCols(nv).setIdentity();
-      p.addLevel("velocity", V, Eigen::VectorXd::Zero(nv), Eigen::VectorXd::Zero(nv));
-      p.setLevelColumns(p.levelCount() - 1, nv);
-    }
-    {
-      Eigen::MatrixXd W = Eigen::MatrixXd::Zero(nf, n);
-      W.rightCols(nf).setIdentity();
-      p.addLevel("wrench", W, Eigen::VectorXd::Zero(nf), Eigen::VectorXd::Zero(nf));
-    }
-    if (!controllerLike) appendMinNorm(p);
+    test::appendRegularisationLevels(p, nv, controllerLike);
     Options on;
     on.split_from_variable = nv;
     on.lazy_snapshots = seed % 2 == 0;

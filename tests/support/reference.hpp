@@ -424,6 +424,24 @@ inline void appendMinNorm(Problem& p) {
   p.addLevel("min-norm", Eigen::MatrixXd::Identity(n, n), Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n));
 }
 
+/// The controller's last levels over nv velocities and the forces after them: minimum velocity
+/// (unit rows x_j = 0 on the velocities, declared velocity-only) and minimum wrench (unit rows on
+/// the forces); or, with `controllerLike` false, the wrench level and a minimum norm over every
+/// variable.
+inline void appendRegularisationLevels(Problem& p, int nv, bool controllerLike) {
+  const int n = p.variables(), nf = n - nv;
+  if (controllerLike) {
+    Eigen::MatrixXd V = Eigen::MatrixXd::Zero(nv, n);
+    V.leftCols(nv).setIdentity();
+    p.addLevel("velocity", V, Eigen::VectorXd::Zero(nv), Eigen::VectorXd::Zero(nv));
+    p.setLevelColumns(p.levelCount() - 1, nv);
+  }
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(nf, n);
+  W.rightCols(nf).setIdentity();
+  p.addLevel("wrench", W, Eigen::VectorXd::Zero(nf), Eigen::VectorXd::Zero(nf));
+  if (!controllerLike) appendMinNorm(p);
+}
+
 /// A hierarchy shaped like the controller's (lexdyn-solver-sweep --controller-shaped,
 /// docs/solver.md): nv velocities, then nf contact forces (n in [2, maxN]);
 ///  - a bounds level: the forces' lower bounds (0 or 2^-7), now and then upper ones, now and
@@ -524,16 +542,7 @@ inline Problem controllerShapedProblem(std::uint64_t seed, int maxN, int maxLeve
     p.addLevel("task" + std::to_string(l), A, lo, up);
     if (kind < 4 && rnd(0, 2) != 0) p.setLevelColumns(p.levelCount() - 1, nv);
   }
-  if (controllerLike) {
-    Eigen::MatrixXd V = Eigen::MatrixXd::Zero(nv, n);
-    V.leftCols(nv).setIdentity();
-    p.addLevel("velocity", V, Eigen::VectorXd::Zero(nv), Eigen::VectorXd::Zero(nv));
-    p.setLevelColumns(p.levelCount() - 1, nv);
-  }
-  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(nf, n);
-  W.rightCols(nf).setIdentity();
-  p.addLevel("wrench", W, Eigen::VectorXd::Zero(nf), Eigen::VectorXd::Zero(nf));
-  if (!controllerLike) appendMinNorm(p);
+  appendRegularisationLevels(p, nv, controllerLike);
   return p;
 }
 
