@@ -69,7 +69,8 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed, "seed of the first problem; problem i has seed + i");
   app.add_option("--cases", cases, "number of random problems")->check(CLI::Range(1L, 1000000000L));
   app.add_option("--max-variables", maxN, "largest number of variables, in [1, 100]")->check(CLI::Range(1, 100));
-  app.add_option("--max-levels", maxLevels, "largest number of general levels, in [1, 50]")->check(CLI::Range(1, 50));
+  app.add_option("--max-levels", maxLevels, "largest number of general levels, in [1, 50] (with --controller-shaped: of task levels)")
+      ->check(CLI::Range(1, 50));
   app.add_option("--max-rows", maxRows, "largest number of rows per level, in [1, 100]")->check(CLI::Range(1, 100));
   app.add_option("--exact-every", exactEvery, "also verify every K-th problem with the exact reference (0: only flagged ones)")
       ->check(CLI::Range(0L, 1000000000L));
@@ -154,7 +155,7 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   // Checks one result (status, certificate, exact reference): the failure's text, or "" when it
   // passes. Sets `interrupted` when a signal stopped its exact check (then nothing is decided).
-  auto verify = [&](std::uint64_t s, const Problem& p, const Result& r, bool sample, bool& interrupted) -> std::string {
+  auto verify = [&](std::uint64_t s, const char* what, const Problem& p, const Result& r, bool sample, bool& interrupted) -> std::string {
     held += r.held_after_reblock;
     cycles += r.cycles_broken;
     iters += r.iterations;
@@ -184,8 +185,8 @@ int main(int argc, char** argv) {
     if (!kkt.empty()) {
       if (v.kind == test::ExactVerdict::Optimal) {
         ++exactCleared;
-        std::printf("problem seed %llu: the certificate failed (%s) but the exact reference proves the result optimal\n",
-                    static_cast<unsigned long long>(s), kkt.c_str());
+        std::printf("problem seed %llu%s: the certificate failed (%s) but the exact reference proves the result optimal\n",
+                    static_cast<unsigned long long>(s), what, kkt.c_str());
         return "";
       }
       (v.kind == test::ExactVerdict::NotOptimal ? exactConfirmed : exactUndecided) += 1;
@@ -221,7 +222,7 @@ int main(int argc, char** argv) {
       splitApplied += r.split_applied ? 1 : 0;
       const bool sample = exactEvery > 0 && c % exactEvery == 0;
       bool interrupted = false;
-      std::string err = verify(s, p, r, sample, interrupted);
+      std::string err = verify(s, "", p, r, sample, interrupted);
       if (interrupted) {  // neither a pass nor a failure: the problem is not counted
         n = before;
         break;
@@ -235,7 +236,7 @@ int main(int argc, char** argv) {
         again.setup(p, problemOptions);
         const Result& w = again.solve(p, warm, r.x);
         ++warmChecked;
-        err = verify(s, p, w, sample, interrupted);
+        err = verify(s, " (warm)", p, w, sample, interrupted);
         if (interrupted) {
           n = before;
           break;

@@ -178,7 +178,7 @@ struct Solver::Impl {
   void prepareLevels();
   void ensureMult(int kf);
   bool isHeld(int kind, int idx, int levelH, int kf);
-  int unitRowHolding(int i, int kf, double xnorm) const;
+  int unitRowHolding(int i, int kf) const;
   double correctSign(int kind, int idx, double value) const;
   void run();
   void finish();
@@ -602,7 +602,7 @@ bool Solver::Impl::isHeld(int kind, int idx, int levelH, int kf) {
 // correct sign). The factorisation gives such a row, a zero row in reduced coordinates, a zero
 // multiplier and the bound the whole of it; releasing the bound then moves nothing, and rounding
 // makes it block again (a cycle). Returns the row's id, or -1.
-int Solver::Impl::unitRowHolding(int i, int kf, double xnorm) const {
+int Solver::Impl::unitRowHolding(int i, int kf) const {
   const double mi = muVarAll(i, kf);
   for (int j = 0; j < kf; ++j) {
     const Eigen::MatrixXd& Aj = A(j);
@@ -611,10 +611,12 @@ int Solver::Impl::unitRowHolding(int i, int kf, double xnorm) const {
       const int r = gid - off;
       const double a = Aj(r, i);
       if (a == 0.0) continue;
-      if (std::abs(res(gid)) > opt.zero_tolerance * rowScale(gid, xnorm)) continue;  // frozen
       bool alone = true;
       for (int c = 0; c < Aj.cols() && alone; ++c) alone = c == i || Aj(r, c) == 0.0;
       if (!alone) continue;
+      // Satisfied on its own scale (a x = a x_i): another variable's size must not hide a
+      // residual that a later level could still remove by releasing the bound.
+      if (std::abs(res(gid)) > opt.zero_tolerance * (std::abs(target(gid)) + std::abs(a * xs(i)))) continue;
       const RowState st = state[static_cast<size_t>(gid)];
       if (st == RowState::Equality || correctSign(1, gid, muAll(gid, kf) + mi / a) >= 0.0) return gid;
     }
@@ -675,7 +677,7 @@ bool Solver::Impl::dualCheck(bool bland, int& kind, int& idx, int& level) {
       if (s != RowState::Lower && s != RowState::Upper) continue;
       if (tabooVar[static_cast<size_t>(i)]) continue;
       const double measure = -correctSign(0, i, muVar(i)) / S;
-      if (measure > dualTol && !isHeld(0, i, -1, kf) && unitRowHolding(i, kf, xnorm) < 0) consider(0, i, measure);
+      if (measure > dualTol && !isHeld(0, i, -1, kf) && unitRowHolding(i, kf) < 0) consider(0, i, measure);
     }
     if (bestKind >= 0) {
       kind = bestKind;
@@ -978,7 +980,6 @@ void Solver::Impl::finish() {
   out.lambda.setZero();
   if (!opt.compute_multipliers) return;
   if (!multValid) prepareLevels();
-  const double xnorm = xs.lpNorm<Eigen::Infinity>();
   const Level* bl = hasBounds ? &problem.level(0) : nullptr;
   auto rowOf = [&](int gid) {
     const int j = fact.levelOf(gid);
@@ -1001,7 +1002,7 @@ void Solver::Impl::finish() {
       const RowState s = vstate[static_cast<size_t>(i)];
       if (s != RowState::Lower && s != RowState::Upper) continue;
       if (!(-correctSign(0, i, muVarAll(i, kf)) / levelS(kf) > dualTol) || isHeld(0, i, -1, kf)) continue;
-      const int h = unitRowHolding(i, kf, xnorm);
+      const int h = unitRowHolding(i, kf);
       if (h < 0) continue;
       col(rowOf(h)) += muVarAll(i, kf) / A(fact.levelOf(h))(h - fact.rowOffset(fact.levelOf(h)), i);
       col(stackOff[0] + r) = 0.0;

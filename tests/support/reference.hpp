@@ -447,7 +447,7 @@ inline void appendRegularisationLevels(Problem& p, int nv, bool controllerLike) 
 ///  - a bounds level: the forces' lower bounds (0 or 2^-7), now and then upper ones, now and
 ///    then bounds on a few velocities;
 ///  - a first general level of equalities over every variable, the equation of motion's
-///    unactuated rows (1 to 6 of them, the velocities' coefficients twice as large; now and then
+///    unactuated rows (1 to min(6, n - 1) of them, the velocities' coefficients twice as large; now and then
 ///    more rows than forces, or a duplicated row, so that split coordinates fall back to the plain
 ///    elimination or the level is not eliminated);
 ///  - 1 to maxLevels task levels of 1 to maxRows rows: most over the velocities only (two thirds
@@ -456,7 +456,8 @@ inline void appendRegularisationLevels(Problem& p, int nv, bool controllerLike) 
 ///    equalities, inequalities, duplicated and zero rows, conflicting targets;
 ///  - the minimum-velocity and minimum-wrench levels of unit rows (x_j = 0), or a quarter of the
 ///    time the wrench level and a minimum norm over everything.
-/// Every number lies on the grid of 2^-10, so the exact reference applies. `o` receives the
+/// Every number is dyadic (the grid of 2^-10; the force pairs' coefficients 2^-11), so the exact
+/// reference applies. `o` receives the
 /// problem's solver options (its other fields are kept): split coordinates from nv, and spanning
 /// stages, lazy snapshots and a projected unit suffix drawn per problem. The problems of a seed
 /// are their own (an independent stream), so one reruns alone.
