@@ -199,6 +199,14 @@ int main(int argc, char** argv) {
     if (v.kind == test::ExactVerdict::Undecided) ++exactUndecided;
     return "";
   };
+  // The first level whose violation in `r` is not the reference's (ref(l)) to 1e-7 (1 + ref), or "".
+  auto levelApart = [](const Problem& p, const Result& r, const auto& ref, const char* against) -> std::string {
+    for (int l = 0; l < p.levelCount(); ++l)
+      if (std::abs(r.violation_norm(l) - ref(l)) > 1e-7 * (1 + ref(l)))
+        return "level " + std::to_string(l) + " violation " + std::to_string(r.violation_norm(l)) + " differs from " + against + " " +
+               std::to_string(ref(l));
+    return "";
+  };
   try {
     for (long c = 0; c < cases; ++c) {
       if (g_signal.load()) break;
@@ -241,19 +249,16 @@ int main(int argc, char** argv) {
           n = before;
           break;
         }
-        for (int l = 0; l < p.levelCount() && err.empty(); ++l)
-          if (std::abs(w.violation_norm(l) - r.violation_norm(l)) > 1e-7 * (1 + r.violation_norm(l)))
-            err = "level " + std::to_string(l) + " violation " + std::to_string(w.violation_norm(l)) + " differs from the cold solve's " +
-                  std::to_string(r.violation_norm(l));
+        if (err.empty())
+          err = levelApart(
+              p, w, [&](int l) { return r.violation_norm(l); }, "the cold solve's");
         if (!err.empty()) err = "warm: " + err;
       }
       if (err.empty() && brute) {
         ++bruteChecked;
         const auto ref = test::bruteForce(p);
-        for (int l = 0; l < p.levelCount() && err.empty(); ++l)
-          if (std::abs(r.violation_norm(l) - ref[static_cast<size_t>(l)]) > 1e-7 * (1 + ref[static_cast<size_t>(l)]))
-            err = "level " + std::to_string(l) + " violation " + std::to_string(r.violation_norm(l)) + " differs from brute force " +
-                  std::to_string(ref[static_cast<size_t>(l)]);
+        err = levelApart(
+            p, r, [&](int l) { return ref[static_cast<size_t>(l)]; }, "brute force");
       }
       if (!err.empty()) {
         ++failures;

@@ -1004,7 +1004,8 @@ void Solver::Impl::finish() {
       if (!(-correctSign(0, i, muVarAll(i, kf)) / levelS(kf) > dualTol) || isHeld(0, i, -1, kf)) continue;
       const int h = unitRowHolding(i, kf);
       if (h < 0) continue;
-      col(rowOf(h)) += muVarAll(i, kf) / A(fact.levelOf(h))(h - fact.rowOffset(fact.levelOf(h)), i);
+      const int j = fact.levelOf(h);
+      col(rowOf(h)) += muVarAll(i, kf) / A(j)(h - fact.rowOffset(j), i);
       col(stackOff[0] + r) = 0.0;
     }
     // Corrections.
