@@ -8,6 +8,8 @@
 //                                     of each statistic's median and each tick's best over the
 //                                     repeats (tick_best_*: a shared machine's false tails)
 //     --warm-only                     skips the cold solves (profiles of the warm path)
+//     --per-tick FILE                 writes one CSV row per tick: each solve's best time over the
+//                                     repeats next to its iterations and factorised stages
 //
 // Solver options: a problem file a controller dumped (lexdyn-harness run --dump-problems) carries
 // the options the controller solved it with (`solver_options`), and lexdyn-solve runs those by
@@ -106,8 +108,33 @@ std::vector<double> tickBest(const std::vector<double>& us, size_t perRepeat) {
   return best;
 }
 
+// One tick's solve (cold or warm) in a --bench run: its best time over the repeats and the
+// deterministic work of the first repeat's solve (every repeat solves the same sequence).
+struct TickSolve {
+  bool timed = false;
+  double best_us = 0.0;
+  int iterations = 0, factorizations = 0, activations = 0, deactivations = 0, bound_change_restarts = 0;
+  std::string status;
+};
+
+void recordSolve(TickSolve& t, const lexdyn::solver::Result& r, double us) {
+  if (!t.timed) {
+    t.timed = true;
+    t.best_us = us;
+    t.iterations = r.iterations;
+    t.factorizations = r.factorizations;
+    t.activations = r.activations;
+    t.deactivations = r.deactivations;
+    t.bound_change_restarts = r.bound_change_restarts;
+    t.status = lexdyn::solver::toString(r.status);
+    return;
+  }
+  t.best_us = std::min(t.best_us, us);
+}
+
 nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iters, int capHits, double unit,
-                     const std::vector<double>& repeatMedians, size_t perRepeat) {
+                     const std::vector<double>& repeatMedians, size_t perRepeat, const std::vector<TickSolve>& perTick,
+                     const std::vector<std::string>& files) {
   nlohmann::json j;
   double sumIt = 0.0;
   int maxIt = 0;
@@ -125,6 +152,8 @@ nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iter
     j["mean_iterations"] = nullptr;
     j["max_iterations"] = nullptr;
     j["iteration_limit_hits"] = 0;
+    j["max_factorizations"] = nullptr;
+    j["slowest_tick"] = nullptr;
     return j;
   }
   j["median_us"] = percentile(us, 0.5);
@@ -149,6 +178,24 @@ nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iter
   j["tick_best_max_us"] = bestMax;
   j["tick_best_p99_qr_units"] = percentile(best, 0.99) / unit;
   j["tick_best_max_qr_units"] = bestMax / unit;
+  // The deterministic work beside the times: the largest number of stages factorised in one
+  // solve, and the tick with the largest best time, with its work (a peak is judged by both).
+  int maxFact = 0;
+  size_t slowest = perTick.size();
+  for (size_t k = 0; k < perTick.size(); ++k) {
+    if (!perTick[k].timed) continue;
+    maxFact = std::max(maxFact, perTick[k].factorizations);
+    if (slowest == perTick.size() || perTick[k].best_us > perTick[slowest].best_us) slowest = k;
+  }
+  j["max_factorizations"] = maxFact;
+  if (slowest < perTick.size()) {
+    const TickSolve& t = perTick[slowest];
+    j["slowest_tick"] = {{"tick", slowest},
+                         {"file", files[slowest]},
+                         {"best_us", t.best_us},
+                         {"iterations", t.iterations},
+                         {"factorizations", t.factorizations}};
+  }
   return j;
 }
 
@@ -159,7 +206,40 @@ struct OptionFlags {
   std::function<void(Options&)> apply;
 };
 
-int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bool detectBounds, int repeats, bool warmOnly) {
+// --per-tick FILE: one CSV row per tick, cold and warm (docs/file-formats.md).
+bool writePerTick(const std::string& path, const std::vector<std::string>& files, const std::vector<TickSolve>& cold,
+                  const std::vector<TickSolve>& warm) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) return false;
+  std::fprintf(f, "tick,file");
+  for (const char* kind : {"cold", "warm"})
+    std::fprintf(f, ",%s_best_us,%s_iterations,%s_factorizations,%s_activations,%s_deactivations,%s_bound_change_restarts,%s_status", kind,
+                 kind, kind, kind, kind, kind, kind);
+  std::fprintf(f, "\n");
+  for (size_t k = 0; k < files.size(); ++k) {
+    // The file name as given, quoted (RFC 4180) when it holds a comma or a quote.
+    std::string name = files[k];
+    if (name.find_first_of(",\"\n") != std::string::npos) {
+      std::string quoted = "\"";
+      for (char ch : name) quoted += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+      name = quoted + "\"";
+    }
+    std::fprintf(f, "%zu,%s", k, name.c_str());
+    for (const TickSolve* t : {&cold[k], &warm[k]}) {
+      if (t->timed)
+        std::fprintf(f, ",%.3f,%d,%d,%d,%d,%d,%s", t->best_us, t->iterations, t->factorizations, t->activations, t->deactivations,
+                     t->bound_change_restarts, t->status.c_str());
+      else
+        std::fprintf(f, ",,,,,,,");
+    }
+    std::fprintf(f, "\n");
+  }
+  const bool ok = std::ferror(f) == 0;
+  return std::fclose(f) == 0 && ok;
+}
+
+int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bool detectBounds, int repeats, bool warmOnly,
+             const std::string& perTickPath) {
   std::vector<Problem> ticks;
   ticks.reserve(files.size());
   Options options;
@@ -193,6 +273,7 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
   std::vector<int> coldIt, warmIt;
   int coldCap = 0, warmCap = 0;
   double maxAbsX = 0.0;
+  std::vector<TickSolve> coldTicks(ticks.size()), warmTicks(ticks.size());
   for (int rep = 0; rep < repeats; ++rep) {
     const size_t coldFrom = coldUs.size(), warmFrom = warmUs.size();
     for (size_t k = 0; k < ticks.size(); ++k) {
@@ -202,6 +283,7 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
         const auto& rc = cold.solve(ticks[k]);
         const auto b = Clock::now();
         coldUs.push_back(elapsedUs(a, b));
+        recordSolve(coldTicks[k], rc, coldUs.back());
         coldIt.push_back(rc.iterations);
         coldCap += (rc.status == Status::IterationLimit);
         maxAbsX = std::max(maxAbsX, rc.x.lpNorm<Eigen::Infinity>());
@@ -214,6 +296,7 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
       const auto& rw = warm.solve(ticks[k], warm.result().active, warm.result().x);
       const auto d = Clock::now();
       warmUs.push_back(elapsedUs(c, d));
+      recordSolve(warmTicks[k], rw, warmUs.back());
       warmIt.push_back(rw.iterations);
       warmCap += (rw.status == Status::IterationLimit);
       maxAbsX = std::max(maxAbsX, rw.x.lpNorm<Eigen::Infinity>());
@@ -229,8 +312,12 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
   out["qr_unit_us"] = unit;
   out["ticks"] = ticks.size();
   out["repeats"] = repeats;
-  if (!warmOnly) out["cold"] = stats(coldUs, coldIt, coldCap, unit, coldMedians, ticks.size());
-  out["warm"] = stats(warmUs, warmIt, warmCap, unit, warmMedians, ticks.size() - 1);
+  if (!warmOnly) out["cold"] = stats(coldUs, coldIt, coldCap, unit, coldMedians, ticks.size(), coldTicks, files);
+  out["warm"] = stats(warmUs, warmIt, warmCap, unit, warmMedians, ticks.size() - 1, warmTicks, files);
+  if (!perTickPath.empty() && !writePerTick(perTickPath, files, coldTicks, warmTicks)) {
+    std::fprintf(stderr, "lexdyn-solve: error: --per-tick: cannot write %s\n", perTickPath.c_str());
+    return kExitBadInput;
+  }
   out["max_abs_x"] = maxAbsX;
   out["solver_options"] = nlohmann::json::parse(lexdyn::solver::solverOptionsToJson(options));
   out["solver_options_from"] = from;
@@ -252,6 +339,9 @@ int main(int argc, char** argv) {
   app.add_flag("--bench", bench, "treat the files as consecutive ticks and print timing statistics");
   app.add_option("--repeats", repeats, "with --bench: run the sequence this many times")->check(CLI::Range(1, 1000));
   app.add_flag("--warm-only", warmOnly, "with --bench: skip the cold solves");
+  std::string perTick;
+  app.add_option("--per-tick", perTick,
+                 "with --bench: write one CSV row per tick (best time over the repeats, iterations, factorisations)");
   app.add_option("--split-from", options_split, "split coordinates: prefer eliminating variables from this index on (docs/solver.md)")
       ->check(CLI::Range(0, 1000000));
   app.add_flag("--spanning-stages", spanning, "solve single-variable-row levels that span their stage by one QR (docs/solver.md)");
@@ -295,11 +385,11 @@ int main(int argc, char** argv) {
     if (suffix) o.project_unit_suffix = true;
   };
   try {
-    if (!bench && (app.count("--repeats") || warmOnly)) {
-      std::fprintf(stderr, "lexdyn-solve: error: --repeats and --warm-only need --bench\n");
+    if (!bench && (app.count("--repeats") || warmOnly || app.count("--per-tick"))) {
+      std::fprintf(stderr, "lexdyn-solve: error: --repeats, --warm-only and --per-tick need --bench\n");
       return kExitBadInput;
     }
-    if (bench) return runBench(files, flags, !noBounds, repeats, warmOnly);
+    if (bench) return runBench(files, flags, !noBounds, repeats, warmOnly, perTick);
     if (files.size() != 1) {
       std::fprintf(stderr, "lexdyn-solve: error: expected one problem file, found %zu (use --bench for several)\n", files.size());
       return kExitBadInput;

@@ -9,7 +9,9 @@
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "lexdyn/solver/problem_io.hpp"
 
@@ -286,9 +288,88 @@ TEST(SolveCli, BenchWarmOnlySkipsTheColdSolves) {
   EXPECT_FALSE(j1["cold"]["min_repeat_median_us"].is_null());
 }
 
+// --per-tick: one row per tick, each solve's best time and its work. The work is the solver's
+// own: a tick's cold iterations and factorised stages equal those of `lexdyn-solve --details` on
+// the same file, and the slowest tick and the largest factorisation count of the JSON are the
+// file's.
+TEST(SolveCli, BenchPerTickWritesEachTicksWorkNextToItsBestTime) {
+  // Two different ticks: the second starts from the first's active set, which is not its own.
+  const std::string a = writeFile("pt0.json", kValid);
+  const std::string b = writeFile("pt1.json", R"({"variables": 2, "levels": [
+    {"name": "box", "A": [[1, 0], [0, 1]], "lower": [-1, -1], "upper": [1, 1]},
+    {"name": "task", "A": [[1, -1]], "lower": [0.5], "upper": [0.5]}]})");
+  const std::string csv = tempDir() + "/per_tick.csv";
+  const CliRun r = run("--bench --repeats 3 --per-tick " + csv + " " + a + " " + b + " " + a);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  std::istringstream in(slurp(csv));
+  std::string line;
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::string cell;
+    std::istringstream ls(line);
+    while (std::getline(ls, cell, ',')) cells.push_back(cell);
+    if (!line.empty() && line.back() == ',') cells.push_back("");
+    rows.push_back(cells);
+  }
+  ASSERT_EQ(rows.size(), 4u) << slurp(csv);
+  const std::vector<std::string>& head = rows[0];
+  ASSERT_EQ(head.size(), 16u);
+  auto col = [&](const std::string& name) {
+    for (size_t c = 0; c < head.size(); ++c)
+      if (head[c] == name) return c;
+    ADD_FAILURE() << "no column " << name;
+    return size_t{0};
+  };
+  for (size_t t = 0; t < 3; ++t) {
+    const std::vector<std::string>& row = rows[t + 1];
+    ASSERT_EQ(row.size(), head.size()) << t;
+    EXPECT_EQ(row[col("tick")], std::to_string(t));
+    EXPECT_EQ(row[col("file")], t == 1 ? b : a);
+    // The same file solved alone, cold: the same work.
+    const CliRun single = run("--details " + (t == 1 ? b : a));
+    ASSERT_EQ(single.code, 0) << single.err;
+    const auto s = nlohmann::json::parse(single.out);
+    EXPECT_EQ(std::stoi(row[col("cold_iterations")]), s["iterations"].get<int>()) << t;
+    EXPECT_EQ(std::stoi(row[col("cold_factorizations")]), s["factorizations"].get<int>()) << t;
+    EXPECT_EQ(row[col("cold_status")], "solved");
+    EXPECT_GT(std::stod(row[col("cold_best_us")]), 0.0);
+    // Tick 0 seeds the warm chain: no warm figures.
+    EXPECT_EQ(row[col("warm_best_us")].empty(), t == 0) << t;
+  }
+  // The ticks differ: the second's cold solve works more than a warm start from its own answer
+  // would, and the third (the first's problem again, warm from the second) needs a change.
+  EXPECT_GT(std::stoi(rows[2][col("warm_iterations")]), 1);
+  EXPECT_GT(std::stoi(rows[3][col("warm_iterations")]), 1);
+  for (const char* k : {"cold", "warm"}) {
+    int maxFact = 0;
+    size_t slowest = 0;
+    double slowestUs = -1.0;
+    for (size_t t = 0; t < 3; ++t) {
+      const std::string& us = rows[t + 1][col(std::string(k) + "_best_us")];
+      if (us.empty()) continue;
+      maxFact = std::max(maxFact, std::stoi(rows[t + 1][col(std::string(k) + "_factorizations")]));
+      if (std::stod(us) > slowestUs) {
+        slowestUs = std::stod(us);
+        slowest = t;
+      }
+    }
+    EXPECT_EQ(j[k]["max_factorizations"].get<int>(), maxFact) << k;
+    EXPECT_EQ(j[k]["slowest_tick"]["tick"].get<size_t>(), slowest) << k;
+    EXPECT_NEAR(j[k]["slowest_tick"]["best_us"].get<double>(), slowestUs, 1e-3) << k;
+    EXPECT_NEAR(j[k]["tick_best_max_us"].get<double>(), slowestUs, 1e-3) << k;
+  }
+  // A path that cannot be written: bad input, nothing printed.
+  const CliRun bad = run("--bench --per-tick " + tempDir() + "/no-such-dir/t.csv " + a + " " + b);
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--per-tick: cannot write"), std::string::npos) << bad.err;
+  EXPECT_TRUE(bad.out.empty()) << bad.out;
+}
+
 TEST(SolveCli, RepeatsAndWarmOnlyNeedBench) {
   const std::string a = writeFile("n0.json", kValid);
-  for (const std::string opt : {"--repeats 2", "--warm-only"}) {
+  for (const std::string opt : {"--repeats 2", "--warm-only", "--per-tick x.csv"}) {
     const CliRun r = run(opt + " " + a);
     EXPECT_EQ(r.code, 2) << opt;
     EXPECT_NE(r.err.find("need --bench"), std::string::npos) << r.err;
