@@ -9,7 +9,9 @@
 //                                     repeats (tick_best_*: a shared machine's false tails)
 //     --warm-only                     skips the cold solves (profiles of the warm path)
 //     --per-tick FILE                 writes one CSV row per tick: each solve's best time over the
-//                                     repeats next to its iterations and factorised stages
+//                                     repeats next to its work (iterations, factorised stages,
+//                                     activations, deactivations, restarts after a bound change)
+//                                     and status; written atomically after the JSON is printed
 //
 // Solver options: a problem file a controller dumped (lexdyn-harness run --dump-problems) carries
 // the options the controller solved it with (`solver_options`), and lexdyn-solve runs those by
@@ -23,7 +25,8 @@
 //   2    bad input: the problem file (file and key path named; size guards of docs/file-formats.md)
 //        or the command line;
 //   3    solver failure: the hard iteration cap (iteration_limit), a non-finite result, an
-//        internal error, out of memory; the JSON result is still printed when there is one;
+//        internal error, out of memory; the JSON result is still printed when there is one; with
+//        --bench, a --per-tick file that could not be written at the end (after the JSON);
 //   130 / 143  interrupted by SIGINT / SIGTERM (--bench stops between solves, prints nothing).
 // lexdyn-solve runs no check, so it never exits 1.
 #include <CLI/CLI.hpp>
@@ -31,6 +34,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -42,6 +46,7 @@
 #include <vector>
 
 #include "lexdyn/common/error.hpp"
+#include "harness/checks/output_files.hpp"
 #include "harness/cli/exception_exit.hpp"
 #include "lexdyn/solver/problem_io.hpp"
 #include "lexdyn/solver/solver.hpp"
@@ -108,8 +113,10 @@ std::vector<double> tickBest(const std::vector<double>& us, size_t perRepeat) {
   return best;
 }
 
-// One tick's solve (cold or warm) in a --bench run: its best time over the repeats and the
-// deterministic work of the first repeat's solve (every repeat solves the same sequence).
+// One tick's solve (cold or warm) in a --bench run: its best time over the repeats and the work of
+// the first repeat's solve. A solve's work depends only on its problem, its options and its warm
+// start, and every repeat starts the warm chain cold again at tick 0, so the repeats' work is
+// the same; recordSolve says so on stderr if it ever is not.
 struct TickSolve {
   bool timed = false;
   double best_us = 0.0;
@@ -117,7 +124,7 @@ struct TickSolve {
   std::string status;
 };
 
-void recordSolve(TickSolve& t, const lexdyn::solver::Result& r, double us) {
+void recordSolve(TickSolve& t, const lexdyn::solver::Result& r, double us, size_t tick, const char* kind) {
   if (!t.timed) {
     t.timed = true;
     t.best_us = us;
@@ -130,6 +137,11 @@ void recordSolve(TickSolve& t, const lexdyn::solver::Result& r, double us) {
     return;
   }
   t.best_us = std::min(t.best_us, us);
+  if (r.iterations != t.iterations || r.factorizations != t.factorizations || r.activations != t.activations ||
+      r.deactivations != t.deactivations || r.bound_change_restarts != t.bound_change_restarts)
+    std::fprintf(stderr,
+                 "lexdyn-solve: warning: tick %zu's %s solve did other work in a later repeat (%d iterations, %d stages; first %d, %d)\n",
+                 tick, kind, r.iterations, r.factorizations, t.iterations, t.factorizations);
 }
 
 nlohmann::json stats(const std::vector<double>& us, const std::vector<int>& iters, int capHits, double unit,
@@ -207,39 +219,46 @@ struct OptionFlags {
 };
 
 // --per-tick FILE: one CSV row per tick, cold and warm (docs/file-formats.md).
-bool writePerTick(const std::string& path, const std::vector<std::string>& files, const std::vector<TickSolve>& cold,
-                  const std::vector<TickSolve>& warm) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) return false;
-  std::fprintf(f, "tick,file");
+std::string perTickCsv(const std::vector<std::string>& files, const std::vector<TickSolve>& cold, const std::vector<TickSolve>& warm) {
+  std::string out = "tick,file";
   for (const char* kind : {"cold", "warm"})
-    std::fprintf(f, ",%s_best_us,%s_iterations,%s_factorizations,%s_activations,%s_deactivations,%s_bound_change_restarts,%s_status", kind,
-                 kind, kind, kind, kind, kind, kind);
-  std::fprintf(f, "\n");
+    for (const char* field : {"best_us", "iterations", "factorizations", "activations", "deactivations", "bound_change_restarts", "status"})
+      out += std::string(",") + kind + "_" + field;
+  out += "\n";
+  char buf[160];
   for (size_t k = 0; k < files.size(); ++k) {
-    // The file name as given, quoted (RFC 4180) when it holds a comma or a quote.
+    // The file name as given, quoted (RFC 4180) when it holds a comma, a quote or a line break.
     std::string name = files[k];
-    if (name.find_first_of(",\"\n") != std::string::npos) {
+    if (name.find_first_of(",\"\r\n") != std::string::npos) {
       std::string quoted = "\"";
       for (char ch : name) quoted += ch == '"' ? std::string("\"\"") : std::string(1, ch);
       name = quoted + "\"";
     }
-    std::fprintf(f, "%zu,%s", k, name.c_str());
+    out += std::to_string(k) + "," + name;
     for (const TickSolve* t : {&cold[k], &warm[k]}) {
-      if (t->timed)
-        std::fprintf(f, ",%.3f,%d,%d,%d,%d,%d,%s", t->best_us, t->iterations, t->factorizations, t->activations, t->deactivations,
-                     t->bound_change_restarts, t->status.c_str());
-      else
-        std::fprintf(f, ",,,,,,,");
+      if (t->timed) {
+        std::snprintf(buf, sizeof buf, ",%.3f,%d,%d,%d,%d,%d,", t->best_us, t->iterations, t->factorizations, t->activations,
+                      t->deactivations, t->bound_change_restarts);
+        out += buf + t->status;
+      } else {
+        out += ",,,,,,,";
+      }
     }
-    std::fprintf(f, "\n");
+    out += "\n";
   }
-  const bool ok = std::ferror(f) == 0;
-  return std::fclose(f) == 0 && ok;
+  return out;
 }
 
 int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bool detectBounds, int repeats, bool warmOnly,
              const std::string& perTickPath) {
+  if (!perTickPath.empty()) {
+    // A path that cannot be written is bad input, found before anything is solved.
+    const std::string probe = perTickPath + ".partial";
+    std::FILE* f = std::fopen(probe.c_str(), "w");
+    if (!f) throw lexdyn::InputError(perTickPath, "--per-tick: cannot write: " + lexdyn::files::reason(errno));
+    std::fclose(f);
+    std::remove(probe.c_str());
+  }
   std::vector<Problem> ticks;
   ticks.reserve(files.size());
   Options options;
@@ -283,7 +302,7 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
         const auto& rc = cold.solve(ticks[k]);
         const auto b = Clock::now();
         coldUs.push_back(elapsedUs(a, b));
-        recordSolve(coldTicks[k], rc, coldUs.back());
+        recordSolve(coldTicks[k], rc, coldUs.back(), k, "cold");
         coldIt.push_back(rc.iterations);
         coldCap += (rc.status == Status::IterationLimit);
         maxAbsX = std::max(maxAbsX, rc.x.lpNorm<Eigen::Infinity>());
@@ -296,7 +315,7 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
       const auto& rw = warm.solve(ticks[k], warm.result().active, warm.result().x);
       const auto d = Clock::now();
       warmUs.push_back(elapsedUs(c, d));
-      recordSolve(warmTicks[k], rw, warmUs.back());
+      recordSolve(warmTicks[k], rw, warmUs.back(), k, "warm");
       warmIt.push_back(rw.iterations);
       warmCap += (rw.status == Status::IterationLimit);
       maxAbsX = std::max(maxAbsX, rw.x.lpNorm<Eigen::Infinity>());
@@ -314,14 +333,13 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
   out["repeats"] = repeats;
   if (!warmOnly) out["cold"] = stats(coldUs, coldIt, coldCap, unit, coldMedians, ticks.size(), coldTicks, files);
   out["warm"] = stats(warmUs, warmIt, warmCap, unit, warmMedians, ticks.size() - 1, warmTicks, files);
-  if (!perTickPath.empty() && !writePerTick(perTickPath, files, coldTicks, warmTicks)) {
-    std::fprintf(stderr, "lexdyn-solve: error: --per-tick: cannot write %s\n", perTickPath.c_str());
-    return kExitBadInput;
-  }
+
   out["max_abs_x"] = maxAbsX;
   out["solver_options"] = nlohmann::json::parse(lexdyn::solver::solverOptionsToJson(options));
   out["solver_options_from"] = from;
   std::cout << out.dump(2) << std::endl;
+  // After the JSON, so that a full disk costs the file, not the run's figures: OutputError, exit 3.
+  if (!perTickPath.empty()) lexdyn::files::writeAtomically(perTickPath, perTickCsv(files, coldTicks, warmTicks));
   // A benchmark measures time; a tick that hit the cap is counted in iteration_limit_hits.
   return kExitPass;
 }
@@ -341,7 +359,9 @@ int main(int argc, char** argv) {
   app.add_flag("--warm-only", warmOnly, "with --bench: skip the cold solves");
   std::string perTick;
   app.add_option("--per-tick", perTick,
-                 "with --bench: write one CSV row per tick (best time over the repeats, iterations, factorisations)");
+                 "with --bench: write one CSV row per tick (best time over the repeats, iterations, factorised stages, activations, "
+                 "deactivations, restarts after a bound change, status)")
+      ->check([](const std::string& v) { return v.empty() ? std::string("expected a file name") : std::string(); });
   app.add_option("--split-from", options_split, "split coordinates: prefer eliminating variables from this index on (docs/solver.md)")
       ->check(CLI::Range(0, 1000000));
   app.add_flag("--spanning-stages", spanning, "solve single-variable-row levels that span their stage by one QR (docs/solver.md)");

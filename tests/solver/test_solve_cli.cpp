@@ -5,15 +5,20 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lexdyn/solver/problem_io.hpp"
+#include "lexdyn/solver/solver.hpp"
+#include "reference.hpp"
 
 namespace {
 
@@ -288,65 +293,104 @@ TEST(SolveCli, BenchWarmOnlySkipsTheColdSolves) {
   EXPECT_FALSE(j1["cold"]["min_repeat_median_us"].is_null());
 }
 
-// --per-tick: one row per tick, each solve's best time and its work. The work is the solver's
-// own: a tick's cold iterations and factorised stages equal those of `lexdyn-solve --details` on
-// the same file, and the slowest tick and the largest factorisation count of the JSON are the
-// file's.
-TEST(SolveCli, BenchPerTickWritesEachTicksWorkNextToItsBestTime) {
-  // Two different ticks: the second starts from the first's active set, which is not its own.
-  const std::string a = writeFile("pt0.json", kValid);
-  const std::string b = writeFile("pt1.json", R"({"variables": 2, "levels": [
-    {"name": "box", "A": [[1, 0], [0, 1]], "lower": [-1, -1], "upper": [1, 1]},
-    {"name": "task", "A": [[1, -1]], "lower": [0.5], "upper": [0.5]}]})");
-  const std::string csv = tempDir() + "/per_tick.csv";
-  const CliRun r = run("--bench --repeats 3 --per-tick " + csv + " " + a + " " + b + " " + a);
-  ASSERT_EQ(r.code, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
-  std::istringstream in(slurp(csv));
-  std::string line;
+// The rows of a --per-tick CSV, split on commas; a quoted field (RFC 4180) stays one field.
+std::vector<std::vector<std::string>> csvRows(const std::string& text) {
   std::vector<std::vector<std::string>> rows;
-  while (std::getline(in, line)) {
-    std::vector<std::string> cells;
-    std::string cell;
-    std::istringstream ls(line);
-    while (std::getline(ls, cell, ',')) cells.push_back(cell);
-    if (!line.empty() && line.back() == ',') cells.push_back("");
-    rows.push_back(cells);
+  std::vector<std::string> row;
+  std::string cell;
+  bool quoted = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char ch = text[i];
+    if (quoted) {
+      if (ch == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+        cell += '"';
+        ++i;
+      } else if (ch == '"') {
+        quoted = false;
+      } else {
+        cell += ch;
+      }
+    } else if (ch == '"') {
+      quoted = true;
+    } else if (ch == ',') {
+      row.push_back(cell);
+      cell.clear();
+    } else if (ch == '\n') {
+      row.push_back(cell);
+      rows.push_back(row);
+      row.clear();
+      cell.clear();
+    } else {
+      cell += ch;
+    }
   }
-  ASSERT_EQ(rows.size(), 4u) << slurp(csv);
+  return rows;
+}
+
+// `lexdyn-solve --bench --repeats 3 --per-tick` on `files`: the CSV's rows against the library's
+// Solver solving the same files the same way (cold, and warm along the chain, with the first
+// file's options or the solver's defaults), field by field; the JSON's slowest tick and largest
+// factorisation count against the rows. Returns the rows (header first).
+std::vector<std::vector<std::string>> checkPerTick(const std::vector<std::string>& files) {
+  const std::string csv = tempDir() + "/per_tick.csv";
+  std::string args = "--bench --repeats 3 --per-tick " + csv;
+  for (const std::string& f : files) args += " '" + f + "'";
+  const CliRun r = run(args);
+  EXPECT_EQ(r.code, 0) << r.err;
+  if (r.code != 0) return {};
+  const auto j = nlohmann::json::parse(r.out);
+  const auto rows = csvRows(slurp(csv));
+  EXPECT_EQ(rows.size(), files.size() + 1) << slurp(csv);
+  if (rows.size() != files.size() + 1) return {};
   const std::vector<std::string>& head = rows[0];
-  ASSERT_EQ(head.size(), 16u);
+  EXPECT_EQ(head.size(), 16u);
   auto col = [&](const std::string& name) {
     for (size_t c = 0; c < head.size(); ++c)
       if (head[c] == name) return c;
     ADD_FAILURE() << "no column " << name;
     return size_t{0};
   };
-  for (size_t t = 0; t < 3; ++t) {
-    const std::vector<std::string>& row = rows[t + 1];
-    ASSERT_EQ(row.size(), head.size()) << t;
-    EXPECT_EQ(row[col("tick")], std::to_string(t));
-    EXPECT_EQ(row[col("file")], t == 1 ? b : a);
-    // The same file solved alone, cold: the same work.
-    const CliRun single = run("--details " + (t == 1 ? b : a));
-    ASSERT_EQ(single.code, 0) << single.err;
-    const auto s = nlohmann::json::parse(single.out);
-    EXPECT_EQ(std::stoi(row[col("cold_iterations")]), s["iterations"].get<int>()) << t;
-    EXPECT_EQ(std::stoi(row[col("cold_factorizations")]), s["factorizations"].get<int>()) << t;
-    EXPECT_EQ(row[col("cold_status")], "solved");
-    EXPECT_GT(std::stod(row[col("cold_best_us")]), 0.0);
-    // Tick 0 seeds the warm chain: no warm figures.
-    EXPECT_EQ(row[col("warm_best_us")].empty(), t == 0) << t;
+  std::vector<lexdyn::solver::Problem> problems;
+  lexdyn::solver::Options options;
+  for (const std::string& f : files) {
+    lexdyn::solver::ProblemFile pf = lexdyn::solver::readProblemFile(f);
+    if (problems.empty() && pf.options) options = *pf.options;
+    problems.push_back(std::move(pf.problem));
+    problems.back().detectBoundsLevel();
   }
-  // The ticks differ: the second's cold solve works more than a warm start from its own answer
-  // would, and the third (the first's problem again, warm from the second) needs a change.
-  EXPECT_GT(std::stoi(rows[2][col("warm_iterations")]), 1);
-  EXPECT_GT(std::stoi(rows[3][col("warm_iterations")]), 1);
+  lexdyn::solver::Solver cold, warm;
+  cold.setup(problems[0], options);
+  warm.setup(problems[0], options);
+  for (size_t t = 0; t < files.size(); ++t) {
+    const std::vector<std::string>& row = rows[t + 1];
+    EXPECT_EQ(row.size(), head.size()) << t;
+    if (row.size() != head.size()) continue;
+    EXPECT_EQ(row[col("tick")], std::to_string(t));
+    EXPECT_EQ(row[col("file")], files[t]);
+    const lexdyn::solver::Result rc = cold.solve(problems[t]);
+    const lexdyn::solver::Result rw = t == 0 ? warm.solve(problems[0]) : warm.solve(problems[t], warm.result().active, warm.result().x);
+    for (const auto& [kind, res] : {std::pair<std::string, const lexdyn::solver::Result*>{"cold", &rc}, {"warm", &rw}}) {
+      const std::string k = kind + "_";
+      if (kind == "warm" && t == 0) {
+        // Tick 0 seeds the warm chain: no warm figures.
+        for (const char* f : {"best_us", "iterations", "factorizations", "activations", "deactivations", "bound_change_restarts", "status"})
+          EXPECT_TRUE(row[col(k + f)].empty()) << f;
+        continue;
+      }
+      EXPECT_GT(std::stod(row[col(k + "best_us")]), 0.0) << kind << t;
+      EXPECT_EQ(std::stoi(row[col(k + "iterations")]), res->iterations) << kind << t;
+      EXPECT_EQ(std::stoi(row[col(k + "factorizations")]), res->factorizations) << kind << t;
+      EXPECT_EQ(std::stoi(row[col(k + "activations")]), res->activations) << kind << t;
+      EXPECT_EQ(std::stoi(row[col(k + "deactivations")]), res->deactivations) << kind << t;
+      EXPECT_EQ(std::stoi(row[col(k + "bound_change_restarts")]), res->bound_change_restarts) << kind << t;
+      EXPECT_EQ(row[col(k + "status")], lexdyn::solver::toString(res->status)) << kind << t;
+    }
+  }
   for (const char* k : {"cold", "warm"}) {
     int maxFact = 0;
     size_t slowest = 0;
     double slowestUs = -1.0;
-    for (size_t t = 0; t < 3; ++t) {
+    for (size_t t = 0; t < files.size(); ++t) {
       const std::string& us = rows[t + 1][col(std::string(k) + "_best_us")];
       if (us.empty()) continue;
       maxFact = std::max(maxFact, std::stoi(rows[t + 1][col(std::string(k) + "_factorizations")]));
@@ -355,16 +399,92 @@ TEST(SolveCli, BenchPerTickWritesEachTicksWorkNextToItsBestTime) {
         slowest = t;
       }
     }
+    const nlohmann::json& s = j[k]["slowest_tick"];
     EXPECT_EQ(j[k]["max_factorizations"].get<int>(), maxFact) << k;
-    EXPECT_EQ(j[k]["slowest_tick"]["tick"].get<size_t>(), slowest) << k;
-    EXPECT_NEAR(j[k]["slowest_tick"]["best_us"].get<double>(), slowestUs, 1e-3) << k;
+    EXPECT_EQ(s["tick"].get<size_t>(), slowest) << k;
+    EXPECT_EQ(s["file"].get<std::string>(), files[slowest]) << k;
+    EXPECT_EQ(s["iterations"].get<int>(), std::stoi(rows[slowest + 1][col(std::string(k) + "_iterations")])) << k;
+    EXPECT_EQ(s["factorizations"].get<int>(), std::stoi(rows[slowest + 1][col(std::string(k) + "_factorizations")])) << k;
+    EXPECT_NEAR(s["best_us"].get<double>(), slowestUs, 1e-3) << k;
     EXPECT_NEAR(j[k]["tick_best_max_us"].get<double>(), slowestUs, 1e-3) << k;
   }
-  // A path that cannot be written: bad input, nothing printed.
-  const CliRun bad = run("--bench --per-tick " + tempDir() + "/no-such-dir/t.csv " + a + " " + b);
+  // With three ticks, the median of the cold solves' best times is the middle one.
+  if (files.size() == 3) {
+    std::vector<double> coldBest;
+    for (size_t t = 0; t < 3; ++t) coldBest.push_back(std::stod(rows[t + 1][col("cold_best_us")]));
+    std::sort(coldBest.begin(), coldBest.end());
+    EXPECT_NEAR(j["cold"]["tick_best_median_us"].get<double>(), coldBest[1], 1e-3);
+  }
+  return rows;
+}
+
+// --per-tick: one row per tick, each solve's best time and its work, which is the solver's own
+// (checkPerTick). Once on small problems whose warm starts change the active set, one file name
+// holding a comma (quoted in the CSV); once on a controller-shaped problem with its split
+// coordinates, whose cold solves restart after bound changes and release rows, so that every
+// column of the work is nonzero somewhere.
+TEST(SolveCli, BenchPerTickWritesEachTicksWorkNextToItsBestTime) {
+  const std::string a = writeFile("pt0.json", kValid);
+  const std::string b = writeFile("pt,1.json", R"({"variables": 2, "levels": [
+    {"name": "box", "A": [[1, 0], [0, 1]], "lower": [-1, -1], "upper": [1, 1]},
+    {"name": "task", "A": [[1, -1]], "lower": [0.5], "upper": [0.5]}]})");
+  // Three names (the third the first's problem again): a slowest tick's file is its own.
+  const auto small = checkPerTick({a, b, writeFile("pt2.json", kValid)});
+  ASSERT_EQ(small.size(), 4u);
+  for (size_t t = 2; t < 4; ++t) EXPECT_GT(std::stoi(small[t][10]), 1) << "warm iterations, tick " << t - 1;
+
+  // The first controller-shaped seed whose cold solve restarts after a bound change and releases a
+  // row; its second tick has the general levels' targets halved.
+  lexdyn::solver::Options o;
+  lexdyn::solver::Problem p;
+  bool found = false;
+  for (std::uint64_t seed = 1; seed < 400 && !found; ++seed) {
+    o = lexdyn::solver::Options{};
+    p = lexdyn::solver::test::controllerShapedProblem(seed, 12, 7, 8, o);
+    lexdyn::solver::Solver s;
+    s.setup(p, o);
+    const lexdyn::solver::Result& r = s.solve(p);
+    found = r.status == lexdyn::solver::Status::Solved && r.bound_change_restarts > 0 && r.deactivations > 0 &&
+            r.activations != r.deactivations;
+  }
+  ASSERT_TRUE(found);
+  lexdyn::solver::Problem q = p;
+  for (int l = 0; l < q.levelCount(); ++l) {
+    if (q.level(l).kind != lexdyn::solver::LevelKind::General) continue;
+    q.level(l).lower *= 0.5;
+    q.level(l).upper *= 0.5;
+  }
+  const std::string c0 = tempDir() + "/shaped0.json", c1 = tempDir() + "/shaped1.json", c2 = tempDir() + "/shaped2.json";
+  lexdyn::solver::writeProblemJson(p, c0, &o);
+  lexdyn::solver::writeProblemJson(q, c1, &o);
+  lexdyn::solver::writeProblemJson(p, c2, &o);
+  const auto shaped = checkPerTick({c0, c1, c2});
+  ASSERT_EQ(shaped.size(), 4u);
+  EXPECT_GT(std::stoi(shaped[1][7]), 0) << "cold restarts after a bound change";
+  EXPECT_NE(shaped[1][5], shaped[1][6]) << "cold activations and deactivations";
+
+  // --warm-only: every cold field empty. One file: no warm tick, so no slowest tick.
+  const std::string csv = tempDir() + "/per_tick_warm.csv";
+  const CliRun w = run("--bench --warm-only --per-tick " + csv + " " + a + " " + a);
+  ASSERT_EQ(w.code, 0) << w.err;
+  const auto wrows = csvRows(slurp(csv));
+  ASSERT_EQ(wrows.size(), 3u);
+  for (size_t t = 1; t < 3; ++t) {
+    for (size_t c = 2; c < 9; ++c) EXPECT_TRUE(wrows[t][c].empty()) << t << " " << wrows[0][c];
+    EXPECT_EQ(wrows[t][10].empty(), t == 1) << t;
+  }
+  const CliRun one = run("--bench --per-tick " + csv + " " + a);
+  ASSERT_EQ(one.code, 0) << one.err;
+  const auto jo = nlohmann::json::parse(one.out);
+  EXPECT_TRUE(jo["warm"]["slowest_tick"].is_null() && jo["warm"]["max_factorizations"].is_null()) << jo.dump();
+  EXPECT_EQ(jo["cold"]["slowest_tick"]["tick"], 0);
+
+  // A path that cannot be written: bad input, found before anything is solved or printed.
+  const CliRun bad = run("--bench --per-tick " + tempDir() + "/no-such-dir/t.csv " + a + " " + a);
   EXPECT_EQ(bad.code, 2);
-  EXPECT_NE(bad.err.find("--per-tick: cannot write"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("--per-tick: cannot write: No such file or directory"), std::string::npos) << bad.err;
   EXPECT_TRUE(bad.out.empty()) << bad.out;
+  EXPECT_EQ(run("--bench --per-tick '' " + a).code, 2);
 }
 
 TEST(SolveCli, RepeatsAndWarmOnlyNeedBench) {
