@@ -333,7 +333,6 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
   out["repeats"] = repeats;
   if (!warmOnly) out["cold"] = stats(coldUs, coldIt, coldCap, unit, coldMedians, ticks.size(), coldTicks, files);
   out["warm"] = stats(warmUs, warmIt, warmCap, unit, warmMedians, ticks.size() - 1, warmTicks, files);
-
   out["max_abs_x"] = maxAbsX;
   out["solver_options"] = nlohmann::json::parse(lexdyn::solver::solverOptionsToJson(options));
   out["solver_options_from"] = from;
