@@ -60,7 +60,8 @@ int main(int argc, char** argv) {
   int maxN = 12, maxLevels = 7, maxRows = 8;
   long exactEvery = 0;
   int maxIterations = Options{}.max_iterations;
-  bool spanning = false, lazy = false, suffix = false, noBoundRestarts = false, controllerShaped = false, warmToo = false;
+  bool spanning = false, spanningAny = false, spanningStructured = false, lazy = false, suffix = false, noBoundRestarts = false,
+       controllerShaped = false, warmToo = false;
   double unitLevels = 0.0;
   bool brute = false;
   double exactTimeLimit = 0.0;
@@ -85,6 +86,8 @@ int main(int argc, char** argv) {
   app.add_option("--max-iterations", maxIterations, "the solver's hard iteration cap (default 1000)")->check(CLI::Range(1, 1000000));
   app.add_option("--write-failures", writeDir, "write each failing problem to DIR/problem-SEED.json");
   app.add_flag("--spanning-stages", spanning, "solve with Options::spanning_stages (docs/solver.md)");
+  app.add_flag("--spanning-any-rows", spanningAny, "solve with Options::spanning_any_rows (docs/solver.md)");
+  app.add_flag("--spanning-structured", spanningStructured, "solve with Options::spanning_structured (docs/solver.md)");
   app.add_flag("--lazy-snapshots", lazy, "solve with Options::lazy_snapshots (docs/solver.md)");
   app.add_flag("--unit-suffix", suffix, "solve with Options::project_unit_suffix (docs/solver.md)");
   app.add_flag("--no-restart-after-bound-change", noBoundRestarts, "solve with Options::restart_after_bound_change off (docs/solver.md)");
@@ -103,10 +106,11 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? kExitPass : kExitBadInput;
   }
-  if (controllerShaped && (spanning || lazy || suffix || unitLevels > 0.0 || brute)) {
-    std::fprintf(stderr,
-                 "lexdyn-solver-sweep: error: --controller-shaped draws each problem's options itself: it takes none of "
-                 "--spanning-stages, --lazy-snapshots, --unit-suffix, --unit-levels, --brute-force\n");
+  if (controllerShaped && (spanning || spanningAny || spanningStructured || lazy || suffix || unitLevels > 0.0 || brute)) {
+    std::fprintf(
+        stderr,
+        "lexdyn-solver-sweep: error: --controller-shaped draws each problem's options itself: it takes none of "
+        "--spanning-stages, --spanning-any-rows, --spanning-structured, --lazy-snapshots, --unit-suffix, --unit-levels, --brute-force\n");
     return kExitBadInput;
   }
   if (controllerShaped && maxN < 2) {
@@ -130,13 +134,16 @@ int main(int argc, char** argv) {
   const std::string options = " --max-variables " + std::to_string(maxN) + " --max-levels " + std::to_string(maxLevels) + " --max-rows " +
                               std::to_string(maxRows) + (brute ? " --brute-force" : "") +
                               (maxIterations != Options{}.max_iterations ? " --max-iterations " + std::to_string(maxIterations) : "") +
-                              (spanning ? " --spanning-stages" : "") + (lazy ? " --lazy-snapshots" : "") +
+                              (spanning ? " --spanning-stages" : "") + (spanningAny ? " --spanning-any-rows" : "") +
+                              (spanningStructured ? " --spanning-structured" : "") + (lazy ? " --lazy-snapshots" : "") +
                               (suffix ? " --unit-suffix" : "") + (noBoundRestarts ? " --no-restart-after-bound-change" : "") +
                               (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "") +
                               (controllerShaped ? " --controller-shaped" : "") + (warmToo && !controllerShaped ? " --warm" : "");
   Options solverOptions;
   solverOptions.max_iterations = maxIterations;
   solverOptions.spanning_stages = spanning;
+  solverOptions.spanning_any_rows = spanningAny;
+  solverOptions.spanning_structured = spanningStructured;
   solverOptions.lazy_snapshots = lazy;
   solverOptions.project_unit_suffix = suffix;
   solverOptions.restart_after_bound_change = !noBoundRestarts;

@@ -81,6 +81,8 @@ solver::Options readSolver(yaml::StrictMap& sm, double dt) {
     o.split_from_variable = v->asBool() ? solver::Options::kSplitAtControllerForces : -1;
   }
   if (auto v = sm.optional("spanning_stages")) o.spanning_stages = v->asBool();
+  if (auto v = sm.optional("spanning_any_rows")) o.spanning_any_rows = v->asBool();
+  if (auto v = sm.optional("spanning_structured")) o.spanning_structured = v->asBool();
   if (auto v = sm.optional("lazy_snapshots")) o.lazy_snapshots = v->asBool();
   if (auto v = sm.optional("project_unit_suffix")) o.project_unit_suffix = v->asBool();
   if (auto v = sm.optional("restart_after_bound_change")) o.restart_after_bound_change = v->asBool();

@@ -348,8 +348,8 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
 int main(int argc, char** argv) {
   CLI::App app{"lexdyn-solve: hierarchical least-squares solver (docs/solver.md)"};
   std::vector<std::string> files;
-  bool bench = false, details = false, noBounds = false, warmOnly = false, spanning = false, lazy = false, suffix = false,
-       noBoundRestarts = false;
+  bool bench = false, details = false, noBounds = false, warmOnly = false, spanning = false, spanningAny = false,
+       spanningStructured = false, lazy = false, suffix = false, noBoundRestarts = false;
   bool defaultOptions = false;
   int maxIterations = 1000, repeats = 1, options_split = -1;
   double paperDt = 0.0;
@@ -364,6 +364,10 @@ int main(int argc, char** argv) {
   app.add_option("--split-from", options_split, "split coordinates: prefer eliminating variables from this index on (docs/solver.md)")
       ->check(CLI::Range(0, 1000000));
   app.add_flag("--spanning-stages", spanning, "solve single-variable-row levels that span their stage by one QR (docs/solver.md)");
+  app.add_flag("--spanning-any-rows", spanningAny,
+               "with --spanning-stages: levels of rows that read several variables too (docs/solver.md)");
+  app.add_flag("--spanning-structured", spanningStructured,
+               "with --spanning-stages: structured spanning stages, a row per coordinate plus a few others (docs/solver.md)");
   app.add_flag("--lazy-snapshots", lazy, "save restart snapshots only once a solve restarts (docs/solver.md)");
   app.add_flag("--no-restart-after-bound-change", noBoundRestarts,
                "factorise every level again after a variable is fixed at its bound or freed (docs/solver.md)");
@@ -399,6 +403,8 @@ int main(int argc, char** argv) {
     if (app.count("--max-iterations")) o.max_iterations = maxIterations;
     if (app.count("--split-from")) o.split_from_variable = options_split;
     if (spanning) o.spanning_stages = true;
+    if (spanningAny) o.spanning_any_rows = true;
+    if (spanningStructured) o.spanning_structured = true;
     if (lazy) o.lazy_snapshots = true;
     if (noBoundRestarts) o.restart_after_bound_change = false;
     if (suffix) o.project_unit_suffix = true;

@@ -41,13 +41,17 @@ enum class MultiplierScale {
 
 /// The controller's solver options unless a case sets them: the solver's defaults, with split
 /// coordinates at the contact forces (Options::kSplitAtControllerForces), spanning stages (its
-/// minimum-velocity and minimum-wrench levels), lazy snapshots (nearly every tick is a solve
+/// minimum-velocity and minimum-wrench levels; with spanning_any_rows also a level of Newton
+/// rows that spans the velocities left to it; with spanning_structured the minimum-wrench
+/// level's QR reads only its nonzero rows), lazy snapshots (nearly every tick is a solve
 /// of one iteration from the warm start) and the projected unit suffix (the minimum-velocity
 /// level below a level of Newton rows).
 inline solver::Options defaultSolverOptions() {
   solver::Options o;
   o.split_from_variable = solver::Options::kSplitAtControllerForces;
   o.spanning_stages = true;
+  o.spanning_any_rows = true;
+  o.spanning_structured = true;
   o.lazy_snapshots = true;
   o.project_unit_suffix = true;
   return o;

@@ -261,6 +261,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   spanOrder_.assign(z(maxLevelRows), 0);
   spanWhere_.assign(z(maxLevelRows), 0);
   spanAt_.assign(z(maxLevelRows), 0);
+  spanUnitAt_.assign(z(maxLevelRows), 0);
   pivotRow_.setZero(maxLevelRows);
   recompute_.assign(z(maxLevelRows), 0);
   u_.setZero(maxLevelRows);
@@ -983,10 +984,11 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   const int d = e - c0;
   span_[z(k)] = 0;
   if (spanAllowed_ && d > 0 && m >= d) {
-    bool unit = true;
-    for (int j = 0; j < m && unit; ++j) unit = unitRow_[z(colGid_[z(s + j)])] != 0;
-    if (unit && factorSpanning(k, d, rankTol)) {
-      span_[z(k)] = 1;
+    bool eligible = true;
+    for (int j = 0; j < m && eligible && !spanAnyRows_; ++j) eligible = unitRow_[z(colGid_[z(s + j)])] != 0;
+    bool structured = false;
+    if (eligible && factorSpanning(k, d, rankTol, structured)) {
+      span_[z(k)] = structured ? 2 : 1;
       rank_[z(k)] = d;
       refl_[z(k)] = 0;
       col0_[z(k + 1)] = c0 + d;
@@ -1104,7 +1106,7 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   }
 }
 
-bool HlsFactorization::factorSpanning(int k, int d, double rankTol) {
+bool HlsFactorization::factorSpanning(int k, int d, double rankTol, bool& structured) {
   const int s = start_[z(k)];
   const int m = act_[z(k)];
   const int c0 = col0_[z(k)];
@@ -1121,9 +1123,11 @@ bool HlsFactorization::factorSpanning(int k, int d, double rankTol) {
   // are exact where the standard factorisation has them exact.
   int* order = spanOrder_.data();
   int* zeros = spanAt_.data();  // (reset below, after the QR)
+  int* unitAt = spanUnitAt_.data();
   int nonzero = 0, zero = 0;
   for (int j = 0; j < m; ++j) {
-    if (W_.col(s + j).segment(c0, d).isZero(0.0)) {
+    unitAt[j] = singleNonzero(W_.col(s + j).data() + c0, d);
+    if (unitAt[j] == -1) {
       zeros[zero++] = j;
     } else {
       order[nonzero++] = j;
@@ -1131,16 +1135,65 @@ bool HlsFactorization::factorSpanning(int k, int d, double rankTol) {
   }
   if (nonzero < d) return false;
   std::copy(zeros, zeros + zero, order + nonzero);
+  // Structured stage (Options::spanning_structured): every coordinate i has a row that reads it
+  // alone, with an entry above the pivot bound, and at most d / 2 rows are left over. The
+  // coordinates' own rows go first, in the coordinates' order, then the others, then the zero
+  // rows. A Householder QR without pivoting then keeps its reflectors to the coordinate's own row
+  // and the other rows (the later own rows are zero in the column), and B^T B >= diag(v_i^2)
+  // bounds sigma_min(B) by the smallest own entry from below: the pivot test holds a priori.
+  structured = false;
+  if (spanStructured_ && 2 * (nonzero - d) <= d) {
+    int* owner = spanWhere_.data();  // (reset below, after the QR)
+    std::fill(owner, owner + d, -1);
+    int owned = 0;
+    for (int q = 0; q < nonzero; ++q) {
+      const int j = order[q], at = unitAt[j];
+      if (at >= 0 && owner[at] < 0 && std::abs(W_(c0 + at, s + j)) > tol) {
+        owner[at] = j;
+        ++owned;
+      }
+    }
+    if (owned == d) {
+      structured = true;
+      int* next = spanAt_.data();  // the zero rows are in order already
+      std::copy(owner, owner + d, next);
+      int q2 = d;
+      for (int q = 0; q < nonzero; ++q) {
+        const int j = order[q];
+        if (unitAt[j] < 0 || owner[unitAt[j]] != j) next[q2++] = j;
+      }
+      std::copy(next, next + nonzero, order);
+    }
+  }
   auto Lm = left_[z(k)].block(0, 0, m, d);
   for (int i = 0; i < d; ++i)
     for (int q = 0; q < m; ++q) Lm(q, i) = W_(c0 + i, s + order[q]);
   auto& perm = spanPerm_[z(k)];
-  for (int i = 0; i < d; ++i) {
-    perm[z(i)] = i;
-    spanNorm_(i) = spanRef_(i) = Lm.col(i).norm();
-  }
+  for (int i = 0; i < d; ++i) perm[z(i)] = i;
   auto& lt = leftTau_[z(k)];
-  for (int i = 0; i < d; ++i) {
+  if (structured) {
+    const int p = nonzero - d;
+    for (int i = 0; i < d; ++i) {
+      Eigen::Map<Eigen::VectorXd> x(pivotRow_.data(), p + 1);
+      x(0) = Lm(i, i);
+      x.tail(p) = Lm.col(i).segment(d, p);
+      double tau = 0.0, beta = 0.0;
+      x.makeHouseholderInPlace(tau, beta);
+      if (!(std::abs(beta) > tol)) return false;  // |beta| >= |v_i| > tol: not expected
+      Lm(i, i) = beta;
+      Lm.col(i).segment(d, p) = x.tail(p);
+      lt(i) = tau;
+      const auto ess = Lm.col(i).segment(d, p);
+      for (int c = i + 1; c < d; ++c) {
+        auto rest = Lm.col(c).segment(d, p);
+        const double w = tau * (Lm(i, c) + ess.dot(rest));
+        Lm(i, c) -= w;
+        rest -= w * ess;
+      }
+    }
+  }
+  for (int i = 0; i < d && !structured; ++i) spanNorm_(i) = spanRef_(i) = Lm.col(i).norm();
+  for (int i = 0; i < d && !structured; ++i) {
     // Pivot: the coordinate of largest remaining norm (ties: lowest index).
     int best = i;
     for (int c = i + 1; c < d; ++c)
@@ -1192,7 +1245,13 @@ bool HlsFactorization::factorSpanning(int k, int d, double rankTol) {
 
 int HlsFactorization::spanningStages() const {
   int n = 0;
-  for (int k = firstStage_; k < levelCount(); ++k) n += span_[z(k)];
+  for (int k = firstStage_; k < levelCount(); ++k) n += span_[z(k)] != 0 ? 1 : 0;
+  return n;
+}
+
+int HlsFactorization::structuredStages() const {
+  int n = 0;
+  for (int k = firstStage_; k < levelCount(); ++k) n += span_[z(k)] == 2 ? 1 : 0;
   return n;
 }
 

@@ -141,6 +141,8 @@ json optionsValue(const Options& o) {
                                    ? "auto"
                                    : (o.last_level_projection == Options::LastLevel::Never ? "never" : "always");
   j["spanning_stages"] = o.spanning_stages;
+  j["spanning_any_rows"] = o.spanning_any_rows;
+  j["spanning_structured"] = o.spanning_structured;
   j["lazy_snapshots"] = o.lazy_snapshots;
   j["project_unit_suffix"] = o.project_unit_suffix;
   j["restart_after_bound_change"] = o.restart_after_bound_change;
@@ -203,6 +205,8 @@ Options readOptions(const json& j, const std::string& where) {
       throw InputError(where + ".last_level_projection", "expected \"auto\", \"never\" or \"always\", found " + x.dump());
   }
   boolean("spanning_stages", o.spanning_stages);
+  boolean("spanning_any_rows", o.spanning_any_rows);
+  boolean("spanning_structured", o.spanning_structured);
   boolean("lazy_snapshots", o.lazy_snapshots);
   boolean("project_unit_suffix", o.project_unit_suffix);
   boolean("restart_after_bound_change", o.restart_after_bound_change);

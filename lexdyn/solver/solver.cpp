@@ -264,7 +264,7 @@ bool Solver::Impl::resultShaped() const {
 
 void Solver::Impl::resetCounters() {
   out.iterations = out.factorizations = out.bound_change_restarts = out.optimality_iterations = out.activations = out.deactivations = 0;
-  out.held_after_reblock = out.cycles_broken = out.projected_levels = out.spanning_stages = 0;
+  out.held_after_reblock = out.cycles_broken = out.projected_levels = out.spanning_stages = out.structured_stages = 0;
   out.optimal_through = -1;
   out.last_level_projected = out.split_applied = false;
 }
@@ -353,7 +353,7 @@ void Solver::Impl::loadData(const Problem& problem) {
   }
   fact.setElimination(opt.eliminate_first_level && allEq, opt.elimination_tolerance);
   fact.setSplit(opt.split_from_variable);
-  fact.setSpanning(opt.spanning_stages);
+  fact.setSpanning(opt.spanning_stages, opt.spanning_any_rows, opt.spanning_structured);
   fact.setLazySnapshots(opt.lazy_snapshots);
   fact.setProjectUnitSuffix(opt.project_unit_suffix);
   fact.setBoundChangeRestarts(opt.restart_after_bound_change);
@@ -938,6 +938,7 @@ void Solver::Impl::finish() {
   out.projected_levels = fact.projectedLevels();
   out.split_applied = fact.splitApplied();
   out.spanning_stages = fact.spanningStages();
+  out.structured_stages = fact.structuredStages();
   // True violations at the final x (Ax is kept up to date along the steps).
   if (hasBounds) {
     const Level& lv = problem.level(0);

@@ -96,6 +96,22 @@ struct Options {
   /// is factorised as any other), so that both ways decide the rank alike; the answers then agree
   /// up to rounding. It changes the rounding.
   bool spanning_stages = false;
+  /// Spanning stages for levels of any rows (with spanning_stages): a level whose active rows
+  /// read several variables (a level of Newton rows over the velocities, say) is taken as a
+  /// spanning stage too when it spans every coordinate left to its stage, under the same pivot
+  /// test. The test's argument holds for any rows: every direction of the stage's coordinates is
+  /// reached by some row with at least sigma_min / sqrt(rows) of it, relative to that row's norm.
+  /// It changes the rounding of such levels.
+  bool spanning_any_rows = false;
+  /// Structured spanning stages (with spanning_stages): a spanning stage whose rows hold, for
+  /// each of its d coordinates, one row that reads that coordinate alone, and at most d / 2 other
+  /// rows (the minimum-wrench level with split coordinates: a row per non-basic force, a dense
+  /// row per basic one), is factorised by a Householder QR without pivoting, the coordinates' own
+  /// rows first: each reflector then reads the coordinate's own row and the other rows only,
+  /// 1 + d / 2 entries or fewer instead of up to m. Taken when every such row's entry exceeds the
+  /// spanning stages' pivot bound: B^T B >= diag(entries^2), so the smallest entry bounds
+  /// sigma_min(B) from below. It changes the rounding of such stages.
+  bool spanning_structured = false;
   /// Lazy snapshots. A solve whose warm start is already optimal (most controller ticks)
   /// factorises once and never restarts, so the copies of the later levels' rows saved before
   /// each stage for restarts are not needed. With this option the first factorisation of a solve
@@ -203,6 +219,8 @@ struct Result {
   bool split_applied = false;
   /// Stages of the last factorisation solved as spanning stages (Options::spanning_stages).
   int spanning_stages = 0;
+  /// Of those, the structured ones (Options::spanning_structured).
+  int structured_stages = 0;
   int bad_level = -1, bad_row = -1;  ///< NonFiniteInput location
 };
 

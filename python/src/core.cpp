@@ -441,6 +441,8 @@ PYBIND11_MODULE(_core, m) {
           },
           "auto | never | always")
       .def_readwrite("spanning_stages", &ls::Options::spanning_stages)
+      .def_readwrite("spanning_any_rows", &ls::Options::spanning_any_rows)
+      .def_readwrite("spanning_structured", &ls::Options::spanning_structured)
       .def_readwrite("lazy_snapshots", &ls::Options::lazy_snapshots)
       .def_readwrite("restart_after_bound_change", &ls::Options::restart_after_bound_change)
       .def_readwrite("project_unit_suffix", &ls::Options::project_unit_suffix)

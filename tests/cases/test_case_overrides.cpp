@@ -82,6 +82,15 @@ TEST(CaseOverrides, SeveralKeysOfASectionAnOverrideCreated) {
   EXPECT_FALSE(c.controller.lexdyn.params.solver.spanning_stages);
   EXPECT_FALSE(c.controller.lexdyn.params.solver.lazy_snapshots);
   EXPECT_EQ(c.controller.lexdyn.params.solver.max_iterations, 77);
+  // The controller's defaults take spanning stages of any rows and structured ones; a case turns
+  // them off.
+  EXPECT_TRUE(c.controller.lexdyn.params.solver.spanning_any_rows);
+  EXPECT_TRUE(c.controller.lexdyn.params.solver.spanning_structured);
+  const CaseSpec off = withSets("cases/pointmass-damping.yaml",
+                                {"controller.solver.spanning_any_rows=false", "controller.solver.spanning_structured=false"});
+  EXPECT_FALSE(off.controller.lexdyn.params.solver.spanning_any_rows);
+  EXPECT_FALSE(off.controller.lexdyn.params.solver.spanning_structured);
+  EXPECT_TRUE(off.controller.lexdyn.params.solver.spanning_stages);
   EXPECT_TRUE(containsAll(
       errorOf("cases/pointmass-damping.yaml", {"controller.solver.spanning_stages=false", "controller.solver.lazy_snapshotz=false"}),
       {"no key 'lazy_snapshotz'", "nearest valid paths: controller.solver.lazy_snapshots"}));

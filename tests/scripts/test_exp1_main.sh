@@ -33,7 +33,7 @@ sed -i "s|urdf: ../models|urdf: $ROOT/models|; s|data: ../models|data: $ROOT/mod
 code=$?
 check "a comparison documented as failing that passes: exit 1 (found $code)" [ "$code" = 1 ]
 check "... naming it" grep -q "NOT as the case says: bfgs_mean_not_worse_than_wls passed" "$OUT/changed_comparison.log"
-sed -e 's/checks: \[right_foot_friction, right_foot_cop, left_foot_cop\]/checks: [right_foot_cop, left_foot_cop]/' \
+sed -e 's/checks: \[left_foot_friction, right_foot_cop, left_foot_cop\]/checks: [right_foot_cop, left_foot_cop]/' \
   "$ROOT/cases/exp1.yaml" > "$OUT/changed_checks.yaml"
 sed -i "s|urdf: ../models|urdf: $ROOT/models|; s|data: ../models|data: $ROOT/models|" "$OUT/changed_checks.yaml"
 "$H" check "$OUT/runs/wls/trace.csv" --case "$OUT/changed_checks.yaml" > "$OUT/changed_checks.log" 2>&1

@@ -180,6 +180,14 @@ TEST(SolveCli, RunsTheSolverOptionsTheFileCarries) {
   j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["solver_options"]["max_iterations"], 50);
   EXPECT_EQ(j["solver_options"]["split_from_variable"], 1);
+  EXPECT_EQ(j["solver_options"]["spanning_any_rows"], false);
+  EXPECT_EQ(j["solver_options"]["spanning_structured"], false);
+  r = run("--max-iterations 50 --spanning-stages --spanning-any-rows --spanning-structured " + f);
+  EXPECT_EQ(r.code, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["solver_options"]["spanning_stages"], true);
+  EXPECT_EQ(j["solver_options"]["spanning_any_rows"], true);
+  EXPECT_EQ(j["solver_options"]["spanning_structured"], true);
   j = nlohmann::json::parse(run(writeFile("without_options.json", kValid)).out);
   EXPECT_EQ(j["solver_options_from"], "the solver's defaults");
   r = run("--bench " + f + " " + f);
@@ -198,6 +206,8 @@ TEST(SolveCli, RunsTheSolverOptionsTheFileCarries) {
            {R"({"rank_tolerance": "small"})", "solver_options.rank_tolerance: expected a number"},
            {R"({"rank_tolerance": 1})", "bad_options.json: solver_options.rank_tolerance: expected a number in (0, 0.01], found 1\n"},
            {R"({"spanning_stages": 1})", "solver_options.spanning_stages: expected true or false"},
+           {R"({"spanning_any_rows": "yes"})", "solver_options.spanning_any_rows: expected true or false"},
+           {R"({"spanning_structured": 0})", "solver_options.spanning_structured: expected true or false"},
            {R"({"last_level_projection": "sometimes"})", "expected \"auto\", \"never\" or \"always\""}}) {
     const std::string bad = std::string(kValid).substr(0, std::string(kValid).size() - 1) + R"(, "solver_options": )" + options + "}";
     const CliRun b = run(writeFile("bad_options.json", bad));
@@ -612,6 +622,8 @@ TEST(SolverSweepExitCodes, ControllerShapedProblemsAreSolvedColdAndWarm) {
   // It draws each problem's options itself: the option flags are refused, as is a single variable.
   EXPECT_EQ(sweep("--controller-shaped --spanning-stages --cases 1"), 2);
   EXPECT_NE(slurp(err).find("--controller-shaped"), std::string::npos) << slurp(err);
+  EXPECT_EQ(sweep("--controller-shaped --spanning-any-rows --cases 1"), 2);
+  EXPECT_EQ(sweep("--controller-shaped --spanning-structured --cases 1"), 2);
   EXPECT_EQ(sweep("--controller-shaped --max-variables 1 --cases 1"), 2);
 }
 

@@ -459,7 +459,8 @@ inline void appendRegularisationLevels(Problem& p, int nv, bool controllerLike) 
 /// Every number is dyadic (the grid of 2^-10; the force pairs' coefficients 2^-11), so the exact
 /// reference applies. `o` receives the
 /// problem's solver options (its other fields are kept): split coordinates from nv, and spanning
-/// stages, lazy snapshots and a projected unit suffix drawn per problem. The problems of a seed
+/// stages (half of them for levels of any rows, half structured), lazy snapshots and a projected unit suffix drawn
+/// per problem. The problems of a seed
 /// are their own (an independent stream), so one reruns alone.
 inline Problem controllerShapedProblem(std::uint64_t seed, int maxN, int maxLevels, int maxRows, Options& o) {
   std::mt19937_64 meta(seed ^ 0xc2b2ae3d27d4eb4fULL), rng(seed);
@@ -477,6 +478,14 @@ inline Problem controllerShapedProblem(std::uint64_t seed, int maxN, int maxLeve
   o.lazy_snapshots = meta() % 2 == 0;
   o.spanning_stages = meta() % 3 != 0;
   o.project_unit_suffix = controllerLike && meta() % 4 != 0;
+  // Spanning stages for levels of any rows: drawn from a stream of its own, so that each seed's
+  // problem and its other options stay those of the sweeps before the option existed.
+  {
+    std::mt19937_64 extra(seed ^ 0x165667b19e3779f9ULL);
+    const std::uint64_t bits = extra();
+    o.spanning_any_rows = o.spanning_stages && (bits & 1U) != 0;
+    o.spanning_structured = o.spanning_stages && (bits & 2U) != 0;
+  }
   Problem p(n);
   {
     std::vector<int> vars;

@@ -72,8 +72,14 @@ class HlsFactorization {
   }
   /// Split coordinates from variable `from` on (-1: off; Options::split_from_variable).
   void setSplit(int from) { split_ = from; }
-  /// Spanning stages (Options::spanning_stages).
-  void setSpanning(bool allowed) { spanAllowed_ = allowed; }
+  /// Spanning stages (Options::spanning_stages); anyRows: for levels of any rows too
+  /// (Options::spanning_any_rows), not only of rows that read one free variable; structured:
+  /// structured spanning stages (Options::spanning_structured).
+  void setSpanning(bool allowed, bool anyRows = false, bool structured = false) {
+    spanAllowed_ = allowed;
+    spanAnyRows_ = anyRows;
+    spanStructured_ = structured;
+  }
   /// Lazy snapshots (Options::lazy_snapshots): the first factorisation after clearActive() saves
   /// no restart snapshots; a later restart at a level c > 0 then factorises from the first level
   /// again, saving them.
@@ -86,6 +92,8 @@ class HlsFactorization {
   int projectedLevels() const { return deferFrom_ < 0 ? 0 : levelCount() - deferFrom_; }
   /// Stages of the last factorisation solved as spanning stages.
   int spanningStages() const;
+  /// Of those, the structured ones (Options::spanning_structured).
+  int structuredStages() const;
   /// True when the last elimination took its basic variables from the split's preferred ones.
   bool splitApplied() const { return elim_ && splitApplied_; }
   /// How the last level is factorised. Standard: like every other level (each earlier stage's
@@ -184,8 +192,8 @@ class HlsFactorization {
   void factorLevel(int k, double rankTol);
   /// Stage k (rows c0 .. c0 + d of its m >= d columns) as a spanning stage: the column-pivoted QR
   /// of its rows B^T (m x d) into left_[k]; false (the stage's columns unchanged) when a pivot is
-  /// too small for rankTol.
-  bool factorSpanning(int k, int d, double rankTol);
+  /// too small for rankTol. structured: set when it took the structured QR.
+  bool factorSpanning(int k, int d, double rankTol, bool& structured);
   void projectDeferredLevel(int k);
   /// Projected level k's raw rows in RawP_, in its current column order.
   Eigen::Block<Eigen::MatrixXd> projectedRaw(int k);
@@ -235,16 +243,19 @@ class HlsFactorization {
   Eigen::MatrixXd W_;
   std::vector<int> start_, act_, col0_, rank_;
   std::vector<int> stageEnd_;  // stage k works on rows col0_[k] .. stageEnd_[k] (nr_ unless split)
-  // Spanning stages: span_[k] set when stage k is one (then it stores no reflectors in W_: its
+  // Spanning stages: span_[k] set when stage k is one (2: a structured one) (then it stores no reflectors in W_: its
   // columns keep the rows B of the stage's coordinates, and left_[k] holds the QR of B^T with the
   // coordinate order spanPerm_[k]); refl_[k] reflectors stored in W_ (rank_[k], or 0).
   bool spanAllowed_ = false;
+  bool spanAnyRows_ = false;
+  bool spanStructured_ = false;
   std::vector<char> span_;
   std::vector<int> refl_;
   std::vector<std::vector<int>> spanPerm_;
   std::vector<char> unitRow_;                        // per gid: the row's original entries have a single nonzero
   Eigen::VectorXd spanNorm_, spanRef_;               // factorSpanning: column norms (current, at the last recomputation)
   std::vector<int> spanOrder_, spanWhere_, spanAt_;  // factorSpanning: the stage's column order
+  std::vector<int> spanUnitAt_;                      // factorSpanning: per column, its single nonzero's coordinate (-1 none, -2 several)
   // Stage k of that layout: m active columns from physical column s, its rows from c0, rank r.
   struct Stage {
     int m, s, c0, r;
