@@ -106,6 +106,10 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? kExitPass : kExitBadInput;
   }
+  if (!controllerShaped && (spanningAny || spanningStructured) && !spanning) {
+    std::fprintf(stderr, "lexdyn-solver-sweep: error: --spanning-any-rows and --spanning-structured need --spanning-stages\n");
+    return kExitBadInput;
+  }
   if (controllerShaped && (spanning || spanningAny || spanningStructured || lazy || suffix || unitLevels > 0.0 || brute)) {
     std::fprintf(
         stderr,

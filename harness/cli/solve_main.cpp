@@ -405,6 +405,10 @@ int main(int argc, char** argv) {
     if (spanning) o.spanning_stages = true;
     if (spanningAny) o.spanning_any_rows = true;
     if (spanningStructured) o.spanning_structured = true;
+    // Without spanning stages the two would do nothing: say so rather than run something else.
+    if ((spanningAny || spanningStructured) && !o.spanning_stages)
+      throw lexdyn::InputError(spanningAny ? "--spanning-any-rows" : "--spanning-structured",
+                               "needs spanning stages (--spanning-stages, or spanning_stages true in the file's solver_options)");
     if (lazy) o.lazy_snapshots = true;
     if (noBoundRestarts) o.restart_after_bound_change = false;
     if (suffix) o.project_unit_suffix = true;

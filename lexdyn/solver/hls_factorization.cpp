@@ -217,6 +217,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   left_.resize(z(L));
   leftTau_.resize(z(L));
   span_.assign(z(L), 0);
+  spanDeclined_.assign(z(L), {-1, -1});
   refl_.assign(z(L), 0);
   spanPerm_.assign(z(L), {});
   unitRow_.assign(z(mTot_), 0);
@@ -290,6 +291,7 @@ void HlsFactorization::rowNorms(const Eigen::MatrixXd& A, int columns, Eigen::Re
 void HlsFactorization::computeRowNorms() {
   elimDataValid_ = false;  // new data: the elimination is recomputed
   invalidateAll();         // and nothing of an earlier factorisation is kept
+  std::fill(spanDeclined_.begin(), spanDeclined_.end(), std::pair<int, int>{-1, -1});
   for (int k = 0; k < levelCount(); ++k) {
     const Eigen::MatrixXd& A = *A_[z(k)];
     if (A.rows() == 0) continue;
@@ -984,10 +986,16 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   const int d = e - c0;
   span_[z(k)] = 0;
   if (spanAllowed_ && d > 0 && m >= d) {
-    bool eligible = true;
-    for (int j = 0; j < m && eligible && !spanAnyRows_; ++j) eligible = unitRow_[z(colGid_[z(s + j)])] != 0;
+    bool unit = true;
+    for (int j = 0; j < m && unit; ++j) unit = unitRow_[z(colGid_[z(s + j)])] != 0;
+    // A level of other rows (spanning_any_rows) that does not span its stage, a rank-deficient
+    // one, declines after its QR: with the same rows and coordinate count as at a decline earlier
+    // in this solve it is not tried again (an active-set search factorises it many times).
+    const bool eligible = unit || (spanAnyRows_ && spanDeclined_[z(k)] != std::pair<int, int>{m, d});
     bool structured = false;
-    if (eligible && factorSpanning(k, d, rankTol, structured)) {
+    const bool spanned = eligible && factorSpanning(k, d, rankTol, structured);
+    if (eligible && !spanned && !unit) spanDeclined_[z(k)] = {m, d};
+    if (spanned) {
       span_[z(k)] = structured ? 2 : 1;
       rank_[z(k)] = d;
       refl_[z(k)] = 0;

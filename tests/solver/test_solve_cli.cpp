@@ -182,6 +182,13 @@ TEST(SolveCli, RunsTheSolverOptionsTheFileCarries) {
   EXPECT_EQ(j["solver_options"]["split_from_variable"], 1);
   EXPECT_EQ(j["solver_options"]["spanning_any_rows"], false);
   EXPECT_EQ(j["solver_options"]["spanning_structured"], false);
+  // Without spanning stages the two flags would do nothing: refused, naming the flag.
+  r = run("--spanning-any-rows " + f);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--spanning-any-rows: needs spanning stages"), std::string::npos) << r.err;
+  r = run("--bench --spanning-structured " + f + " " + f);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--spanning-structured: needs spanning stages"), std::string::npos) << r.err;
   r = run("--max-iterations 50 --spanning-stages --spanning-any-rows --spanning-structured " + f);
   EXPECT_EQ(r.code, 0) << r.err;
   j = nlohmann::json::parse(r.out);
@@ -623,6 +630,8 @@ TEST(SolverSweepExitCodes, ControllerShapedProblemsAreSolvedColdAndWarm) {
   EXPECT_EQ(sweep("--controller-shaped --spanning-stages --cases 1"), 2);
   EXPECT_NE(slurp(err).find("--controller-shaped"), std::string::npos) << slurp(err);
   EXPECT_EQ(sweep("--controller-shaped --spanning-any-rows --cases 1"), 2);
+  EXPECT_EQ(sweep("--spanning-any-rows --cases 1"), 2);  // without --spanning-stages
+  EXPECT_NE(slurp(err).find("need --spanning-stages"), std::string::npos) << slurp(err);
   EXPECT_EQ(sweep("--controller-shaped --spanning-structured --cases 1"), 2);
   EXPECT_EQ(sweep("--controller-shaped --max-variables 1 --cases 1"), 2);
 }

@@ -719,6 +719,27 @@ void addHalvesLevel(Problem& p, std::mt19937_64& rng, int rows, const std::strin
   p.addLevel(name, A, lo, hi);
 }
 
+// The answer `r`, solved with options `o`, is `ref`'s to rounding: x and every level's violation;
+// the multipliers and ranks when the active sets agree (returned: a row duplicated as an
+// inequality can sit exactly at its bound at the optimum, held or not as rounding has it, both
+// optimal); a KKT certificate; and the same x from a warm start at ref's active set.
+bool expectSameAnswer(const Problem& p, const Result& ref, const Result& r, const Options& o, const std::string& what) {
+  EXPECT_LE((r.x - ref.x).norm(), 1e-9 * (1 + ref.x.norm())) << what;
+  for (int l = 0; l < p.levelCount(); ++l)
+    EXPECT_NEAR(r.violation_norm(l), ref.violation_norm(l), 1e-9 * (1 + ref.violation_norm(l))) << what << " level " << l;
+  const bool same = r.active.level == ref.active.level;
+  if (same) {
+    EXPECT_LE((r.lambda - ref.lambda).norm(), 1e-7 * (1 + ref.lambda.norm())) << what;
+    EXPECT_EQ(r.rank, ref.rank) << what;
+  }
+  EXPECT_EQ(checkKkt(p, r), "") << what;
+  Solver w;
+  w.setup(p, o);
+  w.solve(p, ref.active, ref.x);
+  EXPECT_LE((w.result().x - ref.x).norm(), 1e-9 * (1 + ref.x.norm())) << what << " (warm)";
+  return same;
+}
+
 // Options::spanning_stages: levels of single-variable rows (x_j = c over a set of variables, some
 // scaled, some inequalities, some duplicated) that span what is left to them are solved by one
 // QR; the answers, violations and multipliers are the standard factorisation's to rounding, with
@@ -729,7 +750,6 @@ void addHalvesLevel(Problem& p, std::mt19937_64& rng, int rows, const std::strin
 // rows dense in split coordinates) take the structured QR, with the same answers.
 TEST(Solver, SpanningStagesGiveTheStandardAnswer) {
   int checked = 0, spanned = 0, notSpanned = 0, sameActive = 0, structuredTaken = 0;
-  const auto sameActiveSet = [](const ActiveSet& a, const ActiveSet& b) { return a.level == b.level; };
   for (std::uint64_t seed = 9000; seed < 9160; ++seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -773,26 +793,13 @@ TEST(Solver, SpanningStagesGiveTheStandardAnswer) {
         Solver s1;
         const Result r1 = solveOnce(s1, p, spanning);
         ASSERT_EQ(r1.status, Status::Solved) << what;
-        if (!structured) (r1.spanning_stages > 0 ? spanned : notSpanned)++;
-        if (!structured) EXPECT_EQ(r1.structured_stages, 0) << what;
+        if (!structured) {
+          (r1.spanning_stages > 0 ? spanned : notSpanned)++;
+          EXPECT_EQ(r1.structured_stages, 0) << what;
+        }
         if (r1.structured_stages > 0) ++structuredTaken;
         EXPECT_LE(r1.structured_stages, r1.spanning_stages) << what;
-        EXPECT_LE((r1.x - r0.x).norm(), 1e-9 * (1 + r0.x.norm())) << what;
-        for (int l = 0; l < p.levelCount(); ++l)
-          EXPECT_NEAR(r1.violation_norm(l), r0.violation_norm(l), 1e-9 * (1 + r0.violation_norm(l))) << what;
-        // The multipliers follow the active set. A row duplicated as an inequality can sit exactly
-        // at its bound at the optimum (x_j = 0 held by the equality): held or not, as rounding has
-        // it, and both are optimal; the KKT certificate below holds either way.
-        if (sameActiveSet(r1.active, r0.active)) {
-          EXPECT_LE((r1.lambda - r0.lambda).norm(), 1e-7 * (1 + r0.lambda.norm())) << what;
-          EXPECT_EQ(r1.rank, r0.rank) << what;
-          ++sameActive;
-        }
-        EXPECT_EQ(checkKkt(p, r1), "") << what;
-        Solver w;
-        w.setup(p, spanning);
-        w.solve(p, r0.active, r0.x);
-        EXPECT_LE((w.result().x - r0.x).norm(), 1e-9 * (1 + r0.x.norm())) << what << " (warm)";
+        if (expectSameAnswer(p, r0, r1, spanning, what)) ++sameActive;
         ++checked;
       }
     }
@@ -825,22 +832,92 @@ TEST(Solver, StructuredSpanningStagesGiveTheSameAnswer) {
     ASSERT_EQ(rb.status, Status::Solved) << what;
     EXPECT_EQ(ra.structured_stages, 0) << what;
     if (rb.structured_stages > 0) ++structured;
-    EXPECT_LE((rb.x - ra.x).norm(), 1e-9 * (1 + ra.x.norm())) << what;
-    for (int l = 0; l < p.levelCount(); ++l)
-      EXPECT_NEAR(rb.violation_norm(l), ra.violation_norm(l), 1e-9 * (1 + ra.violation_norm(l))) << what << " level " << l;
-    if (rb.active.level == ra.active.level) {
-      EXPECT_LE((rb.lambda - ra.lambda).norm(), 1e-7 * (1 + ra.lambda.norm())) << what;
-      EXPECT_EQ(rb.rank, ra.rank) << what;
-      ++sameActive;
-    }
-    EXPECT_EQ(checkKkt(p, rb), "") << what;
-    const Result wb = b.solve(p, ra.active, ra.x);
-    EXPECT_LE((wb.x - ra.x).norm(), 1e-9 * (1 + ra.x.norm())) << what << " (warm)";
+    if (expectSameAnswer(p, ra, rb, on, what)) ++sameActive;
     ++checked;
   }
   EXPECT_EQ(checked, 400);
   EXPECT_GE(sameActive, 380);
   EXPECT_GE(structured, 40);  // small stages often have more dense rows than half their coordinates
+}
+
+// A structured stage with dense rows, against the closed form. 2 velocities and 6 forces; the
+// first level's 2 equalities over all 8 are eliminated with 2 forces as basic variables (split
+// coordinates from variable 2); the velocities are then fixed by their level; the minimum-wrench
+// level's rows are, in the stage's 4 force coordinates, 4 rows of their own and the 2 basic
+// forces' dense rows (d = 4, p = 2). Its answer is the minimum-norm force f = E_f^T (E_f
+// E_f^T)^-1 (b - E_v v), and the pivoted spanning stage's to rounding.
+TEST(Solver, AStructuredStageWithDenseRowsGivesTheMinimumNormForces) {
+  Problem p(8);
+  Eigen::MatrixXd E(2, 8);
+  E << 2.0, 0.5, 1.0, 0.25, -0.5, 0.75, 1.0, 0.5,  //
+      -1.0, 2.0, 0.5, 1.0, 0.25, -0.75, 0.5, 1.0;
+  const Eigen::Vector2d b(1.0, -0.5), v(0.3, -0.2);
+  p.addLevel("eom", E, b, b);
+  Eigen::MatrixXd V = Eigen::MatrixXd::Zero(2, 8);
+  V(0, 0) = V(1, 1) = 1.0;
+  p.addLevel("velocity", V, v, v);
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(6, 8);
+  W.rightCols(6).setIdentity();
+  p.addLevel("wrench", W, Eigen::VectorXd::Zero(6), Eigen::VectorXd::Zero(6));
+  Options pivoted;
+  pivoted.split_from_variable = 2;
+  pivoted.spanning_stages = true;
+  Options structured = pivoted;
+  structured.spanning_structured = true;
+  Solver a, s;
+  const Result ra = solveOnce(a, p, pivoted);
+  const Result rs = solveOnce(s, p, structured);
+  ASSERT_EQ(ra.status, Status::Solved);
+  ASSERT_EQ(rs.status, Status::Solved);
+  EXPECT_TRUE(rs.split_applied);
+  EXPECT_EQ(ra.structured_stages, 0);
+  EXPECT_EQ(rs.spanning_stages, 2);
+  EXPECT_EQ(rs.structured_stages, 2);  // the velocities' stage (no dense row) and the wrench's
+  const Eigen::MatrixXd Ef = E.rightCols(6);
+  const Eigen::VectorXd f = Ef.transpose() * (Ef * Ef.transpose()).ldlt().solve(b - E.leftCols(2) * v);
+  EXPECT_LE((rs.x.head(2) - v).norm(), 1e-14);
+  EXPECT_LE((rs.x.tail(6) - f).norm(), 1e-13 * (1 + f.norm())) << rs.x.tail(6).transpose() << " | " << f.transpose();
+  expectSameAnswer(p, ra, rs, structured, "dense rows");
+}
+
+// Spanning stages of any rows follow the rank tolerance with several coordinates too: a level of
+// 5 dense rows over 3 variables with singular values 1, 0.5 and s, then a minimum norm. With s =
+// 1e-12 the standard factorisation finds rank 2 (rank_tolerance 1e-9) and the spanning stage is
+// declined by its pivot test, so both find rank 2 and the same answer; with s = 1e-3 both find
+// rank 3, and the level is a spanning stage.
+TEST(Solver, SpanningStagesOfAnyRowsDeclineANearlyDeficientLevel) {
+  Eigen::MatrixXd M(5, 3), N(3, 3);
+  M << 1.0, 0.5, -0.25, 0.75, -1.0, 0.5, -0.5, 0.25, 1.0, 0.25, 0.75, -0.5, 1.0, -0.25, 0.75;
+  N << 0.5, 1.0, -0.75, -1.0, 0.25, 0.5, 0.75, -0.5, 1.0;
+  const Eigen::MatrixXd U = Eigen::HouseholderQR<Eigen::MatrixXd>(M).householderQ() * Eigen::MatrixXd::Identity(5, 3);
+  const Eigen::MatrixXd Vt = (Eigen::HouseholderQR<Eigen::MatrixXd>(N).householderQ() * Eigen::MatrixXd::Identity(3, 3)).transpose();
+  for (const double sv : {1e-12, 1e-3}) {
+    const Eigen::MatrixXd B = U * Eigen::Vector3d(1.0, 0.5, sv).asDiagonal() * Vt;
+    const Eigen::VectorXd t = (Eigen::VectorXd(5) << 0.5, -0.25, 1.0, 0.75, -0.5).finished();
+    Problem p(3);
+    p.addLevel("dense", B, t, t);
+    p.addLevel("min", Eigen::MatrixXd::Identity(3, 3), Eigen::VectorXd::Zero(3), Eigen::VectorXd::Zero(3));
+    Options standard;
+    standard.eliminate_first_level = false;
+    Options unitOnly = standard;
+    unitOnly.spanning_stages = true;
+    Options any = unitOnly;
+    any.spanning_any_rows = true;
+    Solver s0, s1, s2;
+    const Result r0 = solveOnce(s0, p, standard);
+    const Result r1 = solveOnce(s1, p, unitOnly);
+    const Result r2 = solveOnce(s2, p, any);
+    const std::string what = "s " + std::to_string(sv);
+    ASSERT_EQ(r0.status, Status::Solved) << what;
+    ASSERT_EQ(r2.status, Status::Solved) << what;
+    const int rank = sv > 1e-6 ? 3 : 2;
+    EXPECT_EQ(r0.rank[0], rank) << what;
+    EXPECT_EQ(r2.rank[0], rank) << what;
+    // The dense level is a spanning stage only with spanning_any_rows, and only at full rank (the
+    // minimum norm's unit rows span what is left at rank 2 either way).
+    EXPECT_EQ(r2.spanning_stages - r1.spanning_stages, rank == 3 ? 1 : 0) << what;
+    expectSameAnswer(p, r0, r2, any, what);
+  }
 }
 
 // Options::spanning_any_rows: a level whose rows read several variables (as the controller's
@@ -897,19 +974,7 @@ TEST(Solver, SpanningStagesOfAnyRowsGiveTheStandardAnswer) {
       ASSERT_EQ(r1.status, Status::Solved) << what;
       ASSERT_EQ(r2.status, Status::Solved) << what;
       if (r2.spanning_stages > r1.spanning_stages) ++moreSpanned;
-      EXPECT_LE((r2.x - r0.x).norm(), 1e-9 * (1 + r0.x.norm())) << what;
-      for (int l = 0; l < p.levelCount(); ++l)
-        EXPECT_NEAR(r2.violation_norm(l), r0.violation_norm(l), 1e-9 * (1 + r0.violation_norm(l))) << what << " level " << l;
-      if (r2.active.level == r0.active.level) {
-        EXPECT_LE((r2.lambda - r0.lambda).norm(), 1e-7 * (1 + r0.lambda.norm())) << what;
-        EXPECT_EQ(r2.rank, r0.rank) << what;
-        ++sameActive;
-      }
-      EXPECT_EQ(checkKkt(p, r2), "") << what;
-      Solver w;
-      w.setup(p, any);
-      w.solve(p, r0.active, r0.x);
-      EXPECT_LE((w.result().x - r0.x).norm(), 1e-9 * (1 + r0.x.norm())) << what << " (warm)";
+      if (expectSameAnswer(p, r0, r2, any, what)) ++sameActive;
       ++checked;
     }
   }

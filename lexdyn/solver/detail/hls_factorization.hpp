@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 #include <vector>
+#include <utility>
 
 namespace lexdyn::solver {
 
@@ -190,9 +191,10 @@ class HlsFactorization {
   /// pivot ratios).
   static void downdateNorms(int cnt, const double* w, double* nrm, const double* ref, const double* orig, double* ratio, char* recompute);
   void factorLevel(int k, double rankTol);
-  /// Stage k (rows c0 .. c0 + d of its m >= d columns) as a spanning stage: the column-pivoted QR
-  /// of its rows B^T (m x d) into left_[k]; false (the stage's columns unchanged) when a pivot is
-  /// too small for rankTol. structured: set when it took the structured QR.
+  /// Stage k (rows c0 .. c0 + d of its m >= d columns) as a spanning stage: the QR of its rows
+  /// B^T (m x d) into left_[k], column-pivoted, or structured (Options::spanning_structured: a row
+  /// of its own per coordinate first, no pivoting); false (the stage's columns unchanged) when a
+  /// pivot is too small for rankTol. structured: set when it took the structured QR.
   bool factorSpanning(int k, int d, double rankTol, bool& structured);
   void projectDeferredLevel(int k);
   /// Projected level k's raw rows in RawP_, in its current column order.
@@ -248,6 +250,7 @@ class HlsFactorization {
   // coordinate order spanPerm_[k]); refl_[k] reflectors stored in W_ (rank_[k], or 0).
   bool spanAllowed_ = false;
   bool spanAnyRows_ = false;
+  std::vector<std::pair<int, int>> spanDeclined_;  // per level: (rows, coordinates) of its last declined spanning attempt in this solve
   bool spanStructured_ = false;
   std::vector<char> span_;
   std::vector<int> refl_;
