@@ -989,8 +989,9 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
     bool unit = true;
     for (int j = 0; j < m && unit; ++j) unit = unitRow_[z(colGid_[z(s + j)])] != 0;
     // A level of other rows (spanning_any_rows) that does not span its stage, a rank-deficient
-    // one, declines after its QR: with the same rows and coordinate count as at a decline earlier
-    // in this solve it is not tried again (an active-set search factorises it many times).
+    // one, declines after its QR: with the same numbers of active rows and coordinates as at a
+    // decline earlier in this solve it is not tried again (an active-set search factorises it
+    // many times).
     const bool eligible = unit || (spanAnyRows_ && spanDeclined_[z(k)] != std::pair<int, int>{m, d});
     bool structured = false;
     const bool spanned = eligible && factorSpanning(k, d, rankTol, structured);
