@@ -130,7 +130,8 @@ struct Solver::Impl {
   Eigen::MatrixXd muAll;     // M x lg
   Eigen::MatrixXd muVarAll;  // n x lg
   std::vector<char> multDone, levelNz;
-  bool multValid = false;  // multDone / levelNz describe the current equality solution
+  std::vector<char> muFinite;  // per level: its active rows' multipliers of the level being computed are finite
+  bool multValid = false;      // multDone / levelNz describe the current equality solution
   Eigen::VectorXd levelS;
   // Constraints that re-blocked immediately after being released (anti-cycling), cleared on progress.
   std::vector<char> tabooRow, tabooVar;
@@ -226,6 +227,7 @@ void Solver::Impl::setup(const Problem& problem, const Options& o) {
   muVarAll.setZero(n, std::max(lg, 1));
   multDone.assign(static_cast<size_t>(std::max(lg, 1)), 0);
   levelNz.assign(static_cast<size_t>(std::max(lg, 1)), 0);
+  muFinite.assign(static_cast<size_t>(std::max(lg, 1)), 0);
   levelS.setZero(std::max(lg, 1));
   tabooRow.assign(static_cast<size_t>(std::max(M, 1)), 0);
   tabooVar.assign(static_cast<size_t>(n), 0);
@@ -508,17 +510,29 @@ void Solver::Impl::startFromStates() {
 }
 
 void Solver::Impl::buildTargets() {
+  // b = target - A_fixed x_fixed on the active rows. Column by column (the fixed variables in
+  // order), so that each column is read where it is stored; every row takes the same operations in
+  // the same order as a row-by-row sum. Past a level's declared columns the entries are zeros and
+  // the fixed values are finite (bounds), so each such term is a signed zero, and t - (+-0) is t
+  // to the bit unless t is -0. A sum that does not start at -0 never becomes -0 (an exact
+  // cancellation gives +0): the terms are left out unless a row's target is -0.
   for (int kf = 0; kf < lg; ++kf) {
+    const std::vector<int>& act = fact.activeList(kf);
+    if (act.empty()) continue;
     const Eigen::MatrixXd& Ak = A(kf);
     const int off = fact.rowOffset(kf);
-    for (int gid : fact.activeList(kf)) {
-      double t = target(gid);
-      const int row = gid - off;
-      for (int q = 0; q < nFixed; ++q) {
-        const int i = fixedVar[static_cast<size_t>(q)];
-        t -= Ak(row, i) * x(i);
-      }
+    int cols = prob->level(kf + first).columns;
+    for (int gid : act) {
+      const double t = target(gid);
       b(gid) = t;
+      if (t == 0.0 && std::signbit(t)) cols = -1;
+    }
+    for (int q = 0; q < nFixed; ++q) {
+      const int i = fixedVar[static_cast<size_t>(q)];
+      if (cols >= 0 && i >= cols) continue;
+      const double xi = x(i);
+      const double* col = Ak.col(i).data();
+      for (int gid : act) b(gid) -= col[gid - off] * xi;
     }
   }
 }
@@ -555,21 +569,35 @@ void Solver::Impl::ensureMult(int kf) {
   auto col = muAll.col(kf);
   col.setZero();
   fact.multipliers(kf, res, col);
-  // Fixed variables: mu_i = -sum_j A_ji mu_j over the active rows of levels <= kf.
+  // Fixed variables: mu_i = -sum_j A_ji mu_j over the active rows of levels <= kf, summed in the
+  // order of the levels and their active rows. Variable by variable, so that A's column i is read
+  // where it is stored. Past a level's declared columns the entries are zeros: with finite
+  // multipliers each such term is a signed zero, and m - (+-0) is m to the bit unless m is -0,
+  // which a sum starting at +0 never is (an exact cancellation gives +0). Such a level is left out
+  // when its multipliers are finite.
   auto mv = muVarAll.col(kf);
   mv.setZero();
   if (nFixed == 0) return;
   for (int j = 0; j <= kf; ++j) {
-    const Eigen::MatrixXd& Aj = A(j);
-    const int off = fact.rowOffset(j);
-    for (int gid : fact.activeList(j)) {
-      const double mj = col(gid);
-      if (mj == 0.0) continue;
-      for (int q = 0; q < nFixed; ++q) {
-        const int i = fixedVar[static_cast<size_t>(q)];
-        mv(i) -= Aj(gid - off, i) * mj;
+    bool finite = true;
+    for (int gid : fact.activeList(j)) finite = finite && std::isfinite(col(gid));
+    muFinite[static_cast<size_t>(j)] = finite ? 1 : 0;
+  }
+  for (int q = 0; q < nFixed; ++q) {
+    const int i = fixedVar[static_cast<size_t>(q)];
+    double m = 0.0;
+    for (int j = 0; j <= kf; ++j) {
+      const int cols = prob->level(j + first).columns;
+      if (cols >= 0 && i >= cols && muFinite[static_cast<size_t>(j)]) continue;
+      const double* ai = A(j).col(i).data();
+      const int off = fact.rowOffset(j);
+      for (int gid : fact.activeList(j)) {
+        const double mj = col(gid);
+        if (mj == 0.0) continue;
+        m -= ai[gid - off] * mj;
       }
     }
+    mv(i) = m;
   }
 }
 

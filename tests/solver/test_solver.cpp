@@ -532,7 +532,7 @@ TEST(Solver, BlockReflectorUpdateSkippingZeroColumnsKeepsTheBits) {
 // entry, and a count outside -1 .. n or on a bounds level is refused.
 TEST(Solver, DeclaredLeadingColumnsKeepEveryBit) {
   GenOptions g;
-  int declared = 0;
+  int declared = 0, fixedSeen = 0;
   for (std::uint64_t seed = 300; seed < 420; ++seed) {
     g.n = 4 + static_cast<int>((seed * 7) % 150);  // beyond 128 columns too
     g.levels = 2 + static_cast<int>(seed % 4);
@@ -548,6 +548,23 @@ TEST(Solver, DeclaredLeadingColumnsKeepEveryBit) {
       for (int j = c; j < g.n; ++j)
         for (int r = 0; r < lv.rows(); ++r) lv.A(r, j) = (rng() % 2) ? 0.0 : -0.0;
       cols[static_cast<size_t>(l)] = c;
+      // Targets of -0 (a sum that starts at -0 stays sensitive to the sign of its zero terms).
+      for (int r = 0; r < lv.rows(); ++r)
+        if (rng() % 4 == 0) {
+          lv.lower(r) = std::min(lv.lower(r), -0.0);
+          lv.upper(r) = -0.0;
+        }
+    }
+    // Negative bounds on the bounds level, so that fixed variables take negative values too.
+    for (int l = 0; l < plain.levelCount(); ++l) {
+      Level& lv = plain.level(l);
+      if (lv.kind != LevelKind::Bounds) continue;
+      for (int r = 0; r < lv.rows(); ++r) {
+        if (rng() % 2 != 0 || !std::isfinite(lv.lower(r)) || !std::isfinite(lv.upper(r))) continue;
+        const double w = lv.upper(r) - lv.lower(r);
+        lv.upper(r) = -0.25 - 0.5 * std::abs(lv.upper(r));
+        lv.lower(r) = lv.upper(r) - w;
+      }
     }
     Problem withColumns = plain;
     for (int l = 0; l < plain.levelCount(); ++l)
@@ -564,6 +581,12 @@ TEST(Solver, DeclaredLeadingColumnsKeepEveryBit) {
     ASSERT_TRUE(same(ra.x, rb.x)) << "seed " << seed;
     ASSERT_TRUE(same(ra.violation_norm, rb.violation_norm)) << "seed " << seed;
     EXPECT_EQ(ra.iterations, rb.iterations) << "seed " << seed;
+    ASSERT_EQ(ra.lambda.size(), rb.lambda.size()) << "seed " << seed;
+    EXPECT_EQ(std::memcmp(ra.lambda.data(), rb.lambda.data(), sizeof(double) * static_cast<size_t>(ra.lambda.size())), 0)
+        << "seed " << seed;
+    fixedSeen += ra.active.level.empty() ? 0
+                                         : static_cast<int>(std::count_if(ra.active.level[0].begin(), ra.active.level[0].end(),
+                                                                          [](RowState st) { return st != RowState::Inactive; }));
     // Warm-started from the answer of a perturbed problem.
     Problem plain2 = plain, withColumns2 = withColumns;
     for (int l = 0; l < plain.levelCount(); ++l) {
@@ -576,6 +599,7 @@ TEST(Solver, DeclaredLeadingColumnsKeepEveryBit) {
     ASSERT_TRUE(same(wa.x, wb.x)) << "seed " << seed << " (warm)";
   }
   EXPECT_GE(declared, 100);
+  EXPECT_GE(fixedSeen, 50);  // the fixed variables' terms in the targets and multipliers were exercised
 
   Problem p(3);
   p.addBoundsLevel("box", {0}, Eigen::VectorXd::Ones(1), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Ones(1));
