@@ -217,7 +217,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   left_.resize(z(L));
   leftTau_.resize(z(L));
   span_.assign(z(L), 0);
-  spanDeclined_.assign(z(L), {-1, -1});
+  spanDeclined_.assign(z(L), 0);
   refl_.assign(z(L), 0);
   spanPerm_.assign(z(L), {});
   unitRow_.assign(z(mTot_), 0);
@@ -291,7 +291,7 @@ void HlsFactorization::rowNorms(const Eigen::MatrixXd& A, int columns, Eigen::Re
 void HlsFactorization::computeRowNorms() {
   elimDataValid_ = false;  // new data: the elimination is recomputed
   invalidateAll();         // and nothing of an earlier factorisation is kept
-  std::fill(spanDeclined_.begin(), spanDeclined_.end(), std::pair<int, int>{-1, -1});
+  std::fill(spanDeclined_.begin(), spanDeclined_.end(), 0);
   for (int k = 0; k < levelCount(); ++k) {
     const Eigen::MatrixXd& A = *A_[z(k)];
     if (A.rows() == 0) continue;
@@ -989,13 +989,14 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
     bool unit = true;
     for (int j = 0; j < m && unit; ++j) unit = unitRow_[z(colGid_[z(s + j)])] != 0;
     // A level of other rows (spanning_any_rows) that does not span its stage, a rank-deficient
-    // one, declines after its QR: with the same numbers of active rows and coordinates as at a
-    // decline earlier in this solve it is not tried again (an active-set search factorises it
-    // many times).
-    const bool eligible = unit || (spanAnyRows_ && spanDeclined_[z(k)] != std::pair<int, int>{m, d});
+    // one, declines after its QR and is not tried again in this solve: an active-set search
+    // factorises it many times, and a level that left a direction of its stage unreached mostly
+    // leaves one again as bounds and rows come and go (every other count of its rows and
+    // coordinates would be a new attempt, and most would decline too).
+    const bool eligible = unit || (spanAnyRows_ && !spanDeclined_[z(k)]);
     bool structured = false;
     const bool spanned = eligible && factorSpanning(k, d, rankTol, structured);
-    if (eligible && !spanned && !unit) spanDeclined_[z(k)] = {m, d};
+    if (eligible && !spanned && !unit) spanDeclined_[z(k)] = 1;
     if (spanned) {
       span_[z(k)] = structured ? 2 : 1;
       rank_[z(k)] = d;

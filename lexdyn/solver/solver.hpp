@@ -101,8 +101,7 @@ struct Options {
   /// spanning stage too when it spans every coordinate left to its stage, under the same pivot
   /// test. The test's argument holds for any rows: every direction of the stage's coordinates is
   /// reached by some row with at least sigma_min / sqrt(rows) of it, relative to that row's norm.
-  /// A level that declines (it does not span its stage) is not tried again within the solve while
-  /// the counts of its active rows and of its stage's coordinates are those of the decline. It
+  /// A level that declines (it does not span its stage) is not tried again within the solve. It
   /// changes the rounding of such levels.
   bool spanning_any_rows = false;
   /// Structured spanning stages (with spanning_stages): a spanning stage whose rows hold, for

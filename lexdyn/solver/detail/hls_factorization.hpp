@@ -250,7 +250,7 @@ class HlsFactorization {
   // coordinate order spanPerm_[k]); refl_[k] reflectors stored in W_ (rank_[k], or 0).
   bool spanAllowed_ = false;
   bool spanAnyRows_ = false;
-  std::vector<std::pair<int, int>> spanDeclined_;  // per level: (rows, coordinates) of its last declined spanning attempt in this solve
+  std::vector<char> spanDeclined_;  // per level: its spanning attempt declined in this solve (new data clears it)
   bool spanStructured_ = false;
   std::vector<char> span_;
   std::vector<int> refl_;
