@@ -12,6 +12,8 @@
 //                                     repeats next to its work (iterations, factorised stages,
 //                                     activations, deactivations, restarts after a bound change)
 //                                     and status; written atomically after the JSON is printed
+//     --stage-times                   adds stage_times: the timed solves' factorisation time, level
+//                                     by level (wall clock, a diagnostic; the solves are the same)
 //
 // Solver options: a problem file a controller dumped (lexdyn-harness run --dump-problems) carries
 // the options the controller solved it with (`solver_options`), and lexdyn-solve runs those by
@@ -249,8 +251,32 @@ std::string perTickCsv(const std::vector<std::string>& files, const std::vector<
   return out;
 }
 
+// --stage-times: where the timed solves' factorisations went, level by level (StageTimes).
+nlohmann::json stageTimesJson(const lexdyn::solver::StageTimes& t, const Problem& problem, size_t solves) {
+  nlohmann::json j;
+  const double n = solves > 0 ? static_cast<double>(solves) : 1.0;
+  j["solves"] = solves;
+  j["passes"] = t.passes;
+  j["preparation_us_per_solve"] = t.preparation_us / n;
+  j["layout_us_per_solve"] = t.layout_us / n;
+  double total = t.preparation_us + t.layout_us;
+  nlohmann::json levels = nlohmann::json::array();
+  for (size_t l = 0; l < t.stage_us.size() && l < static_cast<size_t>(problem.levelCount()); ++l) {
+    total += t.stage_us[l];
+    if (problem.level(static_cast<int>(l)).kind == lexdyn::solver::LevelKind::Bounds) continue;
+    const long c = t.stage_count[l];
+    levels.push_back({{"level", problem.level(static_cast<int>(l)).name},
+                      {"factorizations", c},
+                      {"us_per_solve", t.stage_us[l] / n},
+                      {"us_per_factorization", c > 0 ? nlohmann::json(t.stage_us[l] / static_cast<double>(c)) : nlohmann::json()}});
+  }
+  j["stages"] = levels;
+  j["factorization_us_per_solve"] = total / n;
+  return j;
+}
+
 int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bool detectBounds, int repeats, bool warmOnly,
-             const std::string& perTickPath) {
+             const std::string& perTickPath, bool stageTimes) {
   if (!perTickPath.empty()) {
     // A path that cannot be written is bad input, found before anything is solved.
     const std::string probe = perTickPath + ".partial";
@@ -287,6 +313,8 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
   Solver cold, warm;
   cold.setup(ticks[0], options);
   warm.setup(ticks[0], options);
+  lexdyn::solver::StageTimes coldTimes, warmTimes;
+  if (stageTimes) cold.setStageTimes(&coldTimes);
   const double unit = qrUnitUs();
   std::vector<double> coldUs, warmUs, coldMedians, warmMedians;
   std::vector<int> coldIt, warmIt;
@@ -308,7 +336,9 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
         maxAbsX = std::max(maxAbsX, rc.x.lpNorm<Eigen::Infinity>());
       }
       if (k == 0) {
-        warm.solve(ticks[0]);  // each repeat starts cold, like the first
+        warm.setStageTimes(nullptr);  // not timed
+        warm.solve(ticks[0]);         // each repeat starts cold, like the first
+        if (stageTimes) warm.setStageTimes(&warmTimes);
         continue;
       }
       const auto c = Clock::now();
@@ -334,6 +364,12 @@ int runBench(const std::vector<std::string>& files, const OptionFlags& flags, bo
   if (!warmOnly) out["cold"] = stats(coldUs, coldIt, coldCap, unit, coldMedians, ticks.size(), coldTicks, files);
   out["warm"] = stats(warmUs, warmIt, warmCap, unit, warmMedians, ticks.size() - 1, warmTicks, files);
   out["max_abs_x"] = maxAbsX;
+  if (stageTimes) {
+    nlohmann::json st;
+    if (!warmOnly) st["cold"] = stageTimesJson(coldTimes, ticks[0], coldUs.size());
+    st["warm"] = stageTimesJson(warmTimes, ticks[0], warmUs.size());
+    out["stage_times"] = st;
+  }
   out["solver_options"] = nlohmann::json::parse(lexdyn::solver::solverOptionsToJson(options));
   out["solver_options_from"] = from;
   std::cout << out.dump(2) << std::endl;
@@ -349,13 +385,15 @@ int main(int argc, char** argv) {
   CLI::App app{"lexdyn-solve: hierarchical least-squares solver (docs/solver.md)"};
   std::vector<std::string> files;
   bool bench = false, details = false, noBounds = false, warmOnly = false, spanning = false, spanningAny = false,
-       spanningStructured = false, lazy = false, suffix = false, noBoundRestarts = false;
+       spanningStructured = false, lazy = false, suffix = false, noBoundRestarts = false, stageTimes = false;
   bool defaultOptions = false;
   int maxIterations = 1000, repeats = 1, options_split = -1;
   double paperDt = 0.0;
   app.add_flag("--bench", bench, "treat the files as consecutive ticks and print timing statistics");
   app.add_option("--repeats", repeats, "with --bench: run the sequence this many times")->check(CLI::Range(1, 1000));
   app.add_flag("--warm-only", warmOnly, "with --bench: skip the cold solves");
+  app.add_flag("--stage-times", stageTimes,
+               "with --bench: also print where the timed solves' factorisations went, level by level (wall clock; stage_times)");
   std::string perTick;
   app.add_option("--per-tick", perTick,
                  "with --bench: write one CSV row per tick (best time over the repeats, iterations, factorised stages, activations, "
@@ -414,11 +452,11 @@ int main(int argc, char** argv) {
     if (suffix) o.project_unit_suffix = true;
   };
   try {
-    if (!bench && (app.count("--repeats") || warmOnly || app.count("--per-tick"))) {
-      std::fprintf(stderr, "lexdyn-solve: error: --repeats, --warm-only and --per-tick need --bench\n");
+    if (!bench && (app.count("--repeats") || warmOnly || app.count("--per-tick") || stageTimes)) {
+      std::fprintf(stderr, "lexdyn-solve: error: --repeats, --warm-only, --per-tick and --stage-times need --bench\n");
       return kExitBadInput;
     }
-    if (bench) return runBench(files, flags, !noBounds, repeats, warmOnly, perTick);
+    if (bench) return runBench(files, flags, !noBounds, repeats, warmOnly, perTick, stageTimes);
     if (files.size() != 1) {
       std::fprintf(stderr, "lexdyn-solve: error: expected one problem file, found %zu (use --bench for several)\n", files.size());
       return kExitBadInput;

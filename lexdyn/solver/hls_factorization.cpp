@@ -1,8 +1,10 @@
 #include "lexdyn/solver/detail/hls_factorization.hpp"
+#include "lexdyn/solver/solver.hpp"
 
 #include <Eigen/Householder>
 #include <Eigen/LU>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -1332,6 +1334,14 @@ void HlsFactorization::projectDeferredLevel(int k) {
 
 void HlsFactorization::factorize(double rankTol) {
   const int L = levelCount();
+  // StageTimes: read the clock only when attached (diagnostics; nothing below depends on it).
+  using Clock = std::chrono::steady_clock;
+  const auto us = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::micro>(b - a).count(); };
+  Clock::time_point t0;
+  if (times_) {
+    t0 = Clock::now();
+    ++times_->passes;
+  }
   if (pendingVar_ >= 0) {
     // One variable fixed or freed since the last factorisation (setFreeVariables).
     const int v = pendingVar_;
@@ -1348,6 +1358,7 @@ void HlsFactorization::factorize(double rankTol) {
   }
   if (dirtyFrom_ >= L) {
     lastRestart_ = L;
+    if (times_) times_->preparation_us += us(t0, Clock::now());
     return;
   }
   // A restart needs the snapshots of its level; without them (lazy snapshots, first pass), the
@@ -1392,7 +1403,17 @@ void HlsFactorization::factorize(double rankTol) {
   }
   lastRestart_ = dirtyFrom_;
   if (c < L) {
+    if (times_) {
+      const auto t1 = Clock::now();
+      times_->preparation_us += us(t0, t1);
+      t0 = t1;
+    }
     relayout(c);
+    if (times_) {
+      const auto t1 = Clock::now();
+      times_->layout_us += us(t0, t1);
+      t0 = t1;
+    }
     // The last snapshot taken in this pass while no stage has had active rows since: such a
     // stage changes nothing, so the next snapshot would hold the same columns with the same
     // entries, and shares its storage instead of copying them again (levels that are rarely
@@ -1408,7 +1429,15 @@ void HlsFactorization::factorize(double rankTol) {
       factorLevel(k, rankTol);
       if (act_[z(k)] > 0) untouchedSince = -1;
       ++stages_;
+      if (times_) {
+        const auto t1 = Clock::now();
+        times_->stage_us[z(k + timesOffset_)] += us(t0, t1);
+        ++times_->stage_count[z(k + timesOffset_)];
+        t0 = t1;
+      }
     }
+  } else if (times_) {
+    times_->preparation_us += us(t0, Clock::now());
   }
   fullLayout_ = false;
   dirtyFrom_ = L;

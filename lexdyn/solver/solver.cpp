@@ -160,6 +160,16 @@ struct Solver::Impl {
   Eigen::VectorXd warmX;
 
   const Problem* prob = nullptr;
+  StageTimes* times = nullptr;  // setStageTimes
+  // Hands `times` to the factorisation, sized to the problem's levels (after setup).
+  void attachStageTimes() {
+    if (times && isSetup) {
+      const size_t levels = static_cast<size_t>(p);
+      if (times->stage_us.size() < levels) times->stage_us.resize(levels, 0.0);
+      if (times->stage_count.size() < levels) times->stage_count.resize(levels, 0);
+    }
+    fact.setStageTimes(isSetup ? times : nullptr, first);
+  }
 
   void setup(const Problem& problem, const Options& o);
   void checkCompatible(const Problem& problem) const;
@@ -251,6 +261,7 @@ void Solver::Impl::setup(const Problem& problem, const Options& o) {
   out = Result{};
   shapeResult();
   isSetup = true;
+  attachStageTimes();
 }
 
 bool Solver::Impl::resultShaped() const {
@@ -1111,6 +1122,11 @@ const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm,
 const Result& Solver::solve(const Problem& problem) { return impl_->solve(problem, nullptr, nullptr); }
 
 void Solver::swapResult(Result& r) { std::swap(impl_->out, r); }
+
+void Solver::setStageTimes(StageTimes* times) {
+  impl_->times = times;
+  impl_->attachStageTimes();
+}
 
 const Result& Solver::solve(const Problem& problem, const ActiveSet& warm, const Eigen::VectorXd& xWarm) {
   return impl_->solve(problem, &warm, &xWarm);

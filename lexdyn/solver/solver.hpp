@@ -225,6 +225,18 @@ struct Result {
   int bad_level = -1, bad_row = -1;  ///< NonFiniteInput location
 };
 
+/// Wall-clock time of the factorisation's parts, summed over the solves of a solver while it is
+/// attached (Solver::setStageTimes): a diagnostic for benchmarks (`lexdyn-solve --bench
+/// --stage-times`). The clock is read only while one is attached, and nothing of a solve depends
+/// on it. Levels are the problem's; a bounds level has no stage (its rows fix variables).
+struct StageTimes {
+  long passes = 0;                ///< factorisation passes (each factorises from its first changed stage on)
+  double preparation_us = 0.0;    ///< before the stages: the first level's elimination or its update, a restart's bookkeeping
+  double layout_us = 0.0;         ///< the active rows of the stages to factorise: gathered, transformed, restored
+  std::vector<double> stage_us;   ///< [problem level]: its stage's factorisations (a projected level's projection included)
+  std::vector<long> stage_count;  ///< [problem level]: how many times its stage was factorised
+};
+
 class Solver {
  public:
   Solver();
@@ -249,6 +261,9 @@ class Solver {
   /// solver). For a caller that keeps every result and recycles their buffers (the Python
   /// bindings); the controller's loop never calls it.
   void swapResult(Result& r);
+  /// Attaches `times` (nullptr detaches): each factorisation adds its parts' wall-clock times to it,
+  /// sized to the problem's levels at the next solve. Diagnostics only; the solve is the same.
+  void setStageTimes(StageTimes* times);
 
  private:
   struct Impl;

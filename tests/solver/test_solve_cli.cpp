@@ -504,9 +504,53 @@ TEST(SolveCli, BenchPerTickWritesEachTicksWorkNextToItsBestTime) {
   EXPECT_EQ(run("--bench --per-tick '' " + a).code, 2);
 }
 
+// --stage-times: the timed solves' factorisation time, level by level (the bounds level has no
+// stage), counted over the same solves as the other figures; the figures themselves unchanged in
+// kind (the solves are the same with the diagnostic).
+TEST(SolveCli, BenchStageTimesSplitTheFactorisationByLevel) {
+  // A bounds level, an equality level that the elimination takes (no stage of its own) and a
+  // level of two rows.
+  const char* three = R"({"variables": 3, "levels": [
+    {"name": "box", "A": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "lower": [-1, -1, -1], "upper": [1, 1, 1]},
+    {"name": "sum", "A": [[1, 1, 1]], "lower": [0.5], "upper": [0.5]},
+    {"name": "task", "A": [[1, -1, 0], [0, 1, -1]], "lower": [2, -0.5], "upper": [2, 0.5]}]})";
+  std::string files;
+  for (int i = 0; i < 3; ++i) files += " " + writeFile("st" + std::to_string(i) + ".json", three);
+  const CliRun r = run("--bench --repeats 2 --stage-times" + files);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(j.contains("stage_times")) << j.dump();
+  for (const char* k : {"cold", "warm"}) {
+    const nlohmann::json& s = j["stage_times"][k];
+    EXPECT_EQ(s["solves"], j[k]["count"]) << k;
+    ASSERT_EQ(s["stages"].size(), 2u) << s.dump();
+    EXPECT_EQ(s["stages"][0]["level"], "sum");
+    EXPECT_EQ(s["stages"][0]["factorizations"], 0) << "eliminated, no stage";
+    EXPECT_TRUE(s["stages"][0]["us_per_factorization"].is_null());
+    const nlohmann::json& task = s["stages"][1];
+    EXPECT_EQ(task["level"], "task");
+    // One full factorisation per solve at least (each takes one active-set iteration or more).
+    EXPECT_GE(task["factorizations"].get<long>(), j[k]["count"].get<long>()) << k;
+    EXPECT_GE(s["passes"].get<long>(), task["factorizations"].get<long>()) << k;
+    const double stage = task["us_per_solve"].get<double>();
+    EXPECT_GT(stage, 0.0) << k;
+    EXPECT_GE(s["factorization_us_per_solve"].get<double>(), stage) << k;
+    EXPECT_GE(s["layout_us_per_solve"].get<double>(), 0.0) << k;
+    EXPECT_GE(s["preparation_us_per_solve"].get<double>(), 0.0) << k;
+    EXPECT_NEAR(task["us_per_factorization"].get<double>() * task["factorizations"].get<double>(), stage * s["solves"].get<double>(),
+                1e-9 * stage * s["solves"].get<double>())
+        << k;
+  }
+  const nlohmann::json w = benchOnCopies("--warm-only --stage-times", 2);
+  ASSERT_TRUE(w.contains("stage_times"));
+  EXPECT_FALSE(w["stage_times"].contains("cold"));
+  EXPECT_EQ(w["stage_times"]["warm"]["solves"], 1);
+  EXPECT_FALSE(benchOnCopies("", 2).contains("stage_times"));
+}
+
 TEST(SolveCli, RepeatsAndWarmOnlyNeedBench) {
   const std::string a = writeFile("n0.json", kValid);
-  for (const std::string opt : {"--repeats 2", "--warm-only", "--per-tick x.csv"}) {
+  for (const std::string opt : {"--repeats 2", "--warm-only", "--per-tick x.csv", "--stage-times"}) {
     const CliRun r = run(opt + " " + a);
     EXPECT_EQ(r.code, 2) << opt;
     EXPECT_NE(r.err.find("need --bench"), std::string::npos) << r.err;

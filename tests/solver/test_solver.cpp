@@ -1707,5 +1707,50 @@ TEST(SolverOptions, LevelIndicesAreChecked) {
   EXPECT_THROW((void)p.level(-1), std::out_of_range);
 }
 
+// Solver::setStageTimes: a diagnostic. The solves are the same to the bit with it attached, and
+// its counts are the solves' own: every factorised stage counted at its problem level (none at a
+// bounds level), Result::factorizations adding at most one elimination or elimination update per
+// pass; detached, nothing more is added.
+TEST(Solver, StageTimesChangeNothingAndCountTheStages) {
+  GenOptions g;
+  long searched = 0;
+  for (std::uint64_t seed = 700; seed < 780; ++seed) {
+    g.n = 4 + static_cast<int>(seed % 20);
+    g.levels = 2 + static_cast<int>(seed % 4);
+    g.maxRows = 2 + static_cast<int>(seed % 6);
+    const Problem prob = randomProblem(seed, g);
+    Options o;
+    o.restart_after_bound_change = (seed % 2) == 0;
+    o.lazy_snapshots = (seed % 3) == 0;
+    Solver a, b;
+    StageTimes t;
+    b.setStageTimes(&t);  // before setup: attached there
+    const Result& ra = solveOnce(a, prob, o);
+    const Result& rb = solveOnce(b, prob, o);
+    ASSERT_EQ(std::memcmp(ra.x.data(), rb.x.data(), sizeof(double) * static_cast<size_t>(ra.x.size())), 0) << "seed " << seed;
+    ASSERT_EQ(ra.iterations, rb.iterations) << "seed " << seed;
+    ASSERT_EQ(ra.factorizations, rb.factorizations) << "seed " << seed;
+    ASSERT_EQ(t.stage_count.size(), static_cast<size_t>(prob.levelCount()));
+    ASSERT_EQ(t.stage_us.size(), static_cast<size_t>(prob.levelCount()));
+    long stages = 0;
+    for (size_t l = 0; l < t.stage_count.size(); ++l) {
+      stages += t.stage_count[l];
+      EXPECT_GE(t.stage_us[l], 0.0);
+      if (prob.level(static_cast<int>(l)).kind == LevelKind::Bounds) EXPECT_EQ(t.stage_count[l], 0) << "seed " << seed;
+    }
+    EXPECT_GE(t.passes, 1) << "seed " << seed;
+    EXPECT_LE(stages, rb.factorizations) << "seed " << seed;
+    EXPECT_GE(stages, rb.factorizations - t.passes) << "seed " << seed;
+    EXPECT_GE(t.preparation_us, 0.0);
+    EXPECT_GE(t.layout_us, 0.0);
+    searched += rb.iterations > 1 ? 1 : 0;
+    b.setStageTimes(nullptr);
+    const long passes = t.passes;
+    b.solve(prob);
+    EXPECT_EQ(t.passes, passes) << "seed " << seed;
+  }
+  EXPECT_GE(searched, 20);  // active-set searches, with restarts, not only single factorisations
+}
+
 }  // namespace
 }  // namespace lexdyn::solver

@@ -29,6 +29,8 @@
 
 namespace lexdyn::solver {
 
+struct StageTimes;
+
 class HlsFactorization {
  public:
   /// The projected level's product Z^T A (Z: nr x d, A: nr x m) when Z's columns from t on are
@@ -54,6 +56,12 @@ class HlsFactorization {
   void setLevelMatrix(int k, const Eigen::MatrixXd* A, int columns = -1) {
     A_[static_cast<size_t>(k)] = A;
     cols_[static_cast<size_t>(k)] = columns;
+  }
+  /// Adds each factorisation's parts' wall-clock times to `times` (nullptr: none), its stage of
+  /// level k at entry k + levelOffset (sized by the caller).
+  void setStageTimes(StageTimes* times, int levelOffset) {
+    times_ = times;
+    timesOffset_ = levelOffset;
   }
   /// rn = the Euclidean norms of the rows of A, whose entries past its first `columns` columns
   /// are zero (-1: no such knowledge). The same bits as over every column: Eigen sums a row's
@@ -320,6 +328,8 @@ class HlsFactorization {
   int lastRestart_ = 0;
   long stages_ = 0;
   long restartsTaken_ = 0;
+  StageTimes* times_ = nullptr;  // setStageTimes
+  int timesOffset_ = 0;
 };
 
 }  // namespace lexdyn::solver
