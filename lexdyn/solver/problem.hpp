@@ -32,7 +32,8 @@ struct Level {
   Eigen::VectorXd coefficient;
   /// General: A's nonzero entries lie in its first `columns` columns (-1: anywhere). A caller
   /// that knows (the controller's velocity-only task rows) sets it with Problem::setLevelColumns;
-  /// the solver then leaves the other columns out of its products A x (the same bits).
+  /// the solver then leaves the other columns out of its products A x, its row norms, its copies
+  /// of the rows and, where that keeps every bit, the fixed variables' terms (the same bits).
   int columns = -1;
 
   int rows() const { return static_cast<int>(lower.size()); }

@@ -523,10 +523,10 @@ void Solver::Impl::startFromStates() {
 void Solver::Impl::buildTargets() {
   // b = target - A_fixed x_fixed on the active rows. Column by column (the fixed variables in
   // order), so that each column is read where it is stored; every row takes the same operations in
-  // the same order as a row-by-row sum. Past a level's declared columns the entries are zeros and
-  // the fixed values are finite (bounds), so each such term is a signed zero, and t - (+-0) is t
-  // to the bit unless t is -0. A sum that does not start at -0 never becomes -0 (an exact
-  // cancellation gives +0): the terms are left out unless a row's target is -0.
+  // the same order as a row-by-row sum. Past a level's declared columns the entries are zeros, so
+  // with a finite fixed value each such term is a signed zero, and t - (+-0) is t to the bit unless
+  // t is -0. A sum that does not start at -0 never becomes -0 (an exact cancellation gives +0):
+  // the terms of a finite value are left out unless a row's target is -0.
   for (int kf = 0; kf < lg; ++kf) {
     const std::vector<int>& act = fact.activeList(kf);
     if (act.empty()) continue;
@@ -540,8 +540,8 @@ void Solver::Impl::buildTargets() {
     }
     for (int q = 0; q < nFixed; ++q) {
       const int i = fixedVar[static_cast<size_t>(q)];
-      if (cols >= 0 && i >= cols) continue;
       const double xi = x(i);
+      if (cols >= 0 && i >= cols && std::isfinite(xi)) continue;
       const double* col = Ak.col(i).data();
       for (int gid : act) b(gid) -= col[gid - off] * xi;
     }

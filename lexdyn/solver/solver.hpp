@@ -101,8 +101,8 @@ struct Options {
   /// spanning stage too when it spans every coordinate left to its stage, under the same pivot
   /// test. The test's argument holds for any rows: every direction of the stage's coordinates is
   /// reached by some row with at least sigma_min / sqrt(rows) of it, relative to that row's norm.
-  /// A level that declines (it does not span its stage) is not tried again within the solve. It
-  /// changes the rounding of such levels.
+  /// A level that declines (it does not span its stage) is not tried again within the solve as a
+  /// level of such rows. It changes the rounding of such levels.
   bool spanning_any_rows = false;
   /// Structured spanning stages (with spanning_stages): a spanning stage whose rows hold, for
   /// each of its d coordinates, one row that reads that coordinate alone, and at most d / 2 other

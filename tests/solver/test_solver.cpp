@@ -944,6 +944,51 @@ TEST(Solver, SpanningStagesOfAnyRowsDeclineANearlyDeficientLevel) {
   }
 }
 
+// A declined spanning level is not tried again within its solve only: the same solver, given new
+// data on which the level spans (the level above at s = 1e-3 after s = 1e-12), takes the spanning
+// stage again, cold and warm, with the bits of a fresh solver.
+TEST(Solver, ADeclinedSpanningLevelIsTriedAgainOnNewData) {
+  Eigen::MatrixXd M(5, 3), N(3, 3);
+  M << 1.0, 0.5, -0.25, 0.75, -1.0, 0.5, -0.5, 0.25, 1.0, 0.25, 0.75, -0.5, 1.0, -0.25, 0.75;
+  N << 0.5, 1.0, -0.75, -1.0, 0.25, 0.5, 0.75, -0.5, 1.0;
+  const Eigen::MatrixXd U = Eigen::HouseholderQR<Eigen::MatrixXd>(M).householderQ() * Eigen::MatrixXd::Identity(5, 3);
+  const Eigen::MatrixXd Vt = (Eigen::HouseholderQR<Eigen::MatrixXd>(N).householderQ() * Eigen::MatrixXd::Identity(3, 3)).transpose();
+  const Eigen::VectorXd t = (Eigen::VectorXd(5) << 0.5, -0.25, 1.0, 0.75, -0.5).finished();
+  const auto problem = [&](double sv) {
+    Problem p(3);
+    p.addLevel("dense", U * Eigen::Vector3d(1.0, 0.5, sv).asDiagonal() * Vt, t, t);
+    p.addLevel("min", Eigen::MatrixXd::Identity(3, 3), Eigen::VectorXd::Zero(3), Eigen::VectorXd::Zero(3));
+    return p;
+  };
+  const Problem deficient = problem(1e-12), full = problem(1e-3);
+  Options any;
+  any.eliminate_first_level = false;
+  any.spanning_stages = true;
+  any.spanning_any_rows = true;
+  Options unitOnly = any;
+  unitOnly.spanning_any_rows = false;
+  Solver fresh, reused, u1, u2;
+  const Result rf = solveOnce(fresh, full, any);
+  const int spanned = rf.spanning_stages;
+  ASSERT_EQ(rf.rank[0], 3);
+  EXPECT_EQ(spanned - solveOnce(u1, full, unitOnly).spanning_stages, 1) << "the dense level spans at rank 3";
+  const Result rd = solveOnce(reused, deficient, any);
+  ASSERT_EQ(rd.rank[0], 2);
+  EXPECT_EQ(rd.spanning_stages, solveOnce(u2, deficient, unitOnly).spanning_stages) << "declined at rank 2";
+  const auto same = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<size_t>(a.size())) == 0;
+  };
+  const Result cold = reused.solve(full);
+  EXPECT_EQ(cold.spanning_stages, spanned);
+  EXPECT_TRUE(same(cold.x, rf.x));
+  reused.solve(deficient);
+  const Result warm = reused.solve(full, reused.result().active, reused.result().x);
+  const Result warmFresh = fresh.solve(full, rd.active, rd.x);
+  EXPECT_EQ(warm.spanning_stages, warmFresh.spanning_stages);
+  EXPECT_EQ(warm.spanning_stages, spanned);
+  EXPECT_TRUE(same(warm.x, warmFresh.x));
+}
+
 // Options::spanning_any_rows: a level whose rows read several variables (as the controller's
 // level of Newton rows over the velocities: as many rows as the coordinates of its part or more)
 // is taken as a spanning stage too when it spans what is left to it. The answers, violations and
@@ -1711,6 +1756,34 @@ TEST(SolverOptions, LevelIndicesAreChecked) {
 // its counts are the solves' own: every factorised stage counted at its problem level (none at a
 // bounds level), Result::factorizations adding at most one elimination or elimination update per
 // pass; detached, nothing more is added.
+// Targets of -0 on a level declared zero past its first column, a fixed variable past it (x1 = +-1,
+// the entry +-0): the target's terms of that variable are left out only where that keeps the
+// target's bits, so x (x0 = target / 2, a signed zero) is the undeclared level's to the bit.
+TEST(Solver, DeclaredColumnsKeepTheSignOfAZeroTarget) {
+  int cases = 0;
+  for (const double fixed : {1.0, -1.0}) {
+    for (const double entry : {0.0, -0.0}) {
+      Problem plain(2);
+      plain.addBoundsLevel("fix", {1}, Eigen::VectorXd::Ones(1), Eigen::VectorXd::Constant(1, fixed), Eigen::VectorXd::Constant(1, fixed));
+      plain.addLevel("t", mat(1, 2, {2.0, entry}), vec({-0.0}), vec({-0.0}));
+      Problem declared = plain;
+      declared.setLevelColumns(1, 1);
+      for (const bool eliminate : {true, false}) {
+        Options o;
+        o.eliminate_first_level = eliminate;
+        Solver a, b;
+        const Result& ra = solveOnce(a, plain, o);
+        const Result& rb = solveOnce(b, declared, o);
+        ASSERT_EQ(ra.status, Status::Solved);
+        EXPECT_EQ(std::memcmp(ra.x.data(), rb.x.data(), sizeof(double) * 2), 0)
+            << "x1 " << fixed << ", entry " << entry << ", eliminate " << eliminate << ": x0 " << ra.x(0) << " / " << rb.x(0);
+        ++cases;
+      }
+    }
+  }
+  EXPECT_EQ(cases, 8);
+}
+
 TEST(Solver, StageTimesChangeNothingAndCountTheStages) {
   GenOptions g;
   long searched = 0;
