@@ -1338,6 +1338,12 @@ void HlsFactorization::factorize(double rankTol) {
   using Clock = std::chrono::steady_clock;
   const auto us = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::micro>(b - a).count(); };
   Clock::time_point t0;
+  // Adds the time since t0 to `into` and starts the next part there.
+  const auto lap = [&t0, &us](double& into) {
+    const auto t1 = Clock::now();
+    into += us(t0, t1);
+    t0 = t1;
+  };
   if (times_) {
     t0 = Clock::now();
     ++times_->passes;
@@ -1358,7 +1364,7 @@ void HlsFactorization::factorize(double rankTol) {
   }
   if (dirtyFrom_ >= L) {
     lastRestart_ = L;
-    if (times_) times_->preparation_us += us(t0, Clock::now());
+    if (times_) lap(times_->preparation_us);
     return;
   }
   // A restart needs the snapshots of its level; without them (lazy snapshots, first pass), the
@@ -1403,17 +1409,9 @@ void HlsFactorization::factorize(double rankTol) {
   }
   lastRestart_ = dirtyFrom_;
   if (c < L) {
-    if (times_) {
-      const auto t1 = Clock::now();
-      times_->preparation_us += us(t0, t1);
-      t0 = t1;
-    }
+    if (times_) lap(times_->preparation_us);
     relayout(c);
-    if (times_) {
-      const auto t1 = Clock::now();
-      times_->layout_us += us(t0, t1);
-      t0 = t1;
-    }
+    if (times_) lap(times_->layout_us);
     // The last snapshot taken in this pass while no stage has had active rows since: such a
     // stage changes nothing, so the next snapshot would hold the same columns with the same
     // entries, and shares its storage instead of copying them again (levels that are rarely
@@ -1430,14 +1428,12 @@ void HlsFactorization::factorize(double rankTol) {
       if (act_[z(k)] > 0) untouchedSince = -1;
       ++stages_;
       if (times_) {
-        const auto t1 = Clock::now();
-        times_->stage_us[z(k + timesOffset_)] += us(t0, t1);
+        lap(times_->stage_us[z(k + timesOffset_)]);
         ++times_->stage_count[z(k + timesOffset_)];
-        t0 = t1;
       }
     }
   } else if (times_) {
-    times_->preparation_us += us(t0, Clock::now());
+    lap(times_->preparation_us);
   }
   fullLayout_ = false;
   dirtyFrom_ = L;

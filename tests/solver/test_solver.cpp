@@ -904,23 +904,29 @@ TEST(Solver, AStructuredStageWithDenseRowsGivesTheMinimumNormForces) {
   expectSameAnswer(p, ra, rs, structured, "dense rows");
 }
 
+// A level of 5 dense rows over 3 variables with singular values 1, 0.5 and sv, then a minimum
+// norm (the two tests below).
+Problem denseLevelWithSingularValue(double sv) {
+  Eigen::MatrixXd M(5, 3), N(3, 3);
+  M << 1.0, 0.5, -0.25, 0.75, -1.0, 0.5, -0.5, 0.25, 1.0, 0.25, 0.75, -0.5, 1.0, -0.25, 0.75;
+  N << 0.5, 1.0, -0.75, -1.0, 0.25, 0.5, 0.75, -0.5, 1.0;
+  const Eigen::MatrixXd U = Eigen::HouseholderQR<Eigen::MatrixXd>(M).householderQ() * Eigen::MatrixXd::Identity(5, 3);
+  const Eigen::MatrixXd Vt = (Eigen::HouseholderQR<Eigen::MatrixXd>(N).householderQ() * Eigen::MatrixXd::Identity(3, 3)).transpose();
+  const Eigen::VectorXd t = (Eigen::VectorXd(5) << 0.5, -0.25, 1.0, 0.75, -0.5).finished();
+  Problem p(3);
+  p.addLevel("dense", U * Eigen::Vector3d(1.0, 0.5, sv).asDiagonal() * Vt, t, t);
+  p.addLevel("min", Eigen::MatrixXd::Identity(3, 3), Eigen::VectorXd::Zero(3), Eigen::VectorXd::Zero(3));
+  return p;
+}
+
 // Spanning stages of any rows follow the rank tolerance with several coordinates too: a level of
 // 5 dense rows over 3 variables with singular values 1, 0.5 and s, then a minimum norm. With s =
 // 1e-12 the standard factorisation finds rank 2 (rank_tolerance 1e-9) and the spanning stage is
 // declined by its pivot test, so both find rank 2 and the same answer; with s = 1e-3 both find
 // rank 3, and the level is a spanning stage.
 TEST(Solver, SpanningStagesOfAnyRowsDeclineANearlyDeficientLevel) {
-  Eigen::MatrixXd M(5, 3), N(3, 3);
-  M << 1.0, 0.5, -0.25, 0.75, -1.0, 0.5, -0.5, 0.25, 1.0, 0.25, 0.75, -0.5, 1.0, -0.25, 0.75;
-  N << 0.5, 1.0, -0.75, -1.0, 0.25, 0.5, 0.75, -0.5, 1.0;
-  const Eigen::MatrixXd U = Eigen::HouseholderQR<Eigen::MatrixXd>(M).householderQ() * Eigen::MatrixXd::Identity(5, 3);
-  const Eigen::MatrixXd Vt = (Eigen::HouseholderQR<Eigen::MatrixXd>(N).householderQ() * Eigen::MatrixXd::Identity(3, 3)).transpose();
   for (const double sv : {1e-12, 1e-3}) {
-    const Eigen::MatrixXd B = U * Eigen::Vector3d(1.0, 0.5, sv).asDiagonal() * Vt;
-    const Eigen::VectorXd t = (Eigen::VectorXd(5) << 0.5, -0.25, 1.0, 0.75, -0.5).finished();
-    Problem p(3);
-    p.addLevel("dense", B, t, t);
-    p.addLevel("min", Eigen::MatrixXd::Identity(3, 3), Eigen::VectorXd::Zero(3), Eigen::VectorXd::Zero(3));
+    const Problem p = denseLevelWithSingularValue(sv);
     Options standard;
     standard.eliminate_first_level = false;
     Options unitOnly = standard;
@@ -948,19 +954,7 @@ TEST(Solver, SpanningStagesOfAnyRowsDeclineANearlyDeficientLevel) {
 // data on which the level spans (the level above at s = 1e-3 after s = 1e-12), takes the spanning
 // stage again, cold and warm, with the bits of a fresh solver.
 TEST(Solver, ADeclinedSpanningLevelIsTriedAgainOnNewData) {
-  Eigen::MatrixXd M(5, 3), N(3, 3);
-  M << 1.0, 0.5, -0.25, 0.75, -1.0, 0.5, -0.5, 0.25, 1.0, 0.25, 0.75, -0.5, 1.0, -0.25, 0.75;
-  N << 0.5, 1.0, -0.75, -1.0, 0.25, 0.5, 0.75, -0.5, 1.0;
-  const Eigen::MatrixXd U = Eigen::HouseholderQR<Eigen::MatrixXd>(M).householderQ() * Eigen::MatrixXd::Identity(5, 3);
-  const Eigen::MatrixXd Vt = (Eigen::HouseholderQR<Eigen::MatrixXd>(N).householderQ() * Eigen::MatrixXd::Identity(3, 3)).transpose();
-  const Eigen::VectorXd t = (Eigen::VectorXd(5) << 0.5, -0.25, 1.0, 0.75, -0.5).finished();
-  const auto problem = [&](double sv) {
-    Problem p(3);
-    p.addLevel("dense", U * Eigen::Vector3d(1.0, 0.5, sv).asDiagonal() * Vt, t, t);
-    p.addLevel("min", Eigen::MatrixXd::Identity(3, 3), Eigen::VectorXd::Zero(3), Eigen::VectorXd::Zero(3));
-    return p;
-  };
-  const Problem deficient = problem(1e-12), full = problem(1e-3);
+  const Problem deficient = denseLevelWithSingularValue(1e-12), full = denseLevelWithSingularValue(1e-3);
   Options any;
   any.eliminate_first_level = false;
   any.spanning_stages = true;
@@ -1809,7 +1803,9 @@ TEST(Solver, StageTimesChangeNothingAndCountTheStages) {
     for (size_t l = 0; l < t.stage_count.size(); ++l) {
       stages += t.stage_count[l];
       EXPECT_GE(t.stage_us[l], 0.0);
-      if (prob.level(static_cast<int>(l)).kind == LevelKind::Bounds) EXPECT_EQ(t.stage_count[l], 0) << "seed " << seed;
+      if (prob.level(static_cast<int>(l)).kind == LevelKind::Bounds) {
+        EXPECT_EQ(t.stage_count[l], 0) << "seed " << seed;
+      }
     }
     EXPECT_GE(t.passes, 1) << "seed " << seed;
     EXPECT_LE(stages, rb.factorizations) << "seed " << seed;
