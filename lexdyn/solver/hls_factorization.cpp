@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -52,19 +53,59 @@ int singleNonzero(const double* v, int n) {
   return at;
 }
 
-// dst[f] = row[off[f]] for f < n where off[f] < limit, 0 past it (a declared zero, not read),
-// and what singleNonzero(dst, n) returns. The nonzeros are counted without a branch on each
-// value (whether a row's entry is zero follows no pattern the branch predictor could learn).
-int gatherClassified(const double* row, const Eigen::Index* off, int n, Eigen::Index limit, double* dst) {
+// dst[pos[k]] = row[off[k]] for k < nk and dst[zero[i]] = 0 for i < nzero (the positions past a
+// level's declared columns: zeros, not read), and what singleNonzero(dst, n) returns, the positions
+// being ascending. The nonzeros are counted without a branch on each value (whether a row's entry
+// is zero follows no pattern the branch predictor could learn).
+int gatherClassified(const double* row, const Eigen::Index* off, const int* pos, int nk, const int* zero, int nzero, double* dst) {
+  for (int i = 0; i < nzero; ++i) dst[zero[i]] = 0.0;
   int count = 0, at = -1;
-  for (int f = 0; f < n; ++f) {
-    const double v = off[f] < limit ? row[off[f]] : 0.0;
-    dst[f] = v;
+  for (int k = 0; k < nk; ++k) {
+    const double v = row[off[k]];
+    dst[pos[k]] = v;
     const bool nonzero = !(v == 0.0);
     count += nonzero ? 1 : 0;
-    at = nonzero ? f : at;
+    at = nonzero ? pos[k] : at;
   }
   return count == 0 ? -1 : (count == 1 ? at : -2);
+}
+
+// The same for R (2 or 4) adjacent rows of a column-major matrix (row, row + 1, ...: one 16-byte
+// load per two of them and column) into dst[0 .. R), with what each returns in out[0 .. R). Each
+// value is stored as read and classified as gatherClassified does (!(v == 0): a NaN counts as
+// nonzero, -0 as zero).
+template <int R>
+void gatherClassifiedRows(const double* row, const Eigen::Index* off, const int* pos, int nk, const int* zero, int nzero,
+                          double* const* dst, int* out) {
+#if defined(__SSE2__) && defined(__x86_64__)
+  constexpr int P = R / 2;
+  for (int i = 0; i < nzero; ++i)
+    for (int r = 0; r < R; ++r) dst[r][zero[i]] = 0.0;
+  const __m128d zeros = _mm_setzero_pd();
+  __m128i count[P], at[P];
+  for (int h = 0; h < P; ++h) {
+    count[h] = _mm_setzero_si128();
+    at[h] = _mm_set1_epi64x(-1);
+  }
+  for (int k = 0; k < nk; ++k) {
+    const __m128i f = _mm_set1_epi64x(pos[k]);
+    for (int h = 0; h < P; ++h) {
+      const __m128d v = _mm_loadu_pd(row + off[k] + 2 * h);
+      _mm_storel_pd(dst[2 * h] + pos[k], v);
+      _mm_storeh_pd(dst[2 * h + 1] + pos[k], v);
+      const __m128i nonzero = _mm_castpd_si128(_mm_cmpneq_pd(v, zeros));  // all ones where v != 0 or NaN
+      count[h] = _mm_sub_epi64(count[h], nonzero);
+      at[h] = _mm_or_si128(_mm_and_si128(nonzero, f), _mm_andnot_si128(nonzero, at[h]));
+    }
+  }
+  for (int h = 0; h < P; ++h) {
+    const long long c[2] = {_mm_cvtsi128_si64(count[h]), _mm_cvtsi128_si64(_mm_unpackhi_epi64(count[h], count[h]))};
+    const long long a[2] = {_mm_cvtsi128_si64(at[h]), _mm_cvtsi128_si64(_mm_unpackhi_epi64(at[h], at[h]))};
+    for (int l = 0; l < 2; ++l) out[2 * h + l] = c[l] == 0 ? -1 : (c[l] == 1 ? static_cast<int>(a[l]) : -2);
+  }
+#else
+  for (int r = 0; r < R; ++r) out[r] = gatherClassified(row + r, off, pos, nk, zero, nzero, dst[r]);
+#endif
 }
 
 // A column's pivot ratio: its projected norm relative to its row's own norm (0 for a zero row).
@@ -162,6 +203,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   cols_.assign(z(L), -1);
   gatherIdx_.assign(z(2 * std::max(mTot_, 1)), 0);
   gatherOff_.assign(z(std::max(n, 1)), 0);
+  gatherPos_.assign(z(std::max(n, 1)), 0);
   static_.assign(z(L), 0);
   rowNorm_ = Eigen::VectorXd::Zero(std::max(mTot_, 1));
   freeVar_.resize(z(n));
@@ -670,32 +712,77 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Ei
     rows[cnt++] = tmpGid_[z(q)] - off;
   }
   // Row by row: each scratch column is written contiguously, reading the row across A's columns
-  // at the reduced (then basic) variables' offsets.
-  Eigen::Index* vo = gatherOff_.data();
-  for (int f = 0; f < nr_; ++f) vo[f] = static_cast<Eigen::Index>(elim_ ? varPerm_[z(m0_ + f)] : freeVar_[z(f)]) * lda;
-  if (elim_)
-    for (int i = 0; i < m0_; ++i) vo[nr_ + i] = static_cast<Eigen::Index>(varPerm_[z(i)]) * lda;
-  const Eigen::Index ldS = S.outerStride(), ldB = SB.outerStride();
-  // A level declared zero past its first columns: the other variables' entries are zeros, not
-  // read (each read is a cache line of its own in the column-major matrix).
+  // at the reduced (then basic) variables' offsets. A level declared zero past its first columns:
+  // the other variables' entries are zeros, not read (each read is a cache line of its own in the
+  // column-major matrix). The variables read come first in each part's list of positions.
   const Eigen::Index limit = cols_[z(j)] >= 0 ? static_cast<Eigen::Index>(cols_[z(j)]) * lda : A.size();
-  for (int c = 0; c < cnt; ++c) {
-    const double* row = A.data() + rows[c];
-    double* dst = S.data() + qs[c] * ldS;
-    // Spanning stages: rows that read at most one free variable (a row on a fixed variable reads
-    // none), counted over the reduced and the basic variables together.
-    const int nonzeros = gatherClassified(row, vo, nr_, limit, dst);
+  Eigen::Index* vo = gatherOff_.data();
+  int* pos = gatherPos_.data();
+  auto list = [&](int first, int count, auto variable) {
+    int read = 0, zero = count;
+    for (int f = 0; f < count; ++f) {
+      const Eigen::Index o = static_cast<Eigen::Index>(variable(f)) * lda;
+      if (o < limit) {
+        vo[first + read] = o;
+        pos[first + read++] = f;
+      } else {
+        pos[first + --zero] = f;
+      }
+    }
+    std::reverse(pos + first + read, pos + first + count);  // the zeros in ascending order too
+    return read;
+  };
+  const int readN = list(0, nr_, [&](int f) { return elim_ ? varPerm_[z(m0_ + f)] : freeVar_[z(f)]; });
+  const int readB = elim_ ? list(nr_, m0_, [&](int i) { return varPerm_[z(i)]; }) : 0;
+  const Eigen::Index ldS = S.outerStride(), ldB = SB.outerStride();
+  // Spanning stages: rows that read at most one free variable (a row on a fixed variable reads
+  // none), counted over the reduced and the basic variables together.
+  auto classify = [&](int c, int nonzeros, int basic) {
     const int single = spanAllowed_ ? nonzeros : -2;
     if (!elim_) {
       if (spanAllowed_) unitRow_[z(off + rows[c])] = single != -2 ? 1 : 0;
+      return;
+    }
+    sparseB_[z(qs[c])] = basic;
+    if (spanAllowed_) unitRow_[z(off + rows[c])] = (single == -1 && basic != -2) || (single >= 0 && basic == -1) ? 1 : 0;
+  };
+  // Runs of adjacent rows (a task's rows are loaded together) are read 4 or 2 at a time.
+  auto run = [&](int c, auto lanes) {
+    constexpr int R = decltype(lanes)::value;
+    const double* row = A.data() + rows[c];
+    double* dst[R];
+    int red[R], bas[R];
+    for (int r = 0; r < R; ++r) dst[r] = S.data() + qs[c + r] * ldS;
+    gatherClassifiedRows<R>(row, vo, pos, readN, pos + readN, nr_ - readN, dst, red);
+    if (elim_) {
+      for (int r = 0; r < R; ++r) dst[r] = SB.data() + qs[c + r] * ldB;
+      gatherClassifiedRows<R>(row, vo + nr_, pos + nr_, readB, pos + nr_ + readB, m0_ - readB, dst, bas);
+    }
+    for (int r = 0; r < R; ++r) classify(c + r, red[r], elim_ ? bas[r] : -1);
+  };
+  auto adjacent = [&](int c, int r) {
+    if (c + r > cnt) return false;
+    for (int i = 1; i < r; ++i)
+      if (rows[c + i] != rows[c] + i) return false;
+    return true;
+  };
+  for (int c = 0; c < cnt;) {
+    if (adjacent(c, 4)) {
+      run(c, std::integral_constant<int, 4>{});
+      c += 4;
       continue;
     }
-    double* dstB = SB.data() + qs[c] * ldB;
-    sparseB_[z(qs[c])] = gatherClassified(row, vo + nr_, m0_, limit, dstB);
-    if (spanAllowed_) {
-      const int basic = sparseB_[z(qs[c])];
-      unitRow_[z(off + rows[c])] = (single == -1 && basic != -2) || (single >= 0 && basic == -1) ? 1 : 0;
+    if (adjacent(c, 2)) {
+      run(c, std::integral_constant<int, 2>{});
+      c += 2;
+      continue;
     }
+    const double* row = A.data() + rows[c];
+    const int nonzeros = gatherClassified(row, vo, pos, readN, pos + readN, nr_ - readN, S.data() + qs[c] * ldS);
+    const int basic =
+        elim_ ? gatherClassified(row, vo + nr_, pos + nr_, readB, pos + nr_ + readB, m0_ - readB, SB.data() + qs[c] * ldB) : -1;
+    classify(c, nonzeros, basic);
+    ++c;
   }
 }
 

@@ -220,7 +220,8 @@ class HlsFactorization {
   std::vector<const Eigen::MatrixXd*> A_;
   std::vector<int> cols_;  ///< per level: leading columns that hold the nonzero entries (-1: all)
   std::vector<int> gatherIdx_;
-  std::vector<Eigen::Index> gatherOff_;  ///< gatherLevel: column offsets in A of the variables
+  std::vector<Eigen::Index> gatherOff_;  ///< gatherLevel: column offsets in A of the variables read
+  std::vector<int> gatherPos_;           ///< gatherLevel: their positions, then those of declared zeros
   std::vector<char> static_;
   Eigen::VectorXd rowNorm_;
   std::vector<int> freeVar_;
