@@ -54,9 +54,10 @@ int singleNonzero(const double* v, int n) {
 }
 
 // dst[pos[k]] = row[off[k]] for k < nk and dst[zero[i]] = 0 for i < nzero (the positions past a
-// level's declared columns: zeros, not read), and what singleNonzero(dst, n) returns, the positions
-// being ascending. The nonzeros are counted without a branch on each value (whether a row's entry
-// is zero follows no pattern the branch predictor could learn).
+// level's declared columns: zeros, not read), and what singleNonzero(dst, nk + nzero) returns: the
+// position of the one nonzero (when there is one, the last nonzero met is it, in any order of the
+// positions), -1 for none, -2 for several. The nonzeros are counted without a branch on each value
+// (whether a row's entry is zero follows no pattern the branch predictor could learn).
 int gatherClassified(const double* row, const Eigen::Index* off, const int* pos, int nk, const int* zero, int nzero, double* dst) {
   for (int i = 0; i < nzero; ++i) dst[zero[i]] = 0.0;
   int count = 0, at = -1;
@@ -698,7 +699,7 @@ bool HlsFactorization::updateElimination() {
 }
 
 // Loads the active rows of level j found at scratch columns [p0, p1) marked as loaded (colNorm_ == 1):
-// reduced coordinates into S, basic part into SB, one row at a time.
+// reduced coordinates into S, basic part into SB; runs of adjacent rows together.
 void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Eigen::MatrixXd& SB) {
   const Eigen::MatrixXd& A = *A_[z(j)];
   const Eigen::Index lda = A.rows();
@@ -711,7 +712,7 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Ei
     qs[cnt] = q;
     rows[cnt++] = tmpGid_[z(q)] - off;
   }
-  // Row by row: each scratch column is written contiguously, reading the row across A's columns
+  // Each scratch column is written contiguously, reading its row across A's columns
   // at the reduced (then basic) variables' offsets. A level declared zero past its first columns:
   // the other variables' entries are zeros, not read (each read is a cache line of its own in the
   // column-major matrix). The variables read come first in each part's list of positions.
@@ -751,7 +752,7 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Ei
     constexpr int R = decltype(lanes)::value;
     const double* row = A.data() + rows[c];
     double* dst[R];
-    int red[R], bas[R];
+    int red[R], bas[R] = {};
     for (int r = 0; r < R; ++r) dst[r] = S.data() + qs[c + r] * ldS;
     gatherClassifiedRows<R>(row, vo, pos, readN, pos + readN, nr_ - readN, dst, red);
     if (elim_) {

@@ -618,11 +618,13 @@ TEST(Solver, DeclaredLeadingColumnsKeepEveryBit) {
 // of rows and column) and other rows one at a time. Rows that never become active (bounds of
 // -inf and +inf) put between a level's rows break those runs and change nothing else that the
 // gathered rows decide: the answers, the counts of iterations and factorisations and the
-// multipliers of the original rows must agree bit for bit, cold and warm. That checks each row's
-// values and its classification (zero, one nonzero and where, several) for the spanning stages and
-// the elimination, on controller-shaped problems (split coordinates, declared columns, unit rows,
-// spanning stages). The violations are not compared: the matrix-vector products of the steps
-// round a row by its place among the level's rows.
+// multipliers of the original rows must agree bit for bit, cold and warm, on controller-shaped
+// problems (split coordinates, declared columns, unit rows, spanning stages). That checks each
+// row's values and, where it decides anything, its classification (zero, one nonzero and where,
+// several): a row taken for a unit row by the spanning stages, or a basic part taken for a single
+// nonzero by the elimination, changes the answer's bits (a basic part of one nonzero classified as
+// several only takes the product that adds exact zeros). The violations are not compared: the
+// matrix-vector products of the steps round a row by its place among the level's rows.
 TEST(Solver, AdjacentRowsReadTogetherGiveTheBitsOfScatteredRows) {
   int compared = 0, runsBroken = 0;
   for (std::uint64_t seed = 1; seed <= 300; ++seed) {
