@@ -60,6 +60,7 @@ std::unique_ptr<TaskData> SelfCollisionTask::createData(const ContactLayout& lay
   d->normal.setZero(3, rows());
   d->upper.setConstant(std::numeric_limits<double>::infinity());
   d->dampers.resize(static_cast<size_t>(rows()));
+  d->jacobian_zero.assign(static_cast<size_t>(rows()), 1);  // J and A start zero
   return d;
 }
 
@@ -73,13 +74,29 @@ void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
   const double d_i = damper_.interaction;
   for (int r = 0; r < rows(); ++r) {
     const Pair& pr = pairs_[static_cast<size_t>(r)];
-    const model::CapsuleDistance cd = model.capsuleDistance(data, pr.pair, d.J.row(r));
-    d.A.row(r).head(nv_) = d.J.row(r);
-    d.point_a.col(r) = model.framePlacement(data, pr.frame_a).inverse() * cd.point_a;
-    d.point_b.col(r) = model.framePlacement(data, pr.frame_b).inverse() * cd.point_b;
+    char& zero = d.jacobian_zero[static_cast<size_t>(r)];
+    // The distance first: a pair at or beyond the interaction distance gives a free row (lower
+    // bound -inf), which constrains nothing whatever its coefficients, so its Jacobian is not
+    // computed; its rows of J and A are zeros (written once, when the pair leaves the interaction
+    // distance) and its witness points are those of its last engaged tick.
+    const model::CapsuleDistance far = model.capsuleDistance(data, pr.pair, d.J.row(r).head(0));
+    const bool engaged = damperEngaged(far.distance, d_i);
+    if (!engaged && !zero) {
+      d.J.row(r).setZero();
+      d.A.row(r).head(nv_).setZero();
+      zero = 1;
+    }
+    const model::CapsuleDistance cd = engaged ? model.capsuleDistance(data, pr.pair, d.J.row(r)) : far;
+    double ddot = 0.0;  // the damper does not read it for a free row
+    if (engaged) {
+      zero = 0;
+      d.A.row(r).head(nv_) = d.J.row(r);
+      d.point_a.col(r) = model.framePlacement(data, pr.frame_a).inverse() * cd.point_a;
+      d.point_b.col(r) = model.framePlacement(data, pr.frame_b).inverse() * cd.point_b;
+      ddot = d.J.row(r).dot(u);
+    }
     d.normal.col(r) = cd.normal;
     const double dist = cd.distance;
-    const double ddot = d.J.row(r).dot(u);
     double lower;
     if (ctx.domain == Domain::Velocity) {
       lower = damperVelocityBound(dist, ddot, damper_, d.dampers[static_cast<size_t>(r)]);
@@ -89,7 +106,7 @@ void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
     d.lower[r] = lower;
     d.upper[r] = std::numeric_limits<double>::infinity();
     d.error[r] = dist;
-    d.engaged[static_cast<size_t>(r)] = damperEngaged(dist, d_i) ? 1 : 0;
+    d.engaged[static_cast<size_t>(r)] = engaged ? 1 : 0;
   }
 }
 
