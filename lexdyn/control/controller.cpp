@@ -238,6 +238,7 @@ void Controller::Impl::buildLevels() {
       slot.row = target.task_rows;
       slot.scale = meth.rowScale(ls, l, k);
       slot.velocity_only = tm.velocityOnly();
+      slot.constant = tm.constantMatrix();
       target.slots.push_back(slot);
       target.task_rows += tm.rows();
       if (tm.geometric()) target.augmentable = true;
@@ -299,12 +300,14 @@ void Controller::Impl::fillRows() {
         LEXDYN_ALWAYS_ASSERT((d.A.rightCols(nx - nv).array() == 0.0).all(),
                              "task \"" + cfg.tasks[z(s.task)]->name() + "\" declares velocity-only rows but writes other columns");
       const int cols = s.velocity_only ? nv : nx;
+      // A constant matrix (rows that are variables themselves) is in the problem after the first copy.
+      const bool copyA = !s.constant || firstFill;
       if (s.scale == 1.0) {
-        pl.A.middleRows(s.row, m).leftCols(cols) = d.A.leftCols(cols);
+        if (copyA) pl.A.middleRows(s.row, m).leftCols(cols) = d.A.leftCols(cols);
         pl.lower.segment(s.row, m) = d.lower;
         pl.upper.segment(s.row, m) = d.upper;
       } else {
-        pl.A.middleRows(s.row, m).leftCols(cols) = s.scale * d.A.leftCols(cols);
+        if (copyA) pl.A.middleRows(s.row, m).leftCols(cols) = s.scale * d.A.leftCols(cols);
         pl.lower.segment(s.row, m) = s.scale * d.lower;
         pl.upper.segment(s.row, m) = s.scale * d.upper;
       }

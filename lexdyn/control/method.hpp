@@ -35,6 +35,7 @@ struct TaskSlot {
   int row = 0;                 ///< first row in the solver level
   double scale = 1.0;          ///< ControlMethod::rowScale (sqrt(weight) on the WLS objective level)
   bool velocity_only = false;  ///< TaskModel::velocityOnly(): A is zero past its first nv columns
+  bool constant = false;       ///< TaskModel::constantMatrix(): A copied into the problem once
 };
 
 /// How the controller's tasks map onto one of the solver's general levels.

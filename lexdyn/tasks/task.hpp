@@ -160,6 +160,9 @@ class TaskModel {
   /// the first nv are zero at every tick. Geometric tasks write A = [J, 0]. The controller then
   /// copies and multiplies only those columns of the rows (checked on the first copy).
   virtual bool velocityOnly() const { return geometric(); }
+  /// True when A is set by createData() and never changes (rows that are decision variables
+  /// themselves): the controller copies it into the problem once, its bounds at every tick.
+  virtual bool constantMatrix() const { return false; }
   /// Domains the task supports.
   virtual bool supports(Domain d) const { return d == Domain::Velocity; }
   /// True for rows that can always be met exactly whatever earlier levels impose (the equation

@@ -13,6 +13,7 @@ class VelocityRowsTask : public TaskModel {
   int rows() const override { return nv_; }
   bool supports(Domain d) const override { return d == Domain::Velocity; }
   bool velocityOnly() const override { return true; }
+  bool constantMatrix() const override { return true; }
   std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
 
  protected:
@@ -28,6 +29,7 @@ class GeneratorRowsTask : public TaskModel {
  public:
   int rows() const override { return ng_; }
   bool supports(Domain) const override { return true; }
+  bool constantMatrix() const override { return true; }
   std::unique_ptr<TaskData> createData(const ContactLayout& layout) const override;
 
  protected:

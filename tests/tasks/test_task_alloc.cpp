@@ -3,7 +3,9 @@
 // broken and made again, targets set by setTarget, and reset().
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "../common/alloc_counter.hpp"
@@ -37,9 +39,8 @@ TEST(TaskAllocation, CounterSeesAllocations) {
   EXPECT_GE(scope.finish(), 3u);
 }
 
-TEST(TaskAllocation, ComputeAndHessiansAllocateNothing) {
-  TickFixture fx("hrp2kai_like");
-  RandomStates rs(501);
+// One task of each type on the humanoid (contact three times): 17 tasks.
+std::vector<std::unique_ptr<TaskModel>> everyTaskType(TickFixture& fx) {
   std::vector<std::unique_ptr<TaskModel>> tasks;
   tasks.push_back(std::make_unique<ContactForceBoundsTask>("gamma", fx.layout));
   tasks.push_back(std::make_unique<JointLimitsTask>("limits", fx.model));
@@ -73,6 +74,13 @@ TEST(TaskAllocation, ComputeAndHessiansAllocateNothing) {
   tasks.push_back(std::make_unique<PostureTask>("posture", fx.model, sp));
   tasks.push_back(std::make_unique<VelocityMinTask>("qdot0", fx.model));
   tasks.push_back(std::make_unique<WrenchMinTask>("gamma0", fx.layout));
+  return tasks;
+}
+
+TEST(TaskAllocation, ComputeAndHessiansAllocateNothing) {
+  TickFixture fx("hrp2kai_like");
+  RandomStates rs(501);
+  const std::vector<std::unique_ptr<TaskModel>> tasks = everyTaskType(fx);
   ASSERT_EQ(tasks.size(), 17u);  // 15 types, contact three times
 
   std::vector<std::unique_ptr<TaskData>> data;
@@ -108,6 +116,42 @@ TEST(TaskAllocation, ComputeAndHessiansAllocateNothing) {
   EXPECT_EQ(count, 0u);
   EXPECT_TRUE(H.allFinite());
   EXPECT_GT(H.cwiseAbs().maxCoeff(), 0.0);
+}
+
+// TaskModel::constantMatrix(): the controller copies such a task's A into the problem once, so
+// compute() and reset() must never change it. Exactly the tasks whose rows are variables
+// themselves (trust region, minimum velocity, minimum wrench, contact force bounds) claim it.
+TEST(TaskAllocation, ConstantMatricesStayAsCreated) {
+  TickFixture fx("hrp2kai_like");
+  RandomStates rs(502);
+  const std::vector<std::unique_ptr<TaskModel>> tasks = everyTaskType(fx);
+  std::vector<std::unique_ptr<TaskData>> data;
+  std::vector<Eigen::MatrixXd> created;
+  std::vector<std::string> constant;
+  for (const auto& t : tasks) {
+    data.push_back(t->createData(fx.layout));
+    created.push_back(data.back()->A);
+    if (t->constantMatrix()) constant.push_back(t->name());
+  }
+  EXPECT_EQ(constant, (std::vector<std::string>{"gamma", "trust", "qdot0", "gamma0"}));
+  for (int tick = 0; tick < 6; ++tick) {
+    fx.set(rs.configuration(fx.model), rs.velocity(fx.model, 1.0));
+    fx.active = {1, static_cast<char>(tick % 2), 1};
+    for (Domain dom : {Domain::Velocity, Domain::Acceleration}) {
+      fx.ctx.domain = dom;
+      for (size_t k = 0; k < tasks.size(); ++k)
+        if (tasks[k]->supports(dom)) tasks[k]->compute(fx.ctx, *data[k]);
+    }
+    if (tick == 3)
+      for (size_t k = 0; k < tasks.size(); ++k) tasks[k]->reset(*data[k]);
+  }
+  for (size_t k = 0; k < tasks.size(); ++k) {
+    if (!tasks[k]->constantMatrix()) continue;
+    const Eigen::MatrixXd& A = data[k]->A;
+    ASSERT_EQ(A.size(), created[k].size()) << tasks[k]->name();
+    EXPECT_EQ(std::memcmp(A.data(), created[k].data(), sizeof(double) * static_cast<size_t>(A.size())), 0) << tasks[k]->name();
+    EXPECT_GT(A.cwiseAbs().sum(), 0.0) << tasks[k]->name();
+  }
 }
 
 }  // namespace
