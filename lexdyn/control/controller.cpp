@@ -138,6 +138,7 @@ Controller::Impl::Impl(const model::RobotModel& m, ControllerConfig c) : model(&
   ctx.domain = dom;
   ctx.M = &M;
   ctx.N = &N;
+  ctx.free_row_jacobians = method->readsPreviousJacobians();
   if (method->needsKinematicHessians()) {
     hws = std::make_unique<hessian::KinematicHessianWorkspace>(m);
     ctx.hessian = hws.get();

@@ -95,6 +95,8 @@ class ControlMethod {
   }
   /// Whether the tick must update the kinematic Hessian workspace (TickContext::hessian).
   virtual bool needsKinematicHessians() const { return false; }
+  /// Whether the method reads the tasks' Jacobians of the previous tick (TickContext::free_row_jacobians).
+  virtual bool readsPreviousJacobians() const { return false; }
   /// Allocates the method's per-tick memory, once the solver problem is laid out.
   virtual void setup(const MethodSetup& setup) = 0;
 

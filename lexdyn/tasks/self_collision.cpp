@@ -76,19 +76,21 @@ void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
     const Pair& pr = pairs_[static_cast<size_t>(r)];
     char& zero = d.jacobian_zero[static_cast<size_t>(r)];
     // The distance first: a pair at or beyond the interaction distance gives a free row (lower
-    // bound -inf), which constrains nothing whatever its coefficients, so its Jacobian is not
-    // computed; its rows of J and A are zeros (written once, when the pair leaves the interaction
-    // distance) and its witness points are those of its last engaged tick.
+    // bound -inf), which constrains nothing whatever its coefficients. Unless the method reads the
+    // previous tick's Jacobians (TickContext::free_row_jacobians), its Jacobian is not computed:
+    // its rows of J and A are zeros (written once, when the pair leaves the interaction distance)
+    // and its witness points are those of its last engaged tick.
     const model::CapsuleDistance far = model.capsuleDistance(data, pr.pair, d.J.row(r).head(0));
     const bool engaged = damperEngaged(far.distance, d_i);
-    if (!engaged && !zero) {
+    const bool jacobian = engaged || ctx.free_row_jacobians;
+    if (!jacobian && !zero) {
       d.J.row(r).setZero();
       d.A.row(r).head(nv_).setZero();
       zero = 1;
     }
-    const model::CapsuleDistance cd = engaged ? model.capsuleDistance(data, pr.pair, d.J.row(r)) : far;
+    const model::CapsuleDistance cd = jacobian ? model.capsuleDistance(data, pr.pair, d.J.row(r)) : far;
     double ddot = 0.0;  // the damper does not read it for a free row
-    if (engaged) {
+    if (jacobian) {
       zero = 0;
       d.A.row(r).head(nv_) = d.J.row(r);
       d.point_a.col(r) = model.framePlacement(data, pr.frame_a).inverse() * cd.point_a;

@@ -109,6 +109,11 @@ struct TickContext {
   /// Dof axes and subtree CoMs updated at this tick (KinematicHessianWorkspace::update); needed
   /// only by accumulateHessian() of geometric tasks (LexDynAH).
   const hessian::KinematicHessianWorkspace* hessian = nullptr;
+  /// Whether rows that constrain nothing at this tick (a self-collision pair beyond its
+  /// interaction distance: lower bound -inf) get their TaskData::J too. A method that reads the
+  /// previous tick's Jacobians (LexDynBFGS's secant, eq. 88: a row free at one tick may be active
+  /// at the next) needs them; for the others (false) such rows of J and A are zeros.
+  bool free_row_jacobians = true;
 };
 
 /// Per-tick data of a task. Sizes are fixed by TaskModel::createData().

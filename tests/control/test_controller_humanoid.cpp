@@ -104,6 +104,42 @@ TEST(ControllerHumanoid, VelocityOnlyRowsHoldAndTheirLevelsDeclareThem) {
   }
 }
 
+// TickContext::free_row_jacobians: a self-collision pair beyond its interaction distance gives a
+// free row. LexDynBFGS reads the previous tick's Jacobians (its secant), so every row's J is the
+// capsule distance's; for the other methods a free row's J and A are zeros.
+TEST(ControllerHumanoid, FreeCollisionRowsHaveJacobiansWhereTheMethodReadsThem) {
+  const model::RobotModel m = test::loadHumanoid();
+  for (const std::string method : {"bfgs", "ah", "gn", "wls"}) {
+    Controller c(m, test::exp1Config(m, method));
+    RobotState s = test::halfSitting(m);
+    c.reset(s);
+    const int sc = c.taskIndex("collisions");
+    const auto& task = dynamic_cast<const tasks::SelfCollisionTask&>(c.task(sc));
+    int freeRows = 0;
+    for (int k = 0; k < 20; ++k) {
+      const Command& cmd = c.tick(s);
+      ASSERT_TRUE(cmd.ok()) << method;
+      const tasks::TaskData& d = c.taskData(sc);
+      for (int r = 0; r < task.rows(); ++r) {
+        if (d.lower(r) != -solver::kInf) continue;
+        ++freeRows;
+        Eigen::RowVectorXd J(m.nv());
+        m.capsuleDistance(c.modelData(), task.modelPair(r), J);
+        if (method != "bfgs") J.setZero();
+        ASSERT_TRUE(d.J.row(r) == J) << method << " row " << r;
+        ASSERT_TRUE(d.A.row(r).head(m.nv()) == J) << method << " row " << r;
+        if (method == "bfgs") {
+          ASSERT_GT(J.cwiseAbs().maxCoeff(), 0.0) << "row " << r;
+        }
+      }
+      s.q = cmd.q;
+      s.u = cmd.u;
+      s.time += 0.005;
+    }
+    EXPECT_GE(freeRows, 20 * 8) << method;  // most pairs are far apart at the half-sitting posture
+  }
+}
+
 TEST(ControllerHumanoid, TickAllocatesNothing) {
   const model::RobotModel m = test::loadHumanoid();
   for (const std::string method : {"bfgs", "ah", "gn", "wls"}) {

@@ -4,8 +4,8 @@
 //  - joint limits: lower <= upper for every joint over positions sweeping through and beyond both
 //    limits, the bounds within the velocity limit, signs near each limit;
 //  - self-collision: J_d equals the model's capsule-distance Jacobian and the finite difference
-//    of the distance for pairs within d_i, whose rows alone are bounded; the free rows of the
-//    others are zeros, also after a pair leaves d_i;
+//    of the distance; bounds only for pairs within d_i; without TickContext::free_row_jacobians
+//    the free rows of the others are zeros, also after a pair leaves d_i or the flag changes;
 //  - CoM box: the damper engages d_i before each edge and only there; infinite sides are free.
 #include <gtest/gtest.h>
 
@@ -151,16 +151,23 @@ TEST(SelfCollision, DamperOnCapsuleDistances) {
   auto d = task.createData(fx.layout);
   const int nv = fx.model.nv();
   int inside = 0, outside = 0;
+  int zeroRows = 0;
   for (int trial = 0; trial < 40; ++trial) {
     fx.set(rs.configuration(fx.model), rs.velocity(fx.model, 1.0));
+    // Every row's Jacobian (LexDynBFGS) two trials in three, the free rows left out in the third.
+    fx.ctx.free_row_jacobians = trial % 3 != 2;
     for (Domain dom : {Domain::Velocity, Domain::Acceleration}) {
       fx.ctx.domain = dom;
       task.compute(fx.ctx, *d);
       for (int r = 0; r < task.rows(); ++r) {
         Eigen::RowVectorXd J(nv);
         const double dist = fx.model.capsuleDistance(fx.data, task.modelPair(r), J).distance;
-        // A free row (the pair at or beyond d_i) constrains nothing: its coefficients are zeros.
-        if (dist >= 0.05) J.setZero();
+        // A free row (the pair at or beyond d_i) constrains nothing: without the flag its
+        // coefficients are zeros.
+        if (dist >= 0.05 && !fx.ctx.free_row_jacobians) {
+          J.setZero();
+          ++zeroRows;
+        }
         EXPECT_TRUE(near(d->J.row(r), J, 0.0));
         EXPECT_TRUE(near(d->A.row(r).head(nv), J, 0.0));
         EXPECT_EQ(d->A.row(r).tail(fx.layout.ng()).cwiseAbs().maxCoeff(), 0.0);
@@ -180,25 +187,23 @@ TEST(SelfCollision, DamperOnCapsuleDistances) {
       }
     }
     fx.ctx.domain = Domain::Velocity;
-    // J_d u against the finite difference of the distance, every pair engaged (a wide d_i).
+    // J_d u against the finite difference of the distance (row 0..rows-1), every row's J.
     if (trial < 3) {
-      SelfCollisionParams all = scp;
-      all.interaction_distance = 100.0;
-      const SelfCollisionTask wide("collisions", fx.model, all);
-      auto dw = wide.createData(fx.layout);
-      wide.compute(fx.ctx, *dw);
+      fx.ctx.free_row_jacobians = true;
+      task.compute(fx.ctx, *d);
       const Eigen::MatrixXd dd = centralDifference(fx, fx.u, [&] {
         Eigen::VectorXd v(task.rows());
         Eigen::RowVectorXd none(0);
         for (int r = 0; r < task.rows(); ++r) v[r] = fx.model.capsuleDistance(fx.data, task.modelPair(r), none).distance;
         return Eigen::MatrixXd(v);
       });
-      EXPECT_TRUE(near(dw->J * fx.u, dd, 1e-6));
+      EXPECT_TRUE(near(d->J * fx.u, dd, 1e-6));
     }
   }
   // Both branches were exercised.
   EXPECT_GT(inside, 0);
   EXPECT_GT(outside, 0);
+  EXPECT_GT(zeroRows, 0);
 }
 
 TEST(SelfCollision, PairSelectionAndValidation) {

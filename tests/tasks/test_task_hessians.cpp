@@ -233,10 +233,7 @@ INSTANTIATE_TEST_SUITE_P(Models, TaskHessians, ::testing::Values("hrp2kai_like",
 TEST(SelfCollisionHessian, WitnessPointApproximationMatchesItsDefinition) {
   TickFixture fx("hrp2kai_like");
   RandomStates rs(402);
-  // Every pair engaged (a wide interaction distance): a free row's Jacobian is not computed.
-  SelfCollisionParams wide;
-  wide.interaction_distance = 100.0;
-  const SelfCollisionTask task("collisions", fx.model, wide);
+  const SelfCollisionTask task("collisions", fx.model);
   auto dptr = task.createData(fx.layout);
   auto& d = static_cast<SelfCollisionTaskData&>(*dptr);
   const int nv = fx.model.nv();
