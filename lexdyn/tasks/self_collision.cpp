@@ -76,10 +76,11 @@ void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
     const Pair& pr = pairs_[static_cast<size_t>(r)];
     char& zero = d.jacobian_zero[static_cast<size_t>(r)];
     // The distance first: a pair at or beyond the interaction distance gives a free row (lower
-    // bound -inf), which constrains nothing whatever its coefficients. Unless the method reads the
-    // previous tick's Jacobians (TickContext::free_row_jacobians), its Jacobian is not computed:
-    // its rows of J and A are zeros (written once, when the pair leaves the interaction distance)
-    // and its witness points are those of its last engaged tick.
+    // bound -inf), which constrains nothing whatever its coefficients. Unless the method reads
+    // the Jacobians of earlier ticks (TickContext::free_row_jacobians), its Jacobian is not
+    // computed: its rows of J and A are zeros (written once, when the pair leaves the interaction
+    // distance). Its witness points and normal are this tick's in any case (LexDynAH's Hessian
+    // weighs the rows by the previous tick's multipliers, which a free row can hold).
     const model::CapsuleDistance far = model.capsuleDistance(data, pr.pair, d.J.row(r).head(0));
     const bool engaged = damperEngaged(far.distance, d_i);
     const bool jacobian = engaged || ctx.free_row_jacobians;
@@ -93,10 +94,10 @@ void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
     if (jacobian) {
       zero = 0;
       d.A.row(r).head(nv_) = d.J.row(r);
-      d.point_a.col(r) = model.framePlacement(data, pr.frame_a).inverse() * cd.point_a;
-      d.point_b.col(r) = model.framePlacement(data, pr.frame_b).inverse() * cd.point_b;
       ddot = d.J.row(r).dot(u);
     }
+    d.point_a.col(r) = model.framePlacement(data, pr.frame_a).inverse() * cd.point_a;
+    d.point_b.col(r) = model.framePlacement(data, pr.frame_b).inverse() * cd.point_b;
     d.normal.col(r) = cd.normal;
     const double dist = cd.distance;
     double lower;

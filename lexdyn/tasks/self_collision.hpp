@@ -5,9 +5,9 @@
 //   acceleration domain: J_d udot >= (-xi (d - d_s) / (d_i - d_s) - J_d u) / dt   (Jdot_d u neglected)
 // otherwise the row is free (lower = -inf). Upper bounds are +inf. d.error[r] = d,
 // d.engaged[r] = (d < d_i), d.J.row(r) = J_d. A free row constrains nothing whatever its
-// coefficients: unless TickContext::free_row_jacobians (LexDynBFGS, whose secant reads the
-// previous tick's J), its J_d is not computed and its rows of J and A are zeros (with many pairs
-// most are free at any tick).
+// coefficients: unless TickContext::free_row_jacobians (methods that read earlier ticks'
+// Jacobians, such as LexDynBFGS's secant), its J_d is not computed and its rows of J and A are
+// zeros (with many pairs most are free at any tick); its witness points and normal are computed.
 //
 // Hessian (an approximation, documented in docs/controller.md): the distance is treated as
 // n^T (p_a(q) - p_b(q)) with the normal n and the witness points p_a, p_b held fixed on their
@@ -36,7 +36,7 @@ struct SelfCollisionParams {
 };
 
 struct SelfCollisionTaskData : DamperTaskData {
-  Eigen::Matrix3Xd point_a, point_b;  ///< witness points of each row whose J_d is computed, in the frames of their links
+  Eigen::Matrix3Xd point_a, point_b;  ///< witness points of each row in the frames of their links
   Eigen::Matrix3Xd normal;            ///< unit normal of each row (world, from b to a)
   std::vector<char> jacobian_zero;    ///< per row: its rows of J and A hold zeros (a free row's)
 };

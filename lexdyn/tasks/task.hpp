@@ -110,9 +110,10 @@ struct TickContext {
   /// only by accumulateHessian() of geometric tasks (LexDynAH).
   const hessian::KinematicHessianWorkspace* hessian = nullptr;
   /// Whether rows that constrain nothing at this tick (a self-collision pair beyond its
-  /// interaction distance: lower bound -inf) get their TaskData::J too. A method that reads the
-  /// previous tick's Jacobians (LexDynBFGS's secant, eq. 88: a row free at one tick may be active
-  /// at the next) needs them; for the others (false) such rows of J and A are zeros.
+  /// interaction distance: lower bound -inf) get their TaskData::J too. A method that reads
+  /// earlier ticks' Jacobians needs them (LexDynBFGS's secant, eq. 88: y(k) = sum (J(k) -
+  /// J(k-1))^T lambda with the previous solve's multipliers, and a row held then may be free
+  /// now); for the others (false: LexDynAH, WLS) such rows of J and A are zeros.
   bool free_row_jacobians = true;
 };
 

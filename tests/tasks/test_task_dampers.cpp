@@ -5,7 +5,8 @@
 //    limits, the bounds within the velocity limit, signs near each limit;
 //  - self-collision: J_d equals the model's capsule-distance Jacobian and the finite difference
 //    of the distance; bounds only for pairs within d_i; without TickContext::free_row_jacobians
-//    the free rows of the others are zeros, also after a pair leaves d_i or the flag changes;
+//    the free rows of the others are zeros, also after a pair leaves d_i or the flag changes,
+//    and every row's witness points and normal are this tick's either way;
 //  - CoM box: the damper engages d_i before each edge and only there; infinite sides are free.
 #include <gtest/gtest.h>
 
@@ -149,6 +150,7 @@ TEST(SelfCollision, DamperOnCapsuleDistances) {
   EXPECT_DOUBLE_EQ(task.damper().interaction, 0.05);
   EXPECT_DOUBLE_EQ(task.damper().safety, 0.01);
   auto d = task.createData(fx.layout);
+  const auto& sd = static_cast<const SelfCollisionTaskData&>(*d);
   const int nv = fx.model.nv();
   int inside = 0, outside = 0;
   int zeroRows = 0;
@@ -161,7 +163,12 @@ TEST(SelfCollision, DamperOnCapsuleDistances) {
       task.compute(fx.ctx, *d);
       for (int r = 0; r < task.rows(); ++r) {
         Eigen::RowVectorXd J(nv);
-        const double dist = fx.model.capsuleDistance(fx.data, task.modelPair(r), J).distance;
+        const model::CapsuleDistance cd = fx.model.capsuleDistance(fx.data, task.modelPair(r), J);
+        const double dist = cd.distance;
+        // The witness points and the normal are this tick's, with or without the flag.
+        EXPECT_TRUE(near(fx.model.pointPosition(fx.data, task.frameA(r), sd.point_a.col(r)), cd.point_a, 1e-12));
+        EXPECT_TRUE(near(fx.model.pointPosition(fx.data, task.frameB(r), sd.point_b.col(r)), cd.point_b, 1e-12));
+        EXPECT_TRUE(near(sd.normal.col(r), cd.normal, 0.0));
         // A free row (the pair at or beyond d_i) constrains nothing: without the flag its
         // coefficients are zeros.
         if (dist >= 0.05 && !fx.ctx.free_row_jacobians) {

@@ -14,6 +14,8 @@ class LexDynAh final : public VelocityDomainMethod {
   explicit LexDynAh(const ControllerParams& p) : VelocityDomainMethod(p) {}
 
   bool needsKinematicHessians() const override { return true; }
+  // The Hessian of a tick reads that tick's Jacobians and witness points only.
+  bool readsPreviousJacobians() const override { return false; }
 
   void setup(const MethodSetup& s) override {
     VelocityDomainMethod::setup(s);

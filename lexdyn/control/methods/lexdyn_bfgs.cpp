@@ -16,8 +16,6 @@ class LexDynBfgs final : public VelocityDomainMethod {
 
  protected:
   bool newtonRows() const override { return true; }
-  // eq. 88 reads J_i(k-1) of every row that is active at k, free at k-1 or not.
-  bool readsPreviousJacobians() const override { return true; }
 
   void setupLevel(size_t k, NewtonLevel& level) override {
     (void)k;

@@ -15,6 +15,8 @@ class Wls final : public ControlMethod {
   explicit Wls(const ControllerParams& p) : params_(p) {}
 
   tasks::Domain domain() const override { return tasks::Domain::Acceleration; }
+  // Each tick's rows only: no second-order term from earlier ticks.
+  bool readsPreviousJacobians() const override { return false; }
 
   void checkLevels(const ControllerConfig& cfg) const override {
     if (cfg.levels.size() != 2) {
