@@ -81,15 +81,18 @@ void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
     // computed: its rows of J and A are zeros (written once, when the pair leaves the interaction
     // distance). Its witness points and normal are this tick's in any case (LexDynAH's Hessian
     // weighs the rows by the previous tick's multipliers, which a free row can hold).
-    const model::CapsuleDistance far = model.capsuleDistance(data, pr.pair, d.J.row(r).head(0));
-    const bool engaged = damperEngaged(far.distance, d_i);
-    const bool jacobian = engaged || ctx.free_row_jacobians;
+    // With every row's Jacobian wanted, it comes with the distance in one call.
+    const bool every = ctx.free_row_jacobians;
+    model::CapsuleDistance cd =
+        every ? model.capsuleDistance(data, pr.pair, d.J.row(r)) : model.capsuleDistance(data, pr.pair, d.J.row(r).head(0));
+    const bool engaged = damperEngaged(cd.distance, d_i);
+    const bool jacobian = engaged || every;
     if (!jacobian && !zero) {
       d.J.row(r).setZero();
       d.A.row(r).head(nv_).setZero();
       zero = 1;
     }
-    const model::CapsuleDistance cd = jacobian ? model.capsuleDistance(data, pr.pair, d.J.row(r)) : far;
+    if (jacobian && !every) cd = model.capsuleDistance(data, pr.pair, d.J.row(r));
     double ddot = 0.0;  // the damper does not read it for a free row
     if (jacobian) {
       zero = 0;
