@@ -356,7 +356,10 @@ Controller& Controller::operator=(Controller&&) noexcept = default;
 void Controller::reset(const RobotState& s) {
   Impl& I = *impl_;
   I.warm = false;
-  for (size_t i = 0; i < I.td.size(); ++i) I.cfg.tasks[i]->reset(*I.td[i]);
+  for (size_t i = 0; i < I.td.size(); ++i) {
+    I.cfg.tasks[i]->reset(*I.td[i]);
+    std::fill(I.td[i]->held.begin(), I.td[i]->held.end(), 0);
+  }
   I.method->reset();
   I.cmd.q = s.q;
   I.cmd.u = s.u;
@@ -425,20 +428,28 @@ const Command& Controller::tick(const RobotState& s) {
     rec.task_engaged_rows[i] = engaged;
     rec.task_active_rows[i] = 0;
   }
+  // TaskData::held: the rows active in this solve (read at the next tick).
   for (size_t b = 0; b < I.boundsTasks.size(); ++b) {
     const int t = I.boundsTasks[b];
+    std::vector<char>& h = I.td[z(t)]->held;
     int held = 0;
-    for (int k = 0; k < I.cfg.tasks[z(t)]->rows(); ++k)
-      held += r.active.level[0][z(I.boundsFirstRow[b] + k)] != solver::RowState::Inactive ? 1 : 0;
+    for (int k = 0; k < I.cfg.tasks[z(t)]->rows(); ++k) {
+      h[z(k)] = r.active.level[0][z(I.boundsFirstRow[b] + k)] != solver::RowState::Inactive ? 1 : 0;
+      held += h[z(k)];
+    }
     rec.task_active_rows[z(t)] = held;
   }
   rec.level_violation.setZero();
   for (const SolverLevel& lv : I.levels) {
     const auto& act = r.active.level[z(lv.problem_level)];
     for (const TaskSlot& sl : lv.slots) {
+      std::vector<char>& h = I.td[z(sl.task)]->held;
       int held = 0;
       const int m = I.cfg.tasks[z(sl.task)]->rows();
-      for (int k = 0; k < m; ++k) held += act[z(sl.row + k)] != solver::RowState::Inactive ? 1 : 0;
+      for (int k = 0; k < m; ++k) {
+        h[z(k)] = act[z(sl.row + k)] != solver::RowState::Inactive ? 1 : 0;
+        held += h[z(k)];
+      }
       rec.task_active_rows[z(sl.task)] = held;
     }
     const double v = r.violation[z(lv.problem_level)].head(lv.task_rows).norm();

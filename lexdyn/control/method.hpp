@@ -95,8 +95,9 @@ class ControlMethod {
   }
   /// Whether the tick must update the kinematic Hessian workspace (TickContext::hessian).
   virtual bool needsKinematicHessians() const { return false; }
-  /// Whether the method reads the tasks' Jacobians of an earlier tick, so that every row's must be
-  /// computed, a free row's too (TickContext::free_row_jacobians). True unless a method opts out.
+  /// Whether the method reads the tasks' Jacobians of an earlier tick, weighted by the multipliers
+  /// of the previous solve, so that a free row's must be computed when the row was active in that
+  /// solve (TickContext::free_row_jacobians, TaskData::held). True unless a method opts out.
   virtual bool readsPreviousJacobians() const { return true; }
   /// Allocates the method's per-tick memory, once the solver problem is laid out.
   virtual void setup(const MethodSetup& setup) = 0;

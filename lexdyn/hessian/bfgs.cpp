@@ -21,19 +21,25 @@ void addOnChain(const std::vector<char>& chain, double value, Eigen::Ref<Eigen::
 
 namespace {
 
-// y[c] += sum over r of term(r, c), each column's sum over the rows in order from +0. Four
+// y[c] += sum over r of a(r, c) w(r), each column's sum over the rows in order from +0. Four
 // columns at a time, so that four independent sums overlap instead of each add waiting for the
-// previous one; the bits are those of one column at a time.
-template <class Term>
-void addColumnSums(Eigen::Index rows, Eigen::Index cols, const Term& term, Eigen::Ref<Eigen::VectorXd> y) {
+// previous one; the bits are those of one column at a time. Rows with w(r) == 0 are skipped:
+// their terms are zeros (a finite a), and adding a zero of either sign to a sum that starts at
+// +0 changes no bit (the sum is never -0: x + y is -0 only when both are), so the result is
+// that of the full sum. A task's rows held by no solve (free or inactive inequalities) have
+// zero multipliers.
+template <class Entry, class Weight>
+void addColumnSums(Eigen::Index rows, Eigen::Index cols, const Entry& a, const Weight& w, Eigen::Ref<Eigen::VectorXd> y) {
   Eigen::Index c = 0;
   for (; c + 4 <= cols; c += 4) {
     double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
     for (Eigen::Index r = 0; r < rows; ++r) {
-      s0 += term(r, c);
-      s1 += term(r, c + 1);
-      s2 += term(r, c + 2);
-      s3 += term(r, c + 3);
+      const double wr = w(r);
+      if (wr == 0.0) continue;
+      s0 += a(r, c) * wr;
+      s1 += a(r, c + 1) * wr;
+      s2 += a(r, c + 2) * wr;
+      s3 += a(r, c + 3) * wr;
     }
     y[c] += s0;
     y[c + 1] += s1;
@@ -42,7 +48,10 @@ void addColumnSums(Eigen::Index rows, Eigen::Index cols, const Term& term, Eigen
   }
   for (; c < cols; ++c) {
     double s = 0.0;
-    for (Eigen::Index r = 0; r < rows; ++r) s += term(r, c);
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      const double wr = w(r);
+      if (wr != 0.0) s += a(r, c) * wr;
+    }
     y[c] += s;
   }
 }
@@ -55,7 +64,8 @@ void accumulateGradientChange(const Eigen::Ref<const Eigen::MatrixXd>& J, const 
                        "accumulateGradientChange: sizes differ");
   // eq. 88: y_l = grad L_l(k) - grad L_l(k-1) = sum_i (J_i - J_i(k-1))^T lambda_{i,l}
   addColumnSums(
-      J.rows(), J.cols(), [&](Eigen::Index r, Eigen::Index c) { return (J(r, c) - J_prev(r, c)) * lambda[r]; }, y);
+      J.rows(), J.cols(), [&](Eigen::Index r, Eigen::Index c) { return J(r, c) - J_prev(r, c); }, [&](Eigen::Index r) { return lambda[r]; },
+      y);
 }
 
 void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev, const Eigen::Ref<const Eigen::VectorXd>& lambda,
@@ -63,7 +73,8 @@ void accumulateMultiplierChange(const Eigen::Ref<const Eigen::MatrixXd>& J_prev,
   LEXDYN_ALWAYS_ASSERT(J_prev.rows() == lambda.size() && lambda.size() == lambda_prev.size() && J_prev.cols() == y.size(),
                        "accumulateMultiplierChange: sizes differ");
   addColumnSums(
-      J_prev.rows(), J_prev.cols(), [&](Eigen::Index r, Eigen::Index c) { return J_prev(r, c) * (lambda[r] - lambda_prev[r]); }, y);
+      J_prev.rows(), J_prev.cols(), [&](Eigen::Index r, Eigen::Index c) { return J_prev(r, c); },
+      [&](Eigen::Index r) { return lambda[r] - lambda_prev[r]; }, y);
 }
 
 int choleskyOfOccupied(const Eigen::Ref<const Eigen::MatrixXd>& B, const std::vector<char>& occupied, Eigen::Ref<Eigen::MatrixXd> R,

@@ -180,6 +180,12 @@ struct Solver::Impl {
   void startFromStates();
   void updateFreeVariables();
   void computeAx(const Eigen::VectorXd& xx, Eigen::VectorXd& out) const;
+  // Per general level kf, runs [begin, end) of its rows (level-relative) that computeAx
+  // multiplies: axRuns[axRunsOff[kf] .. axRunsOff[kf + 1]) in pairs. Rows outside them are free
+  // (lower -inf, upper +inf: never active, never blocking, violation 0 whatever A x is), such as
+  // the reserved rows of a level that is not augmented; their A x is set to 0. Set by loadData().
+  std::vector<int> axRuns, axRunsOff;
+  void findAxRuns();
   double target(int gid) const;
   void buildTargets();
   void solveEquality();
@@ -198,6 +204,10 @@ struct Solver::Impl {
   // gives it that shape (zeros).
   bool resultShaped() const;
   void shapeResult();
+  // out.lambda's column l is zero past the rows of level l (every stage of finish() writes a
+  // column's rows of its own and earlier levels only), as shapeResult() leaves it; false after
+  // swapResult() handed in buffers of unknown content.
+  bool lambdaTailsZero = false;
   // The result's counters and flags as before any work (a solve sets them as it goes).
   void resetCounters();
   // One solve, from the warm start (warm, xw) or, when warm is null, from a cold start.
@@ -231,6 +241,9 @@ void Solver::Impl::setup(const Problem& problem, const Options& o) {
   M = 0;
   for (int r : gen) M += r;
   for (Eigen::VectorXd* vec : {&lo, &up, &Ax, &Adx, &v, &dv, &res, &mu, &b, &rowNorm}) vec->setZero(std::max(M, 1));
+  axRuns.clear();
+  axRuns.reserve(static_cast<size_t>(M + 2 * lg + 2));  // at most (rows + 1) / 2 runs a level
+  axRunsOff.assign(static_cast<size_t>(lg + 1), 0);
   state.assign(static_cast<size_t>(M), RowState::Inactive);
   for (Eigen::VectorXd* vec : {&xlo, &xup, &x, &dx, &xs, &xFree}) vec->setZero(n);
   muAll.setZero(std::max(M, 1), std::max(lg, 1));
@@ -288,6 +301,7 @@ void Solver::Impl::shapeResult() {
   for (int l = 0; l < p; ++l) out.violation[static_cast<size_t>(l)].setZero(rowsOf[static_cast<size_t>(l)]);
   out.violation_norm.setZero(p);
   out.lambda.setZero(allRows, p);
+  lambdaTailsZero = true;
   out.active.level.resize(static_cast<size_t>(p));
   for (int l = 0; l < p; ++l)
     out.active.level[static_cast<size_t>(l)].assign(static_cast<size_t>(rowsOf[static_cast<size_t>(l)]), RowState::Inactive);
@@ -358,6 +372,7 @@ void Solver::Impl::loadData(const Problem& problem) {
     lo.segment(off, lv.rows()) = lv.lower;
     up.segment(off, lv.rows()) = lv.upper;
   }
+  findAxRuns();
   // The elimination stage needs a first general level of equality rows only.
   bool allEq = lg > 0 && rowsOf[static_cast<size_t>(first)] > 0;
   if (allEq) {
@@ -482,6 +497,43 @@ void Solver::Impl::updateFreeVariables() {
   fact.setFreeVariables(freeVar, nf);
 }
 
+void Solver::Impl::findAxRuns() {
+  // Free rows between constraining ones are multiplied too when fewer than kGap of them lie
+  // between (one product instead of two). A run has two rows at least (a free neighbour joins a
+  // lone row): Eigen multiplies a single row as a dot product, whose sum is not the
+  // matrix-vector product's.
+  constexpr int kGap = 4;
+  axRuns.clear();
+  for (int kf = 0; kf < lg; ++kf) {
+    axRunsOff[static_cast<size_t>(kf)] = static_cast<int>(axRuns.size());
+    const int off = fact.rowOffset(kf);
+    const int m = rowsOf[static_cast<size_t>(kf + first)];
+    int begin = -1, end = -1;
+    auto push = [&] {
+      if (end - begin == 1 && m >= 2) {
+        if (end < m) {
+          ++end;
+        } else {
+          --begin;
+        }
+      }
+      axRuns.insert(axRuns.end(), {begin, end});
+    };
+    for (int r = 0; r < m; ++r) {
+      if (lo(off + r) == -kInf && up(off + r) == kInf) continue;
+      if (begin >= 0 && r - end < kGap) {
+        end = r + 1;
+        continue;
+      }
+      if (begin >= 0) push();
+      begin = r;
+      end = r + 1;
+    }
+    if (begin >= 0) push();
+  }
+  axRunsOff[static_cast<size_t>(lg)] = static_cast<int>(axRuns.size());
+}
+
 void Solver::Impl::computeAx(const Eigen::VectorXd& xx, Eigen::VectorXd& outv) const {
   for (int kf = 0; kf < lg; ++kf) {
     const int off = fact.rowOffset(kf);
@@ -491,12 +543,27 @@ void Solver::Impl::computeAx(const Eigen::VectorXd& xx, Eigen::VectorXd& outv) c
     // Eigen's matrix-vector product sums each row over the columns in order (in one block of
     // columns below 128 of them) from +0 and adds the sum to a zeroed result, so the terms left
     // out, exact zeros at the end, change no bit (DeclaredLeadingColumnsKeepEveryBit; it fails
-    // without the limit of 128).
+    // without the limit of 128). Each row's sum is the same whichever rows are multiplied with
+    // it, so the free rows are left out (axRuns; FreeRowsLeftOutOfAxKeepEveryBit).
     const int c = prob->level(kf + first).columns;
-    if (c >= 1 && c < n && n < 128) {
-      outv.segment(off, m).noalias() = A(kf).leftCols(c) * xx.head(c);
-    } else {
-      outv.segment(off, m).noalias() = A(kf) * xx;
+    const bool lead = c >= 1 && c < n && n < 128;
+    const int r0 = axRunsOff[static_cast<size_t>(kf)], r1 = axRunsOff[static_cast<size_t>(kf + 1)];
+    if (r1 - r0 == 2 && axRuns[static_cast<size_t>(r0)] == 0 && axRuns[static_cast<size_t>(r0 + 1)] == m) {
+      if (lead) {
+        outv.segment(off, m).noalias() = A(kf).leftCols(c) * xx.head(c);
+      } else {
+        outv.segment(off, m).noalias() = A(kf) * xx;
+      }
+      continue;
+    }
+    outv.segment(off, m).setZero();
+    for (int q = r0; q < r1; q += 2) {
+      const int b = axRuns[static_cast<size_t>(q)], e = axRuns[static_cast<size_t>(q + 1)];
+      if (lead) {
+        outv.segment(off + b, e - b).noalias() = A(kf).middleRows(b, e - b).leftCols(c) * xx.head(c);
+      } else {
+        outv.segment(off + b, e - b).noalias() = A(kf).middleRows(b, e - b) * xx;
+      }
     }
   }
 }
@@ -1017,7 +1084,15 @@ void Solver::Impl::finish() {
   // Multipliers, one column per level: a valid KKT certificate of each level's problem. The raw
   // multipliers of level l are corrected by adding t_i >= 0 times the (corrected) certificate of
   // an earlier level i that holds a row whose raw multiplier has the wrong sign (see isHeld).
-  out.lambda.setZero();
+  // Column l can be nonzero in the rows of levels 0..l only (the earlier levels' active rows,
+  // the bound rows, the level's own; the corrections add earlier columns), so only those rows
+  // need zeroing when the rest is known to be zero.
+  if (lambdaTailsZero) {
+    for (int l = 0; l < p; ++l) out.lambda.col(l).head(stackOff[static_cast<size_t>(l)] + rowsOf[static_cast<size_t>(l)]).setZero();
+  } else {
+    out.lambda.setZero();
+    lambdaTailsZero = true;
+  }
   if (!opt.compute_multipliers) return;
   if (!multValid) prepareLevels();
   const Level* bl = hasBounds ? &problem.level(0) : nullptr;
@@ -1121,7 +1196,10 @@ const Result& Solver::Impl::solve(const Problem& problem, const ActiveSet* warm,
 
 const Result& Solver::solve(const Problem& problem) { return impl_->solve(problem, nullptr, nullptr); }
 
-void Solver::swapResult(Result& r) { std::swap(impl_->out, r); }
+void Solver::swapResult(Result& r) {
+  std::swap(impl_->out, r);
+  impl_->lambdaTailsZero = false;
+}
 
 void Solver::setStageTimes(StageTimes* times) {
   impl_->times = times;

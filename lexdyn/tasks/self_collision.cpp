@@ -76,23 +76,25 @@ void SelfCollisionTask::compute(const TickContext& ctx, TaskData& base) const {
     const Pair& pr = pairs_[static_cast<size_t>(r)];
     char& zero = d.jacobian_zero[static_cast<size_t>(r)];
     // The distance first: a pair at or beyond the interaction distance gives a free row (lower
-    // bound -inf), which constrains nothing whatever its coefficients. Unless the method reads
-    // the Jacobians of earlier ticks (TickContext::free_row_jacobians), its Jacobian is not
-    // computed: its rows of J and A are zeros (written once, when the pair leaves the interaction
-    // distance). Its witness points and normal are this tick's in any case (LexDynAH's Hessian
-    // weighs the rows by the previous tick's multipliers, which a free row can hold).
-    // With every row's Jacobian wanted, it comes with the distance in one call.
-    const bool every = ctx.free_row_jacobians;
+    // bound -inf), which constrains nothing whatever its coefficients. Its Jacobian is computed
+    // only when the method reads earlier ticks' Jacobians (TickContext::free_row_jacobians) and
+    // the row was active in the previous solve (TaskData::held: it may hold a multiplier then);
+    // otherwise its rows of J and A are zeros (written once, when the pair leaves the
+    // interaction distance). Its witness points and normal are this tick's in any case
+    // (LexDynAH's Hessian weighs the rows by the previous tick's multipliers, which a free row
+    // can hold). A row whose Jacobian is wanted before its distance is known gets both from
+    // one call.
+    const bool held = ctx.free_row_jacobians && d.held[static_cast<size_t>(r)];
     model::CapsuleDistance cd =
-        every ? model.capsuleDistance(data, pr.pair, d.J.row(r)) : model.capsuleDistance(data, pr.pair, d.J.row(r).head(0));
+        held ? model.capsuleDistance(data, pr.pair, d.J.row(r)) : model.capsuleDistance(data, pr.pair, d.J.row(r).head(0));
     const bool engaged = damperEngaged(cd.distance, d_i);
-    const bool jacobian = engaged || every;
+    const bool jacobian = engaged || held;
     if (!jacobian && !zero) {
       d.J.row(r).setZero();
       d.A.row(r).head(nv_).setZero();
       zero = 1;
     }
-    if (jacobian && !every) cd = model.capsuleDistance(data, pr.pair, d.J.row(r));
+    if (jacobian && !held) cd = model.capsuleDistance(data, pr.pair, d.J.row(r));
     double ddot = 0.0;  // the damper does not read it for a free row
     if (jacobian) {
       zero = 0;

@@ -5,9 +5,11 @@
 //   acceleration domain: J_d udot >= (-xi (d - d_s) / (d_i - d_s) - J_d u) / dt   (Jdot_d u neglected)
 // otherwise the row is free (lower = -inf). Upper bounds are +inf. d.error[r] = d,
 // d.engaged[r] = (d < d_i), d.J.row(r) = J_d. A free row constrains nothing whatever its
-// coefficients: unless TickContext::free_row_jacobians (methods that read earlier ticks'
-// Jacobians, such as LexDynBFGS's secant), its J_d is not computed and its rows of J and A are
-// zeros (with many pairs most are free at any tick); its witness points and normal are computed.
+// coefficients: its J_d is not computed and its rows of J and A are zeros (with many pairs most
+// are free at any tick), unless the row was active in the previous solve (TaskData::held) and
+// the method reads earlier ticks' Jacobians with that solve's multipliers
+// (TickContext::free_row_jacobians: LexDynBFGS's secant); its witness points and normal are
+// computed.
 //
 // Hessian (an approximation, documented in docs/controller.md): the distance is treated as
 // n^T (p_a(q) - p_b(q)) with the normal n and the witness points p_a, p_b held fixed on their

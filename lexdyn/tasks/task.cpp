@@ -64,6 +64,7 @@ void TaskModel::initData(TaskData& d, const ContactLayout& layout, bool engaged)
   d.error.setZero(m);
   d.J.setZero(m, layout.nv());
   d.engaged.assign(static_cast<size_t>(m), engaged ? 1 : 0);
+  d.held.assign(static_cast<size_t>(m), 0);
   d.target.setZero(targetSize());
   d.target_set = false;
 }

@@ -109,11 +109,13 @@ struct TickContext {
   /// Dof axes and subtree CoMs updated at this tick (KinematicHessianWorkspace::update); needed
   /// only by accumulateHessian() of geometric tasks (LexDynAH).
   const hessian::KinematicHessianWorkspace* hessian = nullptr;
-  /// Whether rows that constrain nothing at this tick (a self-collision pair beyond its
-  /// interaction distance: lower bound -inf) get their TaskData::J too. A method that reads
-  /// earlier ticks' Jacobians needs them (LexDynBFGS's secant, eq. 88: y(k) = sum (J(k) -
-  /// J(k-1))^T lambda with the previous solve's multipliers, and a row held then may be free
-  /// now); for the others (false: LexDynAH, WLS) such rows of J and A are zeros.
+  /// Whether a row that constrains nothing at this tick (a self-collision pair beyond its
+  /// interaction distance: lower bound -inf) gets its TaskData::J when it was active in the
+  /// previous solve (TaskData::held). A method that reads earlier ticks' Jacobians with the
+  /// previous solve's multipliers needs them (LexDynBFGS's secant, eq. 88: y(k) = sum (J(k) -
+  /// J(k-1))^T lambda; a row held then may be free now, and a row not held then has lambda = 0).
+  /// Other free rows, and every free row when false (LexDynAH, WLS), have rows of J and A of
+  /// zeros.
   bool free_row_jacobians = true;
 };
 
@@ -130,6 +132,10 @@ struct TaskData {
   /// Per row: true when the row constrains the solution at this tick (an inequality inside its
   /// interaction distance, or any equality row); for recording "which constraints are active".
   std::vector<char> engaged;
+  /// Per row: the row was active in the previous tick's solve, so that it may hold a multiplier
+  /// of that solve (an inactive row's are zero). Set by the controller after each solve; all
+  /// zero before the first and after a reset.
+  std::vector<char> held;
   /// Runtime target of the task (meaning per task type; empty when the task has none).
   Eigen::VectorXd target;
   /// False while the task has no target yet: a task created without an initial target holds

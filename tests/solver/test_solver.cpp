@@ -68,9 +68,9 @@ void expectSameResult(const Result& a, const Result& b, const std::string& what)
 }
 
 // swapResult() hands the result over without a copy: it is the one the solve computed, and the
-// next solve into the buffers given back (empty ones, or an earlier result's) computes the same
-// bits as a solver whose result was never taken, cold and warm, also after a solve that refuses
-// its input.
+// next solve into the buffers given back (empty ones, an earlier result's, same-shape ones of
+// any values) computes the same bits as a solver whose result was never taken, cold and warm,
+// also after a solve that refuses its input.
 TEST(Solver, ASwappedResultIsTheSolvesAndTheNextSolveFillsTheBuffersGivenBack) {
   test::GenOptions g;
   g.n = 15;
@@ -110,6 +110,19 @@ TEST(Solver, ASwappedResultIsTheSolvesAndTheNextSolveFillsTheBuffersGivenBack) {
     a.swapResult(same);
     expectSameResult(a.solve(prob, expected.active, expected.x), b.solve(prob, expected.active, expected.x),
                      "warm into same-shape buffers, seed " + std::to_string(seed));
+    // Column l of the multipliers is zero past the rows of level l (the solver zeroes only
+    // those rows when it filled the buffers itself); same-shape buffers holding anything else
+    // are zeroed whole.
+    for (int l = 0, end = 0; l < prob.levelCount(); ++l) {
+      end += prob.level(l).rows();
+      EXPECT_TRUE(expected.lambda.col(l).tail(expected.lambda.rows() - end).isZero(0.0)) << "level " << l;
+    }
+    Result junk = expected;
+    junk.lambda.setConstant(7.0);
+    a.swapResult(junk);
+    expectSameResult(a.solve(prob), b.solve(prob), "cold into same-shape buffers of other values, seed " + std::to_string(seed));
+    expectSameResult(a.solve(prob, expected.active, expected.x), b.solve(prob, expected.active, expected.x),
+                     "warm after them, seed " + std::to_string(seed));
 
     // A refused input leaves no figure of an earlier solve, whatever buffers it computes into.
     Problem bad = prob;
@@ -612,6 +625,85 @@ TEST(Solver, DeclaredLeadingColumnsKeepEveryBit) {
       lexdyn::testing::containsAll(lexdyn::testing::inputErrorOf([&] { p.validate("test"); }), {"A[1][2] is 0.5", "first 2 columns"}));
   p.level(1).A(1, 2) = -0.0;
   EXPECT_NO_THROW(p.validate("test"));
+}
+
+// A x is formed for the rows that can constrain only: runs of them, with fewer than four free
+// rows (bounds -inf and +inf) between, each run of two rows at least; a free row's A x is 0. The
+// free rows' coefficients then matter nowhere (the same problem with other values there gives
+// every bit of the result), and the violations of the other rows are those of their A x,
+// computed here independently, cold and warm; free rows alone, in runs, at a level's end (the
+// controller's reserved rows), every other row, beyond 128 columns too.
+TEST(Solver, FreeRowsLeftOutOfAxKeepEveryBit) {
+  GenOptions g;
+  int freeRows = 0, levelsWithFree = 0;
+  for (std::uint64_t seed = 500; seed < 700; ++seed) {
+    g.n = 2 + static_cast<int>((seed * 11) % 140);
+    g.levels = 2 + static_cast<int>(seed % 5);
+    g.maxRows = 2 + static_cast<int>(seed % 14);
+    Problem p = randomProblem(seed, g);
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<std::vector<char>> isFree(static_cast<size_t>(p.levelCount()));
+    for (int l = 0; l < p.levelCount(); ++l) {
+      Level& lv = p.level(l);
+      isFree[static_cast<size_t>(l)].assign(static_cast<size_t>(lv.rows()), 0);
+      if (lv.kind != LevelKind::General) continue;
+      const int pattern = static_cast<int>(rng() % 4);
+      bool any = false;
+      for (int r = 0; r < lv.rows(); ++r) {
+        const bool f = pattern == 1 ? rng() % 2 == 0 : pattern == 2 ? 2 * r >= lv.rows() : pattern == 3 ? r % 2 == 1 : false;
+        if (!f) continue;
+        lv.lower(r) = -kInf;
+        lv.upper(r) = kInf;
+        isFree[static_cast<size_t>(l)][static_cast<size_t>(r)] = 1;
+        any = true;
+        ++freeRows;
+      }
+      levelsWithFree += any ? 1 : 0;
+    }
+    Problem q = p;
+    for (int l = 0; l < q.levelCount(); ++l)
+      for (int r = 0; r < q.level(l).rows(); ++r)
+        if (isFree[static_cast<size_t>(l)][static_cast<size_t>(r)])
+          for (int c = 0; c < g.n; ++c) q.level(l).A(r, c) = u(rng) * 1e3;
+    auto checkViolations = [&](const Problem& pb, const Result& res, const std::string& what) {
+      for (int l = 0; l < pb.levelCount(); ++l) {
+        const Level& lv = pb.level(l);
+        if (lv.kind != LevelKind::General) continue;
+        for (int r = 0; r < lv.rows(); ++r) {
+          const double v = res.violation[static_cast<size_t>(l)](r);
+          if (isFree[static_cast<size_t>(l)][static_cast<size_t>(r)]) {
+            EXPECT_EQ(v, 0.0) << what << " level " << l << " row " << r;
+            continue;
+          }
+          const double ax = lv.A.row(r).dot(res.x);
+          const double expected = ax - std::min(std::max(ax, lv.lower(r)), lv.upper(r));
+          const double scale = 1.0 + lv.A.row(r).cwiseAbs().sum() * res.x.lpNorm<Eigen::Infinity>();
+          EXPECT_NEAR(v, expected, 1e-12 * scale) << what << " level " << l << " row " << r;
+        }
+      }
+    };
+    Solver a, b;
+    const Result& ra = solveOnce(a, p);
+    const Result& rb = solveOnce(b, q);
+    expectSameResult(ra, rb, "cold, seed " + std::to_string(seed));
+    checkViolations(p, ra, "cold, seed " + std::to_string(seed));
+    // Warm, from the answer, with the constraining rows' bounds moved.
+    Problem p2 = p, q2 = q;
+    for (int l = 0; l < p.levelCount(); ++l) {
+      if (p.level(l).kind != LevelKind::General) continue;
+      p2.level(l).lower.array() -= 0.125;
+      q2.level(l).lower.array() -= 0.125;
+    }
+    const ActiveSet act = ra.active;
+    const Eigen::VectorXd x0 = ra.x;
+    const Result& wa = a.solve(p2, act, x0);
+    const Result& wb = b.solve(q2, act, x0);
+    expectSameResult(wa, wb, "warm, seed " + std::to_string(seed));
+    checkViolations(p2, wa, "warm, seed " + std::to_string(seed));
+  }
+  EXPECT_GE(levelsWithFree, 150);
+  EXPECT_GE(freeRows, 600);
 }
 
 // The factorisation reads a level's adjacent active rows two or four at a time (one load per pair

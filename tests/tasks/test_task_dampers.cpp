@@ -4,12 +4,14 @@
 //  - joint limits: lower <= upper for every joint over positions sweeping through and beyond both
 //    limits, the bounds within the velocity limit, signs near each limit;
 //  - self-collision: J_d equals the model's capsule-distance Jacobian and the finite difference
-//    of the distance; bounds only for pairs within d_i; without TickContext::free_row_jacobians
-//    the free rows of the others are zeros, also after a pair leaves d_i or the flag changes,
-//    and every row's witness points and normal are this tick's either way;
+//    of the distance; bounds only for pairs within d_i; the free rows of the others are zeros
+//    unless TickContext::free_row_jacobians and the row was active in the previous solve
+//    (TaskData::held), also after a pair leaves d_i or the flag or the held rows change, and
+//    every row's witness points and normal are this tick's either way;
 //  - CoM box: the damper engages d_i before each edge and only there; infinite sides are free.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -153,11 +155,13 @@ TEST(SelfCollision, DamperOnCapsuleDistances) {
   const auto& sd = static_cast<const SelfCollisionTaskData&>(*d);
   const int nv = fx.model.nv();
   int inside = 0, outside = 0;
-  int zeroRows = 0;
+  int zeroRows = 0, heldFreeRows = 0;
   for (int trial = 0; trial < 40; ++trial) {
     fx.set(rs.configuration(fx.model), rs.velocity(fx.model, 1.0));
-    // Every row's Jacobian (LexDynBFGS) two trials in three, the free rows left out in the third.
+    // The held rows' Jacobians too (LexDynBFGS) two trials in three, every free row left out in
+    // the third; a different half of the rows held at each trial.
     fx.ctx.free_row_jacobians = trial % 3 != 2;
+    for (int r = 0; r < task.rows(); ++r) d->held[static_cast<size_t>(r)] = (r * 7 + trial) % 4 < 2 ? 1 : 0;
     for (Domain dom : {Domain::Velocity, Domain::Acceleration}) {
       fx.ctx.domain = dom;
       task.compute(fx.ctx, *d);
@@ -169,11 +173,15 @@ TEST(SelfCollision, DamperOnCapsuleDistances) {
         EXPECT_TRUE(near(fx.model.pointPosition(fx.data, task.frameA(r), sd.point_a.col(r)), cd.point_a, 1e-12));
         EXPECT_TRUE(near(fx.model.pointPosition(fx.data, task.frameB(r), sd.point_b.col(r)), cd.point_b, 1e-12));
         EXPECT_TRUE(near(sd.normal.col(r), cd.normal, 0.0));
-        // A free row (the pair at or beyond d_i) constrains nothing: without the flag its
-        // coefficients are zeros.
-        if (dist >= 0.05 && !fx.ctx.free_row_jacobians) {
-          J.setZero();
-          ++zeroRows;
+        // A free row (the pair at or beyond d_i) constrains nothing: its coefficients are zeros
+        // unless the flag is set and the row was active in the previous solve.
+        if (dist >= 0.05) {
+          if (fx.ctx.free_row_jacobians && d->held[static_cast<size_t>(r)]) {
+            ++heldFreeRows;
+          } else {
+            J.setZero();
+            ++zeroRows;
+          }
         }
         EXPECT_TRUE(near(d->J.row(r), J, 0.0));
         EXPECT_TRUE(near(d->A.row(r).head(nv), J, 0.0));
@@ -197,6 +205,7 @@ TEST(SelfCollision, DamperOnCapsuleDistances) {
     // J_d u against the finite difference of the distance (row 0..rows-1), every row's J.
     if (trial < 3) {
       fx.ctx.free_row_jacobians = true;
+      std::fill(d->held.begin(), d->held.end(), 1);
       task.compute(fx.ctx, *d);
       const Eigen::MatrixXd dd = centralDifference(fx, fx.u, [&] {
         Eigen::VectorXd v(task.rows());
@@ -211,6 +220,7 @@ TEST(SelfCollision, DamperOnCapsuleDistances) {
   EXPECT_GT(inside, 0);
   EXPECT_GT(outside, 0);
   EXPECT_GT(zeroRows, 0);
+  EXPECT_GT(heldFreeRows, 0);
 }
 
 TEST(SelfCollision, PairSelectionAndValidation) {
