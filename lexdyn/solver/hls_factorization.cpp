@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <type_traits>
@@ -318,7 +319,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   lastRestart_ = 0;
 }
 
-void HlsFactorization::rowNorms(const Eigen::MatrixXd& A, int columns, Eigen::Ref<Eigen::VectorXd> rn) {
+void HlsFactorization::rowNorms(const Eigen::Ref<const Eigen::MatrixXd>& A, int columns, Eigen::Ref<Eigen::VectorXd> rn) {
   const int n = static_cast<int>(A.cols());
   // The full sum adds column 0, then columns 1..4, 5..8, ... as groups through column
   // ((n - 1) & ~3), then the rest one by one (Eigen's packetwise_redux_impl): 4 q + 1 leading
@@ -333,14 +334,30 @@ void HlsFactorization::rowNorms(const Eigen::MatrixXd& A, int columns, Eigen::Re
   }
 }
 
-void HlsFactorization::computeRowNorms() {
+void HlsFactorization::computeRowNorms(const std::vector<int>* runs, const std::vector<int>* runsOff) {
   elimDataValid_ = false;  // new data: the elimination is recomputed
   invalidateAll();         // and nothing of an earlier factorisation is kept
   std::fill(spanDeclined_.begin(), spanDeclined_.end(), 0);
   for (int k = 0; k < levelCount(); ++k) {
     const Eigen::MatrixXd& A = *A_[z(k)];
-    if (A.rows() == 0) continue;
-    rowNorms(A, cols_[z(k)], rowNorm_.segment(rowOff_[z(k)], A.rows()));
+    const int m = static_cast<int>(A.rows());
+    if (m == 0) continue;
+    auto rn = rowNorm_.segment(rowOff_[z(k)], m);
+    const int q0 = runs ? (*runsOff)[z(k)] : 0, q1 = runs ? (*runsOff)[z(k) + 1] : 0;
+    if (!runs || (q1 - q0 == 2 && (*runs)[z(q0)] == 0 && (*runs)[z(q0) + 1] == m)) {
+      rowNorms(A, cols_[z(k)], rn);
+      continue;
+    }
+    // Eigen forms the norms of an aligned pair of rows together and an unaligned first or last
+    // row alone, each way with its own order of the sums.
+    auto misaligned = [&](int r) { return (reinterpret_cast<std::uintptr_t>(rn.data() + r) % 16) != 0; };
+    rn.setZero();
+    for (int q = q0; q < q1; q += 2) {
+      int b = (*runs)[z(q)], e = (*runs)[z(q) + 1];
+      if (b > 0 && misaligned(b)) --b;
+      if (e < m && misaligned(e)) ++e;
+      rowNorms(A.middleRows(b, e - b), cols_[z(k)], rn.segment(b, e - b));
+    }
   }
 }
 

@@ -183,7 +183,8 @@ struct Solver::Impl {
   // Per general level kf, runs [begin, end) of its rows (level-relative) that computeAx
   // multiplies: axRuns[axRunsOff[kf] .. axRunsOff[kf + 1]) in pairs. Rows outside them are free
   // (lower -inf, upper +inf: never active, never blocking, violation 0 whatever A x is), such as
-  // the reserved rows of a level that is not augmented; their A x is set to 0. Set by loadData().
+  // the reserved rows of a level that is not augmented; their A x is set to 0, and their norms
+  // are not computed (HlsFactorization::computeRowNorms). Set by loadData().
   std::vector<int> axRuns, axRunsOff;
   void findAxRuns();
   double target(int gid) const;
@@ -364,8 +365,6 @@ void Solver::Impl::loadData(const Problem& problem) {
   }
 #endif
   for (int kf = 0; kf < lg; ++kf) fact.setLevelMatrix(kf, &problem.level(kf + first).A, problem.level(kf + first).columns);
-  fact.computeRowNorms();
-  if (M > 0) rowNorm.head(M) = fact.rowNorms().head(M);
   for (int kf = 0; kf < lg; ++kf) {
     const Level& lv = problem.level(kf + first);
     const int off = fact.rowOffset(kf);
@@ -373,6 +372,9 @@ void Solver::Impl::loadData(const Problem& problem) {
     up.segment(off, lv.rows()) = lv.upper;
   }
   findAxRuns();
+  // The norms of free rows are never read (they are never active, and never block a step).
+  fact.computeRowNorms(&axRuns, &axRunsOff);
+  if (M > 0) rowNorm.head(M) = fact.rowNorms().head(M);
   // The elimination stage needs a first general level of equality rows only.
   bool allEq = lg > 0 && rowsOf[static_cast<size_t>(first)] > 0;
   if (allEq) {
@@ -500,8 +502,8 @@ void Solver::Impl::updateFreeVariables() {
 void Solver::Impl::findAxRuns() {
   // Free rows between constraining ones are multiplied too when fewer than kGap of them lie
   // between (one product instead of two). A run has two rows at least (a free neighbour joins a
-  // lone row): Eigen multiplies a single row as a dot product, whose sum is not the
-  // matrix-vector product's.
+  // lone row): Eigen multiplies a single row as a dot product, whose sum can differ from the
+  // matrix-vector product's (seen with 130 columns).
   constexpr int kGap = 4;
   axRuns.clear();
   for (int kf = 0; kf < lg; ++kf) {
@@ -1034,6 +1036,7 @@ void Solver::Impl::checkFiniteResult() {
     out.status = Status::NonFiniteResult;
     out.reason = StopReason::NonFiniteResult;
     out.optimal_through = -1;
+    lambdaTailsZero = false;  // the next solve zeroes every multiplier
   }
 }
 
@@ -1105,6 +1108,7 @@ void Solver::Impl::finish() {
     if (!levelNz[static_cast<size_t>(kf)]) continue;
     ensureMult(kf);
     auto col = out.lambda.col(l);
+    const int colRows = stackOff[static_cast<size_t>(l)] + rowsOf[static_cast<size_t>(l)];
     for (int j = 0; j <= kf; ++j)
       for (int gid : fact.activeList(j)) col(rowOf(gid)) = muAll(gid, kf);
     for (int q = 0; q < nFixed; ++q) {
@@ -1149,7 +1153,9 @@ void Solver::Impl::finish() {
           need(stackOff[0] + r, st, std::abs(bl->coefficient(r)));
         }
       }
-      if (t > 0.0) col += t * ci;
+      // Over the column's own rows only: below them both columns hold +0 (t * 0 adds +0 to +0),
+      // and an infinite t would put NaN there, which the next solve would not clear.
+      if (t > 0.0) col.head(colRows) += t * ci.head(colRows);
     }
   }
 }

@@ -212,7 +212,7 @@ class TaskModel {
 
  protected:
   /// Sizes the base members of d for this task (A rows x nx, bounds, error, J rows x nv,
-  /// engaged, target) and zeroes them; with `engaged`, every row is marked engaged (rows that
+  /// engaged, held, target) and zeroes them; with `engaged`, every row is marked engaged (rows that
   /// always constrain the solution). Used by createData() overrides of derived data types.
   void initData(TaskData& d, const ContactLayout& layout, bool engaged = false) const;
   /// A new data of type D (TaskData or derived from it) set up by initData().

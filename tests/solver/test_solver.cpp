@@ -627,12 +627,37 @@ TEST(Solver, DeclaredLeadingColumnsKeepEveryBit) {
   EXPECT_NO_THROW(p.validate("test"));
 }
 
+// Each multiplier column is zeroed over its own and earlier levels' rows only, so nothing may
+// be written below them. A correction by an earlier level's column with an infinite factor (a
+// hold of 1e-100 against a multiplier of 1e300) makes that solve's result non-finite; the next
+// solve, of a harmless problem, must be solved with the bits of a fresh solver's.
+TEST(Solver, AnInfiniteCorrectionDoesNotOutliveItsSolve) {
+  auto build = [](double t1, double t2) {
+    Problem p(2);
+    p.addLevel("x1 >= 0", mat(1, 2, {0, 1}), vec({0}), vec({kInf}));
+    p.addLevel("x1 = t1", mat(1, 2, {0, 1}), vec({t1}), vec({t1}));
+    p.addLevel("x1 = t2", mat(1, 2, {0, 1}), vec({t2}), vec({t2}));
+    p.addLevel("x0 = 0", mat(1, 2, {1, 0}), vec({0}), vec({0}));
+    return p;
+  };
+  const Problem bad = build(-1e-100, 1e300), good = build(1.0, 2.0);
+  Solver a, fresh;
+  a.setup(bad);
+  fresh.setup(good);
+  const Result& r0 = a.solve(bad);
+  EXPECT_EQ(r0.status, Status::NonFiniteResult);
+  expectSameResult(a.solve(good), fresh.solve(good), "after the non-finite result");
+  EXPECT_EQ(a.result().status, Status::Solved);
+  EXPECT_TRUE(a.result().lambda.allFinite());
+}
+
 // A x is formed for the rows that can constrain only: runs of them, with fewer than four free
-// rows (bounds -inf and +inf) between, each run of two rows at least; a free row's A x is 0. The
-// free rows' coefficients then matter nowhere (the same problem with other values there gives
-// every bit of the result), and the violations of the other rows are those of their A x,
-// computed here independently, cold and warm; free rows alone, in runs, at a level's end (the
-// controller's reserved rows), every other row, beyond 128 columns too.
+// rows (bounds -inf and +inf) between, each run of two rows at least; a free row's A x is 0, and
+// its norm is not computed. Every bit of the result is that of the same problem whose free rows
+// have bounds of -1e300 and 1e300 instead (rows that are multiplied and never block), and of
+// the same problem with other coefficients in its free rows; the violations of the other rows
+// are those of their A x, computed here independently; cold and warm; free rows alone, in runs,
+// at a level's end (the controller's reserved rows), every other row, beyond 128 columns too.
 TEST(Solver, FreeRowsLeftOutOfAxKeepEveryBit) {
   GenOptions g;
   int freeRows = 0, levelsWithFree = 0;
@@ -661,11 +686,14 @@ TEST(Solver, FreeRowsLeftOutOfAxKeepEveryBit) {
       }
       levelsWithFree += any ? 1 : 0;
     }
-    Problem q = p;
+    Problem q = p, wide = p;
     for (int l = 0; l < q.levelCount(); ++l)
       for (int r = 0; r < q.level(l).rows(); ++r)
-        if (isFree[static_cast<size_t>(l)][static_cast<size_t>(r)])
+        if (isFree[static_cast<size_t>(l)][static_cast<size_t>(r)]) {
           for (int c = 0; c < g.n; ++c) q.level(l).A(r, c) = u(rng) * 1e3;
+          wide.level(l).lower(r) = -1e300;
+          wide.level(l).upper(r) = 1e300;
+        }
     auto checkViolations = [&](const Problem& pb, const Result& res, const std::string& what) {
       for (int l = 0; l < pb.levelCount(); ++l) {
         const Level& lv = pb.level(l);
@@ -683,23 +711,28 @@ TEST(Solver, FreeRowsLeftOutOfAxKeepEveryBit) {
         }
       }
     };
-    Solver a, b;
+    Solver a, b, w;
     const Result& ra = solveOnce(a, p);
     const Result& rb = solveOnce(b, q);
+    const Result& rw = solveOnce(w, wide);
     expectSameResult(ra, rb, "cold, seed " + std::to_string(seed));
+    expectSameResult(ra, rw, "cold, wide bounds, seed " + std::to_string(seed));
     checkViolations(p, ra, "cold, seed " + std::to_string(seed));
     // Warm, from the answer, with the constraining rows' bounds moved.
-    Problem p2 = p, q2 = q;
+    Problem p2 = p, q2 = q, wide2 = wide;
     for (int l = 0; l < p.levelCount(); ++l) {
       if (p.level(l).kind != LevelKind::General) continue;
       p2.level(l).lower.array() -= 0.125;
       q2.level(l).lower.array() -= 0.125;
+      wide2.level(l).lower.array() -= 0.125;
     }
     const ActiveSet act = ra.active;
     const Eigen::VectorXd x0 = ra.x;
     const Result& wa = a.solve(p2, act, x0);
     const Result& wb = b.solve(q2, act, x0);
+    const Result& ww = w.solve(wide2, act, x0);
     expectSameResult(wa, wb, "warm, seed " + std::to_string(seed));
+    expectSameResult(wa, ww, "warm, wide bounds, seed " + std::to_string(seed));
     checkViolations(p2, wa, "warm, seed " + std::to_string(seed));
   }
   EXPECT_GE(levelsWithFree, 150);
@@ -867,6 +900,67 @@ TEST(Solver, RowNormsOverDeclaredColumnsKeepEveryBit) {
     }
   }
   EXPECT_GE(cut, 500);
+}
+
+// HlsFactorization::computeRowNorms with runs of rows (the solver leaves free rows out) gives
+// each row of a run the bits of the whole levels' computation: Eigen forms an aligned pair of
+// rows together and an unaligned first or last row alone, so each run is widened to aligned
+// ends. Any counts of rows and columns, declared columns, levels at odd and even offsets, runs
+// of any length and gap. Fails without the widening.
+TEST(Solver, RowNormsOfRunsKeepTheBits) {
+  std::mt19937_64 rng(78);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  long rowsChecked = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int n = 1 + static_cast<int>(rng() % 130);
+    const int levels = 1 + static_cast<int>(rng() % 4);
+    std::vector<int> rows;
+    std::vector<Eigen::MatrixXd> A;
+    std::vector<int> cols;
+    for (int k = 0; k < levels; ++k) {
+      rows.push_back(1 + static_cast<int>(rng() % 60));
+      const int c = rng() % 3 == 0 ? -1 : 1 + static_cast<int>(rng() % static_cast<std::uint64_t>(n));
+      Eigen::MatrixXd a = Eigen::MatrixXd::Zero(rows.back(), n);
+      for (int j = 0; j < (c < 0 ? n : c); ++j)
+        for (int i = 0; i < rows.back(); ++i) a(i, j) = u(rng) * std::ldexp(1.0, static_cast<int>(rng() % 40) - 20);
+      A.push_back(a);
+      cols.push_back(c);
+    }
+    HlsFactorization whole, parts;
+    whole.setup(n, rows);
+    parts.setup(n, rows);
+    std::vector<int> runs, runsOff;
+    std::vector<std::vector<char>> want(static_cast<size_t>(levels));
+    for (int k = 0; k < levels; ++k) {
+      whole.setLevelMatrix(k, &A[static_cast<size_t>(k)], cols[static_cast<size_t>(k)]);
+      parts.setLevelMatrix(k, &A[static_cast<size_t>(k)], cols[static_cast<size_t>(k)]);
+      runsOff.push_back(static_cast<int>(runs.size()));
+      const int m = rows[static_cast<size_t>(k)];
+      want[static_cast<size_t>(k)].assign(static_cast<size_t>(m), 0);
+      for (int r = 0; r < m;) {
+        const int len = 1 + static_cast<int>(rng() % 6), gap = static_cast<int>(rng() % 5);
+        const int e = std::min(m, r + len);
+        if (rng() % 4 != 0) {
+          runs.push_back(r);
+          runs.push_back(e);
+          for (int q = r; q < e; ++q) want[static_cast<size_t>(k)][static_cast<size_t>(q)] = 1;
+        }
+        r = e + gap;
+      }
+    }
+    runsOff.push_back(static_cast<int>(runs.size()));
+    whole.computeRowNorms();
+    parts.computeRowNorms(&runs, &runsOff);
+    for (int k = 0, off = 0; k < levels; off += rows[static_cast<size_t>(k)], ++k) {
+      for (int r = 0; r < rows[static_cast<size_t>(k)]; ++r) {
+        if (!want[static_cast<size_t>(k)][static_cast<size_t>(r)]) continue;
+        ++rowsChecked;
+        const double a = whole.rowNorms()(off + r), b = parts.rowNorms()(off + r);
+        ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << "trial " << trial << " level " << k << " row " << r;
+      }
+    }
+  }
+  EXPECT_GE(rowsChecked, 10000);
 }
 
 // The start of the split-coordinate and spanning-stage hierarchies: n variables in two halves,

@@ -68,9 +68,14 @@ class HlsFactorization {
   /// squares from the first column on in groups of four after the first, so the sum over the
   /// leading 4 q + 1 columns that hold the nonzero ones and lie within the full sum's groups adds
   /// the same terms in the same order, and the full sum only adds exact zeros after them.
-  static void rowNorms(const Eigen::MatrixXd& A, int columns, Eigen::Ref<Eigen::VectorXd> rn);
-  /// Recomputes the original row norms (call after the row data changed).
-  void computeRowNorms();
+  static void rowNorms(const Eigen::Ref<const Eigen::MatrixXd>& A, int columns, Eigen::Ref<Eigen::VectorXd> rn);
+  /// Recomputes the original row norms (call after the row data changed). With `runs`, only
+  /// the rows of level k's runs [b, e) (level-relative, in pairs at runs[runsOff[k] ..
+  /// runsOff[k + 1])) are computed; the others are left 0 or a norm, for rows that no stage or
+  /// test reads (free rows). Each run is widened to start and end on a 16-byte boundary of the norms (unless at
+  /// the level's ends), so that each row's norm takes the same path (two rows at a time, or
+  /// alone) as in the level's whole computation: the same bits (RowNormsOfRunsKeepTheBits).
+  void computeRowNorms(const std::vector<int>* runs = nullptr, const std::vector<int>* runsOff = nullptr);
   const Eigen::VectorXd& rowNorms() const { return rowNorm_; }
 
   /// Allows the elimination stage for general level 0 (all its rows are equalities, always
