@@ -17,6 +17,8 @@
 // points held on their bodies, whose first derivative is checked to be TaskData::J.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 
 #include "lexdyn/tasks/com.hpp"
@@ -236,6 +238,7 @@ TEST(SelfCollisionHessian, WitnessPointApproximationMatchesItsDefinition) {
   const SelfCollisionTask task("collisions", fx.model);
   auto dptr = task.createData(fx.layout);
   auto& d = static_cast<SelfCollisionTaskData&>(*dptr);
+  std::fill(d.held.begin(), d.held.end(), 1);  // every row's J, free rows' too (free_row_jacobians)
   const int nv = fx.model.nv();
   for (int trial = 0; trial < 2; ++trial) {
     fx.set(rs.configuration(fx.model), rs.velocity(fx.model, 1.0));
