@@ -19,6 +19,16 @@ namespace lexdyn::model {
 
 namespace {
 
+// X = 0 at the speed of a fill: Eigen's setZero() on a Ref with a run-time outer stride goes
+// entry by entry (about 13 instructions an entry for a 3 x nv Jacobian). The same +0 entries.
+void zeroFill(Eigen::Ref<Eigen::MatrixXd> X) {
+  if (X.outerStride() == X.rows()) {
+    std::fill_n(X.data(), X.size(), 0.0);
+    return;
+  }
+  for (Eigen::Index c = 0; c < X.cols(); ++c) std::fill_n(X.col(c).data(), X.rows(), 0.0);
+}
+
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d S;
   S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
@@ -581,7 +591,7 @@ void massMatrixOfTree(const detail::RobotModelImpl& m, detail::ModelDataImpl& d,
   for (int b = m.nb - 1; b > 0; --b) {
     d.composite[static_cast<size_t>(m.tree.bodies[static_cast<size_t>(b)].parent)] += d.composite[static_cast<size_t>(b)];
   }
-  M.setZero();
+  zeroFill(M);
   for (int b = 0; b < m.nb; ++b) {
     const KinematicTree::Body& B = m.tree.bodies[static_cast<size_t>(b)];
     for (int i : B.dofs) {
@@ -692,7 +702,7 @@ void RobotModel::pointJacobian(const ModelData& data, FrameId f, const Eigen::Ve
     reduceColumns(m, d.J_tree, 3, J);
     return;
   }
-  J.setZero();
+  zeroFill(J);
   for (int k : m.tree.bodies[static_cast<size_t>(b)].ancestor_dofs) {
     J.col(k) = d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(p);
   }
@@ -713,7 +723,7 @@ void RobotModel::frameJacobian(const ModelData& data, FrameId f, Eigen::Ref<Eige
     reduceColumns(m, d.J_tree, 6, J);
     return;
   }
-  J.setZero();
+  zeroFill(J);
   for (int k : m.tree.bodies[static_cast<size_t>(b)].ancestor_dofs) {
     J.col(k).head<3>() = d.S.col(k).tail<3>() + d.S.col(k).head<3>().cross(p);
     J.col(k).tail<3>() = d.S.col(k).head<3>();
