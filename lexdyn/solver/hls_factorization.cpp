@@ -349,7 +349,9 @@ void HlsFactorization::computeRowNorms(const std::vector<int>* runs, const std::
       continue;
     }
     // Eigen forms the norms of an aligned pair of rows together and an unaligned first or last
-    // row alone, each way with its own order of the sums.
+    // row alone, each way with its own order of the sums. Pairs: packets of two doubles (SSE2,
+    // 16 bytes; the build enables no wider vectors).
+    static_assert(Eigen::internal::packet_traits<double>::size == 2, "row-norm runs assume packets of two doubles");
     auto misaligned = [&](int r) { return (reinterpret_cast<std::uintptr_t>(rn.data() + r) % 16) != 0; };
     rn.setZero();
     for (int q = q0; q < q1; q += 2) {

@@ -323,14 +323,24 @@ void Solver::Impl::checkCompatible(const Problem& problem) const {
 
 bool Solver::Impl::scanNonFinite(const Problem& problem) {
   // Fast path: the row norms (computed by loadData) are finite exactly when the rows are finite,
-  // barring overflow; the row-by-row scan below only runs to locate a problem.
+  // barring overflow; the rows whose norms were not computed (free rows outside axRuns) are
+  // checked here, over the declared columns; the row-by-row scan below only runs to locate a
+  // problem.
   for (int l = 0; l < p; ++l) {
     const Level& lv = problem.level(l);
     const bool boundsOk = !lv.lower.hasNaN() && !lv.upper.hasNaN() && (lv.lower.array() <= lv.upper.array()).all();
     bool dataOk;
     if (lv.kind == LevelKind::General) {
-      const int off = fact.rowOffset(l - first);
+      const int kf = l - first;
+      const int off = fact.rowOffset(kf);
       dataOk = lv.rows() == 0 || allFiniteFast(rowNorm.segment(off, lv.rows()));
+      const int c = lv.columns >= 1 ? lv.columns : n;
+      int from = 0;  // the next row not yet known to be in a run
+      for (int q = axRunsOff[static_cast<size_t>(kf)]; dataOk && q <= axRunsOff[static_cast<size_t>(kf + 1)]; q += 2) {
+        const int to = q < axRunsOff[static_cast<size_t>(kf + 1)] ? axRuns[static_cast<size_t>(q)] : lv.rows();
+        if (to > from) dataOk = allFiniteFast(lv.A.block(from, 0, to - from, c));
+        if (q < axRunsOff[static_cast<size_t>(kf + 1)]) from = axRuns[static_cast<size_t>(q + 1)];
+      }
     } else {
       dataOk = lv.coefficient.allFinite() && (lv.coefficient.array() != 0.0).all();
     }
@@ -1060,8 +1070,10 @@ void Solver::Impl::finish() {
     const int off = fact.rowOffset(kf);
     auto& vl = out.violation[static_cast<size_t>(kf + first)];
     for (int r = 0; r < vl.size(); ++r) {
+      // A free row's violation is 0 (also where its a x, formed within a run, overflowed).
       const double ax = Ax(off + r);
-      vl(r) = ax - std::min(std::max(ax, lo(off + r)), up(off + r));
+      const bool free = lo(off + r) == -kInf && up(off + r) == kInf;
+      vl(r) = free ? 0.0 : ax - std::min(std::max(ax, lo(off + r)), up(off + r));
     }
   }
   for (int l = 0; l < p; ++l) out.violation_norm(l) = out.violation[static_cast<size_t>(l)].norm();

@@ -739,6 +739,44 @@ TEST(Solver, FreeRowsLeftOutOfAxKeepEveryBit) {
   EXPECT_GE(freeRows, 600);
 }
 
+// Free rows are left out of the row norms, whose finiteness stands for the rows'; their own
+// coefficients are still checked: a NaN or an infinity anywhere in a free row, outside or inside
+// a run of constraining rows, alone or in an all-free level, is NonFiniteInput naming its row.
+TEST(Solver, NonFiniteCoefficientsOfFreeRowsAreRefused) {
+  std::mt19937_64 rng(81);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int refused = 0;
+  for (int pattern = 0; pattern < 3; ++pattern) {
+    for (int bad = 0; bad < 12; ++bad) {
+      for (const double value : {std::numeric_limits<double>::quiet_NaN(), kInf, -kInf}) {
+        Problem p(5);
+        Eigen::MatrixXd A0(2, 5), A1(12, 5);
+        for (Eigen::Index k = 0; k < A0.size(); ++k) A0.data()[k] = u(rng);
+        for (Eigen::Index k = 0; k < A1.size(); ++k) A1.data()[k] = u(rng);
+        Eigen::VectorXd lo = Eigen::VectorXd::Constant(12, -1.0), up = Eigen::VectorXd::Constant(12, 1.0);
+        for (int r = 0; r < 12; ++r) {
+          // 0: rows 2.. free (a run of two, then free); 1: every row free; 2: rows 0 and 11 held
+          // around free ones (the gap of ten lies outside any run).
+          const bool f = pattern == 0 ? r >= 2 : pattern == 1 ? true : (r != 0 && r != 11);
+          if (f) lo(r) = -kInf, up(r) = kInf;
+        }
+        p.addLevel("first", A0, vec({0, 0}), vec({0, 0}));
+        p.addLevel("rows", A1, lo, up);
+        Solver s;
+        s.setup(p);  // finite; the solve's data carry the bad value
+        Problem q = p;
+        q.level(1).A(bad, static_cast<int>(rng() % 5)) = value;
+        const Result& r = s.solve(q);
+        ASSERT_EQ(r.status, Status::NonFiniteInput) << "pattern " << pattern << " row " << bad;
+        EXPECT_EQ(r.bad_level, 1);
+        EXPECT_EQ(r.bad_row, bad);
+        ++refused;
+      }
+    }
+  }
+  EXPECT_EQ(refused, 3 * 12 * 3);
+}
+
 // The factorisation reads a level's adjacent active rows two or four at a time (one load per pair
 // of rows and column) and other rows one at a time. Rows that never become active (bounds of
 // -inf and +inf) put between a level's rows break those runs and change nothing else that the
