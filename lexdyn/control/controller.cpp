@@ -428,30 +428,21 @@ const Command& Controller::tick(const RobotState& s) {
     rec.task_engaged_rows[i] = engaged;
     rec.task_active_rows[i] = 0;
   }
-  // TaskData::held: the rows active in this solve (read at the next tick).
-  for (size_t b = 0; b < I.boundsTasks.size(); ++b) {
-    const int t = I.boundsTasks[b];
+  // TaskData::held: the task's rows active in this solve (read at the next tick), from the
+  // problem level's states starting at row `first`; their count is recorded.
+  auto recordHeld = [&](int t, const std::vector<solver::RowState>& states, int first) {
     std::vector<char>& h = I.td[z(t)]->held;
     int held = 0;
-    for (int k = 0; k < I.cfg.tasks[z(t)]->rows(); ++k) {
-      h[z(k)] = r.active.level[0][z(I.boundsFirstRow[b] + k)] != solver::RowState::Inactive ? 1 : 0;
-      held += h[z(k)];
+    for (size_t k = 0; k < h.size(); ++k) {
+      h[k] = states[z(first) + k] != solver::RowState::Inactive ? 1 : 0;
+      held += h[k];
     }
     rec.task_active_rows[z(t)] = held;
-  }
+  };
+  for (size_t b = 0; b < I.boundsTasks.size(); ++b) recordHeld(I.boundsTasks[b], r.active.level[0], I.boundsFirstRow[b]);
   rec.level_violation.setZero();
   for (const SolverLevel& lv : I.levels) {
-    const auto& act = r.active.level[z(lv.problem_level)];
-    for (const TaskSlot& sl : lv.slots) {
-      std::vector<char>& h = I.td[z(sl.task)]->held;
-      int held = 0;
-      const int m = I.cfg.tasks[z(sl.task)]->rows();
-      for (int k = 0; k < m; ++k) {
-        h[z(k)] = act[z(sl.row + k)] != solver::RowState::Inactive ? 1 : 0;
-        held += h[z(k)];
-      }
-      rec.task_active_rows[z(sl.task)] = held;
-    }
+    for (const TaskSlot& sl : lv.slots) recordHeld(sl.task, r.active.level[z(lv.problem_level)], sl.row);
     const double v = r.violation[z(lv.problem_level)].head(lv.task_rows).norm();
     double& lvv = rec.level_violation(lv.config_level);
     lvv = std::sqrt(lvv * lvv + v * v);

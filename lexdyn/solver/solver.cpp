@@ -187,6 +187,8 @@ struct Solver::Impl {
   // are not computed (HlsFactorization::computeRowNorms). Set by loadData().
   std::vector<int> axRuns, axRunsOff;
   void findAxRuns();
+  // Row gid constrains nothing: lower -inf and upper +inf.
+  bool freeRow(int gid) const { return lo(gid) == -kInf && up(gid) == kInf; }
   double target(int gid) const;
   void buildTargets();
   void solveEquality();
@@ -335,11 +337,13 @@ bool Solver::Impl::scanNonFinite(const Problem& problem) {
       const int off = fact.rowOffset(kf);
       dataOk = lv.rows() == 0 || allFiniteFast(rowNorm.segment(off, lv.rows()));
       const int c = lv.columns >= 1 ? lv.columns : n;
-      int from = 0;  // the next row not yet known to be in a run
-      for (int q = axRunsOff[static_cast<size_t>(kf)]; dataOk && q <= axRunsOff[static_cast<size_t>(kf + 1)]; q += 2) {
-        const int to = q < axRunsOff[static_cast<size_t>(kf + 1)] ? axRuns[static_cast<size_t>(q)] : lv.rows();
+      // The gaps between the runs [from, to), the last one up to the level's end.
+      const int q1 = axRunsOff[static_cast<size_t>(kf + 1)];
+      int from = 0;
+      for (int q = axRunsOff[static_cast<size_t>(kf)]; dataOk && q <= q1; q += 2) {
+        const int to = q < q1 ? axRuns[static_cast<size_t>(q)] : lv.rows();
         if (to > from) dataOk = allFiniteFast(lv.A.block(from, 0, to - from, c));
-        if (q < axRunsOff[static_cast<size_t>(kf + 1)]) from = axRuns[static_cast<size_t>(q + 1)];
+        if (q < q1) from = axRuns[static_cast<size_t>(q + 1)];
       }
     } else {
       dataOk = lv.coefficient.allFinite() && (lv.coefficient.array() != 0.0).all();
@@ -532,7 +536,7 @@ void Solver::Impl::findAxRuns() {
       axRuns.insert(axRuns.end(), {begin, end});
     };
     for (int r = 0; r < m; ++r) {
-      if (lo(off + r) == -kInf && up(off + r) == kInf) continue;
+      if (freeRow(off + r)) continue;
       if (begin >= 0 && r - end < kGap) {
         end = r + 1;
         continue;
@@ -1072,8 +1076,7 @@ void Solver::Impl::finish() {
     for (int r = 0; r < vl.size(); ++r) {
       // A free row's violation is 0 (also where its a x, formed within a run, overflowed).
       const double ax = Ax(off + r);
-      const bool free = lo(off + r) == -kInf && up(off + r) == kInf;
-      vl(r) = free ? 0.0 : ax - std::min(std::max(ax, lo(off + r)), up(off + r));
+      vl(r) = freeRow(off + r) ? 0.0 : ax - std::min(std::max(ax, lo(off + r)), up(off + r));
     }
   }
   for (int l = 0; l < p; ++l) out.violation_norm(l) = out.violation[static_cast<size_t>(l)].norm();
