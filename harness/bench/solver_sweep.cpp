@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
   long exactEvery = 0;
   int maxIterations = Options{}.max_iterations;
   bool spanning = false, spanningAny = false, spanningStructured = false, lazy = false, suffix = false, noBoundRestarts = false,
-       controllerShaped = false, warmToo = false;
+       noSwaps = false, controllerShaped = false, warmToo = false;
   double unitLevels = 0.0;
   bool brute = false;
   double exactTimeLimit = 0.0;
@@ -91,6 +91,7 @@ int main(int argc, char** argv) {
   app.add_flag("--lazy-snapshots", lazy, "solve with Options::lazy_snapshots (docs/solver.md)");
   app.add_flag("--unit-suffix", suffix, "solve with Options::project_unit_suffix (docs/solver.md)");
   app.add_flag("--no-restart-after-bound-change", noBoundRestarts, "solve with Options::restart_after_bound_change off (docs/solver.md)");
+  app.add_flag("--no-swap-reflectors", noSwaps, "solve with Options::swap_reflectors off (docs/solver.md)");
   app.add_option("--unit-levels", unitLevels, "probability that a level is made of single-variable rows, in [0, 1]")
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--controller-shaped", controllerShaped,
@@ -141,7 +142,7 @@ int main(int argc, char** argv) {
                               (spanning ? " --spanning-stages" : "") + (spanningAny ? " --spanning-any-rows" : "") +
                               (spanningStructured ? " --spanning-structured" : "") + (lazy ? " --lazy-snapshots" : "") +
                               (suffix ? " --unit-suffix" : "") + (noBoundRestarts ? " --no-restart-after-bound-change" : "") +
-                              (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "") +
+                              (noSwaps ? " --no-swap-reflectors" : "") + (unitLevels > 0.0 ? " --unit-levels " + unitLevelsText : "") +
                               (controllerShaped ? " --controller-shaped" : "") + (warmToo && !controllerShaped ? " --warm" : "");
   Options solverOptions;
   solverOptions.max_iterations = maxIterations;
@@ -151,24 +152,28 @@ int main(int argc, char** argv) {
   solverOptions.lazy_snapshots = lazy;
   solverOptions.project_unit_suffix = suffix;
   solverOptions.restart_after_bound_change = !noBoundRestarts;
+  solverOptions.swap_reflectors = !noSwaps;
   // The counts of the problems finished; one interrupted in its exact check is not counted (its
   // counts are taken back whole).
   struct Counts {
     long done = 0, solved = 0, failures = 0, capHits = 0, nonFinite = 0, kktFlagged = 0, exactChecked = 0, exactCleared = 0,
          exactConfirmed = 0, exactUndecided = 0, exactOutOfTime = 0, exactOutOfWork = 0, exactMaxWork = 0, disagreements = 0,
-         bruteChecked = 0, held = 0, cycles = 0, iters = 0, maxIt = 0, warmChecked = 0, splitApplied = 0, boundRestarts = 0;
+         bruteChecked = 0, held = 0, cycles = 0, coldRestarts = 0, iters = 0, maxIt = 0, warmChecked = 0, splitApplied = 0,
+         boundRestarts = 0;
   } n;
   long &done = n.done, &solved = n.solved, &failures = n.failures, &capHits = n.capHits, &nonFinite = n.nonFinite,
        &kktFlagged = n.kktFlagged, &exactChecked = n.exactChecked, &exactCleared = n.exactCleared, &exactConfirmed = n.exactConfirmed,
        &exactUndecided = n.exactUndecided, &exactOutOfTime = n.exactOutOfTime, &exactOutOfWork = n.exactOutOfWork,
        &exactMaxWork = n.exactMaxWork, &disagreements = n.disagreements, &bruteChecked = n.bruteChecked, &held = n.held, &cycles = n.cycles,
-       &iters = n.iters, &maxIt = n.maxIt, &warmChecked = n.warmChecked, &splitApplied = n.splitApplied, &boundRestarts = n.boundRestarts;
+       &coldRestarts = n.coldRestarts, &iters = n.iters, &maxIt = n.maxIt, &warmChecked = n.warmChecked, &splitApplied = n.splitApplied,
+       &boundRestarts = n.boundRestarts;
   const auto t0 = std::chrono::steady_clock::now();
   // Checks one result (status, certificate, exact reference): the failure's text, or "" when it
   // passes. Sets `interrupted` when a signal stopped its exact check (then nothing is decided).
   auto verify = [&](std::uint64_t s, const char* what, const Problem& p, const Result& r, bool sample, bool& interrupted) -> std::string {
     held += r.held_after_reblock;
     cycles += r.cycles_broken;
+    coldRestarts += r.cold_restarts;
     iters += r.iterations;
     maxIt = std::max<long>(maxIt, r.iterations);
     boundRestarts += r.bound_change_restarts;
@@ -296,10 +301,10 @@ int main(int argc, char** argv) {
       "\"certificate_failures\": %ld, \"exact_checked\": %ld, \"exact_cleared\": %ld, \"exact_confirmed\": %ld, "
       "\"exact_undecided\": %ld, \"exact_out_of_work\": %ld, \"exact_out_of_time\": %ld, \"exact_max_work\": %ld, "
       "\"certificate_exact_disagreements\": %ld, \"brute_force_checked\": %ld, "
-      "\"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld, "
+      "\"held_after_reblock\": %ld, \"cycles_broken\": %ld, \"cold_restarts\": %ld, \"mean_iterations\": %.3f, \"max_iterations\": %ld, "
       "\"warm_checked\": %ld, \"split_applied\": %ld, \"bound_change_restarts\": %ld, \"seconds\": %.1f, \"interrupted\": %s}\n",
       done, solved, failures, capHits, nonFinite, kktFlagged, exactChecked, exactCleared, exactConfirmed, exactUndecided, exactOutOfWork,
-      exactOutOfTime, exactMaxWork, disagreements, bruteChecked, held, cycles,
+      exactOutOfTime, exactMaxWork, disagreements, bruteChecked, held, cycles, coldRestarts,
       solved ? static_cast<double>(iters) / static_cast<double>(solved + warmChecked) : 0.0, maxIt, warmChecked, splitApplied,
       boundRestarts, secs, g_signal.load() ? "true" : "false");
   if (g_signal.load()) return kExitInterrupted + g_signal.load();

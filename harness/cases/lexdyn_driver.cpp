@@ -206,17 +206,17 @@ void LexdynDriver::addMetadata(checks::TraceMetadata& md) const {
                       ", wls_infeasibility_tolerance " + num(p.wls_infeasibility_tolerance) + "; feed-forward torque " +
                       (I.lx.feedforward_torque ? "on" : "off") + "; state feedback " + I.lx.state_feedback);
   const solver::Options& o = p.solver;
-  md.emplace_back("solver_options",
-                  "max_iterations " + std::to_string(o.max_iterations) + ", rank_tolerance " + num(o.rank_tolerance) +
-                      ", feasibility_tolerance " + num(o.feasibility_tolerance) + ", zero_tolerance " + num(o.zero_tolerance) +
-                      ", dual_tolerance " + num(o.dual_tolerance) + ", stop_slack_norm " + num(o.stop_slack_norm) +
-                      ", stop_optimality_iterations " + std::to_string(o.stop_optimality_iterations) + ", stop_total_iterations " +
-                      std::to_string(o.stop_total_iterations) + ", split_force_coordinates " +
-                      (o.split_from_variable != -1 ? "true" : "false") + ", spanning_stages " + (o.spanning_stages ? "true" : "false") +
-                      ", lazy_snapshots " + (o.lazy_snapshots ? "true" : "false") + ", project_unit_suffix " +
-                      (o.project_unit_suffix ? "true" : "false") + ", restart_after_bound_change " +
-                      (o.restart_after_bound_change ? "true" : "false") + ", spanning_any_rows " +
-                      (o.spanning_any_rows ? "true" : "false") + ", spanning_structured " + (o.spanning_structured ? "true" : "false"));
+  md.emplace_back(
+      "solver_options",
+      "max_iterations " + std::to_string(o.max_iterations) + ", rank_tolerance " + num(o.rank_tolerance) + ", feasibility_tolerance " +
+          num(o.feasibility_tolerance) + ", zero_tolerance " + num(o.zero_tolerance) + ", dual_tolerance " + num(o.dual_tolerance) +
+          ", stop_slack_norm " + num(o.stop_slack_norm) + ", stop_optimality_iterations " + std::to_string(o.stop_optimality_iterations) +
+          ", stop_total_iterations " + std::to_string(o.stop_total_iterations) + ", split_force_coordinates " +
+          (o.split_from_variable != -1 ? "true" : "false") + ", spanning_stages " + (o.spanning_stages ? "true" : "false") +
+          ", lazy_snapshots " + (o.lazy_snapshots ? "true" : "false") + ", project_unit_suffix " +
+          (o.project_unit_suffix ? "true" : "false") + ", restart_after_bound_change " + (o.restart_after_bound_change ? "true" : "false") +
+          ", spanning_any_rows " + (o.spanning_any_rows ? "true" : "false") + ", spanning_structured " +
+          (o.spanning_structured ? "true" : "false") + ", swap_reflectors " + (o.swap_reflectors ? "true" : "false"));
   std::string h;
   for (const auto& l : I.lx.hierarchy(I.lx.method)) {
     h += (h.empty() ? "" : " | ") + l.name + ":";

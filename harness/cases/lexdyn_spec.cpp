@@ -86,6 +86,7 @@ solver::Options readSolver(yaml::StrictMap& sm, double dt) {
   if (auto v = sm.optional("lazy_snapshots")) o.lazy_snapshots = v->asBool();
   if (auto v = sm.optional("project_unit_suffix")) o.project_unit_suffix = v->asBool();
   if (auto v = sm.optional("restart_after_bound_change")) o.restart_after_bound_change = v->asBool();
+  if (auto v = sm.optional("swap_reflectors")) o.swap_reflectors = v->asBool();
   if (auto v = sm.optional("last_level_projection")) {
     const std::string mode = v->asString();
     if (mode == "auto") {

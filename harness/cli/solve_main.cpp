@@ -385,7 +385,7 @@ int main(int argc, char** argv) {
   CLI::App app{"lexdyn-solve: hierarchical least-squares solver (docs/solver.md)"};
   std::vector<std::string> files;
   bool bench = false, details = false, noBounds = false, warmOnly = false, spanning = false, spanningAny = false,
-       spanningStructured = false, lazy = false, suffix = false, noBoundRestarts = false, stageTimes = false;
+       spanningStructured = false, lazy = false, suffix = false, noBoundRestarts = false, noSwaps = false, stageTimes = false;
   bool defaultOptions = false;
   int maxIterations = 1000, repeats = 1, options_split = -1;
   double paperDt = 0.0;
@@ -409,6 +409,8 @@ int main(int argc, char** argv) {
   app.add_flag("--lazy-snapshots", lazy, "save restart snapshots only once a solve restarts (docs/solver.md)");
   app.add_flag("--no-restart-after-bound-change", noBoundRestarts,
                "factorise every level again after a variable is fixed at its bound or freed (docs/solver.md)");
+  app.add_flag("--no-swap-reflectors", noSwaps,
+               "apply the reflectors of unit columns by the generic arithmetic, not as exact swaps (docs/solver.md)");
   app.add_flag("--unit-suffix", suffix, "project the level before a projected last level too when its rows are unit rows (docs/solver.md)");
   app.add_flag("--details", details, "also print the active set, ranks and per-row violations");
   app.add_flag("--no-bounds-level", noBounds, "do not treat a first level of single-variable rows as bounds");
@@ -449,6 +451,7 @@ int main(int argc, char** argv) {
                                "needs spanning stages (--spanning-stages, or spanning_stages true in the file's solver_options)");
     if (lazy) o.lazy_snapshots = true;
     if (noBoundRestarts) o.restart_after_bound_change = false;
+    if (noSwaps) o.swap_reflectors = false;
     if (suffix) o.project_unit_suffix = true;
   };
   try {

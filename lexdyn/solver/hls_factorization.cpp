@@ -41,6 +41,30 @@ inline void applyReflector(const Ess& ess, double tau, X&& x) {
   if (len > 1) x.tail(len - 1).noalias() -= w * ess;
 }
 
+// A reflector v = [1; ess] whose ess has one nonzero, ess(j - 1) = sg = +-1, with tau = 1 (|v|^2 = 2):
+// I - v v^T swaps x(0) and x(j) and negates them times sg. The generic arithmetic of
+// applyReflector rounds (x(0) - (x(0) + sg x(j))); this is exact, and it reads two entries.
+template <typename X>
+inline void applySwapReflector(int j, double sg, X&& x) {
+  const double a = x(0);
+  x(0) = -sg * x(j);
+  x(j) = -sg * a;
+}
+
+// The offset of a reflector's one other nonzero when it swaps two coordinates (tau 1, ess a
+// single +-1: the stage's column was a unit vector on them), else 0.
+template <typename Ess>
+inline int swapOffset(const Ess& ess, double tau) {
+  if (tau != 1.0) return 0;
+  int at = 0;
+  for (Eigen::Index i = 0; i < ess.size(); ++i) {
+    if (ess(i) == 0.0) continue;
+    if (at != 0 || std::abs(ess(i)) != 1.0) return 0;
+    at = static_cast<int>(i) + 1;
+  }
+  return at;
+}
+
 inline size_t z(int i) { return static_cast<size_t>(i); }
 
 // The one nonzero of v[0 .. n): its index; -1 when all are zero, -2 when there are several.
@@ -240,6 +264,7 @@ void HlsFactorization::setup(int n, const std::vector<int>& rowsPerLevel) {
   colGid_.assign(z(colsW), -1);
   pos_.assign(z(mTot_), -1);
   tau_.setZero(colsW);
+  unitAt_.assign(z(colsW), 0);
   colNorm_.setZero(colsW);
   colNormRef_.setZero(colsW);
   colOrig_.setZero(colsW);
@@ -806,13 +831,23 @@ void HlsFactorization::gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Ei
   }
 }
 
+template <typename X>
+void HlsFactorization::applyStageReflector(int col, int top, int len, X&& x) const {
+  const int j = unitAt_[z(col)];
+  if (j > 0) {
+    applySwapReflector(j, W_(top + j, col), x);
+  } else {
+    applyReflector(W_.col(col).segment(top + 1, len - 1), tau_(col), x);
+  }
+}
+
 void HlsFactorization::applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int stages) const {
   for (int k = firstStage_; k < stages; ++k) {
     const int c0 = col0_[z(k)];
     const int s = start_[z(k)];
     for (int i = 0; i < refl_[z(k)]; ++i) {
       const int len = stageEnd_[z(k)] - c0 - i;
-      applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), col.segment(c0 + i, len));
+      applyStageReflector(s + i, c0 + i, len, col.segment(c0 + i, len));
     }
   }
 }
@@ -823,7 +858,7 @@ void HlsFactorization::applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int 
     const int s = start_[z(k)];
     for (int i = refl_[z(k)] - 1; i >= 0; --i) {
       const int len = stageEnd_[z(k)] - c0 - i;
-      applyReflector(W_.col(s + i).segment(c0 + i + 1, len - 1), tau_(s + i), col.segment(c0 + i, len));
+      applyStageReflector(s + i, c0 + i, len, col.segment(c0 + i, len));
     }
   }
 }
@@ -1146,9 +1181,11 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
     x(0) = beta;
     tau_(s + r) = tau;
     const auto ess = W_.col(s + r).segment(c0 + r + 1, d - r - 1);
+    const int sw = swaps_ ? swapOffset(ess, tau) : 0;
+    unitAt_[z(s + r)] = sw;
     double* top = pivotRow_.data();
     for (int j = r + 1; j < m; ++j) {
-      applyReflector(ess, tau, W_.col(s + j).segment(c0 + r, d - r));
+      applyStageReflector(s + r, c0 + r, d - r, W_.col(s + j).segment(c0 + r, d - r));
       top[j] = W_(c0 + r, s + j);
     }
     // Norm downdates of the remaining columns and their new ratios, all columns at once.
@@ -1175,9 +1212,21 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
   int rest = 0;
   for (int j = k + 1; j < L; ++j)
     if (!projected(j)) rest += act_[z(j)];  // a projected level is projected when its turn comes
+  // Every reflector a swap of two coordinates or the identity (tau 0: a unit column whose
+  // nonzero is already on the pivot row): a stage of unit rows, trust-region rows say.
+  bool swaps = swaps_;
+  for (int i = 0; i < r && swaps; ++i) swaps = unitAt_[z(s + i)] > 0 || tau_(s + i) == 0.0;
   if (rest > 0 && r > 0) {
     auto C = W_.block(c0, s + m, d, rest);
-    if (r <= kDirectReflectors) {
+    if (swaps) {
+      // The rows of C swapped and negated, exactly, instead of a product over all d rows.
+      for (int i = 0; i < r; ++i) {
+        const int j = unitAt_[z(s + i)];
+        if (j == 0) continue;  // the identity
+        const double sg = W_(c0 + i + j, s + i);
+        for (int q = 0; q < rest; ++q) applySwapReflector(j, sg, C.col(q).segment(i, d - i));
+      }
+    } else if (r <= kDirectReflectors) {
       // Few reflectors: apply them one by one (a matrix-vector product and a rank-one update
       // each); cheaper than forming the compact-WY factor for such small blocks.
       for (int i = 0; i < r; ++i) {

@@ -146,6 +146,7 @@ json optionsValue(const Options& o) {
   j["lazy_snapshots"] = o.lazy_snapshots;
   j["project_unit_suffix"] = o.project_unit_suffix;
   j["restart_after_bound_change"] = o.restart_after_bound_change;
+  j["swap_reflectors"] = o.swap_reflectors;
   j["max_iterations"] = o.max_iterations;
   j["bland_after_degenerate_steps"] = o.bland_after_degenerate_steps;
   j["cycle_tolerance_factor"] = o.cycle_tolerance_factor;
@@ -210,6 +211,7 @@ Options readOptions(const json& j, const std::string& where) {
   boolean("lazy_snapshots", o.lazy_snapshots);
   boolean("project_unit_suffix", o.project_unit_suffix);
   boolean("restart_after_bound_change", o.restart_after_bound_change);
+  boolean("swap_reflectors", o.swap_reflectors);
   integer("max_iterations", o.max_iterations);
   integer("bland_after_degenerate_steps", o.bland_after_degenerate_steps);
   number("cycle_tolerance_factor", o.cycle_tolerance_factor);

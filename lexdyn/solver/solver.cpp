@@ -34,6 +34,9 @@ bool allFiniteFast(const Eigen::DenseBase<Derived>& m) {
 
 // A motion no larger than this times the size of what moves is rounding: about 64 units in the
 // last place.
+// Working sets remembered for cycle detection (run()); a cold restart comes after as many repeats
+// at the largest tolerances.
+constexpr int kRecentWorkingSets = 64;
 constexpr double kRoundingMotion = 64.0 * std::numeric_limits<double>::epsilon();
 
 }  // namespace
@@ -140,6 +143,10 @@ struct Solver::Impl {
   // Cycle detection: Zobrist hash of the working set (fixed seed), recent hashes.
   std::vector<std::uint64_t> zRow, zVar;  // per gid / var: 3 keys (Lower, Upper, Equality)
   std::uint64_t wsHash = 0;
+  // A cold restart's starting point (run()): x, the working set, the levels known optimal.
+  Eigen::VectorXd savedX;
+  std::vector<RowState> savedVstate, savedState;
+  int savedThrough = -1;
   std::vector<std::uint64_t> recent;
   int recentPos = 0, recentCount = 0;
   double rankTol = 1e-9, dualTol = 1e-10;
@@ -268,7 +275,7 @@ void Solver::Impl::setup(const Problem& problem, const Options& o) {
     zVar.resize(static_cast<size_t>(3 * std::max(n, 1)));
     for (auto& v : zRow) v = rng();
     for (auto& v : zVar) v = rng();
-    recent.assign(64, 0);
+    recent.assign(kRecentWorkingSets, 0);
   }
   warmVar.assign(static_cast<size_t>(n), RowState::Inactive);
   warmX.setZero(n);
@@ -293,7 +300,7 @@ bool Solver::Impl::resultShaped() const {
 
 void Solver::Impl::resetCounters() {
   out.iterations = out.factorizations = out.bound_change_restarts = out.optimality_iterations = out.activations = out.deactivations = 0;
-  out.held_after_reblock = out.cycles_broken = out.projected_levels = out.spanning_stages = out.structured_stages = 0;
+  out.held_after_reblock = out.cycles_broken = out.cold_restarts = out.projected_levels = out.spanning_stages = out.structured_stages = 0;
   out.optimal_through = -1;
   out.last_level_projected = out.split_applied = false;
 }
@@ -401,6 +408,7 @@ void Solver::Impl::loadData(const Problem& problem) {
   fact.setLazySnapshots(opt.lazy_snapshots);
   fact.setProjectUnitSuffix(opt.project_unit_suffix);
   fact.setBoundChangeRestarts(opt.restart_after_bound_change);
+  fact.setSwapReflectors(opt.swap_reflectors);
   fact.setLastLevelMode(opt.last_level_projection == Options::LastLevel::Never    ? HlsFactorization::LastLevel::Standard
                         : opt.last_level_projection == Options::LastLevel::Always ? HlsFactorization::LastLevel::Projected
                                                                                   : HlsFactorization::LastLevel::Auto);
@@ -822,16 +830,24 @@ void Solver::Impl::run() {
   int degenerateRun = 0;
   bool bland = false;
   bool pending = false;  // the working set changed after the last equality solve
-  std::fill(tabooRow.begin(), tabooRow.end(), 0);
-  std::fill(tabooVar.begin(), tabooVar.end(), 0);
-  lastDropKind = lastDropIdx = -1;
-  rankTol = opt.rank_tolerance;
-  dualTol = opt.dual_tolerance;
   bool forceBland = false;
-  wsHash = 0;
-  for (int i = 0; i < n; ++i) hashFlip(0, i, vstate[static_cast<size_t>(i)]);
-  for (int g = 0; g < M; ++g) hashFlip(1, g, state[static_cast<size_t>(g)]);
-  recentCount = recentPos = 0;
+  bool restartedCold = false;
+  int repeatsRaised = 0;  // working sets repeated with the tolerances raised as far as they go
+  // The search's own state, from the working set in vstate / state.
+  auto beginSearch = [&]() {
+    degenerateRun = 0;
+    bland = forceBland = false;
+    std::fill(tabooRow.begin(), tabooRow.end(), 0);
+    std::fill(tabooVar.begin(), tabooVar.end(), 0);
+    lastDropKind = lastDropIdx = -1;
+    rankTol = opt.rank_tolerance;
+    dualTol = opt.dual_tolerance;
+    wsHash = 0;
+    for (int i = 0; i < n; ++i) hashFlip(0, i, vstate[static_cast<size_t>(i)]);
+    for (int g = 0; g < M; ++g) hashFlip(1, g, state[static_cast<size_t>(g)]);
+    recentCount = recentPos = 0;
+  };
+  beginSearch();
   out.status = Status::Solved;
   out.reason = StopReason::Optimal;
 
@@ -1003,7 +1019,33 @@ void Solver::Impl::run() {
     recent[static_cast<size_t>(recentPos)] = wsHash;
     recentPos = (recentPos + 1) % static_cast<int>(recent.size());
     recentCount = std::min(recentCount + 1, static_cast<int>(recent.size()));
-    if (repeated && (rankTol < 1e-6 || dualTol < 1e-6)) {
+    const bool raisedFully = rankTol >= 1e-6 && dualTol >= 1e-6;
+    if (repeated && raisedFully) ++repeatsRaised;
+    if (repeated && raisedFully && !restartedCold && repeatsRaised >= kRecentWorkingSets) {
+      // Working sets keep repeating with the tolerances already raised as far as they go (as
+      // many repeats as the hash window holds): a cycle among degenerate constraints that Bland's
+      // rule and the held constraints do not break (a warm start at a degenerate point can lead
+      // into one). The search starts again from the cold start, once per solve; the iterations
+      // before it are counted. A search that the paper's stop rules end sooner is not affected.
+      ++out.cycles_broken;
+      ++out.cold_restarts;
+      restartedCold = true;
+      // The point reached, kept in case the iteration budget ends the cold search before it is
+      // as far (below).
+      savedX = x;
+      savedVstate = vstate;
+      savedState = state;
+      savedThrough = out.optimal_through;
+      initCold();
+      startFromStates();
+      fact.invalidateAll();
+      beginSearch();
+      optPhase = false;
+      out.optimal_through = -1;
+      out.optimality_iterations = 0;  // the cold search's optimality phase counts afresh
+      pending = true;
+      if (opt.trace) std::fprintf(stderr, "   cycle at the largest tolerances: the search starts again cold\n");
+    } else if (repeated && !raisedFully) {
       ++out.cycles_broken;
       rankTol = std::min(1e-6, std::max(rankTol, rankTol * opt.cycle_tolerance_factor));
       dualTol = std::min(1e-6, std::max(dualTol, dualTol * opt.cycle_tolerance_factor));
@@ -1033,6 +1075,17 @@ void Solver::Impl::run() {
     }
   }
 
+  // A cold restart that the iteration budget (max_iterations, the paper's stop rules) cut before
+  // the cold search was as far as the point it left: that point is the answer, with its working
+  // set.
+  if (restartedCold && out.status != Status::Solved && out.optimal_through < savedThrough) {
+    x = savedX;
+    vstate = savedVstate;
+    state = savedState;
+    startFromStates();
+    out.optimal_through = savedThrough;
+    pending = true;
+  }
   if (opt.compute_multipliers && pending) {
     // Multipliers of the current working set (its equality solution; x itself is not moved).
     solveEquality();

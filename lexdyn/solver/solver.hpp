@@ -139,6 +139,15 @@ struct Options {
   /// The result is the same up to rounding (the restarted stages' rows are restored from the
   /// restart snapshots), and Result::factorizations counts the stages redone.
   bool restart_after_bound_change = true;
+  /// Swap reflectors. A stage's Householder reflector of a column with one nonzero (a unit row
+  /// on a reduced variable the earlier stages did not mix, as trust-region rows are) is
+  /// I - v v^T with v = e_i + s e_j: it swaps coordinates i and j and negates them. With this
+  /// option it is applied as that swap, exactly and reading two entries, to the stage's own
+  /// columns and wherever the earlier stages are applied, and to the later levels' rows when
+  /// every reflector of the stage is a swap (or the identity); without it, by the generic
+  /// arithmetic, which rounds and reads the whole segment (docs/solver.md, "Swap reflectors").
+  /// It changes the rounding where a stage has such reflectors.
+  bool swap_reflectors = true;
   /// Hard cap on active-set iterations (equality sub-problems solved).
   int max_iterations = 1000;
   /// After this many consecutive zero-length steps, ties are broken by smallest index (Bland).
@@ -209,8 +218,13 @@ struct Result {
   /// last level when Solved with StopReason::Optimal; -1 when nothing is known (e.g. stopped in
   /// the primal phase).
   int optimal_through = -1;
-  /// Cycles detected (a working set repeated) and broken by raising the tolerances.
+  /// Cycles detected (a working set repeated) and broken by raising the tolerances, or by a
+  /// cold restart (below).
   int cycles_broken = 0;
+  /// Searches started again from the cold start within this solve: working sets kept repeating
+  /// with the tolerances already raised as far as they go (at most 1; docs/solver.md,
+  /// "Anti-cycling").
+  int cold_restarts = 0;
   /// The last factorisation projected the last level (Options::last_level_projection).
   bool last_level_projected = false;
   /// Levels the last factorisation projected: 0, 1 (the last) or 2 (with

@@ -445,6 +445,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("spanning_structured", &ls::Options::spanning_structured)
       .def_readwrite("lazy_snapshots", &ls::Options::lazy_snapshots)
       .def_readwrite("restart_after_bound_change", &ls::Options::restart_after_bound_change)
+      .def_readwrite("swap_reflectors", &ls::Options::swap_reflectors)
       .def_readwrite("project_unit_suffix", &ls::Options::project_unit_suffix)
       .def_readwrite("max_iterations", &ls::Options::max_iterations)
       .def_readwrite("bland_after_degenerate_steps", &ls::Options::bland_after_degenerate_steps)
@@ -582,6 +583,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("held_after_reblock", &SolveResult::held_after_reblock)
       .def_readonly("optimal_through", &SolveResult::optimal_through)
       .def_readonly("cycles_broken", &SolveResult::cycles_broken)
+      .def_readonly("cold_restarts", &SolveResult::cold_restarts)
       .def_readonly("bad_level", &SolveResult::bad_level)
       .def_readonly("bad_row", &SolveResult::bad_row)
       .def_readonly("solve_us", &SolveResult::solve_us,

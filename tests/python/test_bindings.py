@@ -118,6 +118,27 @@ def test_restarts_after_a_bound_change_are_counted():
     assert_same_bits(on.x, off.x, "x")
 
 
+def test_swap_reflectors_and_a_cold_restart_after_an_unbroken_cycle():
+    # Two ticks of the GN controller (tests/data/solver/warm_cycle_*.json): warm-started from the
+    # first tick's answer, the second's search repeats a cycle the raised tolerances do not break
+    # and starts again cold; with the generic arithmetic for the unit columns' reflectors
+    # (swap_reflectors off) it takes another path. Both end at the same optimum.
+    data = os.path.join(ROOT, "tests", "data", "solver")
+    first = lexdyn.load_problem(os.path.join(data, "warm_cycle_306.json"))
+    second = lexdyn.load_problem(os.path.join(data, "warm_cycle_307.json"))
+    options = lexdyn.load_solver_options(os.path.join(data, "warm_cycle_307.json"))
+    assert options.swap_reflectors
+    results = {}
+    for swaps in (True, False):
+        options.swap_reflectors = swaps
+        solver = lexdyn.Solver(options)
+        r1 = solver.solve(first)
+        results[swaps] = solver.solve(second, warm=r1)
+        assert results[swaps].status == "solved"
+    assert results[True].cold_restarts == 1
+    assert np.allclose(results[True].level_violation, results[False].level_violation, rtol=1e-9, atol=1e-12)
+
+
 def test_a_problem_built_from_numpy_equals_the_file(problems):
     path = problems[0]
     read = lexdyn.load_problem(path, detect_bounds_level=False)

@@ -20,6 +20,6 @@ check "both in the trace's solver options" \
 "$ROOT/harness/scripts/full-runs.sh" -b "$BUILD" -o "$TMP/plain" -j 1 pointmass-damping.bfgs > /dev/null 2>&1
 check "defaults without -s" \
   grep -q '^# solver_options: .*spanning_stages true, lazy_snapshots true' "$TMP/plain/pointmass-damping.bfgs/trace.csv"
-check "the spanning stages of any rows and structured ones by default" \
-  grep -q '^# solver_options: .*spanning_any_rows true, spanning_structured true$' "$TMP/plain/pointmass-damping.bfgs/trace.csv"
+check "the spanning stages of any rows, structured ones and swap reflectors by default" \
+  grep -q '^# solver_options: .*spanning_any_rows true, spanning_structured true, swap_reflectors true$' "$TMP/plain/pointmass-damping.bfgs/trace.csv"
 exit "$fail"

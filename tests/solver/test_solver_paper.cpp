@@ -81,6 +81,51 @@ TEST(SolverRegression, DegenerateControllerTick) {
   for (int l = 0; l < 7; ++l) EXPECT_LT(r2.violation_norm(l), 1e-9) << "level " << l;
 }
 
+TEST(SolverRegression, AWarmStartIntoAnUnbrokenCycleStartsAgainCold) {
+  // Two consecutive ticks of the GN controller on the humanoid (the hands pulled behind the waist,
+  // then the state set back to the start; tests/control, FreeCollisionRowsHave...). Warm-started
+  // from the first tick's answer, the second's search reaches a point where contact forces sit at
+  // their floor together and releasing them one by one repeats a cycle of six working sets that
+  // neither the raised tolerances nor Bland's rule break (it hit the iteration cap); the search then
+  // starts again from the cold start, and ends at the cold solve's optimum.
+  const std::string dir = std::string(LEXDYN_SOURCE_DIR) + "/tests/data/solver/";
+  ProblemFile a = readProblemFile(dir + "warm_cycle_306.json");
+  ProblemFile b = readProblemFile(dir + "warm_cycle_307.json");
+  a.problem.detectBoundsLevel();
+  b.problem.detectBoundsLevel();
+  ASSERT_TRUE(a.options && b.options);
+  Solver s;
+  s.setup(a.problem, *a.options);
+  const Result first = s.solve(a.problem);
+  ASSERT_EQ(first.status, Status::Solved);
+  const Result& warm = s.solve(b.problem, first.active, first.x);
+  ASSERT_EQ(warm.status, Status::Solved);
+  EXPECT_EQ(warm.cold_restarts, 1);
+  EXPECT_LT(warm.iterations, 400);
+  EXPECT_EQ(test::checkKkt(b.problem, warm), "");
+  Solver c;
+  c.setup(b.problem, *b.options);
+  const Result& cold = c.solve(b.problem);
+  ASSERT_EQ(cold.status, Status::Solved);
+  EXPECT_EQ(cold.cold_restarts, 0);
+  for (int l = 0; l < b.problem.levelCount(); ++l)
+    EXPECT_NEAR(warm.violation_norm(l), cold.violation_norm(l), 1e-9 * (1.0 + cold.violation_norm(l))) << "level " << l;
+  // An iteration cap that ends the cold search early (100: the restart comes at 89): the answer
+  // is the point the restart left, not an early iterate of the cold search.
+  Options capped = *b.options;
+  capped.max_iterations = 100;
+  Solver t;
+  t.setup(a.problem, *a.options);
+  const Result again = t.solve(a.problem);
+  t.setOptions(capped);
+  const Result& cut = t.solve(b.problem, again.active, again.x);
+  EXPECT_EQ(cut.status, Status::IterationLimit);
+  EXPECT_EQ(cut.cold_restarts, 1);
+  ASSERT_GE(cut.optimal_through, 2);
+  for (int l = 0; l <= cut.optimal_through; ++l)
+    EXPECT_NEAR(cut.violation_norm(l), cold.violation_norm(l), 1e-9 * (1.0 + cold.violation_norm(l))) << "level " << l;
+}
+
 }  // namespace
 }  // namespace lexdyn::solver
 

@@ -459,7 +459,8 @@ inline void appendRegularisationLevels(Problem& p, int nv, bool controllerLike) 
 /// Every number is dyadic (the grid of 2^-10; the force pairs' coefficients 2^-11), so the exact
 /// reference applies. `o` receives the
 /// problem's solver options (its other fields are kept): split coordinates from nv, and spanning
-/// stages (half of them for levels of any rows, half structured), lazy snapshots and a projected unit suffix drawn
+/// stages (half of them for levels of any rows, half structured), lazy snapshots, a projected unit suffix and
+/// (unless `o` has them off) swap reflectors drawn
 /// per problem. The problems of a seed
 /// are their own (an independent stream), so one reruns alone.
 inline Problem controllerShapedProblem(std::uint64_t seed, int maxN, int maxLevels, int maxRows, Options& o) {
@@ -485,6 +486,8 @@ inline Problem controllerShapedProblem(std::uint64_t seed, int maxN, int maxLeve
     const std::uint64_t bits = extra();
     o.spanning_any_rows = o.spanning_stages && (bits & 1U) != 0;
     o.spanning_structured = o.spanning_stages && (bits & 2U) != 0;
+    // Swap reflectors: kept off where the caller turned them off, else off for a quarter.
+    o.swap_reflectors = o.swap_reflectors && (bits & 12U) != 0;
   }
   Problem p(n);
   {

@@ -133,6 +133,8 @@ class HlsFactorization {
   void setFreeVariables(const std::vector<int>& freeVar, int nFree);
   /// Restarts after a bound change (Options::restart_after_bound_change); on by default.
   void setBoundChangeRestarts(bool on) { boundRestarts_ = on; }
+  /// Swap reflectors (Options::swap_reflectors); on by default.
+  void setSwapReflectors(bool on) { swaps_ = on; }
 
   /// Active-row bookkeeping. Marks the level dirty; factorize() restarts from the lowest dirty level.
   void activate(int k, int row);
@@ -181,6 +183,9 @@ class HlsFactorization {
   void gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Eigen::MatrixXd& SB);
   int colGidTmp(int q) const { return tmpGid_[static_cast<size_t>(q)]; }
   /// col <- Q_{<stages}^T col (the reflectors of the orthogonal stages before `stages`).
+  // x <- H x for the reflector of physical column col, whose segment starts at row top (len rows).
+  template <typename X>
+  void applyStageReflector(int col, int top, int len, X&& x) const;
   void applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
   /// col <- Q_{<stages} col.
   void applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
@@ -281,6 +286,10 @@ class HlsFactorization {
   std::vector<int> colGid_;  // physical column -> gid
   std::vector<int> pos_;     // gid -> physical column or -1
   Eigen::VectorXd tau_, colNorm_, colNormRef_, colOrig_;
+  // Per physical column, like tau_: a stage's reflector that swaps two coordinates (its column was
+  // a unit vector there): the offset j >= 1 of ess's one nonzero, +-1, in the reflector's segment,
+  // with tau 1; 0 for any other reflector.
+  std::vector<int> unitAt_;
 
   // Snapshot k: rows [col0_k, nr) of the columns of levels >= k before stage k.
   std::vector<Eigen::MatrixXd> snap_;
@@ -293,6 +302,7 @@ class HlsFactorization {
   int pendingVar_ = -1;          // the variable setFreeVariables() fixed or freed since the last factorize() (-1: none)
   bool pendingFixed_ = false;    // ... fixed (else freed)
   bool boundRestarts_ = true;
+  bool swaps_ = true;  // Options::swap_reflectors
 
   // Rank-deficient levels: L = R^T (m x r) = V [U; 0], stored Householder-style.
   std::vector<Eigen::MatrixXd> left_;
