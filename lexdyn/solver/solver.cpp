@@ -34,10 +34,10 @@ bool allFiniteFast(const Eigen::DenseBase<Derived>& m) {
 
 // A motion no larger than this times the size of what moves is rounding: about 64 units in the
 // last place.
+constexpr double kRoundingMotion = 64.0 * std::numeric_limits<double>::epsilon();
 // Working sets remembered for cycle detection (run()); a cold restart comes after as many repeats
 // at the largest tolerances.
 constexpr int kRecentWorkingSets = 64;
-constexpr double kRoundingMotion = 64.0 * std::numeric_limits<double>::epsilon();
 
 }  // namespace
 
