@@ -1181,8 +1181,7 @@ void HlsFactorization::factorLevel(int k, double rankTol) {
     x(0) = beta;
     tau_(s + r) = tau;
     const auto ess = W_.col(s + r).segment(c0 + r + 1, d - r - 1);
-    const int sw = swaps_ ? swapOffset(ess, tau) : 0;
-    unitAt_[z(s + r)] = sw;
+    unitAt_[z(s + r)] = swaps_ ? swapOffset(ess, tau) : 0;
     double* top = pivotRow_.data();
     for (int j = r + 1; j < m; ++j) {
       applyStageReflector(s + r, c0 + r, d - r, W_.col(s + j).segment(c0 + r, d - r));

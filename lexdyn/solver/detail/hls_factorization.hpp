@@ -182,10 +182,11 @@ class HlsFactorization {
   bool updateElimination();
   void gatherLevel(int j, int p0, int p1, Eigen::MatrixXd& S, Eigen::MatrixXd& SB);
   int colGidTmp(int q) const { return tmpGid_[static_cast<size_t>(q)]; }
-  /// col <- Q_{<stages}^T col (the reflectors of the orthogonal stages before `stages`).
-  // x <- H x for the reflector of physical column col, whose segment starts at row top (len rows).
+  /// x <- H x for the reflector of physical column col, whose segment starts at row top (len
+  /// rows): the exact swap where unitAt_ names one, else the generic arithmetic.
   template <typename X>
   void applyStageReflector(int col, int top, int len, X&& x) const;
+  /// col <- Q_{<stages}^T col (the reflectors of the orthogonal stages before `stages`).
   void applyEarlierStagesTo(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
   /// col <- Q_{<stages} col.
   void applyEarlierStagesQ(Eigen::Ref<Eigen::VectorXd> col, int stages) const;
