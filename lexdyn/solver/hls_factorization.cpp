@@ -913,55 +913,67 @@ void HlsFactorization::relayout(int c) {
   const int sc = (c <= firstStage_) ? 0 : start_[z(c - 1)] + act_[z(c - 1)];
   const int c0 = col0_[z(c)];
   const bool useSnap = (c > 0) && !static_[z(c)] && snapValid_[z(c)];
+  const auto restorable = [&](int gid) { return pos_[z(gid)] >= 0 && useSnap && snapCol_[z(c)][z(gid)] >= 0; };
+  int p = 0, fresh = 0;
+  for (int j = c; j < L; ++j) p += static_cast<int>(active_[z(j)].size());
   // After a full reset nothing is restored and the layout starts at column 0: the columns are
-  // built in place. Otherwise in scratch, since restored columns are read from their old places.
+  // built in place. Otherwise in scratch, since restored columns are read from their old places:
+  // at their final places when the earlier stages have fewer columns than the levels rebuilt
+  // (a restart at an early level), and the earlier stages' columns are copied into the scratch,
+  // which then becomes the layout (the two matrices swap their storage); else from the scratch's
+  // first column, copied back.
   const bool direct = fullLayout_ && c == firstStage_;
+  const bool swapIn = !direct && sc < p;
   Eigen::MatrixXd& S = direct ? W_ : S_;
   Eigen::MatrixXd& SB = direct ? WB_ : SB_;
-  int p = 0, fresh = 0;
-  for (int j = c; j < L; ++j) {
-    const int p0 = p;
+  const int o = swapIn ? sc : 0;  // S's column of the first column of level c (sc is 0 when direct)
+  // Level j's columns at o + [p0, p0 + its count): restored or marked to load, then loaded.
+  const auto placeLevel = [&](int j, int p0) {
+    const std::vector<int>& act = active_[z(j)];
+    const int cnt = static_cast<int>(act.size());
     int freshHere = 0;
-    for (int gid : active_[z(j)]) {
+    for (int i = 0; i < cnt; ++i) {
+      const int gid = act[z(i)];
+      const int q = o + p0 + i;
+      tmpGid_[z(q)] = gid;
       if (projected(j)) {
         // Projected level: its raw reduced rows, kept from an earlier layout or loaded.
         const int row = gid - rowOff_[z(deferFrom_)];
-        tmpGid_[z(p)] = gid;
         if (rawHave_[z(row)]) {
-          S.col(p).head(nr_) = Raw_.col(row).head(nr_);
-          if (elim_) SB.col(p).head(m0_) = RawB_.col(row).head(m0_);
-          colNorm_(p) = 0.0;
+          S.col(q).head(nr_) = Raw_.col(row).head(nr_);
+          if (elim_) SB.col(q).head(m0_) = RawB_.col(row).head(m0_);
+          colNorm_(q) = 0.0;
         } else {
-          colNorm_(p) = 1.0;
+          colNorm_(q) = 1.0;
           ++freshHere;
         }
-        ++p;
         continue;
       }
-      const int old = pos_[z(gid)];
-      const int sCol = useSnap ? snapCol_[z(c)][z(gid)] : -1;
-      tmpGid_[z(p)] = gid;
-      if (old >= 0 && sCol >= 0) {
-        S.col(p).head(c0) = W_.col(old).head(c0);
-        S.col(p).segment(c0, nr_ - c0) = snap_[z(snapStore_[z(c)])].col(sCol).head(nr_ - c0);
-        if (elim_) SB.col(p).head(m0_) = WB_.col(old).head(m0_);
-        colNorm_(p) = 0.0;  // marks a restored column
+      if (restorable(gid)) {
+        const int old = pos_[z(gid)];
+        S.col(q).head(c0) = W_.col(old).head(c0);
+        S.col(q).segment(c0, nr_ - c0) = snap_[z(snapStore_[z(c)])].col(snapCol_[z(c)][z(gid)]).head(nr_ - c0);
+        if (elim_) SB.col(q).head(m0_) = WB_.col(old).head(m0_);
+        colNorm_(q) = 0.0;  // marks a restored column
       } else {
-        colNorm_(p) = 1.0;  // marks a loaded column
+        colNorm_(q) = 1.0;  // marks a loaded column
         ++freshHere;
       }
-      ++p;
     }
-    if (freshHere > 0) gatherLevel(j, p0, p, S, SB);
+    if (freshHere > 0) gatherLevel(j, o + p0, o + p0 + cnt, S, SB);
     fresh += freshHere;
+  };
+  for (int j = c, p0 = 0; j < L; ++j) {
+    placeLevel(j, p0);
+    p0 += static_cast<int>(active_[z(j)].size());
   }
   // Loaded rows: elimination transform a_N - D^T a_B. Rows whose basic part has at most one
   // nonzero (bounds-like rows: trust region, minimum velocity) take one column of D^T; runs of
   // dense rows are transformed together (matrix product).
   if (elim_ && fresh > 0) {
     const auto DT = G_.block(m0_, 0, nr_, m0_);
-    int q = 0;
-    while (q < p) {
+    int q = o;
+    while (q < o + p) {
       if (colNorm_(q) != 1.0 || sparseB_[z(q)] != -2) {
         if (colNorm_(q) == 1.0 && sparseB_[z(q)] >= 0) {
           const int i = sparseB_[z(q)];
@@ -971,7 +983,7 @@ void HlsFactorization::relayout(int c) {
         continue;
       }
       int e = q + 1;
-      while (e < p && colNorm_(e) == 1.0 && sparseB_[z(e)] == -2) ++e;
+      while (e < o + p && colNorm_(e) == 1.0 && sparseB_[z(e)] == -2) ++e;
       S.block(0, q, nr_, e - q).noalias() -= DT * SB.block(0, q, m0_, e - q);
       q = e;
     }
@@ -981,7 +993,7 @@ void HlsFactorization::relayout(int c) {
   int pDef = p;
   if (deferFrom_ >= 0)
     for (int j = std::max(c, deferFrom_); j < L; ++j) pDef -= static_cast<int>(active_[z(j)].size());
-  for (int q = pDef; q < p && fresh > 0; ++q) {
+  for (int q = o + pDef; q < o + p && fresh > 0; ++q) {
     if (colNorm_(q) != 1.0) continue;
     const int row = tmpGid_[z(q)] - rowOff_[z(deferFrom_)];
     Raw_.col(row).head(nr_) = S.col(q).head(nr_);
@@ -989,7 +1001,7 @@ void HlsFactorization::relayout(int c) {
     rawHave_[z(row)] = 1;
   }
   if (c > firstStage_ && fresh > 0) {
-    for (int q = 0; q < pDef; ++q)
+    for (int q = o; q < o + pDef; ++q)
       if (colNorm_(q) == 1.0) applyEarlierStagesTo(S.col(q).head(nr_), c);
   }
   for (int q = sc; q < mTot_; ++q) {
@@ -997,7 +1009,14 @@ void HlsFactorization::relayout(int c) {
     if (gid >= 0) pos_[z(gid)] = -1;
     colGid_[z(q)] = -1;
   }
-  if (p > 0 && !direct) {
+  if (swapIn) {
+    if (sc > 0) {
+      S_.block(0, 0, nr_, sc) = W_.block(0, 0, nr_, sc);
+      if (elim_) SB_.block(0, 0, m0_, sc) = WB_.block(0, 0, m0_, sc);
+    }
+    W_.swap(S_);
+    if (elim_) WB_.swap(SB_);
+  } else if (p > 0 && !direct) {
     W_.block(0, sc, nr_, p) = S_.block(0, 0, nr_, p);
     if (elim_) WB_.block(0, sc, m0_, p) = SB_.block(0, 0, m0_, p);
   }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cmath>
+#include <cstring>
 #include <iterator>
 #include <limits>
 #include <random>
@@ -198,6 +199,18 @@ struct Solver::Impl {
   bool freeRow(int gid) const { return lo(gid) == -kInf && up(gid) == kInf; }
   double target(int gid) const;
   void buildTargets();
+  // buildTargets' values kept between the active-set iterations of a solve: b(gid) is recomputed
+  // only when its inputs changed. bEpoch[gid]: the epoch of the fixed variables (their set and
+  // values, the problem's data) it was computed in (-1: none); bTarget: the target it started
+  // from; bWhole: whether every fixed variable's term was summed (a level with a -0 target).
+  std::vector<long> bEpoch;
+  std::vector<double> bTarget;
+  std::vector<char> bWhole;
+  std::vector<char> bLevelWhole;  // per level: its flag at its last call
+  std::vector<int> bTodo;         // the active rows of a level to compute
+  Eigen::VectorXd fixedX;         // the fixed variables' values in the current epoch (fixedVar's order)
+  long fixedEpoch = 0;
+  bool fixedXValid = false;  // fixedX holds them (false: a new epoch begins at the next call)
   void solveEquality();
   // level: the factored level whose multiplier releases the constraint (the levels before it are
   // optimal).
@@ -255,7 +268,13 @@ void Solver::Impl::setup(const Problem& problem, const Options& o) {
   axRuns.reserve(static_cast<size_t>(M + 2 * lg + 2));  // at most (rows + 1) / 2 runs a level
   axRunsOff.assign(static_cast<size_t>(lg + 1), 0);
   state.assign(static_cast<size_t>(M), RowState::Inactive);
-  for (Eigen::VectorXd* vec : {&xlo, &xup, &x, &dx, &xs, &xFree}) vec->setZero(n);
+  for (Eigen::VectorXd* vec : {&xlo, &xup, &x, &dx, &xs, &xFree, &fixedX}) vec->setZero(n);
+  bEpoch.assign(static_cast<size_t>(std::max(M, 1)), -1);
+  bTarget.assign(static_cast<size_t>(std::max(M, 1)), 0.0);
+  bWhole.assign(static_cast<size_t>(std::max(M, 1)), 0);
+  bLevelWhole.assign(static_cast<size_t>(std::max(lg, 1)), 0);
+  bTodo.assign(static_cast<size_t>(std::max(M, 1)), 0);
+  fixedXValid = false;
   muAll.setZero(std::max(M, 1), std::max(lg, 1));
   muVarAll.setZero(n, std::max(lg, 1));
   multDone.assign(static_cast<size_t>(std::max(lg, 1)), 0);
@@ -376,6 +395,7 @@ bool Solver::Impl::scanNonFinite(const Problem& problem) {
 
 void Solver::Impl::loadData(const Problem& problem) {
   prob = &problem;
+  fixedXValid = false;  // new rows and bounds: every target is computed again
 #ifndef NDEBUG
   // Level::columns is the caller's promise (validate() checks it at setup): a debug build checks
   // it at every solve, a release build reads nothing past the declared columns.
@@ -518,6 +538,7 @@ void Solver::Impl::updateFreeVariables() {
       fixedVar[static_cast<size_t>(nFixed++)] = i;
     }
   }
+  fixedXValid = false;  // another set of fixed variables: every target is computed again
   fact.setFreeVariables(freeVar, nf);
 }
 
@@ -618,23 +639,63 @@ void Solver::Impl::buildTargets() {
   // with a finite fixed value each such term is a signed zero, and t - (+-0) is t to the bit unless
   // t is -0. A sum that does not start at -0 never becomes -0 (an exact cancellation gives +0):
   // the terms of a finite value are left out unless a row's target is -0.
+  //
+  // A row's b is kept from an earlier iteration of this solve when its inputs are the same: the
+  // fixed variables (set and values, compared to the bit: a new epoch otherwise), its target (to
+  // the bit) and whether its level sums every term. It is then the value computed here, bit for
+  // bit; only the rows activated or changed since are computed.
+  const auto sameBits = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  bool same = fixedXValid;
+  for (int q = 0; q < nFixed && same; ++q) same = sameBits(fixedX(q), x(fixedVar[static_cast<size_t>(q)]));
+  if (!same) {
+    ++fixedEpoch;
+    for (int q = 0; q < nFixed; ++q) fixedX(q) = x(fixedVar[static_cast<size_t>(q)]);
+    fixedXValid = true;
+  }
   for (int kf = 0; kf < lg; ++kf) {
     const std::vector<int>& act = fact.activeList(kf);
     if (act.empty()) continue;
     const Eigen::MatrixXd& Ak = A(kf);
     const int off = fact.rowOffset(kf);
     int cols = prob->level(kf + first).columns;
+    // The rows to compute: those whose epoch, target or whole-sum flag changed. The flag is the
+    // level's, known once every target is seen: the rows are checked against the level's flag of
+    // its last call, and all of them are computed when it changed.
+    const char wasWhole = bLevelWhole[static_cast<size_t>(kf)];
+    int todo = 0;
     for (int gid : act) {
+      const size_t g = static_cast<size_t>(gid);
       const double t = target(gid);
-      b(gid) = t;
       if (t == 0.0 && std::signbit(t)) cols = -1;
+      if (bEpoch[g] == fixedEpoch && bWhole[g] == wasWhole && sameBits(bTarget[g], t)) continue;
+      bTarget[g] = t;
+      bTodo[static_cast<size_t>(todo++)] = gid;
     }
+    const char whole = cols < 0 ? 1 : 0;
+    bLevelWhole[static_cast<size_t>(kf)] = whole;
+    if (whole != wasWhole) {
+      todo = 0;
+      for (int gid : act) {
+        bTarget[static_cast<size_t>(gid)] = target(gid);
+        bTodo[static_cast<size_t>(todo++)] = gid;
+      }
+    }
+    for (int r = 0; r < todo; ++r) {
+      const size_t g = static_cast<size_t>(bTodo[static_cast<size_t>(r)]);
+      bEpoch[g] = fixedEpoch;
+      bWhole[g] = whole;
+      b(static_cast<Eigen::Index>(g)) = bTarget[g];
+    }
+    if (todo == 0) continue;
     for (int q = 0; q < nFixed; ++q) {
       const int i = fixedVar[static_cast<size_t>(q)];
       const double xi = x(i);
       if (cols >= 0 && i >= cols && std::isfinite(xi)) continue;
       const double* col = Ak.col(i).data();
-      for (int gid : act) b(gid) -= col[gid - off] * xi;
+      for (int r = 0; r < todo; ++r) {
+        const int gid = bTodo[static_cast<size_t>(r)];
+        b(gid) -= col[gid - off] * xi;
+      }
     }
   }
 }
