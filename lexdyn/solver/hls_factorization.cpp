@@ -871,7 +871,7 @@ bool HlsFactorization::projectionPays(int k) const {
   return static_cast<int>(active_[z(k)].size()) > std::max(nr_ - earlier, 0);
 }
 
-bool HlsFactorization::unitRowsOnReduced(int k) const {
+bool HlsFactorization::unitRows(int k) const {
   const Eigen::MatrixXd& A = *A_[z(k)];
   const int cols = cols_[z(k)] >= 0 ? cols_[z(k)] : static_cast<int>(A.cols());
   for (int gid : active_[z(k)]) {
@@ -882,12 +882,6 @@ bool HlsFactorization::unitRowsOnReduced(int k) const {
       if (at >= 0) return false;
       at = c;
     }
-    // On a basic variable the elimination would spread the row over the reduced ones; on a
-    // variable fixed by its bound it reads none of them (a zero row).
-    if (at < 0) continue;
-    if (elim_)
-      for (int i = 0; i < m0_; ++i)
-        if (varPerm_[z(i)] == at) return false;
   }
   return !active_[z(k)].empty();
 }
@@ -900,11 +894,13 @@ void HlsFactorization::decideDeferral() {
   if (lastMode_ == LastLevel::Auto && !projectionPays(k)) return;
   deferred_ = k;
   deferFrom_ = k;
-  // Projected unit suffix: the level before the last too, when its rows are unit rows on
-  // reduced variables (x_j = 0, say) and projection pays for it as well. Its rows then take no
-  // earlier stage's reflectors; when the earlier levels leave it only coordinates that no
-  // earlier stage reached, its projection costs copies of exact zeros.
-  if (unitSuffix_ && k - 1 > firstStage_ && projectionPays(k - 1) && unitRowsOnReduced(k - 1)) deferFrom_ = k - 1;
+  // Projected unit suffix: the level before the last too, when its rows are unit rows (x_j = 0,
+  // say) and projection pays for it as well. Its rows then take no earlier stage's reflectors;
+  // when the earlier levels leave it only coordinates that no earlier stage reached, its
+  // projection costs copies of exact zeros. A row on a basic variable of the elimination is a
+  // column of D^T in reduced coordinates (and its basic part): projected like any row of the last
+  // level.
+  if (unitSuffix_ && k - 1 > firstStage_ && projectionPays(k - 1) && unitRows(k - 1)) deferFrom_ = k - 1;
 }
 
 void HlsFactorization::relayout(int c) {

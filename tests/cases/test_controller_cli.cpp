@@ -228,10 +228,13 @@ TEST(ControllerCli, ShortRunsSkipLateChecksAndCoverWhatWasRun) {
   // The stored trace gives the same checks (its header records both durations).
   const CliResult check = harness("check " + dir + "/exp2/trace.csv --json", dir);
   EXPECT_EQ(nlohmann::json::parse(check.out)["checks"], s["checks"]);
-  // exp1-kp1 expects its CoP checks to fail in the first reach (0.5-1.3 s): a run stopped at 5 s
-  // has the expected failure. exp2-instant expects its failure at 12 s: a run stopped at 5 s
-  // has not reached it and passes as any run would, saying so.
-  const CliResult kp1 = harness("run " + src + "/cases/exp1-kp1.yaml --duration 5 --out " + dir + "/kp1 --quiet", dir);
+  // exp1-kp1 expects its CoP checks to fail in the first reach (0.5-1.3 s): a run stopped at 10 s
+  // has the expected failure and no other (over a 5 s window the left foot's computed-vs-sensed
+  // rms is close to its limit and moves with rounding: the transient after the paper's early
+  // stops at 0.30-0.31 s weighs much in it; docs/results.md, "Sensitivity"). exp2-instant
+  // expects its failure at 12 s: a run stopped at 5 s has not reached it and passes as any run
+  // would, saying so.
+  const CliResult kp1 = harness("run " + src + "/cases/exp1-kp1.yaml --duration 10 --out " + dir + "/kp1 --quiet", dir);
   expectExit(kp1, 0, {"xfail right_foot_cop", "expected failure, as the case says"});
   const nlohmann::json ks = nlohmann::json::parse(slurp(dir + "/kp1/summary.json"));
   EXPECT_FALSE(ks["all_checks_passed"].get<bool>());

@@ -87,13 +87,18 @@ TEST(SolverRegression, AWarmStartIntoAnUnbrokenCycleStartsAgainCold) {
   // from the first tick's answer, the second's search reaches a point where contact forces sit at
   // their floor together and releasing them one by one repeats a cycle of six working sets that
   // neither the raised tolerances nor Bland's rule break (it hit the iteration cap); the search then
-  // starts again from the cold start, and ends at the cold solve's optimum.
+  // starts again from the cold start, and ends at the cold solve's optimum. The cycle is one of
+  // the rounding of the build that dumped the ticks, which did not project the level before the
+  // last here (its rows lie on a basic variable). With the files' options the solver now projects
+  // it, and the search takes another path (29 iterations, one cycle broken, no cold restart); the
+  // test keeps the dumping build's rounding with the projected unit suffix off.
   const std::string dir = std::string(LEXDYN_SOURCE_DIR) + "/tests/data/solver/";
   ProblemFile a = readProblemFile(dir + "warm_cycle_306.json");
   ProblemFile b = readProblemFile(dir + "warm_cycle_307.json");
   a.problem.detectBoundsLevel();
   b.problem.detectBoundsLevel();
   ASSERT_TRUE(a.options && b.options);
+  a.options->project_unit_suffix = b.options->project_unit_suffix = false;
   Solver s;
   s.setup(a.problem, *a.options);
   const Result first = s.solve(a.problem);

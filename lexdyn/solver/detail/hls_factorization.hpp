@@ -329,10 +329,11 @@ class HlsFactorization {
   bool unitSuffix_ = false;  // Options::project_unit_suffix
   bool projected(int k) const { return deferFrom_ >= 0 && k >= deferFrom_; }
   bool projectionPays(int k) const;  // decideDeferral's row-count test for level k
-  // Every active row of level k has at most one nonzero (over its declared columns), and not on
-  // a basic variable: a unit row in reduced coordinates, or a zero row (its variable fixed by a
-  // bound). A row with a second nonzero on a fixed variable is refused (conservative).
-  bool unitRowsOnReduced(int k) const;
+  // Every active row of level k has at most one nonzero (over its declared columns), on any
+  // variable (a reduced one, a basic one of the elimination, or one fixed by a bound: a zero row
+  // in reduced coordinates). A row with a second nonzero on a fixed variable is refused
+  // (conservative).
+  bool unitRows(int k) const;
   Eigen::MatrixXd Raw_, RawB_, RawP_, Z_, P_;
   std::vector<char> rawHave_;
   Eigen::VectorXd zvec_;
