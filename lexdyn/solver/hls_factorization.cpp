@@ -896,10 +896,10 @@ void HlsFactorization::decideDeferral() {
   deferFrom_ = k;
   // Projected unit suffix: the level before the last too, when its rows are unit rows (x_j = 0,
   // say) and projection pays for it as well. Its rows then take no earlier stage's reflectors;
-  // when the earlier levels leave it only coordinates that no earlier stage reached, its
-  // projection costs copies of exact zeros. A row on a basic variable of the elimination is a
-  // column of D^T in reduced coordinates (and its basic part): projected like any row of the last
-  // level.
+  // when the earlier levels leave it only coordinates that no earlier stage reached, the
+  // projection of its rows on reduced variables costs copies of exact zeros. A row on a basic
+  // variable of the elimination is a column of D^T in reduced coordinates (and its basic part):
+  // projected like any row of the last level.
   if (unitSuffix_ && k - 1 > firstStage_ && projectionPays(k - 1) && unitRows(k - 1)) deferFrom_ = k - 1;
 }
 

@@ -122,14 +122,15 @@ struct Options {
   /// (rounding), and Result::factorizations counts the full factorisation.
   bool lazy_snapshots = false;
   /// Projected unit suffix. When the last level is projected (last_level_projection), the level
-  /// before it is projected as well if its active rows have one nonzero each, on a variable that
-  /// the first level's elimination keeps (x_j = 0, say), and it has more active rows than the
-  /// null space that the earlier levels leave, counted as for the last level. Its rows then take
-  /// none of the earlier stages' reflectors; they are projected once, Z^T a, when its turn comes.
-  /// When the earlier levels have taken every coordinate that their stages reached (a level of
-  /// Newton rows over all velocities, with split coordinates), the projection is a copy of exact
-  /// zeros and the level's rows cost nothing. Decided per full factorisation. It changes the
-  /// rounding of that level's multipliers, and of its rows where it keeps coordinates.
+  /// before it is projected as well if its active rows have one nonzero each (x_j = 0, say; on
+  /// any variable: a row on a basic variable of the first level's elimination is a column of D^T
+  /// in reduced coordinates with its basic part), and it has more active rows than the null space
+  /// that the earlier levels leave, counted as for the last level. Its rows then take none of the
+  /// earlier stages' reflectors; they are projected once, Z^T a, when its turn comes. When the
+  /// earlier levels have taken every coordinate that their stages reached (a level of Newton rows
+  /// over all velocities, with split coordinates), the projection of its rows on reduced variables
+  /// is a copy of exact zeros and they cost nothing. Decided per full factorisation. It changes
+  /// the rounding of that level's multipliers, and of its rows where it keeps coordinates.
   bool project_unit_suffix = false;
   /// Restarts after a bound change. When an active-set step fixes a variable at its bound, or a
   /// release frees one, and the stages of the levels before some level c cannot be altered by

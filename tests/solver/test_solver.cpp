@@ -1796,6 +1796,31 @@ TEST(Solver, ProjectedLastLevelGivesTheStandardAnswer) {
   EXPECT_EQ(checkKkt(q, r4), "");
 }
 
+// Box centres c uniform in [-1, 1], targets 0.6 from them on a random side (outside a box of
+// half-width 0.2), and the same with every other target at its centre: the unit levels of the
+// projected-suffix tests.
+struct BoxTargets {
+  Eigen::VectorXd c, outside, half;
+};
+BoxTargets boxTargets(int n, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  BoxTargets b{Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)};
+  for (int j = 0; j < n; ++j) {
+    b.c(j) = u(rng);
+    b.outside(j) = b.c(j) + (u(rng) < 0.0 ? -0.6 : 0.6);
+    b.half(j) = j % 2 == 0 ? b.c(j) : b.outside(j);
+  }
+  return b;
+}
+
+// Their last three levels: a dense one, the box (half-width 0.2 around c) and the targets t.
+void addDenseBoxTarget(Problem& p, const Eigen::MatrixXd& D, const Eigen::VectorXd& d, const Eigen::VectorXd& c, const Eigen::VectorXd& t) {
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(p.variables(), p.variables());
+  p.addLevel("dense", D, d, d);
+  p.addLevel("box", I, c.array() - 0.2, c.array() + 0.2);
+  p.addLevel("target", I, t, t);
+}
+
 TEST(Solver, ProjectedUnitSuffixGivesTheStandardAnswer) {
   // A box level (unit inequality rows l_j <= x_j <= u_j) and a target level (x_j = t_j, most
   // targets outside the box) after a few small random levels and a dense one: the shape of the
@@ -1819,12 +1844,8 @@ TEST(Solver, ProjectedUnitSuffixGivesTheStandardAnswer) {
     const int n = base.variables();
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
-    Eigen::VectorXd c(n), outside(n), half(n);
-    for (int j = 0; j < n; ++j) {
-      c(j) = u(rng);
-      outside(j) = c(j) + (u(rng) < 0.0 ? -0.6 : 0.6);
-      half(j) = j % 2 == 0 ? c(j) : outside(j);
-    }
+    const BoxTargets bt = boxTargets(n, rng);
+    const Eigen::VectorXd &c = bt.c, &outside = bt.outside, &half = bt.half;
     // A dense level takes all but three dimensions, so that a few active box rows outnumber
     // what is left to them (the row-count test of the projection).
     Eigen::MatrixXd D(n - 3, n);
@@ -1834,10 +1855,7 @@ TEST(Solver, ProjectedUnitSuffixGivesTheStandardAnswer) {
     for (int i = 0; i < n - 3; ++i) d(i) = u(rng);
     auto withTargets = [&](const Eigen::VectorXd& t) {
       Problem p = base;
-      const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
-      p.addLevel("dense", D, d, d);
-      p.addLevel("box", I, c.array() - 0.2, c.array() + 0.2);
-      p.addLevel("target", I, t, t);
+      addDenseBoxTarget(p, D, d, c, t);
       return p;
     };
     const Problem p1 = withTargets(outside), p2 = withTargets(half);
@@ -1908,11 +1926,14 @@ TEST(Solver, ProjectedUnitSuffixOnBasicVariablesGivesTheStandardAnswer) {
   // variable's box and target rows), a dense level that leaves three dimensions, then the box
   // and the target levels over every variable. With the suffix projected, a box or target row on
   // a basic variable is a column of D^T in reduced coordinates plus its basic part, projected like
-  // the last level's rows. Cold (lazy snapshots: the first restart decides the projections with
-  // box rows active) and warm with half the targets inside the box, where the warm start's active
-  // box rows make both projections pay: the answer and every level's violation are the standard
-  // factorisation's, and the KKT certificate holds.
-  int suffix = 0;
+  // the last level's rows. Lower bounds on every third variable, tighter than its box, are
+  // reached on the way: each fixes a variable, the elimination is brought to the new free
+  // variables and the projections are decided again, by then with box rows active (in most cold
+  // solves both levels are projected and a bound is held at the end). Cold, and warm with half
+  // the targets inside the box, where the warm start's active box rows make both projections
+  // pay: the answer and every level's violation are the standard factorisation's, and the KKT
+  // certificate holds.
+  int suffix = 0, boundHeld = 0;
   for (std::uint64_t seed = 7200; seed < 7320; ++seed) {
     const int n = 8 + static_cast<int>(seed % 9);
     const int m0 = 2 + static_cast<int>(seed % 3);
@@ -1926,19 +1947,18 @@ TEST(Solver, ProjectedUnitSuffixOnBasicVariablesGivesTheStandardAnswer) {
     };
     const Eigen::MatrixXd E = random(m0, n), D = random(n - m0 - 3, n);
     const Eigen::VectorXd e = random(m0, 1), d = random(n - m0 - 3, 1);
-    Eigen::VectorXd c(n), outside(n), half(n);
-    for (int j = 0; j < n; ++j) {
-      c(j) = u(rng);
-      outside(j) = c(j) + (u(rng) < 0.0 ? -0.6 : 0.6);
-      half(j) = j % 2 == 0 ? c(j) : outside(j);
-    }
+    const BoxTargets bt = boxTargets(n, rng);
+    const Eigen::VectorXd &c = bt.c, &outside = bt.outside, &half = bt.half;
     const auto withTargets = [&](const Eigen::VectorXd& t) {
       Problem p(n);
-      const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+      std::vector<int> vars;
+      for (int j = 0; j < n; j += 3) vars.push_back(j);
+      const int nb = static_cast<int>(vars.size());
+      Eigen::VectorXd lo(nb), up = Eigen::VectorXd::Constant(nb, std::numeric_limits<double>::infinity());
+      for (int q = 0; q < nb; ++q) lo(q) = c(vars[static_cast<size_t>(q)]) - 0.1;
+      p.addBoundsLevel("bounds", vars, Eigen::VectorXd::Ones(nb), lo, up);
       p.addLevel("equation", E, e, e);
-      p.addLevel("dense", D, d, d);
-      p.addLevel("box", I, c.array() - 0.2, c.array() + 0.2);
-      p.addLevel("target", I, t, t);
+      addDenseBoxTarget(p, D, d, c, t);
       return p;
     };
     const Problem p1 = withTargets(outside), p2 = withTargets(half);
@@ -1946,7 +1966,7 @@ TEST(Solver, ProjectedUnitSuffixOnBasicVariablesGivesTheStandardAnswer) {
     standard.eliminate_first_level = on.eliminate_first_level = true;
     standard.last_level_projection = Options::LastLevel::Never;
     on.project_unit_suffix = true;
-    on.lazy_snapshots = true;
+    on.lazy_snapshots = false;
     Solver s1, s2, s3, s4;
     const Result r1 = solveOnce(s1, p1, standard);
     const Result r2 = solveOnce(s2, p1, on);
@@ -1964,8 +1984,12 @@ TEST(Solver, ProjectedUnitSuffixOnBasicVariablesGivesTheStandardAnswer) {
     EXPECT_LE((r3.x - r4.x).norm(), 1e-9 * (1 + r4.x.norm())) << "warm, seed " << seed;
     EXPECT_EQ(checkKkt(p2, r3), "") << "warm, seed " << seed;
     suffix += r3.projected_levels == 2 ? 1 : 0;  // (the warm start's box rows make projection pay)
+    int held = 0;
+    for (RowState st : r2.active.level[0]) held += st != RowState::Inactive ? 1 : 0;
+    boundHeld += r2.projected_levels == 2 && held > 0 ? 1 : 0;
   }
   EXPECT_GE(suffix, 100);
+  EXPECT_GE(boundHeld, 50);
 }
 
 TEST(Solver, ScalingPermutingAndAppendingKeepEarlierOptima) {

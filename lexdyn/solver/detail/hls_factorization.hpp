@@ -99,8 +99,8 @@ class HlsFactorization {
   /// again, saving them.
   void setLazySnapshots(bool lazy) { lazy_ = lazy; }
   /// Projected unit suffix (Options::project_unit_suffix): when the last level is projected, the
-  /// level before it is projected too if its active rows are unit rows on reduced variables and
-  /// projection pays for it by the same row count (decided per full factorisation).
+  /// level before it is projected too if its active rows are unit rows (one nonzero each, on any
+  /// variable) and projection pays for it by the same row count (decided per full factorisation).
   void setProjectUnitSuffix(bool on) { unitSuffix_ = on; }
   /// Levels the last factorisation projected (0, 1 or 2).
   int projectedLevels() const { return deferFrom_ < 0 ? 0 : levelCount() - deferFrom_; }
