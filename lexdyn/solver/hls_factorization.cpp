@@ -909,7 +909,6 @@ void HlsFactorization::relayout(int c) {
   const int sc = (c <= firstStage_) ? 0 : start_[z(c - 1)] + act_[z(c - 1)];
   const int c0 = col0_[z(c)];
   const bool useSnap = (c > 0) && !static_[z(c)] && snapValid_[z(c)];
-  const auto restorable = [&](int gid) { return pos_[z(gid)] >= 0 && useSnap && snapCol_[z(c)][z(gid)] >= 0; };
   int p = 0, fresh = 0;
   for (int j = c; j < L; ++j) p += static_cast<int>(active_[z(j)].size());
   // After a full reset nothing is restored and the layout starts at column 0: the columns are
@@ -923,45 +922,43 @@ void HlsFactorization::relayout(int c) {
   Eigen::MatrixXd& S = direct ? W_ : S_;
   Eigen::MatrixXd& SB = direct ? WB_ : SB_;
   const int o = swapIn ? sc : 0;  // S's column of the first column of level c (sc is 0 when direct)
-  // Level j's columns at o + [p0, p0 + its count): restored or marked to load, then loaded.
-  const auto placeLevel = [&](int j, int p0) {
-    const std::vector<int>& act = active_[z(j)];
-    const int cnt = static_cast<int>(act.size());
-    int freshHere = 0;
-    for (int i = 0; i < cnt; ++i) {
-      const int gid = act[z(i)];
-      const int q = o + p0 + i;
-      tmpGid_[z(q)] = gid;
-      if (projected(j)) {
-        // Projected level: its raw reduced rows, kept from an earlier layout or loaded.
-        const int row = gid - rowOff_[z(deferFrom_)];
-        if (rawHave_[z(row)]) {
-          S.col(q).head(nr_) = Raw_.col(row).head(nr_);
-          if (elim_) SB.col(q).head(m0_) = RawB_.col(row).head(m0_);
-          colNorm_(q) = 0.0;
+  {
+    int q = o;  // each column's place in S
+    for (int j = c; j < L; ++j) {
+      const int q0 = q;
+      int freshHere = 0;
+      for (int gid : active_[z(j)]) {
+        tmpGid_[z(q)] = gid;
+        if (projected(j)) {
+          // Projected level: its raw reduced rows, kept from an earlier layout or loaded.
+          const int row = gid - rowOff_[z(deferFrom_)];
+          if (rawHave_[z(row)]) {
+            S.col(q).head(nr_) = Raw_.col(row).head(nr_);
+            if (elim_) SB.col(q).head(m0_) = RawB_.col(row).head(m0_);
+            colNorm_(q) = 0.0;
+          } else {
+            colNorm_(q) = 1.0;
+            ++freshHere;
+          }
+          ++q;
+          continue;
+        }
+        const int old = pos_[z(gid)];
+        const int sCol = useSnap ? snapCol_[z(c)][z(gid)] : -1;
+        if (old >= 0 && sCol >= 0) {
+          S.col(q).head(c0) = W_.col(old).head(c0);
+          S.col(q).segment(c0, nr_ - c0) = snap_[z(snapStore_[z(c)])].col(sCol).head(nr_ - c0);
+          if (elim_) SB.col(q).head(m0_) = WB_.col(old).head(m0_);
+          colNorm_(q) = 0.0;  // marks a restored column
         } else {
-          colNorm_(q) = 1.0;
+          colNorm_(q) = 1.0;  // marks a loaded column
           ++freshHere;
         }
-        continue;
+        ++q;
       }
-      if (restorable(gid)) {
-        const int old = pos_[z(gid)];
-        S.col(q).head(c0) = W_.col(old).head(c0);
-        S.col(q).segment(c0, nr_ - c0) = snap_[z(snapStore_[z(c)])].col(snapCol_[z(c)][z(gid)]).head(nr_ - c0);
-        if (elim_) SB.col(q).head(m0_) = WB_.col(old).head(m0_);
-        colNorm_(q) = 0.0;  // marks a restored column
-      } else {
-        colNorm_(q) = 1.0;  // marks a loaded column
-        ++freshHere;
-      }
+      if (freshHere > 0) gatherLevel(j, q0, q, S, SB);
+      fresh += freshHere;
     }
-    if (freshHere > 0) gatherLevel(j, o + p0, o + p0 + cnt, S, SB);
-    fresh += freshHere;
-  };
-  for (int j = c, p0 = 0; j < L; ++j) {
-    placeLevel(j, p0);
-    p0 += static_cast<int>(active_[z(j)].size());
   }
   // Loaded rows: elimination transform a_N - D^T a_B. Rows whose basic part has at most one
   // nonzero (bounds-like rows: trust region, minimum velocity) take one column of D^T; runs of

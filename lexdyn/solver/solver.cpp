@@ -667,18 +667,15 @@ void Solver::Impl::buildTargets() {
       const size_t g = static_cast<size_t>(gid);
       const double t = target(gid);
       if (t == 0.0 && std::signbit(t)) cols = -1;
-      if (bEpoch[g] == fixedEpoch && bWhole[g] == wasWhole && sameBits(bTarget[g], t)) continue;
+      const bool kept = bEpoch[g] == fixedEpoch && bWhole[g] == wasWhole && sameBits(bTarget[g], t);
       bTarget[g] = t;
-      bTodo[static_cast<size_t>(todo++)] = gid;
+      if (!kept) bTodo[static_cast<size_t>(todo++)] = gid;
     }
     const char whole = cols < 0 ? 1 : 0;
     bLevelWhole[static_cast<size_t>(kf)] = whole;
     if (whole != wasWhole) {
       todo = 0;
-      for (int gid : act) {
-        bTarget[static_cast<size_t>(gid)] = target(gid);
-        bTodo[static_cast<size_t>(todo++)] = gid;
-      }
+      for (int gid : act) bTodo[static_cast<size_t>(todo++)] = gid;
     }
     for (int r = 0; r < todo; ++r) {
       const size_t g = static_cast<size_t>(bTodo[static_cast<size_t>(r)]);
